@@ -1,0 +1,33 @@
+"""The ``camjax`` command.  Each subcommand lives in its own module with ``register``."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from ._common import CliError
+
+# Modules under camjax.cli that define ``register(subparsers)``; each sets ``func``.
+_COMMANDS = ("laws", "ct")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="camjax",
+        description="Cam-mechanism dynamics: motion laws, responses, Ct curves, design.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name in _COMMANDS:
+        importlib.import_module(f"camjax.cli.{name}").register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args) or 0
+    except (CliError, ValueError) as error:
+        print(f"camjax {args.command}: error: {error}", file=sys.stderr)
+        return 2

@@ -1,0 +1,113 @@
+"""The motion-law interface shared by every law family."""
+
+from __future__ import annotations
+
+import abc
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._custom_types import ArrayLike, Breakpoints, LawValues
+
+
+def is_concrete(*values) -> bool:
+    """True when no value is a JAX tracer, so that Python-side checks can run."""
+    return not any(isinstance(v, jax.core.Tracer) for v in jax.tree.leaves(values))
+
+
+def require(condition: bool, message: str) -> None:
+    """Raise ``ValueError(message)`` when a concrete validity condition fails."""
+    if not bool(condition):
+        raise ValueError(message)
+
+
+class AbstractMotionLaw(eqx.Module):
+    """A normalised rise: ``s`` goes from 0 at ``tau = 0`` to 1 at ``tau = 1``.
+
+    Subclasses implement :meth:`_rise` on ``[0, 1]``; outside that interval the law
+    continues as a dwell (``s = 0`` before, ``s = 1`` after, all derivatives zero), which
+    is what the response engine integrates through.  Every method is elementwise in
+    ``tau`` (scalar or array), jittable, vmappable and differentiable in the law's
+    parameters (its pytree leaves).
+    """
+
+    @property
+    @abc.abstractmethod
+    def name(self) -> str:
+        """Canonical registry name (``camjax.laws.get(law.name)`` rebuilds the law)."""
+
+    @abc.abstractmethod
+    def _rise(self, tau: jax.Array) -> LawValues:
+        """``(s, v, a, j)`` for ``tau`` in ``[0, 1]``."""
+
+    @abc.abstractmethod
+    def breakpoints(self) -> Breakpoints:
+        """Interior points of ``(0, 1)`` where the acceleration or jerk is not smooth.
+
+        A tuple of Python floats when the points are fixed by the law's type (the grid
+        can then place nodes in proportion to piece widths), otherwise a 1-D array of
+        fixed length (entries may coincide).
+        """
+
+    @property
+    @abc.abstractmethod
+    def Cv(self) -> jax.Array | float:
+        """Peak normalised velocity ``max |ds/dtau|``."""
+
+    @property
+    @abc.abstractmethod
+    def Ca(self) -> jax.Array | float:
+        """Peak normalised acceleration ``max |d2s/dtau2|``."""
+
+    @property
+    @abc.abstractmethod
+    def Cj(self) -> jax.Array | float:
+        """Peak normalised jerk ``max |d3s/dtau3|``; ``inf`` where the acceleration steps."""
+
+    def evaluate(self, tau: ArrayLike) -> LawValues:
+        """``(s, v, a, j)`` at ``tau``, with dwells outside ``[0, 1]``."""
+        tau = jnp.asarray(tau, dtype=float)
+        inside = (tau >= 0.0) & (tau <= 1.0)
+        s, v, a, j = self._rise(jnp.clip(tau, 0.0, 1.0))
+        s = jnp.where(inside, s, jnp.where(tau > 1.0, 1.0, 0.0))
+        v, a, j = (jnp.where(inside, x, 0.0) for x in (v, a, j))
+        return s, v, a, j
+
+    def s(self, tau: ArrayLike) -> jax.Array:
+        """Normalised displacement."""
+        return self.evaluate(tau)[0]
+
+    def v(self, tau: ArrayLike) -> jax.Array:
+        """Normalised velocity ``ds/dtau``."""
+        return self.evaluate(tau)[1]
+
+    def a(self, tau: ArrayLike) -> jax.Array:
+        """Normalised acceleration ``d2s/dtau2``."""
+        return self.evaluate(tau)[2]
+
+    def j(self, tau: ArrayLike) -> jax.Array:
+        """Normalised jerk ``d3s/dtau3``."""
+        return self.evaluate(tau)[3]
+
+    def peak_coefficients(self) -> dict[str, float]:
+        """``{"Cv", "Ca", "Cj"}`` as Python floats (``inf`` for an acceleration step)."""
+        return {k: float(getattr(self, k)) for k in ("Cv", "Ca", "Cj")}
+
+
+def static_breakpoints(points) -> tuple[float, ...]:
+    """Sorted distinct interior points of ``(0, 1)`` from Python floats."""
+    out: list[float] = []
+    for p in sorted(float(x) for x in points):
+        if 1e-12 < p < 1.0 - 1e-12 and (not out or p - out[-1] > 1e-12):
+            out.append(p)
+    return tuple(out)
+
+
+def polynomial_peaks(coefficients: np.ndarray) -> float:
+    """``max |p(tau)|`` over ``[0, 1]`` of a polynomial (ascending coefficients), exactly."""
+    poly = np.polynomial.Polynomial(coefficients)
+    roots = poly.deriv().roots() if poly.degree() > 0 else np.array([])
+    candidates = [0.0, 1.0] + [r.real for r in roots if abs(r.imag) < 1e-12 and 0 <= r.real <= 1]
+    return float(max(abs(poly(np.array(candidates)))))

@@ -1,0 +1,76 @@
+"""Look laws up by name: ``get("modsine")``, ``get("scca:0.25,0.5,0.25")``, ``get("poly:5")``."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ._base import AbstractMotionLaw
+from ._polynomial import PolynomialLaw
+from ._scca import (
+    SCCA,
+    Cycloidal,
+    ModifiedSine,
+    ModifiedTrapezoid,
+    Parabolic,
+    SimpleHarmonic,
+)
+
+_STANDARD: dict[str, Callable[[], AbstractMotionLaw]] = {
+    "cycloidal": Cycloidal,
+    "modified-sine": ModifiedSine,
+    "modified-trapezoid": ModifiedTrapezoid,
+    "harmonic": SimpleHarmonic,
+    "parabolic": Parabolic,
+    "poly345": lambda: PolynomialLaw(3),
+    "poly4567": lambda: PolynomialLaw(4),
+}
+
+_ALIASES = {
+    "cycloid": "cycloidal",
+    "modsine": "modified-sine",
+    "modified-sinusoid": "modified-sine",
+    "modtrap": "modified-trapezoid",
+    "modified-trapezoidal": "modified-trapezoid",
+    "shm": "harmonic",
+    "simple-harmonic": "harmonic",
+    "constant-acceleration": "parabolic",
+    "3-4-5": "poly345",
+    "4-5-6-7": "poly4567",
+}
+
+
+def names() -> list[str]:
+    """Canonical names of the standard laws, in the order reports list them."""
+    return list(_STANDARD)
+
+
+def standard_laws() -> list[AbstractMotionLaw]:
+    """One instance of every standard law."""
+    return [make() for make in _STANDARD.values()]
+
+
+def _parse_numbers(text: str, kind, name: str) -> list:
+    try:
+        return [kind(x) for x in text.split(",")]
+    except ValueError:
+        raise ValueError(f"cannot read the parameters of law {name!r}") from None
+
+
+def get(name: str) -> AbstractMotionLaw:
+    """The law called ``name``: a standard name, an alias, ``scca:A,B,C`` or ``poly:K``."""
+    if not isinstance(name, str):
+        raise TypeError(f"a law name must be a string, got {type(name).__name__}")
+    key = name.strip().lower().replace("_", "-").replace(" ", "-")
+    key = _ALIASES.get(key, key)
+    if key in _STANDARD:
+        return _STANDARD[key]()
+    if key.startswith("scca:"):
+        fractions = _parse_numbers(key[5:], float, name)
+        if len(fractions) != 3:
+            raise ValueError(f"law {name!r}: scca takes three fractions, 'scca:A,B,C'")
+        return SCCA(*fractions)
+    if key.startswith("poly:"):
+        (order,) = _parse_numbers(key[5:], int, name)
+        return PolynomialLaw(order)
+    valid = ", ".join(names() + sorted(_ALIASES) + ["scca:A,B,C", "poly:K"])
+    raise ValueError(f"unknown law {name!r}; valid names: {valid}")

@@ -1,0 +1,205 @@
+"""The SCCA family (sine - constant - cosine acceleration) and its named members.
+
+Fractions ``a`` (sine), ``b`` (constant), ``c`` (cosine), ``d = 1 - a - b - c`` (zero) are
+totals over the whole rise.  The first half of the acceleration runs a quarter-sine ramp
+of width ``a/2`` up to the peak ``A``, a constant ``A`` for ``b/2``, a quarter-cosine fall
+of width ``c/2`` back to zero, then zero for ``d/2``; the second half is the point
+reflection ``acc(tau) = -acc(1 - tau)``.  ``A`` follows from ``s(1/2) = 1/2``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from .._custom_types import Breakpoints, LawValues
+from ._base import AbstractMotionLaw, is_concrete, require, static_breakpoints
+
+_PI = math.pi
+
+
+def _half_rise(tau, a, b, c):
+    """``(s, v, acc, jerk)`` of the first half for unit peak acceleration, plus ``s(1/2)``.
+
+    Written with safe divisions so that values and gradients stay finite when a
+    fraction is zero (its piece then has zero width and is never selected).
+    """
+    d = 1.0 - a - b - c
+    t1 = a / 2
+    t2 = t1 + b / 2
+    t3 = t2 + c / 2
+    k1 = _PI / jnp.where(a > 0, a, 1.0)
+    k3 = _PI / jnp.where(c > 0, c, 1.0)
+    # State at the end of each piece (unit peak acceleration).
+    v1 = a / _PI
+    s1 = a**2 * (1 / (2 * _PI) - 1 / _PI**2)
+    v2 = v1 + b / 2
+    s2 = s1 + v1 * b / 2 + (b / 2) ** 2 / 2
+    v3 = v2 + c / _PI
+    s3 = s2 + v2 * c / 2 + c**2 / _PI**2
+    s_half = s3 + v3 * d / 2
+
+    u1 = tau
+    sine = (
+        u1 / k1 - jnp.sin(k1 * u1) / k1**2,
+        (1 - jnp.cos(k1 * u1)) / k1,
+        jnp.sin(k1 * u1),
+        k1 * jnp.cos(k1 * u1),
+    )
+    u2 = tau - t1
+    const = (s1 + v1 * u2 + u2**2 / 2, v1 + u2, jnp.ones_like(tau), jnp.zeros_like(tau))
+    u3 = tau - t2
+    cosine = (
+        s2 + v2 * u3 + (1 - jnp.cos(k3 * u3)) / k3**2,
+        v2 + jnp.sin(k3 * u3) / k3,
+        jnp.cos(k3 * u3),
+        -k3 * jnp.sin(k3 * u3),
+    )
+    u4 = tau - t3
+    zero = (s3 + v3 * u4, v3 * jnp.ones_like(tau), jnp.zeros_like(tau), jnp.zeros_like(tau))
+
+    def pick(i):
+        return jnp.where(
+            tau < t1, sine[i], jnp.where(tau < t2, const[i], jnp.where(tau < t3, cosine[i], zero[i]))
+        )
+
+    return tuple(pick(i) for i in range(4)), s_half, v3
+
+
+class AbstractSCCA(AbstractMotionLaw):
+    """Shared implementation of every SCCA law; members fix or free the fractions."""
+
+    sine: eqx.AbstractVar[float | jax.Array]
+    constant: eqx.AbstractVar[float | jax.Array]
+    cosine: eqx.AbstractVar[float | jax.Array]
+
+    @property
+    def fractions(self):
+        """``(sine, constant, cosine)``: the fractions a, b, c of MISSION.md."""
+        return self.sine, self.constant, self.cosine
+
+    @property
+    def peak_acceleration(self):
+        """The amplitude ``A`` (= Ca) that makes the rise end at ``s = 1``."""
+        _, s_half, _ = _half_rise(jnp.zeros(()), self.sine, self.constant, self.cosine)
+        return 0.5 / s_half
+
+    def _rise(self, tau) -> LawValues:
+        first = tau <= 0.5
+        m = jnp.where(first, tau, 1.0 - tau)
+        (s, v, acc, jerk), s_half, _ = _half_rise(m, self.sine, self.constant, self.cosine)
+        amp = 0.5 / s_half
+        s = jnp.where(first, amp * s, 1.0 - amp * s)
+        acc = jnp.where(first, acc, -acc)
+        return s, amp * v, amp * acc, amp * jerk
+
+    def breakpoints(self) -> Breakpoints:
+        a, b, c = self.sine, self.constant, self.cosine
+        half = (a / 2, (a + b) / 2, (a + b + c) / 2)
+        if all(isinstance(x, float | int) for x in (a, b, c)):
+            return static_breakpoints([*half, 0.5, *(1 - x for x in half)])
+        return jnp.stack([*half, jnp.asarray(0.5), *(1 - x for x in half[::-1])])
+
+    @property
+    def Cv(self):
+        _, s_half, v_half = _half_rise(jnp.zeros(()), self.sine, self.constant, self.cosine)
+        return 0.5 * v_half / s_half
+
+    @property
+    def Ca(self):
+        return self.peak_acceleration
+
+    @property
+    def Cj(self):
+        # Quarter-sine ramp peaks at A*pi/a, quarter-cosine fall at A*pi/c; a zero-width
+        # ramp or fall means the acceleration steps, so the jerk is an impulse.
+        a, _, c = self.fractions
+        smooth = (a > 0) & (c > 0)
+        width = jnp.minimum(jnp.where(smooth, a, 1.0), jnp.where(smooth, c, 1.0))
+        return jnp.where(smooth, self.peak_acceleration * _PI / width, jnp.inf)
+
+
+class SCCA(AbstractSCCA):
+    """The general SCCA law with free (differentiable) fractions.
+
+    ``SCCA(a, b, c)`` takes the sine, constant and cosine fractions of MISSION.md.  Valid
+    fractions are non-negative, finite, with ``0 < a + b + c <= 1``.
+    """
+
+    sine: float | jax.Array
+    constant: float | jax.Array
+    cosine: float | jax.Array
+
+    def __check_init__(self):
+        if is_concrete(self.sine, self.constant, self.cosine):
+            a, b, c = (float(jnp.asarray(x)) for x in self.fractions)
+            require(
+                all(math.isfinite(x) for x in (a, b, c)),
+                f"SCCA fractions must be finite, got a={a}, b={b}, c={c}",
+            )
+            require(
+                min(a, b, c) >= 0,
+                f"SCCA fractions must be non-negative, got a={a}, b={b}, c={c}",
+            )
+            require(
+                0 < a + b + c <= 1 + 1e-12,
+                f"SCCA fractions must satisfy 0 < a + b + c <= 1, got a + b + c = {a + b + c}",
+            )
+
+    @property
+    def name(self) -> str:
+        if is_concrete(self.sine, self.constant, self.cosine):
+            return "scca:{:g},{:g},{:g}".format(*(float(x) for x in (self.sine, self.constant, self.cosine)))
+        return "scca"
+
+
+class Cycloidal(AbstractSCCA):
+    """Cycloidal rise, ``s = tau - sin(2 pi tau)/(2 pi)``: SCCA (1/2, 0, 1/2)."""
+
+    sine: ClassVar[float] = 0.5
+    constant: ClassVar[float] = 0.0
+    cosine: ClassVar[float] = 0.5
+    name: ClassVar[str] = "cycloidal"
+
+
+class ModifiedSine(AbstractSCCA):
+    """Modified sine: SCCA (1/4, 0, 3/4); Ca = 4 pi^2/(pi + 4)."""
+
+    sine: ClassVar[float] = 0.25
+    constant: ClassVar[float] = 0.0
+    cosine: ClassVar[float] = 0.75
+    name: ClassVar[str] = "modified-sine"
+
+
+class ModifiedTrapezoid(AbstractSCCA):
+    """Modified trapezoid: SCCA (1/4, 1/2, 1/4); Ca = 8 pi/(pi + 2)."""
+
+    sine: ClassVar[float] = 0.25
+    constant: ClassVar[float] = 0.5
+    cosine: ClassVar[float] = 0.25
+    name: ClassVar[str] = "modified-trapezoid"
+
+
+class SimpleHarmonic(AbstractSCCA):
+    """Simple harmonic motion, ``s = (1 - cos pi tau)/2``: SCCA (0, 0, 1).
+
+    Its acceleration steps from 0 to pi^2/2 at the start and end of the rise.
+    """
+
+    sine: ClassVar[float] = 0.0
+    constant: ClassVar[float] = 0.0
+    cosine: ClassVar[float] = 1.0
+    name: ClassVar[str] = "harmonic"
+
+
+class Parabolic(AbstractSCCA):
+    """Constant acceleration and deceleration (parabolic): SCCA (0, 1, 0); Ca = 4."""
+
+    sine: ClassVar[float] = 0.0
+    constant: ClassVar[float] = 1.0
+    cosine: ClassVar[float] = 0.0
+    name: ClassVar[str] = "parabolic"

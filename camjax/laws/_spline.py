@@ -1,0 +1,188 @@
+"""B-spline motion laws whose boundary conditions hold for any coefficients."""
+
+from __future__ import annotations
+
+import functools
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._custom_types import Breakpoints, LawValues
+from ._base import AbstractMotionLaw, is_concrete, require
+
+
+@functools.lru_cache(maxsize=64)
+def _knots(n_basis: int, degree: int) -> tuple[float, ...]:
+    """Clamped knot vector with uniform interior knots on [0, 1]."""
+    spans = n_basis - degree
+    interior = np.linspace(0.0, 1.0, spans + 1)[1:-1]
+    return tuple(np.concatenate([np.zeros(degree + 1), interior, np.ones(degree + 1)]))
+
+
+@functools.lru_cache(maxsize=64)
+def _derivative_matrix(knots: tuple[float, ...], degree: int, order: int) -> np.ndarray:
+    """Matrix taking control points to those of the ``order``-th derivative spline."""
+    t = np.asarray(knots)
+    matrix = np.eye(len(t) - degree - 1)
+    for r in range(order):
+        p = degree - r
+        tt = t[r : len(t) - r]
+        n = len(tt) - p - 1
+        diff = np.zeros((n - 1, n))
+        for i in range(n - 1):
+            span = tt[i + p + 1] - tt[i + 1]
+            if span > 0:
+                diff[i, i + 1] = p / span
+                diff[i, i] = -p / span
+        matrix = diff @ matrix
+    return matrix
+
+
+def _basis(knots: np.ndarray, degree: int, x: jax.Array) -> jax.Array:
+    """Cox-de Boor basis functions, shape ``x.shape + (len(knots) - degree - 1,)``."""
+    t = np.asarray(knots)
+    x = x[..., None]
+    last = np.max(np.nonzero(t[1:] > t[:-1])[0])  # last non-empty span, closed at x = 1
+    left, right = t[:-1], t[1:]
+    inside = (x >= left) & (x < right)
+    inside = inside | ((np.arange(len(t) - 1) == last) & (x == right))
+    basis = inside.astype(x.dtype)
+    for p in range(1, degree + 1):
+        n = len(t) - p - 1
+        d1 = t[p : p + n] - t[:n]
+        d2 = t[p + 1 : p + 1 + n] - t[1 : 1 + n]
+        w1 = np.where(d1 > 0, 1.0 / np.where(d1 > 0, d1, 1.0), 0.0)
+        w2 = np.where(d2 > 0, 1.0 / np.where(d2 > 0, d2, 1.0), 0.0)
+        basis = (x - t[:n]) * w1 * basis[..., :n] + (t[p + 1 : p + 1 + n] - x) * w2 * basis[
+            ..., 1 : n + 1
+        ]
+    return basis
+
+
+def max_abs_piecewise(f, edges: np.ndarray, samples_per_piece: int = 32) -> jax.Array:
+    """``max |f|`` over ``[edges[0], edges[-1]]`` for a function smooth between ``edges``.
+
+    Samples each piece, then refines the best sample by golden-section search between
+    its neighbours.  The search location carries no gradient, so derivatives follow the
+    envelope theorem (the value's partial derivative at the maximiser).
+    """
+    pieces = [np.linspace(lo, hi, samples_per_piece + 1) for lo, hi in zip(edges[:-1], edges[1:])]
+    grid = jnp.asarray(np.concatenate(pieces))
+    values = jnp.abs(f(grid))
+    k = jnp.argmax(values)
+    lo = grid[jnp.maximum(k - 1, 0)]
+    hi = grid[jnp.minimum(k + 1, grid.size - 1)]
+    ratio = (np.sqrt(5.0) - 1) / 2
+
+    def step(_, bracket):
+        lo, hi = bracket
+        x1 = hi - ratio * (hi - lo)
+        x2 = lo + ratio * (hi - lo)
+        better_left = jnp.abs(f(x1)) >= jnp.abs(f(x2))
+        return jnp.where(better_left, lo, x1), jnp.where(better_left, x2, hi)
+
+    lo, hi = jax.lax.fori_loop(0, 60, step, (lo, hi))
+    x_best = jax.lax.stop_gradient(0.5 * (lo + hi))
+    return jnp.maximum(jnp.abs(f(x_best)), jnp.abs(f(jax.lax.stop_gradient(grid[k]))))
+
+
+class BSplineLaw(AbstractMotionLaw):
+    """A rise ``s(tau) = sum_i c_i B_i(tau)`` on a clamped, uniform B-spline basis.
+
+    The first three control points are 0 and the last three are 1, so ``s(0) = 0``,
+    ``s(1) = 1`` and ``v = a = 0`` at both ends for *any* free coefficients; with
+    ``zero_jerk=True`` a fourth point at each end also pins the jerk to zero there.
+    Only the free (interior) coefficients are pytree leaves, so they can be optimised
+    without constraints.  ``degree`` is at least 3 (continuous acceleration).
+    """
+
+    coefficients: jax.Array
+    degree: int = eqx.field(static=True, default=5)
+    zero_jerk: bool = eqx.field(static=True, default=False)
+
+    def __check_init__(self):
+        require(
+            isinstance(self.degree, int) and 3 <= self.degree <= 9,
+            f"BSplineLaw degree must be an integer in [3, 9], got {self.degree!r}",
+        )
+        require(
+            jnp.ndim(self.coefficients) == 1,
+            f"BSplineLaw coefficients must be 1-D, got shape {jnp.shape(self.coefficients)}",
+        )
+        require(
+            self.n_basis >= self.degree + 1,
+            f"BSplineLaw of degree {self.degree} needs at least "
+            f"{self.degree + 1 - 2 * self._n_fixed} free coefficients, got {len(self.coefficients)}",
+        )
+        if is_concrete(self.coefficients):
+            require(
+                bool(np.all(np.isfinite(np.asarray(self.coefficients)))),
+                "BSplineLaw coefficients must be finite (got NaN or inf)",
+            )
+
+    @property
+    def _n_fixed(self) -> int:
+        return 4 if self.zero_jerk else 3
+
+    @property
+    def n_basis(self) -> int:
+        return len(self.coefficients) + 2 * self._n_fixed
+
+    @property
+    def knots(self) -> np.ndarray:
+        return np.asarray(_knots(self.n_basis, self.degree))
+
+    @property
+    def control_points(self) -> jax.Array:
+        """All control points: the fixed 0s and 1s around the free coefficients."""
+        c = jnp.asarray(self.coefficients)
+        return jnp.concatenate(
+            [jnp.zeros(self._n_fixed, c.dtype), c, jnp.ones(self._n_fixed, c.dtype)]
+        )
+
+    @property
+    def name(self) -> str:
+        return f"bspline:{len(self.coefficients)}"
+
+    def _derivative(self, tau, order: int) -> jax.Array:
+        knots = _knots(self.n_basis, self.degree)
+        points = jnp.asarray(_derivative_matrix(knots, self.degree, order)) @ self.control_points
+        trimmed = np.asarray(knots)[order : len(knots) - order]
+        return _basis(trimmed, self.degree - order, jnp.asarray(tau)) @ points
+
+    def _rise(self, tau) -> LawValues:
+        return tuple(self._derivative(tau, order) for order in range(4))
+
+    def breakpoints(self) -> Breakpoints:
+        return tuple(float(x) for x in np.unique(self.knots)[1:-1])
+
+    def _peak(self, order: int) -> jax.Array:
+        edges = np.unique(self.knots)
+        return max_abs_piecewise(lambda t: self._derivative(t, order), edges)
+
+    @property
+    def Cv(self):
+        return self._peak(1)
+
+    @property
+    def Ca(self):
+        return self._peak(2)
+
+    @property
+    def Cj(self):
+        return self._peak(3)
+
+    @classmethod
+    def fit(
+        cls, law: AbstractMotionLaw, n_free: int, degree: int = 5, zero_jerk: bool = False
+    ) -> BSplineLaw:
+        """Least-squares fit of another law's displacement (a starting point for design)."""
+        n_fixed = 4 if zero_jerk else 3
+        knots = np.asarray(_knots(n_free + 2 * n_fixed, degree))
+        tau = np.linspace(0.0, 1.0, 40 * (n_free + 2 * n_fixed))
+        basis = np.asarray(_basis(knots, degree, jnp.asarray(tau)))
+        target = np.asarray(law.s(tau)) - basis[:, -n_fixed:].sum(axis=1)
+        free = np.linalg.lstsq(basis[:, n_fixed:-n_fixed], target, rcond=None)[0]
+        return cls(jnp.asarray(free), degree=degree, zero_jerk=zero_jerk)

@@ -1,0 +1,184 @@
+"""Response metrics: refined peaks, torsion-factor envelope fits and Ca*Ct crossovers."""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+# Quintic Hermite interpolation on sigma in [0, 1]: monomial coefficients from
+# (f0, f0', f0'', f1, f1', f1'') (derivatives with respect to sigma).
+_HERMITE_TO_MONOMIAL = np.array(
+    [
+        [1, 0, 0, 0, 0, 0],
+        [0, 1, 0, 0, 0, 0],
+        [0, 0, 0.5, 0, 0, 0],
+        [-10, -6, -1.5, 10, -4, 0.5],
+        [15, 8, 1.5, -15, 7, -1],
+        [-6, -3, -0.5, 6, -3, 0.5],
+    ]
+)
+
+
+def _polynomial(c, x):
+    """Value, first and second derivative of ``sum_m c[..., m] x^m`` (Horner)."""
+    p = dp = ddp = jnp.zeros_like(x)
+    for m in range(c.shape[-1] - 1, -1, -1):
+        ddp = ddp * x + 2 * dp
+        dp = dp * x + p
+        p = p * x + c[..., m]
+    return p, dp, ddp
+
+
+def _quintic_peak(coefficients):
+    """``max |p(sigma)|`` over ``[0, 1]`` for quintics with one extremum at most inside.
+
+    Nine samples pick a start; five clipped Newton steps on ``p'`` then polish it.  The
+    location carries no gradient (envelope theorem).
+    """
+    samples = jnp.linspace(0.0, 1.0, 9)
+    values = jnp.abs(_polynomial(coefficients[..., None, :], samples)[0])
+    start = jax.lax.stop_gradient(samples[jnp.argmax(values, axis=-1)])
+
+    def newton(_, x):
+        _, dp, ddp = _polynomial(coefficients, x)
+        safe = jnp.where(ddp != 0, ddp, 1.0)
+        return jnp.clip(jnp.where(ddp != 0, x - dp / safe, x), 0.0, 1.0)
+
+    sigma = jax.lax.stop_gradient(jax.lax.fori_loop(0, 5, newton, start))
+    polished = jnp.abs(_polynomial(coefficients, sigma)[0])
+    return jnp.maximum(polished, jnp.abs(_polynomial(coefficients, start)[0]))
+
+
+def refined_peak(value, slope_left, curvature_left, slope_right, curvature_right, widths, *,
+                 candidates: int = 8):
+    """``max |f(t)|`` of a sampled signal, refined between samples.
+
+    Args:
+        value: ``(K + 1,)`` samples of a continuous signal ``f`` at the nodes.
+        slope_left, curvature_left: ``(K,)`` ``f'`` and ``f''`` at the left end of each
+            interval, as limits from inside it (the signal may kink at nodes).
+        slope_right, curvature_right: ``(K,)`` the same at each interval's right end.
+        widths: ``(K,)`` interval widths.
+        candidates: how many sampled local maxima of ``|f|`` are refined.
+
+    Each candidate's two neighbouring intervals get a quintic Hermite interpolant (error
+    about ``(w h)^6 / 46080`` for a vibration of angular frequency ``w``) whose maximum
+    is found by Newton's method.
+    """
+    magnitude = jnp.abs(value)
+    padded = jnp.concatenate([jnp.full(1, -jnp.inf), magnitude, jnp.full(1, -jnp.inf)])
+    is_peak = (magnitude >= padded[:-2]) & (magnitude >= padded[2:])
+    k = min(candidates, magnitude.shape[0])
+    _, index = jax.lax.top_k(jnp.where(is_peak, magnitude, -1.0), k)
+    n_intervals = widths.shape[0]
+    interval = jnp.clip(jnp.concatenate([index - 1, index]), 0, n_intervals - 1)
+    h = widths[interval]
+    hermite = jnp.stack(
+        [
+            value[interval],
+            h * slope_left[interval],
+            h**2 * curvature_left[interval],
+            value[interval + 1],
+            h * slope_right[interval],
+            h**2 * curvature_right[interval],
+        ],
+        axis=-1,
+    )
+    coefficients = hermite @ jnp.asarray(_HERMITE_TO_MONOMIAL.T)
+    return jnp.maximum(jnp.max(_quintic_peak(coefficients)), jnp.max(magnitude))
+
+
+class TorsionFactorFit(eqx.Module):
+    """``Ct(n) ~ p / n^q + r`` fitted to the upper envelope of a Ct curve."""
+
+    p: float
+    q: float
+    r: float
+    rms_error: float
+    envelope_n: np.ndarray = eqx.field(static=True)
+    envelope_ct: np.ndarray = eqx.field(static=True)
+
+    def __call__(self, period_ratio):
+        return self.p / np.asarray(period_ratio) ** self.q + self.r
+
+
+def upper_envelope(period_ratio, ct) -> tuple[np.ndarray, np.ndarray]:
+    """Points of the upper envelope of a sampled Ct curve.
+
+    The envelope is taken through the curve's local maxima over ``n`` (the crests of its
+    oscillation), plus the end points where the curve is rising towards them; between
+    crests the envelope is what the fit interpolates.  Points that another point at
+    larger ``n`` exceeds are dropped, so the envelope never increases with ``n``
+    (a curve that falls into its crests, as Ct curves do, is bounded from above).
+    """
+    n = np.asarray(period_ratio, dtype=float)
+    c = np.asarray(ct, dtype=float)
+    order = np.argsort(n)
+    n, c = n[order], c[order]
+    padded = np.concatenate([[-np.inf], c, [-np.inf]])
+    crest = (c >= padded[:-2]) & (c >= padded[2:])
+    n, c = n[crest], c[crest]
+    keep = c >= np.maximum.accumulate(c[::-1])[::-1] - 1e-12
+    return n[keep], c[keep]
+
+
+def fit_torsion_factor(curve, *, q_range: tuple[float, float] = (0.05, 6.0)) -> TorsionFactorFit:
+    """Fit ``Ct = p / n^q + r`` to the upper envelope of ``curve`` (a ``CtCurve``).
+
+    For each exponent ``q`` on a fine grid, ``p`` and ``r`` follow by linear least
+    squares; the best ``q`` is then polished by golden-section search.  Needs at least
+    three envelope points.
+    """
+    n, c = upper_envelope(curve.period_ratio, curve.ct)
+    if n.size < 3:
+        raise ValueError(
+            f"the Ct curve has {n.size} envelope points; sample more period ratios to fit "
+            "Ct = p/n^q + r (at least three crests are needed)"
+        )
+
+    def solve(q):
+        design = np.stack([n**-q, np.ones_like(n)], axis=1)
+        (p, r), *_ = np.linalg.lstsq(design, c, rcond=None)
+        return p, r, float(np.sqrt(np.mean((design @ [p, r] - c) ** 2)))
+
+    grid = np.linspace(*q_range, 400)
+    errors = [solve(q)[2] for q in grid]
+    i = int(np.argmin(errors))
+    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    ratio = (math.sqrt(5) - 1) / 2
+    for _ in range(60):
+        x1, x2 = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
+        if solve(x1)[2] <= solve(x2)[2]:
+            hi = x2
+        else:
+            lo = x1
+    q = 0.5 * (lo + hi)
+    p, r, rms = solve(q)
+    return TorsionFactorFit(float(p), float(q), float(r), rms, n, c)
+
+
+def ca_ct_crossings(curve_a, curve_b, *, envelope: bool = True) -> list[float]:
+    """Period ratios where the Ca*Ct curves of two laws cross.
+
+    With ``envelope=True`` (default) the fitted envelopes ``Ca (p/n^q + r)`` are compared
+    on the common ``n`` range (the reading a designer takes off a chart); otherwise the
+    raw sampled curves, which oscillate and may cross many times.  Crossings are located
+    by linear interpolation of the sign change of the difference.
+    """
+    n = np.asarray(curve_a.period_ratio, dtype=float)
+    if not np.allclose(n, np.asarray(curve_b.period_ratio, dtype=float)):
+        raise ValueError("the two curves must be sampled at the same period ratios")
+    if envelope:
+        fine = np.linspace(n.min(), n.max(), 20001)
+        diff = curve_a.ca * fit_torsion_factor(curve_a)(fine) - curve_b.ca * fit_torsion_factor(
+            curve_b
+        )(fine)
+        n = fine
+    else:
+        diff = np.asarray(curve_a.ca_ct) - np.asarray(curve_b.ca_ct)
+    sign_change = np.nonzero(np.sign(diff[:-1]) * np.sign(diff[1:]) < 0)[0]
+    return [float(n[i] - diff[i] * (n[i + 1] - n[i]) / (diff[i + 1] - diff[i])) for i in sign_change]

@@ -1,0 +1,18 @@
+"""Solution paths for the SDOF response: exact propagation and diffrax."""
+
+from ._exact import propagate as propagate
+from ._grid import MotionGrid as MotionGrid
+from ._grid import default_resolution as default_resolution
+from ._grid import motion_grid as motion_grid
+from ._ode import ADAPTIVE_SOLVERS as ADAPTIVE_SOLVERS
+from ._ode import FIXED_STEP_SOLVERS as FIXED_STEP_SOLVERS
+from ._ode import SOLVERS as SOLVERS
+from ._response import Metrics as Metrics
+from ._response import Response as Response
+from ._response import SolveOptions as SolveOptions
+from ._response import SolverError as SolverError
+from ._response import batch_metrics as batch_metrics
+from ._response import residual_vibration as residual_vibration
+from ._response import response_metrics as response_metrics
+from ._response import solve as solve
+from ._response import torsion_factor as torsion_factor
