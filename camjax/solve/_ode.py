@@ -1,4 +1,17 @@
-"""The SDOF motion integrated with diffrax: the general path and the exact path's check."""
+"""The SDOF motion integrated with diffrax: the general path and the exact path's check.
+
+A diffrax solution is checked before it is returned, so that an unstable or failed run
+gives a failure status and NaN values instead of plausible wrong numbers:
+
+- fixed-step explicit solvers: the growth of their numerical free vibration over the
+  rise, ``|R(lambda h)|^steps`` with ``R`` the method's stability polynomial, must stay
+  below ``MAX_FREE_VIBRATION_GROWTH`` (the true free vibration never grows).  Euler and
+  the two-stage methods have no stable interval on the imaginary axis, so this bounds
+  ``w h`` for a given step count (see docs/work-precision.md);
+- every diffrax solver: the complex mode ``q = e' - conj(lambda) e`` must stay finite
+  and within its physical bound ``|q(t)| <= integral |a| <= Ca`` (``zeta >= 0``).
+A failed check reports ``diffrax.RESULTS.nonfinite`` (the values are replaced by NaN).
+"""
 
 from __future__ import annotations
 
@@ -6,6 +19,7 @@ import diffrax
 import jax.numpy as jnp
 
 from ..laws import AbstractMotionLaw
+from ._exact import eigenvalue
 from ._grid import MotionGrid
 
 FIXED_STEP_SOLVERS = {
@@ -25,6 +39,17 @@ ADAPTIVE_SOLVERS = {
 }
 SOLVERS = {**FIXED_STEP_SOLVERS, **ADAPTIVE_SOLVERS}
 
+# Stability polynomials R(z) (coefficients of z^0, z^1, ...): one step maps y to R(h J) y.
+STABILITY_POLYNOMIALS = {
+    "euler": (1.0, 1.0),
+    "heun": (1.0, 1.0, 0.5),
+    "midpoint": (1.0, 1.0, 0.5),
+    "ralston": (1.0, 1.0, 0.5),
+}
+MAX_FREE_VIBRATION_GROWTH = 1.1
+"""Largest growth of a fixed-step solver's free vibration over the rise that is accepted."""
+_BOUND_MARGIN = 1.01
+
 
 def check_method(method: str) -> str:
     """Canonical method name (``"exact"`` or a diffrax solver), or a ``ValueError``."""
@@ -33,6 +58,19 @@ def check_method(method: str) -> str:
         valid = ", ".join(["exact", *SOLVERS])
         raise ValueError(f"unknown method {method!r}; valid methods: {valid}")
     return key
+
+
+def free_vibration_growth(method: str, omega, zeta, steps: int):
+    """Factor by which ``method``'s numerical free vibration grows over ``steps`` steps.
+
+    ``|R(lambda / steps)|^steps`` for the fixed-step explicit solvers (the exact factor,
+    ``exp(-zeta w)``, is at most 1); 1 for adaptive solvers, whose error control bounds it.
+    """
+    if method not in STABILITY_POLYNOMIALS:
+        return jnp.ones_like(jnp.asarray(omega, dtype=float))
+    z = eigenvalue(omega, zeta) / steps
+    amplification = sum(c * z**k for k, c in enumerate(STABILITY_POLYNOMIALS[method]))
+    return jnp.exp(steps * jnp.log(jnp.abs(amplification)))
 
 
 def _vector_field(t, y, args):
@@ -58,6 +96,8 @@ def integrate(
 
     Adaptive solvers stop at the law's breakpoints (``jump_ts``) unless
     ``use_jump_ts=False``; fixed-step solvers take ``steps`` equal steps over the rise.
+    An unstable or out-of-bound solution comes back as NaN with result ``nonfinite``
+    (see the module docstring).
     """
     solver = SOLVERS[method]()
     if method in FIXED_STEP_SOLVERS:
@@ -83,4 +123,14 @@ def integrate(
         throw=False,
     )
     e, de = solution.ys
-    return e, de, solution.result, solution.stats["num_steps"]
+    mode = jnp.abs(de - jnp.conj(eigenvalue(omega, zeta)) * e)
+    within_bound = jnp.all(mode <= _BOUND_MARGIN * law.Ca)  # False for NaN too
+    stable = free_vibration_growth(method, omega, zeta, steps) <= MAX_FREE_VIBRATION_GROWTH
+    accepted = within_bound & stable
+    result = diffrax.RESULTS.where(
+        accepted | (solution.result != diffrax.RESULTS.successful),
+        solution.result,
+        diffrax.RESULTS.nonfinite,
+    )
+    e, de = (jnp.where(accepted, x, jnp.nan) for x in (e, de))
+    return e, de, result, solution.stats["num_steps"]
