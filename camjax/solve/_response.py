@@ -100,19 +100,26 @@ def _dwell_peak(q_end, omega, zeta, dwell: float):
     return jnp.maximum(jnp.abs(jnp.real(amplitude)), jnp.abs(jnp.real(amplitude * jnp.exp(lam * t))))
 
 
-def _signals(q, grid: MotionGrid, omega, zeta):
-    """Payload acceleration at the nodes and its one-sided derivatives per interval."""
+def _peak_in_motion(q, grid: MotionGrid, omega, zeta):
+    """Max |x''| over the rise: ``x'' = Re(K q)`` sampled at the nodes, then refined.
+
+    The refinement needs the next three derivatives at the ends of candidate intervals,
+    ``Re(K (lambda^k q + lambda^(k-1) a + ...))`` with one-sided ``a``, jerk and snap.
+    """
     lam = eigenvalue(omega, zeta)
     gain = _mode_gain(omega, zeta)
-    acc_l, jerk_l, acc_r, jerk_r = grid.one_sided()
-    left, right = q[:-1], q[1:]
-    return (
-        jnp.real(gain * q),
-        jnp.real(gain * (lam * left + acc_l)),
-        jnp.real(gain * (lam**2 * left + lam * acc_l + jerk_l)),
-        jnp.real(gain * (lam * right + acc_r)),
-        jnp.real(gain * (lam**2 * right + lam * acc_r + jerk_r)),
-    )
+
+    def derivatives(interval):
+        def at(q_end, forcing):
+            d1 = lam * q_end + forcing[:, 0]
+            d2 = lam * d1 + forcing[:, 1]
+            d3 = lam * d2 + forcing[:, 2]
+            return jnp.real(gain * jnp.stack([d1, d2, d3], axis=1))
+
+        left, right = grid.one_sided(interval)
+        return at(q[interval], left), at(q[interval + 1], right)
+
+    return refined_peak(jnp.real(gain * q), grid.widths, derivatives)
 
 
 def _mode_at_nodes(law, grid, model: SpringMass, options: SolveOptions):
@@ -130,7 +137,7 @@ def _mode_at_nodes(law, grid, model: SpringMass, options: SolveOptions):
 
 def _metrics(q, grid, model: SpringMass, ca, dwell: float) -> Metrics:
     omega, zeta = model.omega, model.damping
-    in_motion = refined_peak(*_signals(q, grid, omega, zeta), grid.widths)
+    in_motion = _peak_in_motion(q, grid, omega, zeta)
     in_dwell = _dwell_peak(q[-1], omega, zeta, dwell)
     residual = omega * jnp.abs(q[-1]) / jnp.sqrt(1.0 - zeta**2)
     return Metrics(jnp.maximum(in_motion, in_dwell) / ca, residual / ca, in_motion / ca)
