@@ -1,0 +1,253 @@
+"""Backlash: the payload leaves the driving flank, flies across the clearance, strikes.
+
+Two models of the same scene (MISSION.md conventions; ``bk = backlash/stroke``,
+``dn = Dn T^2/h``, ``v = V T/h``):
+
+* :func:`kinematic_impact` - the reference note's kinematic analysis.  The payload rides
+  the driving (lower) flank ``s(tau)`` while the contact force ``a(tau) + dn`` is
+  non-negative; it departs at the first ``tau_d`` with ``a(tau_d) < -dn`` and flies on the
+  parabola ``s_free(tau) = s(tau_d) + v(tau_d) u - dn u^2/2`` (``u = tau - tau_d``; ``dn`` is
+  a constant retarding force: friction while moving forward, gravity or a preload spring).
+  The gap ``g(tau) = s_free(tau) - s(tau)`` opens from 0; the payload strikes the other
+  flank (at ``s + bk``) when ``g`` reaches ``+bk``, with impact velocity ``v = g'(tau_i)``.
+  If ``g`` closes to 0 first, or the payload stops short of ``bk`` in the following dwell,
+  it falls back onto the driving flank: no impact across the clearance.  Roots are found
+  exactly (grid bracket, then bisection to machine precision); the flight after the
+  rise (cam at rest) is solved in closed form.  Jittable, vmappable and differentiable in
+  the law's parameters, ``bk`` and ``dn`` (implicit differentiation through the roots).
+* :class:`Backlash` with :func:`solve_backlash` - the SDOF of ``camjax.SpringMass`` whose
+  transmission spring has a dead zone of width ``bk``: contact with either flank engages
+  the spring (stiffness from the period ratio) and its viscous damping, the free flight
+  feels only ``-dn``.  Integrated with diffrax, one smooth segment per contact state,
+  each ended by a ``diffrax.Event`` at the next contact change (root-found), so the
+  follower can separate and strike any number of times.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+
+from ..laws._base import AbstractMotionLaw, is_concrete, require
+from ..solve import SolverError
+from ._spring_mass import check_damping, check_period_ratios
+
+# Status codes of a kinematic case.
+IMPACT = 0  # strikes the other flank
+NO_SEPARATION = 1  # dn above the law's peak deceleration: never leaves the driving flank
+NO_IMPACT = 2  # leaves, but falls back onto the driving flank before crossing bk
+STATUS_NAMES = {IMPACT: "impact", NO_SEPARATION: "no separation", NO_IMPACT: "no impact"}
+
+_BISECTIONS = 64  # halves a bracket of width <= 1 below float64 resolution
+_FALL_TOL = 1e-12  # a gap below -_FALL_TOL means the payload is back on the driving flank
+
+
+class KinematicImpact(NamedTuple):
+    """One kinematic backlash case; NaN where the event does not happen.
+
+    Attributes:
+        departure_tau: normalised time the payload leaves the driving flank.
+        impact_tau: normalised time it strikes the other flank (> 1 in the dwell).
+        impact_velocity: normalised impact velocity ``v = V T / h`` (relative to the flank).
+        status: ``IMPACT``, ``NO_SEPARATION`` or ``NO_IMPACT`` (see ``STATUS_NAMES``).
+    """
+
+    departure_tau: jax.Array
+    impact_tau: jax.Array
+    impact_velocity: jax.Array
+    status: jax.Array
+
+
+def _bisect(fn, lo, hi):
+    """Root of ``fn`` in ``[lo, hi]`` with ``fn(lo) < 0 <= fn(hi)``: returns ``hi`` at 1 ulp."""
+
+    def halve(_, bracket):
+        lo, hi = bracket
+        mid = 0.5 * (lo + hi)
+        above = fn(mid) >= 0
+        return jnp.where(above, lo, mid), jnp.where(above, mid, hi)
+
+    return jax.lax.fori_loop(0, _BISECTIONS, halve, (lo, hi))[1]
+
+
+def _first(mask):
+    """Index of the first True of a 1-D mask (its length when there is none)."""
+    return jnp.where(jnp.any(mask), jnp.argmax(mask), mask.shape[0])
+
+
+def check_backlash_inputs(backlash, natural_deceleration) -> None:
+    """``ValueError`` for a non-positive backlash or a negative natural deceleration."""
+    if is_concrete(backlash, natural_deceleration):
+        bk = np.asarray(backlash, dtype=float)
+        dn = np.asarray(natural_deceleration, dtype=float)
+        require(np.all(np.isfinite(bk)) and np.all(bk > 0), f"backlash bk must be positive, got {bk}")
+        require(
+            np.all(np.isfinite(dn)) and np.all(dn >= 0),
+            f"natural deceleration dn must be non-negative, got {dn}",
+        )
+
+
+def kinematic_impact(
+    law: AbstractMotionLaw, backlash, natural_deceleration, *, samples: int = 512
+) -> KinematicImpact:
+    """Departure, impact time and impact velocity of the kinematic backlash analysis.
+
+    Args:
+        law: the rise (followed by a dwell).
+        backlash: normalised clearance ``bk > 0`` (scalar).
+        natural_deceleration: normalised natural deceleration ``dn >= 0`` (scalar).
+        samples: grid that brackets the first departure and the first flank crossing
+            during the rise; an excursion narrower than ``1/samples`` may be missed.
+
+    Gradients (in the law's parameters, ``bk``, ``dn``) are exact for a departure where
+    the acceleration crosses ``-dn`` smoothly (every standard law; the parabolic law's
+    step sits at the fixed crossover); a departure at an acceleration step whose position
+    moves with the parameters is not differentiated through that motion.
+    """
+    check_backlash_inputs(backlash, natural_deceleration)
+    bk = jnp.asarray(backlash, dtype=float)
+    dn = jnp.asarray(natural_deceleration, dtype=float)
+    return _kinematic_impact(law, bk, dn, samples)
+
+
+@eqx.filter_jit
+def _kinematic_impact(law, bk, dn, samples):
+    """:func:`kinematic_impact` on validated array inputs (compiled once per law type)."""
+    # Roots are located on constants (no tangents through the loops), then given their
+    # implicit derivatives by one Newton step on the differentiable functions.
+    law_c, bk_c, dn_c = jax.lax.stop_gradient((law, bk, dn))
+
+    # Departure: first tau with a(tau) + dn < 0.
+    grid = jnp.linspace(0.0, 1.0, samples + 1)
+    k = _first(law_c.a(grid) + dn_c < 0)
+    separates = k <= samples
+    k = jnp.clip(k, 1, samples)
+    tau_d = _bisect(lambda t: -(law_c.a(t) + dn_c), grid[k - 1], grid[k])
+    # The impact does not depend on tau_d to first order (a + dn = 0 there), so the
+    # flight uses the stopped root; the reported time gets its implicit derivative.
+    jerk = law.j(tau_d)
+    smooth = jnp.abs(jerk) > 0
+    departure = tau_d - jnp.where(smooth, (law.a(tau_d) + dn) / jnp.where(smooth, jerk, 1.0), 0.0)
+    s_d, v_d = law.s(tau_d), law.v(tau_d)
+
+    def gap(t, law=law, dn=dn, s_d=s_d, v_d=v_d):
+        u = t - tau_d
+        return s_d + v_d * u - 0.5 * dn * u**2 - law.s(t)
+
+    def gap_c(t):
+        return jax.lax.stop_gradient(gap(t, law_c, dn_c, law_c.s(tau_d), law_c.v(tau_d)))
+
+    def gap_rate(t):
+        return v_d - dn * (t - tau_d) - law.v(t)
+
+    # During the rise: first grid point where the gap reaches bk or closes.
+    taus = tau_d + (1.0 - tau_d) * jnp.linspace(0.0, 1.0, samples + 1)
+    g = gap_c(taus)
+    index = jnp.arange(samples + 1)
+    first_cross = _first((g >= bk) & (index > 0))
+    first_fall = _first((g < -_FALL_TOL) & (index > 0))
+    hits_in_rise = first_cross < first_fall
+    i = jnp.clip(first_cross, 1, samples)
+    root = _bisect(lambda t: gap_c(t) - bk_c, taus[i - 1], taus[i])
+    rate = jax.lax.stop_gradient(gap_rate(root))
+    tau_rise = root - (gap(root) - bk) / jnp.where(rate > 0, rate, 1.0)  # implicit derivative
+    v_rise = gap_rate(tau_rise)
+
+    # After the rise the cam rests at s = 1: g(1 + u) = g1 + w1 u - dn u^2 / 2.
+    falls_in_rise = first_fall <= samples
+    g1, w1 = gap(1.0), gap_rate(1.0)
+    disc = w1**2 - 2 * dn * (bk - g1)
+    reaches = (~falls_in_rise) & (w1 > 0) & (disc >= 0)
+    root_disc = jnp.sqrt(jnp.where(reaches, disc, 1.0))
+    tau_dwell = 1.0 + 2 * (bk - g1) / jnp.where(reaches, w1 + root_disc, 1.0)
+
+    status = jnp.where(
+        ~separates, NO_SEPARATION, jnp.where(hits_in_rise | reaches, IMPACT, NO_IMPACT)
+    )
+    nan = jnp.nan
+    impact_tau = jnp.where(hits_in_rise, tau_rise, tau_dwell)
+    impact_velocity = jnp.where(hits_in_rise, v_rise, root_disc)
+    impacts = status == IMPACT
+    return KinematicImpact(
+        departure_tau=jnp.where(separates, departure, nan),
+        impact_tau=jnp.where(impacts, impact_tau, nan),
+        impact_velocity=jnp.where(impacts, impact_velocity, nan),
+        status=status,
+    )
+
+
+@eqx.filter_jit
+def _impact_table(law, bk, dn, samples):
+    per_bk = jax.vmap(lambda b, d: _kinematic_impact(law, b, d, samples), (0, None))
+    return jax.vmap(per_bk, (None, 0))(bk, dn)
+
+
+def kinematic_impact_table(
+    law: AbstractMotionLaw, backlash, natural_deceleration, *, samples: int = 512
+) -> KinematicImpact:
+    """:func:`kinematic_impact` for every ``(dn, bk)`` pair: arrays of shape ``(n_dn, n_bk)``."""
+    bk = jnp.atleast_1d(jnp.asarray(backlash, dtype=float))
+    dn = jnp.atleast_1d(jnp.asarray(natural_deceleration, dtype=float))
+    require(bk.ndim == 1 and dn.ndim == 1, "backlash and natural deceleration must be 1-D lists")
+    check_backlash_inputs(bk, dn)
+    return _impact_table(law, bk, dn, samples)
+
+
+# --- physical units -------------------------------------------------------------------
+
+
+def _positive(label, value):
+    require(value is not None, f"{label} is missing")
+    require(math.isfinite(value) and value > 0, f"{label} must be positive, got {value}")
+    return float(value)
+
+
+def normalised_backlash(backlash: float, stroke: float) -> float:
+    """``bk = backlash / stroke`` (same length or angle units)."""
+    return _positive("backlash", backlash) / _positive("stroke", stroke)
+
+
+def normalised_deceleration(deceleration: float, stroke: float, motion_time: float) -> float:
+    """``dn = Dn T^2 / h`` from the payload's natural deceleration ``Dn`` (m/s^2 or rad/s^2)."""
+    require(math.isfinite(deceleration) and deceleration >= 0, "deceleration must be >= 0")
+    return deceleration * _positive("motion_time", motion_time) ** 2 / _positive("stroke", stroke)
+
+
+def impact_velocity(normalised_velocity: float, stroke: float, motion_time: float) -> float:
+    """Physical impact velocity ``V = v h / T`` (m/s, or rad/s for an angular stroke)."""
+    return float(normalised_velocity) * _positive("stroke", stroke) / _positive("motion_time", motion_time)
+
+
+def impact_force(
+    velocity: float,
+    *,
+    mass: float | None = None,
+    stiffness: float | None = None,
+    inertia: float | None = None,
+    torsional_rigidity: float | None = None,
+) -> float:
+    """Impact force ``V sqrt(S W)`` (N) or torque ``V sqrt(R I)`` (N m), SI units.
+
+    The peak force of an undamped spring ``S`` stopping a mass ``W`` that strikes at
+    ``V``; give ``mass`` and ``stiffness`` (linear) or ``inertia`` and
+    ``torsional_rigidity`` (rotary, ``velocity`` in rad/s).
+    """
+    linear = mass is not None or stiffness is not None
+    rotary = inertia is not None or torsional_rigidity is not None
+    require(
+        linear != rotary,
+        "give either mass and stiffness (linear) or inertia and torsional_rigidity (rotary)",
+    )
+    require(math.isfinite(velocity) and velocity >= 0, f"velocity must be >= 0, got {velocity}")
+    if linear:
+        return velocity * math.sqrt(_positive("mass", mass) * _positive("stiffness", stiffness))
+    return velocity * math.sqrt(
+        _positive("inertia", inertia) * _positive("torsional_rigidity", torsional_rigidity)
+    )

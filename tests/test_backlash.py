@@ -1,0 +1,183 @@
+"""Backlash: kinematic impact against closed forms and scipy, gradients, CLI, dynamic model."""
+
+import argparse
+import json
+import math
+
+import camjax
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from camjax.cli import backlash as backlash_cli
+from camjax.cli._common import CliError
+from camjax.models import backlash as bl
+
+
+def _parabolic_closed_form(bk, dn):
+    """Parabolic law: constant deceleration 4 after tau = 1/2, so g'' = 4 - dn."""
+    g1, w1 = (4 - dn) / 8, (4 - dn) / 2  # gap and relative velocity at tau = 1
+    if bk <= g1:
+        u = math.sqrt(2 * bk / (4 - dn))
+        return 0.5 + u, (4 - dn) * u
+    disc = w1**2 - 2 * dn * (bk - g1)
+    if disc < 0:
+        return math.nan, math.nan
+    v = math.sqrt(disc)
+    return 1 + (w1 - v) / dn if dn > 0 else 1 + (bk - g1) / w1, v
+
+
+@pytest.mark.parametrize(
+    "bk, dn", [(0.01, 0.0), (0.01, 1.0), (0.1, 2.5), (0.3, 1.0), (0.4, 0.5), (0.7, 0.0), (0.3, 3.0)]
+)
+def test_parabolic_matches_closed_form(bk, dn):
+    result = bl.kinematic_impact(camjax.laws.Parabolic(), bk, dn)
+    tau_i, v = _parabolic_closed_form(bk, dn)
+    assert float(result.departure_tau) == pytest.approx(0.5, abs=1e-14)
+    if math.isnan(v):
+        assert int(result.status) == bl.NO_IMPACT
+        assert np.isnan(float(result.impact_velocity))
+    else:
+        assert int(result.status) == bl.IMPACT
+        assert float(result.impact_tau) == pytest.approx(tau_i, rel=1e-12)
+        assert float(result.impact_velocity) == pytest.approx(v, rel=1e-11)
+
+
+@pytest.mark.parametrize("law, scale", [(camjax.laws.SimpleHarmonic(), 1.0), (camjax.laws.Cycloidal(), 2.0)])
+@pytest.mark.parametrize("bk", [1e-4, 0.02, 0.2])
+def test_crossover_departure_matches_scipy(law, scale, bk):
+    """dn = 0: departure at crossover; SHM gap (pi u - sin pi u)/2, cycloidal u - sin(2 pi u)/(2 pi).
+
+    Both are ``(k u - sin k u)/k * c`` forms whose impact velocity is ``c (1 - cos k u)``.
+    """
+    k = math.pi * scale
+    c = math.pi / 2 if scale == 1.0 else 1.0
+    gap = lambda u: c * (k * u - math.sin(k * u)) / k - bk  # noqa: E731
+    u = brentq(gap, 1e-12, 0.5, xtol=1e-15, rtol=1e-15)
+    result = bl.kinematic_impact(law, bk, 0.0)
+    assert float(result.departure_tau) == pytest.approx(0.5, abs=1e-12)
+    assert float(result.impact_tau) == pytest.approx(0.5 + u, rel=1e-12)
+    assert float(result.impact_velocity) == pytest.approx(c * (1 - math.cos(k * u)), rel=1e-9)
+
+
+def test_departure_where_deceleration_exceeds_dn():
+    law = camjax.laws.Cycloidal()  # a = 2 pi sin(2 pi tau)
+    dn = 3.0
+    result = bl.kinematic_impact(law, 0.05, dn)
+    expected = 0.5 + math.asin(dn / (2 * math.pi)) / (2 * math.pi)
+    assert float(result.departure_tau) == pytest.approx(expected, rel=1e-13)
+
+
+def test_no_separation_above_peak_deceleration():
+    for law in (camjax.laws.Cycloidal(), camjax.laws.Parabolic(), camjax.laws.ModifiedSine()):
+        result = bl.kinematic_impact(law, 0.05, float(law.Ca) * 1.01)
+        assert int(result.status) == bl.NO_SEPARATION
+        assert all(np.isnan(float(x)) for x in result[:3])
+    # Exactly at the parabolic law's constant deceleration: the contact force is zero, never negative.
+    assert int(bl.kinematic_impact(camjax.laws.Parabolic(), 0.05, 4.0).status) == bl.NO_SEPARATION
+
+
+def test_small_backlash_scales_with_crossover_jerk():
+    """dn = 0, bk -> 0: g ~ |j| u^3/6, so v -> |j|^(1/3) (6 bk)^(2/3) / 2 (low jerk, low impact)."""
+    bk = 1e-7
+    for law in (camjax.laws.SimpleHarmonic(), camjax.laws.ModifiedSine(), camjax.laws.Cycloidal()):
+        jerk = abs(float(law.j(0.5 + 1e-9)))
+        v = float(bl.kinematic_impact(law, bk, 0.0).impact_velocity)
+        assert v == pytest.approx(jerk ** (1 / 3) * (6 * bk) ** (2 / 3) / 2, rel=1e-3)
+
+
+def test_invalid_inputs_raise():
+    law = camjax.laws.Cycloidal()
+    with pytest.raises(ValueError, match="backlash bk must be positive"):
+        bl.kinematic_impact(law, 0.0, 1.0)
+    with pytest.raises(ValueError, match="natural deceleration dn must be non-negative"):
+        bl.kinematic_impact(law, 0.1, -1.0)
+
+
+def test_table_equals_loop():
+    law = camjax.laws.ModifiedSine()
+    bk, dn = [0.005, 0.1, 0.6], [0.0, 2.0, 5.0, 6.0]
+    table = bl.kinematic_impact_table(law, bk, dn)
+    assert table.impact_velocity.shape == (4, 3)
+    for i, d in enumerate(dn):
+        for j, b in enumerate(bk):
+            single = bl.kinematic_impact(law, b, d)
+            np.testing.assert_allclose(table.impact_velocity[i, j], single.impact_velocity, rtol=1e-13)
+            assert int(table.status[i, j]) == int(single.status)
+    assert int(table.status[3, 0]) == bl.NO_SEPARATION  # ModSine Ca = 5.528 < 6
+
+
+@jax.jit
+def _velocity(params):
+    """Impact velocity of SCCA(a, b, c) at (bk, dn), from ``params = (a, b, c, bk, dn)``."""
+    return bl.kinematic_impact(camjax.laws.SCCA(*params[:3]), params[3], params[4]).impact_velocity
+
+
+_velocity_grad = jax.jit(jax.grad(_velocity))
+
+
+@pytest.mark.parametrize(
+    "fractions, bk, dn",
+    [((0.25, 0.0, 0.75), 0.02, 1.0), ((0.3, 0.2, 0.4), 0.3, 2.0), ((0.2, 0.3, 0.5), 0.05, 0.5)],
+)
+def test_gradient_matches_central_differences(fractions, bk, dn):
+    params = jnp.array([*fractions, bk, dn])
+    grad = _velocity_grad(params)
+    f = _velocity
+    h = 1e-6
+    fd = np.array([(f(params.at[i].add(h)) - f(params.at[i].add(-h))) / (2 * h) for i in range(5)])
+    assert np.all(np.isfinite(grad))
+    np.testing.assert_allclose(grad, fd, rtol=1e-6, atol=1e-7)
+
+
+def test_impact_force_is_energy_balance():
+    """``V sqrt(S W)`` is the peak force of a spring S stopping W from V: W V^2 = S x^2."""
+    V, W, S = 0.3, 2.0, 5e6
+    force = bl.impact_force(V, mass=W, stiffness=S)
+    assert 0.5 * W * V**2 == pytest.approx(0.5 * S * (force / S) ** 2, rel=1e-14)
+    torque = bl.impact_force(2.0, inertia=0.01, torsional_rigidity=4e4)
+    assert torque == pytest.approx(2.0 * math.sqrt(0.01 * 4e4), rel=1e-14)
+    with pytest.raises(ValueError, match="either mass and stiffness"):
+        bl.impact_force(1.0, mass=1.0, inertia=1.0)
+    # Normalisation round trip: v = V T / h.
+    h, T = 0.05, 0.2
+    assert bl.impact_velocity(1.5, h, T) * T / h == pytest.approx(1.5, rel=1e-15)
+    assert bl.normalised_deceleration(9.81, h, T) == pytest.approx(9.81 * T**2 / h)
+
+
+def _cli(argv):
+    parser = argparse.ArgumentParser()
+    backlash_cli.register(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["backlash", *argv])
+    return args.func(args)
+
+
+def test_cli_json_shape(capsys, tmp_path):
+    status = _cli(
+        ["--law", "parabolic", "--law", "shm", "--bk", "0.01,0.3", "--dn", "0,3,5",
+         "--format", "json", "--out", str(tmp_path)]
+    )
+    assert status == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert json.loads((tmp_path / "backlash.json").read_text()) == doc
+    assert set(doc["laws"]) == {"parabolic", "harmonic"}
+    entry = doc["laws"]["parabolic"]
+    assert entry["bk"] == [0.01, 0.3] and entry["dn"] == [0.0, 3.0, 5.0]
+    for key in ("impact_velocity", "departure_tau", "impact_tau"):
+        assert len(entry[key]) == 3 and all(len(row) == 2 for row in entry[key])
+    assert entry["impact_velocity"][0][0] == pytest.approx(_parabolic_closed_form(0.01, 0.0)[1])
+    assert entry["impact_velocity"][2] == [None, None]  # dn = 5 > 4: no separation
+    assert entry["status"][2] == ["no separation", "no separation"]
+    assert entry["impact_velocity"][1][1] is None and entry["status"][1][1] == "no impact"
+
+
+def test_cli_table_and_bad_arguments(capsys):
+    assert _cli(["--law", "cycloidal", "--bk", "0.1", "--dn", "0,7"]) == 0
+    out = capsys.readouterr().out
+    assert "cycloidal" in out and "-" in out.splitlines()[-1]
+    with pytest.raises(CliError, match="--bk"):
+        _cli(["--law", "cycloidal", "--bk", "0,0.1", "--dn", "0"])
+    with pytest.raises(ValueError, match="unknown law"):
+        _cli(["--law", "nope", "--bk", "0.1", "--dn", "0"])
