@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -112,15 +112,20 @@ def refined_peak(value, widths, one_sided_derivatives, *, candidates: int = 8, b
     return jnp.maximum(jnp.max(_interval_peak(coefficients)), jnp.max(magnitude))
 
 
-class TorsionFactorFit(eqx.Module):
-    """``Ct(n) ~ p / n^q + r`` fitted to the upper envelope of a Ct curve."""
+@dataclasses.dataclass(frozen=True)
+class TorsionFactorFit:
+    """``Ct(n) ~ p / n^q + r`` fitted to the upper envelope of a Ct curve.
+
+    ``rms_error`` is the fit's RMS relative deviation from the envelope points
+    ``envelope_n, envelope_ct`` it was fitted to.
+    """
 
     p: float
     q: float
     r: float
     rms_error: float
-    envelope_n: np.ndarray = eqx.field(static=True)
-    envelope_ct: np.ndarray = eqx.field(static=True)
+    envelope_n: np.ndarray
+    envelope_ct: np.ndarray
 
     def __call__(self, period_ratio):
         return self.p / np.asarray(period_ratio) ** self.q + self.r
@@ -149,9 +154,11 @@ def upper_envelope(period_ratio, ct) -> tuple[np.ndarray, np.ndarray]:
 def fit_torsion_factor(curve, *, q_range: tuple[float, float] = (0.05, 6.0)) -> TorsionFactorFit:
     """Fit ``Ct = p / n^q + r`` to the upper envelope of ``curve`` (a ``CtCurve``).
 
-    For each exponent ``q`` on a fine grid, ``p`` and ``r`` follow by linear least
-    squares; the best ``q`` is then polished by golden-section search.  Needs at least
-    three envelope points.
+    The fit minimises the relative error at the envelope points (so the tall crests at
+    low ``n`` do not drown the rest) subject to ``r >= 1``: as ``n`` grows the payload
+    follows the command and Ct tends to 1 or above, never below.  For each exponent ``q``
+    on a fine grid, ``p`` and ``r`` follow by weighted linear least squares; the best
+    ``q`` is then polished by golden-section search.  Needs three envelope points.
     """
     n, c = upper_envelope(curve.period_ratio, curve.ct)
     if n.size < 3:
@@ -161,9 +168,12 @@ def fit_torsion_factor(curve, *, q_range: tuple[float, float] = (0.05, 6.0)) -> 
         )
 
     def solve(q):
-        design = np.stack([n**-q, np.ones_like(n)], axis=1)
-        (p, r), *_ = np.linalg.lstsq(design, c, rcond=None)
-        return p, r, float(np.sqrt(np.mean((design @ [p, r] - c) ** 2)))
+        basis = n**-q / c
+        p, r = np.linalg.lstsq(np.stack([basis, 1 / c], axis=1), np.ones_like(c), rcond=None)[0]
+        if r < 1.0:
+            r = 1.0
+            p = float(basis @ (1 - r / c) / (basis @ basis))
+        return p, r, float(np.sqrt(np.mean(((p * n**-q + r) / c - 1) ** 2)))
 
     grid = np.linspace(*q_range, 400)
     errors = [solve(q)[2] for q in grid]

@@ -1,0 +1,135 @@
+"""``camjax ct``: Ct, residual and Ca*Ct curves of motion laws over period ratios."""
+
+from __future__ import annotations
+
+import csv
+import io
+import sys
+
+import numpy as np
+from tqdm import tqdm
+
+from .. import laws, plot
+from ..metrics import ca_ct_crossings, fit_torsion_factor
+from ..solve import SOLVERS
+from ..sweep import ct_curve
+from ._common import add_format, dump_json, output_dir, parse_range
+
+DEFAULT_N = "1:30:1000"
+
+
+def register(sub) -> None:
+    parser = sub.add_parser(
+        "ct",
+        help="torsion factor, residual vibration and Ca*Ct curves over period ratios",
+        description="Sweep period ratios for one or more motion laws (default: every "
+        "standard law, n from 1 to 30) and report Ct, residual vibration R and Ca*Ct, with "
+        "the fitted torsion-factor envelope Ct = p/n^q + r of each law.",
+    )
+    parser.add_argument("--law", action="append", metavar="NAME",
+                        help="law name (repeatable; default: all standard laws)")
+    parser.add_argument("--n", default=DEFAULT_N, metavar="START:STOP:COUNT|V1,V2,...",
+                        help=f"period ratios (default {DEFAULT_N})")
+    parser.add_argument("--damping", type=float, default=0.0, help="damping ratio zeta in [0, 1)")
+    parser.add_argument("--dwell", type=float, default=1.0,
+                        help="dwell after the rise, in motion periods (default 1)")
+    parser.add_argument("--method", default="exact",
+                        help=f"exact or a diffrax solver: {', '.join(SOLVERS)}")
+    parser.add_argument("--out", metavar="DIR", help="write CSV, JSON, figures and tables here")
+    add_format(parser)
+    parser.set_defaults(func=run)
+
+
+def _fit_or_none(curve):
+    try:
+        return fit_torsion_factor(curve)
+    except ValueError:
+        return None
+
+
+def _table(curves, fits) -> str:
+    lines = [f"{'law':<20} {'Ca':>7} {'max Ct':>7} {'max CaCt':>8} {'max R':>7} "
+             f"{'p':>7} {'q':>6} {'r':>6}"]
+    for name, c in curves.items():
+        f = fits.get(name)
+        fit = f"{f.p:7.3f} {f.q:6.3f} {f.r:6.3f}" if f else f"{'-':>7} {'-':>6} {'-':>6}"
+        lines.append(f"{name:<20} {c.ca:7.4f} {c.ct.max():7.4f} {c.ca_ct.max():8.4f} "
+                     f"{c.residual.max():7.4f} {fit}")
+    return "\n".join(lines)
+
+
+def _csv(curves) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(["law", "period_ratio", "ct", "residual", "peak_in_motion", "ca_ct"])
+    for name, c in curves.items():
+        for row in zip(c.period_ratio, c.ct, c.residual, c.peak_in_motion, c.ca_ct):
+            writer.writerow([name, *(f"{x:.12g}" for x in row)])
+    return buffer.getvalue()
+
+
+def _json(curves, args, selected) -> dict:
+    first = next(iter(curves.values()))
+    return {
+        "period_ratio": first.period_ratio,
+        "damping": args.damping,
+        "method": first.method,
+        "laws": {
+            name: {
+                **selected[name].peak_coefficients(),
+                "ct": c.ct,
+                "residual": c.residual,
+                "peak_in_motion": c.peak_in_motion,
+            }
+            for name, c in curves.items()
+        },
+    }
+
+
+def _fit_report(curves, fits) -> str:
+    rows = ["| law | Ca | p | q | r | rms error |", "|---|---|---|---|---|---|"]
+    for name, f in fits.items():
+        rows.append(f"| {name} | {curves[name].ca:.4f} | {f.p:.4f} | {f.q:.4f} | {f.r:.4f} "
+                    f"| {f.rms_error:.4f} |")
+    rows += ["", "Where the law with the lowest fitted Ca*Ct envelope changes:", ""]
+    rows += [f"- n = {n:.3f}: {a} -> {b}" for n, a, b in plot.best_law_switches(curves, fits)]
+    if {"modified-sine", "cycloidal"} <= fits.keys():
+        cross = ca_ct_crossings(curves["modified-sine"], curves["cycloidal"])
+        text = ", ".join(f"{x:.3f}" for x in cross) or "none in range"
+        rows += ["", f"Fitted Ca*Ct envelopes of modified-sine and cycloidal cross at n = {text}."]
+    return "\n".join(rows) + "\n"
+
+
+def run(args) -> int:
+    names = args.law or laws.names()
+    selected = {}
+    for name in names:
+        law = laws.get(name)
+        selected[law.name] = law
+    n = parse_range(args.n, "--n")
+    out = output_dir(args.out)
+    curves = {}
+    for name, law in tqdm(selected.items(), desc="camjax ct", unit="law", file=sys.stderr,
+                          disable=not sys.stderr.isatty()):
+        curves[name] = ct_curve(law, n, damping=args.damping, method=args.method,
+                                dwell=args.dwell)
+    fits = {k: f for k, f in ((k, _fit_or_none(c)) for k, c in curves.items()) if f}
+    if out is not None:
+        (out / "ct.csv").write_text(_csv(curves))
+        dump_json(_json(curves, args, selected), out / "ct.json")
+        (out / "torsion_factor_fit.md").write_text(_fit_report(curves, fits))
+        plot.save(plot.ct_curves(curves), out / "ct_curves.png")
+        plot.save(plot.residual_curves(curves), out / "residual_curves.png")
+        if fits:
+            plot.save(plot.ca_ct_chart(curves, fits), out / "ca_ct.png")
+        print(f"wrote {out}/: ct.csv, ct.json, torsion_factor_fit.md, ct_curves.png, "
+              "residual_curves.png, ca_ct.png", file=sys.stderr)
+    if args.format == "json":
+        print(dump_json(_json(curves, args, selected)))
+    elif args.format == "csv":
+        sys.stdout.write(_csv(curves))
+    else:
+        print(_table(curves, fits))
+    return 0
+
+
