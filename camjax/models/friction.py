@@ -325,6 +325,9 @@ def solve_friction(law: AbstractMotionLaw, model: CoulombFriction, **options) ->
         jnp.asarray(float(model.friction)),
         jnp.asarray(check_damping(model.damping)),
     )
+    # Traced leaves, not static settings: no recompilation per value.
+    options["eps"] = jnp.asarray(eps)
+    options["max_segments"] = jnp.asarray(int(options.get("max_segments", 256)))
     response = friction_response(law, model, **options)
     if response.result != diffrax.RESULTS.successful:
         raise SolverError(

@@ -1,0 +1,165 @@
+"""Coulomb friction with stick-slip: closed forms, the exact SDOF, and three solution paths."""
+
+import camjax
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from camjax.models.friction import CoulombFriction, free_vibration, solve_friction
+
+SAMPLES = 1024  # one static setting, so the events path compiles once for the module
+
+
+@pytest.fixture(scope="module")
+def cycloidal():
+    return camjax.laws.Cycloidal()
+
+
+def test_free_vibration_decays_linearly_by_four_mu_over_w2_per_cycle():
+    model = CoulombFriction(2.0, 1.0)
+    w = 2 * np.pi * 2.0
+    band = 1.0 / w**2
+    fv = free_vibration(model, 0.1, 0.0)
+    times = np.asarray(fv.reversal_time)
+    finite = np.isfinite(times)
+    x = np.concatenate([[0.1], np.asarray(fv.reversal_position)[finite]])
+    # Half a period between reversals; each half cycle swings about the centre
+    # sign(x) mu / w^2, so x_(k+1) = -x_k + 2 mu / w^2 sign(x_k): 4 mu / w^2 lost a cycle.
+    np.testing.assert_allclose(np.diff(times[finite]), np.pi / w, rtol=1e-12)
+    np.testing.assert_allclose(x[1:], -x[:-1] + 2 * band * np.sign(x[:-1]), rtol=1e-10, atol=1e-15)
+    swinging = np.abs(x[:-1])  # every reversal but the one where it sticks
+    np.testing.assert_allclose(swinging[2:] - swinging[:-2], -4 * band, rtol=1e-10)
+    # It sticks at the first reversal inside the band, after ceil((0.1 - band) / (2 band)) of them.
+    k = int(np.ceil((0.1 - band) / (2 * band)))
+    assert finite.sum() == k
+    assert np.all(np.abs(x[:-1]) > band) and abs(float(fv.rest_position)) <= band
+    np.testing.assert_allclose(float(fv.rest_position), (-1) ** k * (0.1 - 2 * k * band), rtol=1e-10)
+    np.testing.assert_allclose(float(fv.stick_time), k * np.pi / w, rtol=1e-12)
+
+
+def test_free_vibration_with_viscous_damping_matches_scipy_events():
+    model = CoulombFriction(1.5, 2.0, 0.05)
+    w, zeta, mu = 2 * np.pi * 1.5, 0.05, 2.0
+    fv = free_vibration(model, -0.08, 0.3)
+
+    def field(t, y, direction):
+        return [y[1], -(w**2) * y[0] - 2 * zeta * w * y[1] - mu * direction]
+
+    t, y, times, positions = 0.0, np.array([-0.08, 0.3]), [], []
+    direction = np.sign(y[1])
+    while True:
+        reversal = lambda t, y, d=direction: y[1]  # noqa: E731
+        reversal.terminal, reversal.direction = True, -direction
+        sol = solve_ivp(field, (t, t + 50), y, args=(direction,), events=reversal,
+                        method="DOP853", rtol=1e-12, atol=1e-14)
+        t, y = sol.t_events[0][0], sol.y_events[0][0]
+        times.append(t)
+        positions.append(y[0])
+        if abs(w**2 * y[0]) <= mu:
+            break
+        direction = -np.sign(y[0])
+        y = np.array([y[0], 0.0])
+    k = len(times)
+    np.testing.assert_allclose(np.asarray(fv.reversal_time)[:k], times, rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(fv.reversal_position)[:k], positions, rtol=1e-8, atol=1e-12)
+    assert np.isinf(np.asarray(fv.reversal_time)[k])
+    np.testing.assert_allclose(float(fv.rest_position), positions[-1], rtol=1e-8)
+
+
+def test_zero_friction_reproduces_exact_sdof(cycloidal):
+    response = solve_friction(cycloidal, CoulombFriction(5.25, 0.0), samples=SAMPLES)
+    exact = camjax.solve(cycloidal, camjax.SpringMass(5.25))
+    # Deflection e = s - x at the end of the rise and the end of the dwell.
+    tau = np.asarray(response.tau)
+    for t in (1.0, 2.0):
+        i = int(np.argmin(np.abs(tau - t)))
+        j = int(np.argmin(np.abs(np.asarray(exact.tau) - t)))
+        assert tau[i] == t and float(exact.tau[j]) == pytest.approx(t, abs=1e-14)
+        e = float(cycloidal.s(t) - response.position[i])
+        assert e == pytest.approx(float(exact.deflection[j]), abs=1e-10)
+    # Ct from samples (1024 over two periods) agrees with the refined exact peak.
+    assert float(response.ct) == pytest.approx(float(exact.metrics.ct), rel=2e-4)
+    assert float(response.ct) <= float(exact.metrics.ct) + 1e-12
+    assert not bool(response.settled)
+
+
+@pytest.mark.parametrize(
+    "law_name, n, mu, zeta",
+    [
+        ("cycloidal", 5.25, 0.5, 0.0),
+        ("cycloidal", 3.3, 1.0, 0.02),
+        pytest.param("modified-sine", 4.5, 2.0, 0.0, marks=pytest.mark.slow),
+        pytest.param("modified-trapezoid", 3.3, 1.0, 0.02, marks=pytest.mark.slow),
+    ],
+)
+def test_events_agree_with_piecewise_exact_dwell_and_rest_in_band(law_name, n, mu, zeta):
+    law = camjax.laws.get(law_name)
+    model = CoulombFriction(n, mu, zeta)
+    response = solve_friction(law, model, samples=SAMPLES)
+    i_end = int(np.argmin(np.abs(np.asarray(response.tau) - 1.0)))
+    # The dwell from the events path's state at tau = 1, propagated in closed form.
+    fv = free_vibration(model, response.position[i_end] - 1.0, response.velocity[i_end])
+    band = mu / (2 * np.pi * n) ** 2
+    assert bool(response.settled)
+    assert float(fv.stick_time) < 1.0
+    assert float(response.rest_offset) == pytest.approx(float(fv.rest_position), abs=1e-9)
+    assert abs(float(response.rest_offset)) <= band * (1 + 1e-9)
+    assert abs(float(response.rest_offset)) > 0  # out of position, as the note warns
+    # Stuck from the closed-form stick time on (samples after it, with a little margin).
+    after = np.asarray(response.tau) > 1.0 + float(fv.stick_time) + 1e-6
+    assert np.all(np.asarray(response.stuck)[after])
+
+
+def test_regularised_converges_to_stick_slip_as_eps_shrinks(cycloidal):
+    model = CoulombFriction(5.25, 0.5)
+    events = solve_friction(cycloidal, model, samples=SAMPLES)
+    errors = []
+    for eps in (1e-2, 1e-3, 1e-4):
+        smooth = solve_friction(cycloidal, model, samples=SAMPLES, method="regularised", eps=eps)
+        in_motion = events.tau <= 1.0
+        errors.append(float(jnp.max(jnp.where(in_motion, jnp.abs(smooth.position - events.position), 0))))
+    assert errors[0] > 3 * errors[1] > 9 * errors[2]
+    assert errors[2] < 1e-4
+
+
+def test_bad_input_is_a_clear_error(cycloidal):
+    with pytest.raises(ValueError, match="friction"):
+        CoulombFriction(5.0, -1.0)
+    with pytest.raises(ValueError, match="period ratio"):
+        CoulombFriction(-5.0, 1.0)
+    with pytest.raises(ValueError, match="unknown friction method"):
+        solve_friction(cycloidal, CoulombFriction(5.0, 1.0), method="bogus")
+    with pytest.raises(ValueError, match="eps"):
+        solve_friction(cycloidal, CoulombFriction(5.0, 1.0), method="regularised", eps=0.0)
+
+
+def test_too_few_segments_raises_solver_error(cycloidal):
+    with pytest.raises(camjax.SolverError, match="max_segments"):
+        solve_friction(cycloidal, CoulombFriction(5.25, 0.5), samples=SAMPLES, max_segments=2)
+
+
+@pytest.mark.slow
+def test_vmap_over_period_ratios_equals_loop(cycloidal):
+    from camjax.models.friction import friction_response
+
+    ns = jnp.array([3.3, 5.25])
+    batch = jax.vmap(lambda n: friction_response(cycloidal, CoulombFriction(n, 0.5), samples=SAMPLES))(ns)
+    for k, n in enumerate(ns):
+        one = solve_friction(cycloidal, CoulombFriction(float(n), 0.5), samples=SAMPLES)
+        np.testing.assert_allclose(batch.position[k], one.position, atol=1e-12)
+
+
+@pytest.mark.slow
+def test_regularised_gradient_matches_finite_differences(cycloidal):
+    from camjax.models.friction import friction_response
+
+    def offset(mu):
+        model = CoulombFriction(5.25, mu)
+        return friction_response(cycloidal, model, samples=256, method="regularised", eps=1e-2).position[-1]
+
+    g = float(jax.grad(offset)(jnp.asarray(0.5)))
+    h = 1e-5
+    fd = (float(offset(jnp.asarray(0.5 + h))) - float(offset(jnp.asarray(0.5 - h)))) / (2 * h)
+    assert g == pytest.approx(fd, rel=1e-4, abs=1e-9)
