@@ -12,6 +12,7 @@ import math
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._custom_types import ArrayLike, Breakpoints, LawValues
 from ._base import AbstractMotionLaw, is_concrete, require, static_breakpoints
@@ -40,7 +41,7 @@ class MotionProgram(eqx.Module):
         require(self.dwell_angle >= 0, "dwell_angle must be non-negative")
         require(sum(angles) <= 2 * math.pi + 1e-12, f"rise + dwell + fall = {sum(angles):.6g} rad exceeds a turn")
         if is_concrete(self.lift):
-            require(jnp.all(jnp.isfinite(self.lift)), "lift must be finite")
+            require(np.all(np.isfinite(np.asarray(self.lift))), "lift must be finite")
 
     @property
     def fall_start(self) -> float:
