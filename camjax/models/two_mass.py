@@ -84,7 +84,9 @@ class TwoMassResponse(eqx.Module):
     Attributes:
         tau: sample times over the rise and the dwell.
         twist: input-shaft twist ``phi = tau - theta`` (camshaft lag, units of the rise angle).
+        twist_rate: ``phi'``.
         deflection: output deflection ``e = s(theta) - x`` (units of stroke).
+        deflection_rate: ``e'``.
         response_acceleration: payload acceleration ``x'' = w^2 e``.
         ct: max ``|x''|`` over the samples (peak refined by a parabola), over Ca.
         residual: amplitude of the payload vibration at the end of the dwell, over Ca.
@@ -94,7 +96,9 @@ class TwoMassResponse(eqx.Module):
 
     tau: jax.Array
     twist: jax.Array
+    twist_rate: jax.Array
     deflection: jax.Array
+    deflection_rate: jax.Array
     response_acceleration: jax.Array
     ct: jax.Array
     residual: jax.Array
@@ -130,6 +134,7 @@ def two_mass_response(
     ``"kvaerno5"`` (implicit, for a very stiff input shaft).  ``samples`` equal steps
     sample the response; Ct is refined between samples by a parabola.
     """
+    model = jax.tree.map(jnp.asarray, model)  # traced leaves: one compilation for all values
     ts = jnp.linspace(0.0, 1.0 + dwell, samples + 1)
     w = model.omega
     sol = diffrax.diffeqsolve(
@@ -145,13 +150,15 @@ def two_mass_response(
         max_steps=max_steps,
         throw=False,
     )
-    phi, _, e, de = sol.ys
+    phi, dphi, e, de = sol.ys
     acc = w**2 * e
     residual = w**2 * jnp.sqrt(e[-1] ** 2 + (de[-1] / w) ** 2)
     return TwoMassResponse(
         tau=ts,
         twist=phi,
+        twist_rate=dphi,
         deflection=e,
+        deflection_rate=de,
         response_acceleration=acc,
         ct=_refined_peak(acc) / law.Ca,
         residual=residual / law.Ca,
