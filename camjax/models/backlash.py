@@ -251,3 +251,248 @@ def impact_force(
     return velocity * math.sqrt(
         _positive("inertia", inertia) * _positive("torsional_rigidity", torsional_rigidity)
     )
+
+
+# --- dynamic model: SDOF with a dead zone ----------------------------------------------
+
+# Contact states of the dynamic model.
+DRIVING_FLANK = 0  # deflection e = s - x > 0: the transmission pushes the payload
+FREE = 1  # -bk < e < 0: free flight, only the natural deceleration acts
+OTHER_FLANK = 2  # e < -bk: the other flank holds the payload back
+
+
+class Backlash(eqx.Module):
+    """The SDOF of ``camjax.SpringMass`` with a clearance ``bk`` in its transmission.
+
+    In deflection ``e = s - x`` (normalised, ``w = 2 pi n``):
+    ``e'' = a(tau) + dn - w^2 c(e) - 2 zeta w e' [in contact]`` with the dead-zone spring
+    ``c(e) = e`` (driving flank, ``e > 0``), ``0`` (free, ``-bk < e < 0``),
+    ``e + bk`` (other flank, ``e < -bk``).  Contact damping is Kelvin-Voigt (it acts only
+    in contact).  ``dn`` is a constant retarding force (gravity, a preload spring, or
+    friction while the payload moves forward); it holds the payload on the driving flank
+    at rest, where it starts (``e = dn / w^2``).
+
+    Attributes:
+        period_ratio: ``n`` of the transmission (contact) stiffness, > 0.
+        backlash: normalised clearance ``bk`` > 0.
+        natural_deceleration: normalised ``dn`` >= 0.
+        damping: contact damping ratio ``zeta`` in ``[0, 1)``.
+    """
+
+    period_ratio: float | jax.Array
+    backlash: float | jax.Array
+    natural_deceleration: float | jax.Array = 0.0
+    damping: float | jax.Array = 0.0
+
+    def __check_init__(self):
+        if is_concrete(self.period_ratio, self.backlash, self.natural_deceleration, self.damping):
+            check_period_ratios(self.period_ratio)
+            check_damping(self.damping)
+            check_backlash_inputs(self.backlash, self.natural_deceleration)
+
+    @property
+    def omega(self):
+        return 2 * jnp.pi * self.period_ratio
+
+
+class BacklashResponse(NamedTuple):
+    """Dynamic backlash response; impact arrays hold ``n_impacts`` valid entries, NaN after.
+
+    Attributes:
+        tau: sample times (rise then dwell).
+        deflection: ``e = s - x`` at ``tau`` (``e < -bk``: pressed on the other flank).
+        payload_acceleration: ``x''`` at ``tau``.
+        contact: contact state at ``tau`` (``DRIVING_FLANK``, ``FREE``, ``OTHER_FLANK``).
+        impact_tau, impact_velocity, impact_flank: every impact (entry into contact):
+            time, normalised relative velocity ``|e'|``, and the flank struck.
+        n_impacts: number of impacts; segments: number of smooth segments integrated.
+        steps: solver steps over all segments.
+    """
+
+    tau: jax.Array
+    deflection: jax.Array
+    payload_acceleration: jax.Array
+    contact: jax.Array
+    impact_tau: jax.Array
+    impact_velocity: jax.Array
+    impact_flank: jax.Array
+    n_impacts: jax.Array
+    segments: jax.Array
+    steps: jax.Array
+
+    @property
+    def first_impact_velocity(self):
+        """Velocity of the first strike on the other flank (NaN if there is none)."""
+        other = (self.impact_flank == OTHER_FLANK) & jnp.isfinite(self.impact_velocity)
+        return jnp.where(jnp.any(other), self.impact_velocity[jnp.argmax(other)], jnp.nan)
+
+    @property
+    def first_impact_tau(self):
+        other = (self.impact_flank == OTHER_FLANK) & jnp.isfinite(self.impact_velocity)
+        return jnp.where(jnp.any(other), self.impact_tau[jnp.argmax(other)], jnp.nan)
+
+
+def _spring(model, e, mode):
+    """Dead-zone spring stretch and the velocity its damper sees, for contact ``mode``."""
+    stretch = jnp.where(mode == DRIVING_FLANK, e, jnp.where(mode == OTHER_FLANK, e + model.backlash, 0.0))
+    return stretch, mode != FREE
+
+
+def _contact_field(t, y, args):
+    law, model, mode = args
+    e, de = y
+    stretch, touching = _spring(model, e, mode)
+    w = model.omega
+    restoring = w**2 * stretch + jnp.where(touching, 2 * model.damping * w * de, 0.0)
+    return de, law.a(t) + model.natural_deceleration - restoring
+
+
+def _contact_end(t, y, args, **kwargs):
+    """Negative inside the current contact state, crossing zero upward when it ends."""
+    _, model, mode = args
+    e = y[0]
+    return jnp.where(
+        mode == DRIVING_FLANK, -e, jnp.where(mode == FREE, e * (e + model.backlash), e + model.backlash)
+    )
+
+
+@eqx.filter_jit
+def _backlash_path(law, model, ts, t_end, solver, rtol, atol, max_segments, max_steps):
+    jumps = jnp.asarray((*law.breakpoints(), 1.0), dtype=float)
+    controller = diffrax.ClipStepSizeController(
+        diffrax.PIDController(rtol=rtol, atol=atol), jump_ts=jumps
+    )
+    event = diffrax.Event(_contact_end, optx.Newton(rtol=1e-13, atol=1e-13), direction=True)
+    nan_impacts = jnp.full((max_segments,), jnp.nan)
+
+    def segment(state):
+        t0, e0, de0, mode, es, des, modes, impacts, count, n_impacts, steps, result = state
+        sol = diffrax.diffeqsolve(
+            diffrax.ODETerm(_contact_field),
+            solver,
+            t0=t0,
+            t1=t_end,
+            dt0=None,
+            y0=(e0, de0),
+            args=(law, model, mode),
+            saveat=diffrax.SaveAt(
+                subs=[diffrax.SubSaveAt(ts=jnp.clip(ts, t0, t_end)), diffrax.SubSaveAt(t1=True)]
+            ),
+            stepsize_controller=controller,
+            event=event,
+            max_steps=max_steps,
+            throw=False,
+        )
+        (e_saved, de_saved), (e_end, de_end) = sol.ys
+        t1, e1, de1 = sol.ts[1][0], e_end[0], de_end[0]
+        inside = (ts >= t0) & (ts <= t1)
+        es = jnp.where(inside, e_saved, es)
+        des = jnp.where(inside, de_saved, des)
+        modes = jnp.where(inside, mode, modes)
+        ended = sol.result == diffrax.RESULTS.event_occurred
+        strike = jnp.where(e1 > -0.5 * model.backlash, DRIVING_FLANK, OTHER_FLANK)
+        new_mode = jnp.where(ended, jnp.where(mode == FREE, strike, FREE), mode)
+        is_impact = ended & (mode == FREE)
+        times, speeds, flanks = impacts
+        slot = jnp.where(is_impact, n_impacts, max_segments)  # out of range: dropped
+        impacts = (
+            times.at[slot].set(t1, mode="drop"),
+            speeds.at[slot].set(jnp.abs(de1), mode="drop"),
+            flanks.at[slot].set(new_mode, mode="drop"),
+        )
+        ok = (sol.result == diffrax.RESULTS.successful) | ended
+        result = diffrax.RESULTS.where(ok, result, sol.result)
+        steps = steps + sol.stats["num_steps"]
+        return (t1, e1, de1, new_mode, es, des, modes, impacts, count + 1,
+                n_impacts + is_impact, steps, result)
+
+    def running(state):
+        t0, *_, count, _, _, result = state
+        return (t0 < t_end) & (count < max_segments) & (result == diffrax.RESULTS.successful)
+
+    zeros = jnp.zeros_like(ts)
+    start = (
+        jnp.asarray(0.0),
+        model.natural_deceleration / model.omega**2,  # at rest on the driving flank
+        jnp.asarray(0.0),
+        jnp.asarray(DRIVING_FLANK),
+        zeros,
+        zeros,
+        jnp.zeros(ts.shape, int),
+        (nan_impacts, nan_impacts, jnp.full((max_segments,), -1)),
+        jnp.asarray(0),
+        jnp.asarray(0),
+        jnp.asarray(0),
+        diffrax.RESULTS.successful,
+    )
+    t_last, _, _, _, es, des, modes, impacts, count, n_impacts, steps, result = jax.lax.while_loop(
+        running, segment, start
+    )
+    stretch, touching = _spring(model, es, modes)
+    w = model.omega
+    acceleration = (
+        w**2 * stretch + jnp.where(touching, 2 * model.damping * w * des, 0.0)
+        - model.natural_deceleration
+    )
+    return (es, acceleration, modes, impacts, n_impacts, count, steps, t_last, result)
+
+
+def solve_backlash(
+    law: AbstractMotionLaw,
+    model: Backlash,
+    *,
+    method: str = "tsit5",
+    dwell: float = 1.0,
+    samples: int = 1024,
+    rtol: float = 1e-9,
+    atol: float = 1e-12,
+    max_steps: int = 16384,
+    max_segments: int = 64,
+) -> BacklashResponse:
+    """Integrate the dynamic backlash model over the rise and ``dwell`` motion periods.
+
+    One diffrax solve per contact state, each ended by an event at the next contact
+    change, so separations and impacts are located by root finding, not by a grid.
+    Raises ``camjax.SolverError`` when a segment reaches ``max_steps`` (very stiff
+    contact for an explicit ``method``: use an implicit one such as ``"kvaerno5"``) or
+    when the contact changes more than ``max_segments`` times (chattering).
+    """
+    from ..solve._ode import ADAPTIVE_SOLVERS
+
+    key = str(method).strip().lower()
+    require(key in ADAPTIVE_SOLVERS, f"unknown method {method!r}; valid: {', '.join(ADAPTIVE_SOLVERS)}")
+    require(math.isfinite(dwell) and dwell >= 0, f"dwell must be >= 0, got {dwell}")
+    require(samples >= 2 and max_segments >= 1 and max_steps >= 1, "samples, max_segments, max_steps too small")
+    t_end = 1.0 + float(dwell)
+    ts = jnp.linspace(0.0, t_end, samples)
+    model = jax.tree.map(lambda x: jnp.asarray(x, dtype=float), model)  # traced, not static
+    es, acceleration, modes, impacts, n_impacts, count, steps, t_last, result = _backlash_path(
+        law, model, ts, jnp.asarray(t_end), ADAPTIVE_SOLVERS[key](), rtol, atol, max_segments, max_steps
+    )
+    if result != diffrax.RESULTS.successful:
+        raise SolverError(
+            f"backlash solve ({key}) failed at tau = {float(t_last):.6g}: "
+            f"{diffrax.RESULTS[result] if hasattr(diffrax.RESULTS, '__getitem__') else result}; "
+            "for very stiff contact use an implicit method (e.g. method='kvaerno5') or raise max_steps"
+        )
+    if float(t_last) < t_end:
+        raise SolverError(
+            f"backlash solve ({key}): more than max_segments={max_segments} contact changes by "
+            f"tau = {float(t_last):.6g} (repeated impacts / chattering); raise max_segments or "
+            "add contact damping"
+        )
+    if not bool(jnp.all(jnp.isfinite(es))):
+        raise SolverError(f"backlash solve ({key}) produced non-finite values")
+    times, speeds, flanks = impacts
+    return BacklashResponse(
+        tau=ts,
+        deflection=es,
+        payload_acceleration=acceleration,
+        contact=modes,
+        impact_tau=times,
+        impact_velocity=speeds,
+        impact_flank=flanks,
+        n_impacts=n_impacts,
+        segments=count,
+        steps=steps,
+    )
