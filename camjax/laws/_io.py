@@ -1,0 +1,80 @@
+"""Save and load motion laws as JSON: B-spline laws by their coefficients, others by name."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import jax.numpy as jnp
+import numpy as np
+
+from ._base import AbstractMotionLaw
+from ._registry import get
+from ._spline import BSplineLaw
+
+FORMAT = "camjax-law"
+VERSION = 1
+
+
+def to_dict(law: AbstractMotionLaw) -> dict:
+    """A JSON-ready description that :func:`from_dict` turns back into ``law``."""
+    if isinstance(law, BSplineLaw):
+        return {
+            "format": FORMAT,
+            "version": VERSION,
+            "kind": "bspline",
+            "degree": law.degree,
+            "zero_jerk": law.zero_jerk,
+            "knots": [float(x) for x in law.knots],
+            "control_points": [float(x) for x in np.asarray(law.control_points)],
+            "coefficients": [float(x) for x in np.asarray(law.coefficients)],
+            "peaks": law.peak_coefficients(),
+        }
+    name = law.name
+    rebuilt = get(name)
+    tau = np.linspace(0.0, 1.0, 101)
+    if type(rebuilt) is not type(law) or not np.allclose(rebuilt.s(tau), law.s(tau), atol=1e-14):
+        raise ValueError(f"law {name!r} cannot be saved: its name does not rebuild it")
+    return {"format": FORMAT, "version": VERSION, "kind": "named", "name": name}
+
+
+def from_dict(data: dict) -> AbstractMotionLaw:
+    """The law described by ``data`` (as written by :func:`to_dict`)."""
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise ValueError(f"not a camjax law description (expected format {FORMAT!r})")
+    if data.get("version") != VERSION:
+        raise ValueError(f"unsupported camjax law version {data.get('version')!r}")
+    kind = data.get("kind")
+    if kind == "named":
+        return get(data["name"])
+    if kind != "bspline":
+        raise ValueError(f"unknown law kind {kind!r}; expected 'bspline' or 'named'")
+    try:
+        law = BSplineLaw(
+            jnp.asarray(np.asarray(data["coefficients"], dtype=float)),
+            degree=int(data["degree"]),
+            zero_jerk=bool(data.get("zero_jerk", False)),
+        )
+    except KeyError as missing:
+        raise ValueError(f"B-spline law description lacks {missing}") from None
+    if "knots" in data and not np.allclose(np.asarray(data["knots"], dtype=float), law.knots,
+                                           rtol=0, atol=1e-12):
+        raise ValueError("B-spline law knots differ from the uniform clamped knots camjax builds")
+    return law
+
+
+def save(law: AbstractMotionLaw, path) -> Path:
+    """Write ``law`` to ``path`` as JSON; returns the path."""
+    path = Path(path)
+    path.write_text(json.dumps(to_dict(law), indent=1) + "\n")
+    return path
+
+
+def load(path) -> AbstractMotionLaw:
+    """Read a law written by :func:`save`."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path}: not valid JSON ({error})") from None
+    return from_dict(data)
