@@ -1,0 +1,173 @@
+"""Coulomb friction on the payload: residual vibration, in-motion peak and rest offset.
+
+For every standard law at one period ratio, sweeps the normalised friction level
+``mu = F T^2 / (W h)`` with the stick-slip (events) path, and charts the residual
+vibration at the start and the end of a one-period dwell, the in-motion peak, and the
+offset at which the payload comes to rest (with the stick band ``mu / w^2``).  Then the
+error of the tanh regularisation against stick-slip as ``eps`` shrinks.
+
+    python experiments/friction.py [--n 5.25] [--dwell 1.0] [--quick]
+
+writes results/friction/ (friction_sweep.csv, summary.json, *.png, README.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import camjax
+import diffrax
+import jax
+import jax.numpy as jnp
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from camjax.models.friction import CoulombFriction, friction_response  # noqa: E402
+
+OUT = Path(__file__).resolve().parents[1] / "results" / "friction"
+SAMPLES = 4096
+
+
+def window_peak(response, start, stop):
+    """Max |x''| over tau in [start, stop] (samples), per batch member."""
+    tau = response.tau[0]
+    inside = (tau >= start) & (tau <= stop)
+    return jnp.max(jnp.where(inside, jnp.abs(response.acceleration), 0.0), axis=-1)
+
+
+def sweep(law, n, frictions, dwell):
+    """Events-path responses over the friction levels (one vmapped call)."""
+    batch = jax.jit(
+        jax.vmap(lambda mu: friction_response(law, CoulombFriction(n, mu), dwell=dwell, samples=SAMPLES))
+    )(jnp.asarray(frictions))
+    if not bool(jnp.all(batch.result == diffrax.RESULTS.successful)):
+        raise camjax.SolverError(f"{law.name}: a friction solve failed")
+    period = 1.0 / n
+    ca = float(law.Ca)
+    return batch, {
+        "peak_in_motion": np.asarray(batch.peak_in_motion),
+        "residual_start": np.asarray(window_peak(batch, 1.0, 1.0 + period)) / ca,
+        "residual_end": np.asarray(window_peak(batch, 1.0 + dwell - period, 1.0 + dwell)) / ca,
+        "rest_offset": np.asarray(batch.rest_offset),
+        "settled": np.asarray(batch.settled),
+    }
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=float, default=5.25, help="period ratio")
+    parser.add_argument("--dwell", type=float, default=1.0, help="dwell, motion periods")
+    parser.add_argument("--quick", action="store_true", help="two laws, few levels")
+    args = parser.parse_args()
+    OUT.mkdir(parents=True, exist_ok=True)
+    n, dwell = args.n, args.dwell
+    w = 2 * np.pi * n
+    frictions = np.linspace(0.0, 1.5, 7 if args.quick else 31)
+    laws = camjax.laws.standard_laws()[:2] if args.quick else camjax.laws.standard_laws()
+
+    rows, summary, histories = [], {"period_ratio": n, "dwell": dwell, "laws": {}}, {}
+    for law in laws:
+        start = time.perf_counter()
+        batch, metrics = sweep(law, n, frictions, dwell)
+        print(f"{law.name:20s} {time.perf_counter() - start:6.1f} s")
+        histories[law.name] = batch
+        summary["laws"][law.name] = {
+            "ca": float(law.Ca),
+            "friction": frictions.tolist(),
+            **{k: v.tolist() for k, v in metrics.items()},
+        }
+        for i, mu in enumerate(frictions):
+            rows.append([law.name, mu, mu / w**2] + [float(metrics[k][i]) for k in metrics])
+    header = "law,friction,stick_band,peak_in_motion,residual_start,residual_end,rest_offset,settled"
+    with open(OUT / "friction_sweep.csv", "w") as f:
+        f.write(header + "\n")
+        for row in rows:
+            f.write(",".join(str(x) for x in row) + "\n")
+
+    # Regularisation error against stick-slip (Cycloidal, one friction level).
+    law, mu = camjax.laws.Cycloidal(), 0.5
+    exact = friction_response(law, CoulombFriction(n, mu), dwell=dwell, samples=SAMPLES)
+    epsilons = np.logspace(-1, -5, 9)
+    smooth = jax.jit(
+        jax.vmap(
+            lambda eps: friction_response(
+                law, CoulombFriction(n, mu), method="regularised", eps=eps, dwell=dwell, samples=SAMPLES
+            )
+        )
+    )(jnp.asarray(epsilons))
+    in_motion = exact.tau <= 1.0
+    err_motion = np.asarray(jnp.max(jnp.where(in_motion, jnp.abs(smooth.position - exact.position), 0), axis=1))
+    err_peak = np.abs(np.asarray(smooth.peak_in_motion) - float(exact.peak_in_motion))
+    err_rest = np.abs(np.asarray(smooth.rest_offset) - float(exact.rest_offset))
+    summary["regularisation"] = {
+        "law": law.name,
+        "friction": mu,
+        "eps": epsilons.tolist(),
+        "max_position_error_in_motion": err_motion.tolist(),
+        "peak_in_motion_error": err_peak.tolist(),
+        "rest_offset_error": err_rest.tolist(),
+        "events_rest_offset": float(exact.rest_offset),
+    }
+    slope = np.polyfit(np.log(epsilons[3:]), np.log(err_motion[3:]), 1)[0]
+    summary["regularisation"]["order_in_eps"] = float(slope)
+    (OUT / "summary.json").write_text(json.dumps(summary, indent=1))
+
+    # Figures.
+    names = list(summary["laws"])
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    for name in names:
+        d = summary["laws"][name]
+        axes[0].plot(frictions, d["residual_end"], label=name)
+        axes[1].plot(frictions, d["peak_in_motion"], label=name)
+        axes[2].plot(frictions, np.asarray(d["rest_offset"]) * 1e3, label=name)
+    axes[2].fill_between(frictions, -frictions / w**2 * 1e3, frictions / w**2 * 1e3, color="0.9",
+                         label="stick band $\\pm\\mu/w^2$")
+    axes[0].set(xlabel="friction level $\\mu = F T^2/(W h)$", ylabel="residual |x''| / Ca",
+                title=f"residual vibration after a {dwell:g}-period dwell (n = {n:g})")
+    axes[1].set(xlabel="friction level $\\mu$", ylabel="peak |x''| in motion / Ca",
+                title="in-motion peak (Ct over the rise)")
+    axes[2].set(xlabel="friction level $\\mu$", ylabel="rest offset x - 1 (1e-3 stroke)",
+                title="where the payload comes to rest")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    axes[2].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(OUT / "friction_sweep.png", dpi=120)
+
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    name = "cycloidal" if "cycloidal" in histories else names[0]
+    batch = histories[name]
+    tau = np.asarray(batch.tau[0])
+    for i in np.linspace(0, len(frictions) - 1, 4).astype(int):
+        ax.plot(tau, np.asarray(batch.acceleration[i]) / float(camjax.laws.get(name).Ca),
+                label=f"$\\mu$ = {frictions[i]:.2f}", lw=1)
+    ax.plot(tau, np.asarray(camjax.laws.get(name).a(tau)) / float(camjax.laws.get(name).Ca), "k--",
+            lw=0.8, label="command")
+    ax.set(xlabel="tau", ylabel="x'' / Ca", title=f"{name}, n = {n:g}: friction stops the residual vibration")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(OUT / "friction_history.png", dpi=120)
+
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    ax.loglog(epsilons, err_motion, "o-", label="max |x error| in motion")
+    ax.loglog(epsilons, err_peak, "s-", label="in-motion peak error (/Ca)")
+    ax.loglog(epsilons, err_rest, "^-", label="rest offset error")
+    ax.set(xlabel="eps (velocity scale of tanh)", ylabel="error vs stick-slip",
+           title=f"tanh regularisation, {law.name}, n = {n:g}, $\\mu$ = {mu:g}")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    fig.savefig(OUT / "regularisation_error.png", dpi=120)
+    print(json.dumps(summary["regularisation"], indent=1))
+
+
+if __name__ == "__main__":
+    main()
