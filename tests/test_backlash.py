@@ -120,7 +120,7 @@ _velocity_grad = jax.jit(jax.grad(_velocity))
 
 @pytest.mark.parametrize(
     "fractions, bk, dn",
-    [((0.25, 0.0, 0.75), 0.02, 1.0), ((0.3, 0.2, 0.4), 0.3, 2.0), ((0.2, 0.3, 0.5), 0.05, 0.5)],
+    [((0.25, 0.05, 0.65), 0.02, 1.0), ((0.3, 0.2, 0.4), 0.3, 2.0), ((0.2, 0.3, 0.45), 0.05, 0.5)],
 )
 def test_gradient_matches_central_differences(fractions, bk, dn):
     params = jnp.array([*fractions, bk, dn])
@@ -246,10 +246,18 @@ def test_dynamic_invalid_model():
 
 
 @pytest.mark.slow
-def test_implicit_solver_handles_stiff_contact_with_fewer_steps():
+def test_implicit_solver_handles_stiff_contact():
+    """Where the explicit solver gives up (n = 2e4, heavy contact damping) Kvaerno5 solves it
+    in a few hundred steps, and both agree with the kinematic limit where both run."""
+    kinematic = float(bl.kinematic_impact(_MODSINE, _BK, _DN).impact_velocity)
+    with pytest.raises(camjax.SolverError, match="maximum number"):
+        _dynamic(2e4, damping=0.5)
+    implicit = _dynamic(2e4, damping=0.5, method="kvaerno5")
+    assert int(implicit.steps) < 2000
+    assert float(implicit.first_impact_velocity) == pytest.approx(kinematic, rel=1e-5)
     explicit = _dynamic(500.0, damping=0.5)
-    implicit = _dynamic(500.0, damping=0.5, method="kvaerno5", rtol=1e-8, atol=1e-8)
-    assert int(implicit.steps) < int(explicit.steps) / 4
+    implicit = _dynamic(500.0, damping=0.5, method="kvaerno5")
+    assert int(implicit.steps) < int(explicit.steps)
     assert float(implicit.first_impact_velocity) == pytest.approx(
-        float(explicit.first_impact_velocity), rel=1e-4
+        float(explicit.first_impact_velocity), rel=1e-6
     )

@@ -362,7 +362,7 @@ def _backlash_path(law, model, ts, t_end, solver, rtol, atol, max_segments, max_
     controller = diffrax.ClipStepSizeController(
         diffrax.PIDController(rtol=rtol, atol=atol), jump_ts=jumps
     )
-    event = diffrax.Event(_contact_end, optx.Newton(rtol=1e-13, atol=1e-13), direction=True)
+    event = diffrax.Event(_contact_end, optx.Bisection(rtol=1e-14, atol=1e-14), direction=True)
     nan_impacts = jnp.full((max_segments,), jnp.nan)
 
     def segment(state):
