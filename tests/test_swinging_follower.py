@@ -90,3 +90,44 @@ def test_spectrum_recovers_harmonic_amplitudes():
 def test_bad_parameters_raise(kwargs, message):
     with pytest.raises(ValueError, match=message):
         SwingingFollower(**kwargs)
+
+
+def _cli(argv):
+    import argparse
+
+    from camjax.cli import follower
+    from camjax.cli._common import CliError
+
+    parser = argparse.ArgumentParser(prog="camjax")
+    follower.register(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["follower", *argv])
+    try:
+        return args.func(args)
+    except (CliError, ValueError) as error:
+        return str(error)
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [(["--law", "nope"], "unknown law"), (["--law", "cycloidal", "--omega", "-3"], "--omega"), (["--law", "cycloidal", "--modes", "0"], "modes")],
+)
+def test_cli_rejects_bad_arguments(argv, message):
+    assert message in _cli(argv)
+
+
+@pytest.mark.slow
+def test_cli_json_report(tmp_path, capsys):
+    import json
+
+    assert _cli(["--law", "cycloidal", "--format", "json", "--out", str(tmp_path)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report == json.loads((tmp_path / "follower.json").read_text())
+    model = SwingingFollower()
+    assert report["natural_frequency_rad_s"] == pytest.approx(pinned_pinned_rayleigh(model, 1), rel=1e-9)
+    orders = [p["order"] for p in report["transverse_peaks"]]
+    assert orders[:5] == [1.0, 3.0, 5.0, 7.0, 9.0] and abs(orders[5] - report["natural_order"]) <= 3
+    # The paper: the transverse spectrum peaks at 3 Omega, and axial amplitudes are far smaller.
+    amplitudes = [p["amplitude_mm"] for p in report["transverse_peaks"]]
+    assert max(amplitudes) == amplitudes[1]
+    assert max(p["amplitude_mm"] for p in report["axial_peaks"]) < 0.1 * max(amplitudes)
+    assert report["max_constraint_error"] < 1e-10
