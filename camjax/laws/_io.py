@@ -28,7 +28,6 @@ def to_dict(law: AbstractMotionLaw) -> dict:
             "knots": [float(x) for x in law.knots],
             "control_points": [float(x) for x in np.asarray(law.control_points)],
             "coefficients": [float(x) for x in np.asarray(law.coefficients)],
-            "peaks": law.peak_coefficients(),
         }
     name = law.name
     rebuilt = get(name)

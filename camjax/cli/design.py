@@ -1,0 +1,132 @@
+"""``camjax design``: optimise a B-spline motion law and compare it with the standard laws."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._common import CliError, dump_json, output_dir, parse_float_list
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "design",
+        help="design a B-spline motion law (residual vibration or Ca*Ct)",
+        description="Optimise a B-spline rise for a period-ratio band under caps; write the "
+        "law (JSON, CSV), figures and a comparison with every standard law.",
+    )
+    parser.add_argument("--objective", choices=("residual", "ca-ct"), default="residual")
+    where = parser.add_mutually_exclusive_group(required=True)
+    where.add_argument("--band", help="period-ratio band N1:N2 (worst case over it)")
+    where.add_argument("--n", type=float, help="a single period ratio")
+    parser.add_argument("--max-ca", type=float, default=None, help="cap on Ca")
+    parser.add_argument("--max-jerk", type=float, default=None, help="cap on Cj")
+    parser.add_argument("--damping", type=float, default=0.0, help="damping ratio zeta")
+    parser.add_argument("--knots", type=int, default=24, help="free B-spline coefficients")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--steps", type=int, default=300, help="optimiser steps")
+    parser.add_argument("--optimizer", choices=("lbfgs", "adam"), default="lbfgs")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument("--out", required=True, help="output directory")
+    parser.set_defaults(func=run)
+
+
+def _band(text: str) -> tuple[float, float]:
+    parts = text.split(":")
+    if len(parts) != 2:
+        raise CliError(f"--band: expected N1:N2, got {text!r}")
+    n1, n2 = (parse_float_list(p, "--band")[0] for p in parts)
+    if not 0 < n1 < n2:
+        raise CliError(f"--band: need 0 < N1 < N2, got {text!r}")
+    return n1, n2
+
+
+def run(args) -> int:
+    from .. import design as D
+    from ..laws import standard_laws
+    from ..laws._io import save
+
+    out = output_dir(args.out)
+    if args.n is not None and not args.n > 0:
+        raise CliError(f"--n: period ratio must be positive, got {args.n}")
+    band = _band(args.band) if args.band else None
+    if args.objective == "residual":
+        objective = (D.MaxResidual(*band, damping=args.damping) if band
+                     else D.Residual(args.n, damping=args.damping))
+    else:
+        objective = (D.MaxCaCt(*band, damping=args.damping) if band
+                     else D.CaCt(args.n, damping=args.damping))
+    caps = D.Caps(args.max_ca, args.max_jerk)
+    result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=args.steps,
+                      optimizer=args.optimizer, progress=not args.quiet)
+    law = result.law
+    save(law, out / "law.json")
+    tau = np.linspace(0.0, 1.0, 10001)
+    columns = np.stack([tau, *(np.asarray(x) for x in law.evaluate(tau))], axis=1)
+    np.savetxt(out / "law.csv", columns, delimiter=",", header="tau,s,v,a,j", comments="",
+               fmt="%.17g")
+    n1, n2 = band if band else (0.8 * args.n, 1.2 * args.n)
+    ratios = np.linspace(n1, n2, D.EVALUATION_SAMPLES)
+    laws = [("designed", law)] + [(x.name, x) for x in standard_laws()]
+    rows, curves = [], {}
+    for name, each in laws:
+        r = np.asarray(D.residual(each, ratios, args.damping))
+        load = D.peak_loads(each, ratios, args.damping)
+        curves[name] = (r, load)
+        peaks = each.peak_coefficients()
+        rows.append({"law": name, "objective": objective.report(each), "Ca": peaks["Ca"],
+                     "Cj": peaks["Cj"], "max_R": float(r.max()), "max_CaCt": float(load.max())})
+    _write_table(rows, objective.label, out)
+    dump_json({"objective": objective.label, "value": result.values[objective.label],
+               "caps": {"max_ca": args.max_ca, "max_jerk": args.max_jerk, "monotone": True},
+               "coefficients": result.coefficients, "knots": args.knots, "seed": args.seed,
+               "steps": args.steps, "repaired": result.restored, "seconds": result.seconds,
+               "band": [n1, n2], "damping": args.damping}, out / "summary.json")
+    _figures(law, ratios, curves, out)
+    print(f"{objective.label}: designed {rows[0]['objective']:.5g}; best standard "
+          f"{min(rows[1:], key=lambda r: r['objective'])['law']} "
+          f"{min(r['objective'] for r in rows[1:]):.5g}; wrote {out}")
+    return 0
+
+
+def _write_table(rows, label, out) -> None:
+    keys = ["law", "objective", "Ca", "Cj", "max_R", "max_CaCt"]
+    lines = [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]
+    (out / "comparison.csv").write_text("\n".join(lines) + "\n")
+    md = [f"Objective: {label} (evaluated on 2000 period ratios across the band)", "",
+          "| law | objective | Ca | Cj | max R | max Ca*Ct |", "|---|---|---|---|---|---|"]
+    md += [f"| {r['law']} | {r['objective']:.5g} | {r['Ca']:.4g} | {r['Cj']:.4g} | "
+           f"{r['max_R']:.4g} | {r['max_CaCt']:.4g} |" for r in rows]
+    (out / "comparison.md").write_text("\n".join(md) + "\n")
+
+
+def _figures(law, ratios, curves, out) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tau = np.linspace(0.0, 1.0, 2001)
+    fig, axes = plt.subplots(2, 2, figsize=(9, 6), sharex=True)
+    for ax, values, label in zip(axes.flat, law.evaluate(tau), ("s", "v", "a", "j")):
+        ax.plot(tau, np.asarray(values))
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    for ax in axes[1]:
+        ax.set_xlabel("tau")
+    fig.suptitle("designed law")
+    fig.tight_layout()
+    fig.savefig(out / "law.png", dpi=120)
+    plt.close(fig)
+    fig, (ax_r, ax_c) = plt.subplots(1, 2, figsize=(11, 4.5))
+    for name, (r, load) in curves.items():
+        style = dict(lw=2.2, color="k") if name == "designed" else dict(lw=1)
+        ax_r.semilogy(ratios, np.maximum(r, 1e-6), label=name, **style)
+        ax_c.plot(ratios, load, label=name, **style)
+    ax_r.set(xlabel="period ratio n", ylabel="residual R (units of Ca)")
+    ax_c.set(xlabel="period ratio n", ylabel="Ca*Ct (h/T^2)")
+    for ax in (ax_r, ax_c):
+        ax.grid(alpha=0.3)
+    ax_c.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / "curves.png", dpi=120)
+    plt.close(fig)
