@@ -215,9 +215,9 @@ def _events_path(law, model, ts, t_end, rtol, atol, max_segments, max_steps):
     t_last, x_last, _, mode_last, xs, dxs, modes, count, result = jax.lax.while_loop(
         running, segment, start
     )
-    result = diffrax.RESULTS.where(
-        t_last < t_end, diffrax.RESULTS.max_steps_reached, result
-    )
+    # Running out of segments is reported as running out of steps.
+    out_of_segments = (t_last < t_end) & (result == diffrax.RESULTS.successful)
+    result = diffrax.RESULTS.where(out_of_segments, diffrax.RESULTS.max_steps_reached, result)
     return xs, dxs, modes, mode_last == 0, count, result
 
 
