@@ -18,7 +18,6 @@ import csv
 import json
 from pathlib import Path
 
-import camjax
 import jax
 import jax.numpy as jnp
 import matplotlib
@@ -26,6 +25,7 @@ import matplotlib.ticker
 import numpy as np
 import optax
 
+import camjax
 from camjax.models import backlash as bl
 
 matplotlib.use("Agg")
@@ -35,24 +35,32 @@ OUT = Path(__file__).resolve().parents[1] / "results" / "backlash"
 BK = np.geomspace(1e-3, 1.0, 61)
 DN = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]
 PERIOD_RATIOS = [3, 5, 7, 10, 14, 20, 28, 40, 56, 80]
-DYNAMIC_CASES = [("cycloidal", 0.02, 1.0), ("modified-sine", 0.02, 1.0), ("harmonic", 0.02, 1.0),
-                 ("modified-sine", 0.2, 0.0)]
+DYNAMIC_CASES = [
+    ("cycloidal", 0.02, 1.0),
+    ("modified-sine", 0.02, 1.0),
+    ("harmonic", 0.02, 1.0),
+    ("modified-sine", 0.2, 0.0),
+]
 
 
 def kinematic_charts(summary: list[str]) -> None:
     names = camjax.laws.names()
     fig, axes = plt.subplots(2, 4, figsize=(16, 7.5), sharex=True, sharey=True)
     rows, tables = [], {}
-    for ax, name in zip(axes.flat, names):
+    for ax, name in zip(axes.flat, names, strict=False):
         law = camjax.laws.get(name)
         table = bl.kinematic_impact_table(law, BK, DN)
         v = np.asarray(table.impact_velocity)
-        tables[name] = {"bk": BK, "dn": DN, "impact_velocity": v,
-                        "departure_tau": np.asarray(table.departure_tau),
-                        "impact_tau": np.asarray(table.impact_tau)}
-        for d, row in zip(DN, v):
+        tables[name] = {
+            "bk": BK,
+            "dn": DN,
+            "impact_velocity": v,
+            "departure_tau": np.asarray(table.departure_tau),
+            "impact_tau": np.asarray(table.impact_tau),
+        }
+        for d, row in zip(DN, v, strict=True):
             ax.plot(BK, row, label=f"dn = {d:g}")
-            rows += [[name, d, b, x] for b, x in zip(BK, row)]
+            rows += [[name, d, b, x] for b, x in zip(BK, row, strict=True)]
         ax.set_title(f"{name} (Ca {float(law.Ca):.3g}, Cv {float(law.Cv):.3g})")
         ax.set_xscale("log")
         ax.grid(True, which="both", alpha=0.3)
@@ -85,8 +93,12 @@ def kinematic_charts(summary: list[str]) -> None:
 def dynamic_vs_kinematic(summary: list[str]) -> None:
     rows = []
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    summary.append("## Dynamic (dead-zone SDOF, contact damping 0.05) over kinematic first-impact velocity\n")
-    summary.append("| law | bk | dn | kinematic v | " + " | ".join(f"n={n}" for n in PERIOD_RATIOS) + " |")
+    summary.append(
+        "## Dynamic (dead-zone SDOF, contact damping 0.05) over kinematic first-impact velocity\n"
+    )
+    summary.append(
+        "| law | bk | dn | kinematic v | " + " | ".join(f"n={n}" for n in PERIOD_RATIOS) + " |"
+    )
     summary.append("|---" * (len(PERIOD_RATIOS) + 4) + "|")
     for name, bk, dn in DYNAMIC_CASES:
         law = camjax.laws.get(name)
@@ -97,8 +109,11 @@ def dynamic_vs_kinematic(summary: list[str]) -> None:
             ratios.append(float(r.first_impact_velocity) / kin)
             rows.append([name, bk, dn, n, kin, float(r.first_impact_velocity), int(r.n_impacts)])
         ax.plot(PERIOD_RATIOS, ratios, "o-", label=f"{name}, bk={bk:g}, dn={dn:g}")
-        summary.append(f"| {name} | {bk:g} | {dn:g} | {kin:.4f} | "
-                       + " | ".join(f"{x:.3f}" for x in ratios) + " |")
+        summary.append(
+            f"| {name} | {bk:g} | {dn:g} | {kin:.4f} | "
+            + " | ".join(f"{x:.3f}" for x in ratios)
+            + " |"
+        )
     ax.axhspan(0.95, 1.05, color="0.9")
     ax.set_xscale("log")
     ax.set_xticks(PERIOD_RATIOS, [str(n) for n in PERIOD_RATIOS])
@@ -119,21 +134,53 @@ def dynamic_vs_kinematic(summary: list[str]) -> None:
 
 def solver_limits(summary: list[str]) -> None:
     law = camjax.laws.ModifiedSine()
-    rows = [["method", "rtol", "atol", "n", "damping", "outcome", "first_impact_v", "steps", "segments"]]
+    rows = [
+        ["method", "rtol", "atol", "n", "damping", "outcome", "first_impact_v", "steps", "segments"]
+    ]
     settings = [("tsit5", 1e-9, 1e-12), ("kvaerno5", 1e-9, 1e-12), ("kvaerno5", 1e-8, 1e-8)]
     for method, rtol, atol in settings:
         for n in (80.0, 500.0, 2000.0, 20000.0, 2e5):
             try:
-                r = bl.solve_backlash(law, bl.Backlash(n, 0.02, 1.0, 0.5), method=method,
-                                      rtol=rtol, atol=atol, dwell=0.5)
-                rows.append([method, rtol, atol, n, 0.5, "ok", float(r.first_impact_velocity),
-                             int(r.steps), int(r.segments)])
+                r = bl.solve_backlash(
+                    law,
+                    bl.Backlash(n, 0.02, 1.0, 0.5),
+                    method=method,
+                    rtol=rtol,
+                    atol=atol,
+                    dwell=0.5,
+                )
+                rows.append(
+                    [
+                        method,
+                        rtol,
+                        atol,
+                        n,
+                        0.5,
+                        "ok",
+                        float(r.first_impact_velocity),
+                        int(r.steps),
+                        int(r.segments),
+                    ]
+                )
             except camjax.SolverError as error:
-                rows.append([method, rtol, atol, n, 0.5, "SolverError: " + str(error).split(":")[1][:60],
-                             "", "", ""])
+                rows.append(
+                    [
+                        method,
+                        rtol,
+                        atol,
+                        n,
+                        0.5,
+                        "SolverError: " + str(error).split(":")[1][:60],
+                        "",
+                        "",
+                        "",
+                    ]
+                )
     with open(OUT / "solver_limits.csv", "w", newline="") as f:
         csv.writer(f).writerows(rows)
-    summary.append("## Solver limits (ModSine, bk = 0.02, dn = 1, contact damping 0.5, dwell 0.5)\n")
+    summary.append(
+        "## Solver limits (ModSine, bk = 0.02, dn = 1, contact damping 0.5, dwell 0.5)\n"
+    )
     summary.append("| method | rtol | atol | n | outcome | first-impact v | steps |")
     summary.append("|---|---|---|---|---|---|---|")
     for r in rows[1:]:
@@ -169,12 +216,21 @@ def low_impact_design(summary: list[str]) -> None:
         z = optax.apply_updates(z, updates)
     best = camjax.laws.SCCA(*(float(x) for x in fractions(z)))
     results = {
-        "bk": bk, "dn": dn, "ca_limit": ca_limit,
+        "bk": bk,
+        "dn": dn,
+        "ca_limit": ca_limit,
         "start": {"fractions": [float(x) for x in fractions(start)], "objective": history[0]},
-        "modified-sine_v": float(bl.kinematic_impact(camjax.laws.ModifiedSine(), bk, dn).impact_velocity),
-        "harmonic_v": float(bl.kinematic_impact(camjax.laws.SimpleHarmonic(), bk, dn).impact_velocity),
-        "optimised": {"fractions": list(best.fractions), "Ca": float(best.Ca),
-                      "impact_velocity": float(bl.kinematic_impact(best, bk, dn).impact_velocity)},
+        "modified-sine_v": float(
+            bl.kinematic_impact(camjax.laws.ModifiedSine(), bk, dn).impact_velocity
+        ),
+        "harmonic_v": float(
+            bl.kinematic_impact(camjax.laws.SimpleHarmonic(), bk, dn).impact_velocity
+        ),
+        "optimised": {
+            "fractions": list(best.fractions),
+            "Ca": float(best.Ca),
+            "impact_velocity": float(bl.kinematic_impact(best, bk, dn).impact_velocity),
+        },
     }
     (OUT / "design.json").write_text(json.dumps(results, indent=1) + "\n")
     summary.append("## Low-impact SCCA design (bk = 0.01, dn = 1, Ca <= ModSine's 5.528)\n")

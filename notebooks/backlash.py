@@ -7,11 +7,11 @@
 # reference note, then the dynamic SDOF with a dead zone, then a gradient for design.
 
 # %%
-import camjax
 import jax
 import matplotlib.pyplot as plt
 import numpy as np
 
+import camjax
 from camjax.models import backlash as bl
 
 # %% [markdown]
@@ -21,9 +21,10 @@ from camjax.models import backlash as bl
 bk = np.geomspace(1e-3, 0.5, 25)
 dn = [0.0, 2.0, 4.0]
 fig, axes = plt.subplots(1, 3, figsize=(12, 3.5), sharey=True)
-for ax, law in zip(axes, [camjax.laws.SimpleHarmonic(), camjax.laws.ModifiedSine(), camjax.laws.Cycloidal()]):
+laws = [camjax.laws.SimpleHarmonic(), camjax.laws.ModifiedSine(), camjax.laws.Cycloidal()]
+for ax, law in zip(axes, laws, strict=True):
     table = bl.kinematic_impact_table(law, bk, dn)
-    for d, row in zip(dn, np.asarray(table.impact_velocity)):
+    for d, row in zip(dn, np.asarray(table.impact_velocity), strict=True):
         ax.plot(bk, row, label=f"dn = {d:g}")
     ax.set(xscale="log", title=law.name, xlabel="bk")
 axes[0].set_ylabel("impact velocity v")
@@ -37,8 +38,10 @@ plt.show()
 # %%
 for law in (camjax.laws.SimpleHarmonic(), camjax.laws.ModifiedSine(), camjax.laws.Cycloidal()):
     r = bl.kinematic_impact(law, 0.01, 1.0)
-    print(f"{law.name:15s} departs {float(r.departure_tau):.4f}  strikes {float(r.impact_tau):.4f}"
-          f"  v = {float(r.impact_velocity):.4f}")
+    print(
+        f"{law.name:15s} departs {float(r.departure_tau):.4f}  strikes {float(r.impact_tau):.4f}"
+        f"  v = {float(r.impact_velocity):.4f}"
+    )
 
 # %% [markdown]
 # Physical impact force: a 2 kg payload on a 5 MN/m transmission, stroke 50 mm in 0.1 s.
@@ -55,8 +58,14 @@ print(f"V = {V:.3f} m/s, impact force = {bl.impact_force(V, mass=2.0, stiffness=
 law = camjax.laws.ModifiedSine()
 response = bl.solve_backlash(law, bl.Backlash(40.0, 0.02, 1.0, 0.05))
 kinematic = bl.kinematic_impact(law, 0.02, 1.0)
-print("first impact: dynamic", float(response.first_impact_velocity),
-      "kinematic", float(kinematic.impact_velocity), "impacts:", int(response.n_impacts))
+print(
+    "first impact: dynamic",
+    float(response.first_impact_velocity),
+    "kinematic",
+    float(kinematic.impact_velocity),
+    "impacts:",
+    int(response.n_impacts),
+)
 fig, ax = plt.subplots(figsize=(8, 3))
 ax.plot(response.tau, response.deflection)
 ax.axhline(0, color="k", lw=0.5)
@@ -66,6 +75,7 @@ plt.show()
 
 # %% [markdown]
 # ## Gradient of the impact velocity in the SCCA fractions (checked by central differences)
+
 
 # %%
 @jax.jit

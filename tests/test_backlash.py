@@ -4,13 +4,13 @@ import argparse
 import json
 import math
 
-import camjax
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.optimize import brentq
 
+import camjax
 from camjax.cli import backlash as backlash_cli
 from camjax.cli._common import CliError
 from camjax.models import backlash as bl
@@ -45,10 +45,12 @@ def test_parabolic_matches_closed_form(bk, dn):
         assert float(result.impact_velocity) == pytest.approx(v, rel=1e-11)
 
 
-@pytest.mark.parametrize("law, scale", [(camjax.laws.SimpleHarmonic(), 1.0), (camjax.laws.Cycloidal(), 2.0)])
+@pytest.mark.parametrize(
+    "law, scale", [(camjax.laws.SimpleHarmonic(), 1.0), (camjax.laws.Cycloidal(), 2.0)]
+)
 @pytest.mark.parametrize("bk", [1e-4, 0.02, 0.2])
 def test_crossover_departure_matches_scipy(law, scale, bk):
-    """dn = 0: departure at crossover; SHM gap (pi u - sin pi u)/2, cycloidal u - sin(2 pi u)/(2 pi).
+    """dn = 0: departure at crossover; gaps SHM (pi u - sin pi u)/2, cycloidal u - sin(2 pi u)/2pi.
 
     Both are ``(k u - sin k u)/k * c`` forms whose impact velocity is ``c (1 - cos k u)``.
     """
@@ -75,7 +77,7 @@ def test_no_separation_above_peak_deceleration():
         result = bl.kinematic_impact(law, 0.05, float(law.Ca) * 1.01)
         assert int(result.status) == bl.NO_SEPARATION
         assert all(np.isnan(float(x)) for x in result[:3])
-    # Exactly at the parabolic law's constant deceleration: the contact force is zero, never negative.
+    # At the parabolic law's constant deceleration the contact force is zero, never negative.
     assert int(bl.kinematic_impact(camjax.laws.Parabolic(), 0.05, 4.0).status) == bl.NO_SEPARATION
 
 
@@ -104,7 +106,9 @@ def test_table_equals_loop():
     for i, d in enumerate(dn):
         for j, b in enumerate(bk):
             single = bl.kinematic_impact(law, b, d)
-            np.testing.assert_allclose(table.impact_velocity[i, j], single.impact_velocity, rtol=1e-13)
+            np.testing.assert_allclose(
+                table.impact_velocity[i, j], single.impact_velocity, rtol=1e-13
+            )
             assert int(table.status[i, j]) == int(single.status)
     assert int(table.status[3, 0]) == bl.NO_SEPARATION  # ModSine Ca = 5.528 < 6
 
@@ -156,8 +160,20 @@ def _cli(argv):
 
 def test_cli_json_shape(capsys, tmp_path):
     status = _cli(
-        ["--law", "parabolic", "--law", "constant-acceleration", "--bk", "0.01,0.3",
-         "--dn", "0,3,5", "--format", "json", "--out", str(tmp_path)]
+        [
+            "--law",
+            "parabolic",
+            "--law",
+            "constant-acceleration",
+            "--bk",
+            "0.01,0.3",
+            "--dn",
+            "0,3,5",
+            "--format",
+            "json",
+            "--out",
+            str(tmp_path),
+        ]
     )
     assert status == 0
     doc = json.loads(capsys.readouterr().out)
@@ -191,7 +207,9 @@ _SAMPLES = 8192  # one sample grid for every dynamic test: one compilation
 
 
 def _dynamic(n, damping=0.0, **options):
-    return bl.solve_backlash(_MODSINE, bl.Backlash(n, _BK, _DN, damping), samples=_SAMPLES, **options)
+    return bl.solve_backlash(
+        _MODSINE, bl.Backlash(n, _BK, _DN, damping), samples=_SAMPLES, **options
+    )
 
 
 def test_dynamic_first_impact_converges_to_kinematic():
@@ -202,8 +220,10 @@ def test_dynamic_first_impact_converges_to_kinematic():
     for n in (10, 20, 40, 80):
         response = _dynamic(n, damping=0.05)
         errors.append(abs(float(response.first_impact_velocity) - float(kinematic.impact_velocity)))
-        assert float(response.first_impact_tau) == pytest.approx(float(kinematic.impact_tau), abs=0.02)
-    assert all(b < a for a, b in zip(errors, errors[1:]))
+        assert float(response.first_impact_tau) == pytest.approx(
+            float(kinematic.impact_tau), abs=0.02
+        )
+    assert all(b < a for a, b in zip(errors, errors[1:], strict=False))
     assert errors[-1] < 1e-3 * float(kinematic.impact_velocity)
     assert errors[0] > 5e-3 * float(kinematic.impact_velocity)  # a soft transmission differs
 

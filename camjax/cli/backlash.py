@@ -17,14 +17,20 @@ def register(subparsers) -> None:
             "The payload leaves the driving flank when the law's deceleration exceeds the "
             "natural deceleration dn = Dn T^2/h, flies across the clearance bk = "
             "backlash/stroke and strikes the other flank with normalised velocity v = V T/h. "
-            "In the table '-' is no separation and 'fall' a payload that falls back onto the driving flank without crossing (null velocity in JSON, with a status string)."
+            "In the table '-' is no separation and 'fall' a payload that falls back onto "
+            "the driving flank without crossing (null velocity and a status in JSON)."
         ),
     )
     parser.add_argument(
-        "--law", action="append", metavar="NAME", help="motion law (repeatable; default: all standard laws)"
+        "--law",
+        action="append",
+        metavar="NAME",
+        help="motion law (repeatable; default: all standard laws)",
     )
     parser.add_argument("--bk", required=True, help="normalised backlash values V1,V2,... (> 0)")
-    parser.add_argument("--dn", required=True, help="normalised natural decelerations V1,V2,... (>= 0)")
+    parser.add_argument(
+        "--dn", required=True, help="normalised natural decelerations V1,V2,... (>= 0)"
+    )
     add_format(parser, choices=("table", "json"))
     parser.add_argument("--out", metavar="DIR", help="also write backlash.json into DIR")
     parser.set_defaults(func=run)
@@ -60,10 +66,12 @@ def _format_table(report: dict) -> str:
     for name, entry in report["laws"].items():
         lines.append(f"{name}: impact velocity v (rows dn, columns bk)")
         lines.append("dn \\ bk  " + "".join(f"{b:>10.4g}" for b in entry["bk"]))
-        for d, row, states in zip(entry["dn"], entry["impact_velocity"], entry["status"]):
+        for d, row, states in zip(
+            entry["dn"], entry["impact_velocity"], entry["status"], strict=True
+        ):
             cells = (
                 f"{v:>10.4f}" if np.isfinite(v) else f"{_SHORT[state]:>10}"
-                for v, state in zip(row, states)
+                for v, state in zip(row, states, strict=True)
             )
             lines.append(f"{d:<9.4g}" + "".join(cells))
         lines.append("")

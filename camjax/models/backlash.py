@@ -87,7 +87,9 @@ def check_backlash_inputs(backlash, natural_deceleration) -> None:
     if is_concrete(backlash, natural_deceleration):
         bk = np.asarray(backlash, dtype=float)
         dn = np.asarray(natural_deceleration, dtype=float)
-        require(np.all(np.isfinite(bk)) and np.all(bk > 0), f"backlash bk must be positive, got {bk}")
+        require(
+            np.all(np.isfinite(bk)) and np.all(bk > 0), f"backlash bk must be positive, got {bk}"
+        )
         require(
             np.all(np.isfinite(dn)) and np.all(dn >= 0),
             f"natural deceleration dn must be non-negative, got {dn}",
@@ -222,7 +224,11 @@ def normalised_deceleration(deceleration: float, stroke: float, motion_time: flo
 
 def impact_velocity(normalised_velocity: float, stroke: float, motion_time: float) -> float:
     """Physical impact velocity ``V = v h / T`` (m/s, or rad/s for an angular stroke)."""
-    return float(normalised_velocity) * _positive("stroke", stroke) / _positive("motion_time", motion_time)
+    return (
+        float(normalised_velocity)
+        * _positive("stroke", stroke)
+        / _positive("motion_time", motion_time)
+    )
 
 
 def impact_force(
@@ -334,7 +340,9 @@ class BacklashResponse(NamedTuple):
 
 def _spring(model, e, mode):
     """Dead-zone spring stretch and the velocity its damper sees, for contact ``mode``."""
-    stretch = jnp.where(mode == DRIVING_FLANK, e, jnp.where(mode == OTHER_FLANK, e + model.backlash, 0.0))
+    stretch = jnp.where(
+        mode == DRIVING_FLANK, e, jnp.where(mode == OTHER_FLANK, e + model.backlash, 0.0)
+    )
     return stretch, mode != FREE
 
 
@@ -352,7 +360,9 @@ def _contact_end(t, y, args, **kwargs):
     _, model, mode = args
     e = y[0]
     return jnp.where(
-        mode == DRIVING_FLANK, -e, jnp.where(mode == FREE, e * (e + model.backlash), e + model.backlash)
+        mode == DRIVING_FLANK,
+        -e,
+        jnp.where(mode == FREE, e * (e + model.backlash), e + model.backlash),
     )
 
 
@@ -403,8 +413,20 @@ def _backlash_path(law, model, ts, t_end, solver, rtol, atol, max_segments, max_
         ok = (sol.result == diffrax.RESULTS.successful) | ended
         result = diffrax.RESULTS.where(ok, result, sol.result)
         steps = steps + sol.stats["num_steps"]
-        return (t1, e1, de1, new_mode, es, des, modes, impacts, count + 1,
-                n_impacts + is_impact, steps, result)
+        return (
+            t1,
+            e1,
+            de1,
+            new_mode,
+            es,
+            des,
+            modes,
+            impacts,
+            count + 1,
+            n_impacts + is_impact,
+            steps,
+            result,
+        )
 
     def running(state):
         t0, *_, count, _, _, result = state
@@ -431,7 +453,8 @@ def _backlash_path(law, model, ts, t_end, solver, rtol, atol, max_segments, max_
     stretch, touching = _spring(model, es, modes)
     w = model.omega
     acceleration = (
-        w**2 * stretch + jnp.where(touching, 2 * model.damping * w * des, 0.0)
+        w**2 * stretch
+        + jnp.where(touching, 2 * model.damping * w * des, 0.0)
         - model.natural_deceleration
     )
     return (es, acceleration, modes, impacts, n_impacts, count, steps, t_last, result)
@@ -460,20 +483,33 @@ def solve_backlash(
     from ..solve._ode import ADAPTIVE_SOLVERS
 
     key = str(method).strip().lower()
-    require(key in ADAPTIVE_SOLVERS, f"unknown method {method!r}; valid: {', '.join(ADAPTIVE_SOLVERS)}")
+    require(
+        key in ADAPTIVE_SOLVERS, f"unknown method {method!r}; valid: {', '.join(ADAPTIVE_SOLVERS)}"
+    )
     require(math.isfinite(dwell) and dwell >= 0, f"dwell must be >= 0, got {dwell}")
-    require(samples >= 2 and max_segments >= 1 and max_steps >= 1, "samples, max_segments, max_steps too small")
+    require(
+        samples >= 2 and max_segments >= 1 and max_steps >= 1,
+        "samples, max_segments, max_steps too small",
+    )
     t_end = 1.0 + float(dwell)
     ts = jnp.linspace(0.0, t_end, samples)
     model = jax.tree.map(lambda x: jnp.asarray(x, dtype=float), model)  # traced, not static
     es, acceleration, modes, impacts, n_impacts, count, steps, t_last, result = _backlash_path(
-        law, model, ts, jnp.asarray(t_end), ADAPTIVE_SOLVERS[key](), rtol, atol, max_segments, max_steps
+        law,
+        model,
+        ts,
+        jnp.asarray(t_end),
+        ADAPTIVE_SOLVERS[key](),
+        rtol,
+        atol,
+        max_segments,
+        max_steps,
     )
     if result != diffrax.RESULTS.successful:
         raise SolverError(
             f"backlash solve ({key}) failed at tau = {float(t_last):.6g}: "
-            f"{diffrax.RESULTS[result] if hasattr(diffrax.RESULTS, '__getitem__') else result}; "
-            "for very stiff contact use an implicit method (e.g. method='kvaerno5') or raise max_steps"
+            f"{diffrax.RESULTS[result]}; for very stiff contact use an implicit method "
+            "(e.g. method='kvaerno5') or raise max_steps"
         )
     if float(t_last) < t_end:
         raise SolverError(
