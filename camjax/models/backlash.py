@@ -36,7 +36,6 @@ import numpy as np
 import optimistix as optx
 
 from ..laws._base import AbstractMotionLaw, is_concrete, require
-from ..solve import SolverError
 from ._spring_mass import check_damping, check_period_ratios
 
 # Status codes of a kinematic case.
@@ -480,6 +479,7 @@ def solve_backlash(
     contact for an explicit ``method``: use an implicit one such as ``"kvaerno5"``) or
     when the contact changes more than ``max_segments`` times (chattering).
     """
+    from ..solve import SolverError  # here, not at the top: camjax.solve imports camjax.models
     from ..solve._ode import ADAPTIVE_SOLVERS
 
     key = str(method).strip().lower()
