@@ -281,3 +281,23 @@ def test_implicit_solver_handles_stiff_contact():
     assert float(implicit.first_impact_velocity) == pytest.approx(
         float(explicit.first_impact_velocity), rel=1e-6
     )
+
+
+def test_gradient_in_spline_coefficients_matches_central_differences():
+    """The design path for spline laws: d v / d coefficients of a B-spline fitted to ModSine."""
+    coefficients = camjax.laws.BSplineLaw.fit(camjax.laws.ModifiedSine(), 8).coefficients
+
+    @jax.jit
+    def velocity(c):
+        return bl.kinematic_impact(camjax.laws.BSplineLaw(c), 0.02, 1.0).impact_velocity
+
+    grad = jax.grad(velocity)(coefficients)
+    h = 1e-6
+    fd = np.array(
+        [
+            (velocity(coefficients.at[i].add(h)) - velocity(coefficients.at[i].add(-h))) / (2 * h)
+            for i in range(coefficients.shape[0])
+        ]
+    )
+    assert np.max(np.abs(grad)) > 1.0  # the impact velocity does depend on the shape
+    np.testing.assert_allclose(grad, fd, rtol=1e-6, atol=1e-7)
