@@ -112,16 +112,17 @@ def test_small_design_meets_caps_and_its_reported_value():
 
 
 def test_broken_caps_are_repaired_or_refused():
-    # Without a penalty the optimiser ignores the caps; the result is repaired onto them.
+    # The 4-5-6-7 fit breaks Ca <= 6.5; the repair blends it onto the convex feasible set.
+    broken = BSplineLaw.fit(get("poly4567"), 10)
     caps = D.Caps(max_ca=6.5, max_jerk=60.0)
-    result = D.design(D.Residual(7.3), caps=caps, knots=10, steps=30, penalty=0.0,
-                      optimizer="adam", learning_rate=0.3, progress=False)
-    v_min, ca, cj = _fine_grid_peaks(result.law)
-    assert result.restored and v_min >= -1e-12 and ca <= 6.5 and cj <= 60.0
-    # No standard law meets Ca <= 4.5 with Cj <= 30: the design is refused.
+    assert not caps.met(broken)
+    repaired = D._restore(broken, caps)
+    v_min, ca, cj = _fine_grid_peaks(repaired)
+    assert v_min >= -1e-12 and ca <= 6.5 and cj <= 60.0
+    assert ca > 6.49  # the nearest feasible point on the segment, not the anchor itself
+    # No standard law meets Ca <= 4.5 with Cj <= 30: the result is refused.
     with pytest.raises(D.CapError, match="caps"):
-        D.design(D.Residual(7.3), caps=D.Caps(max_ca=4.5, max_jerk=30.0), knots=10, steps=5,
-                 penalty=0.0, optimizer="adam", progress=False)
+        D._restore(broken, D.Caps(max_ca=4.5, max_jerk=30.0))
 
 
 def test_same_seed_same_design():
