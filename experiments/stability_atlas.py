@@ -1,0 +1,200 @@
+"""Stability atlas: where each solution method fails, and whether camjax says so.
+
+Panels (results/stability_atlas/atlas.png):
+1. fixed-step explicit solvers (Euler; Heun, whose stability polynomial Midpoint and
+   Ralston share) over period ratio and step count: the Ct error, or the failure camjax
+   reports; the line is the detection limit (free-vibration growth 1.1 over the rise);
+2. adaptive solvers with and without ``jump_ts`` on laws with jumps: accepted and
+   rejected steps against period ratio (the wasted work);
+3. float32 against float64: the Ct error of the exact path and of Tsit5 against n;
+4. very high period ratios: error and steps of the exact path and of Tsit5 up to n = 300.
+
+    python experiments/stability_atlas.py            # about five minutes on 2 cores
+    python experiments/stability_atlas.py --quick    # a smoke run
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+
+
+def fixed_step_map(n, step_counts, methods=("euler", "heun")):
+    """``{method: (len(steps), len(n))}`` Ct error (NaN where camjax reported a failure)."""
+    import diffrax
+    import jax.numpy as jnp
+
+    import camjax
+    from camjax.cli.bench import reference_metrics
+    from camjax.solve import SolveOptions, batch_metrics
+
+    law = camjax.laws.get("cycloidal")
+    ref_ct, _ = reference_metrics(law, n)
+    errors, failed = {}, {}
+    for method in methods:
+        err = np.full((len(step_counts), n.size), np.nan)
+        bad = np.zeros_like(err, dtype=bool)
+        for i, steps in enumerate(step_counts):
+            options = SolveOptions(method=method, steps=int(steps)).checked(float(n.max()))
+            metrics, result, _ = batch_metrics(law, jnp.asarray(n), 0.0, options)
+            bad[i] = ~np.asarray(result == diffrax.RESULTS.successful)
+            err[i] = np.where(bad[i], np.nan, np.abs(np.asarray(metrics.ct) - ref_ct))
+        errors[method], failed[method] = err, bad
+    return errors, failed
+
+
+def jump_ts_work(n, law_names=("parabolic", "modified-trapezoid"), rtol=1e-8):
+    """Accepted and rejected steps of Tsit5 with and without ``jump_ts``, per n."""
+    import diffrax
+    import jax
+    import jax.numpy as jnp
+
+    import camjax
+    from camjax.solve._ode import _vector_field
+
+    out = {}
+    for name in law_names:
+        law = camjax.laws.get(name)
+        for use_jumps in (True, False):
+            controller = diffrax.PIDController(rtol=rtol, atol=rtol * 1e-2)
+            if use_jumps:
+                controller = diffrax.ClipStepSizeController(
+                    controller, jump_ts=jnp.asarray(law.breakpoints(), dtype=float))
+
+            @jax.jit
+            @jax.vmap
+            def stats(period_ratio, controller=controller):
+                solution = diffrax.diffeqsolve(
+                    diffrax.ODETerm(_vector_field), diffrax.Tsit5(), 0.0, 1.0, None,
+                    (jnp.zeros(()), jnp.zeros(())), args=(law, 2 * jnp.pi * period_ratio, 0.0),
+                    stepsize_controller=controller, max_steps=100_000)
+                return solution.stats["num_accepted_steps"], solution.stats["num_rejected_steps"]
+
+            accepted, rejected = stats(jnp.asarray(n))
+            out[f"{name} {'jump_ts' if use_jumps else 'no jump_ts'}"] = (np.asarray(accepted), np.asarray(rejected))
+    return out
+
+
+def float32_errors(n, law_name="modified-trapezoid"):
+    """Ct error against n of the float32 runs (from the work-precision float32 worker)."""
+    import camjax
+    from camjax.cli.bench import reference_metrics
+
+    spec = Path(f"/tmp/camjax_atlas_float32_{os.getpid()}.json")
+    spec.write_text(json.dumps({"law": law_name, "n": n.tolist()}))
+    subprocess.run([sys.executable, str(HERE / "work_precision.py"), "--float32-worker", str(spec)],
+                   env={**os.environ, "JAX_ENABLE_X64": "0"}, check=True)
+    data = json.loads(spec.read_text())
+    spec.unlink()
+    ref_ct, _ = reference_metrics(camjax.laws.get(law_name), n)
+    return {label: np.abs(np.asarray(d["ct"]) - ref_ct) for label, d in data.items()}
+
+
+def high_period_ratio(n, law_name="modified-trapezoid"):
+    """Ct error and steps against n of the exact path (default grid) and Tsit5 (rtol 1e-8)."""
+    import jax.numpy as jnp
+
+    import camjax
+    from camjax.cli.bench import reference_metrics
+    from camjax.solve import SolveOptions, batch_metrics
+
+    law = camjax.laws.get(law_name)
+    ref_ct, _ = reference_metrics(law, n)
+    out = {}
+    for label, options in (("exact default", SolveOptions()),
+                           ("tsit5 rtol=1e-8", SolveOptions(method="tsit5", rtol=1e-8, atol=1e-10))):
+        metrics, _, steps = batch_metrics(law, jnp.asarray(n), 0.0, options.checked(float(n.max())))
+        out[label] = (np.abs(np.asarray(metrics.ct) - ref_ct), np.asarray(steps))
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--out", default="results/stability_atlas")
+    args = parser.parse_args()
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import LogNorm
+
+    from camjax.solve._ode import MAX_FREE_VIBRATION_GROWTH
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    count = 24 if args.quick else 80
+    n_fixed = np.geomspace(1.0, 100.0, count)
+    steps = np.array([250, 1000, 4000, 16000] if args.quick else [125, 250, 500, 1000, 2000, 4000, 8000, 16000, 32000, 64000])
+    errors, failed = fixed_step_map(n_fixed, steps)
+    n_jump = np.linspace(1.0, 30.0, count)
+    work = jump_ts_work(n_jump)
+    n_f32 = np.linspace(1.0, 30.0, count)
+    f32 = float32_errors(n_f32)
+    n_high = np.geomspace(1.0, 300.0, count)
+    high = high_period_ratio(n_high)
+
+    fig, axes = plt.subplots(2, 3, figsize=(15, 8.5))
+    for ax, method in zip(axes[0][:2], errors):
+        err = np.where(failed[method], np.nan, np.maximum(errors[method], 1e-16))
+        mesh = ax.pcolormesh(n_fixed, steps, err, norm=LogNorm(1e-10, 1.0), shading="nearest", cmap="viridis")
+        ax.contourf(n_fixed, steps, failed[method].astype(float), levels=[0.5, 1.5], colors="none",
+                    hatches=["xx"])
+        # Detection limit: growth**(1/steps) of the stability polynomial at w h.
+        w = 2 * np.pi * n_fixed
+        fine_steps = np.geomspace(steps.min(), steps.max(), 200)
+        ratio = np.log(MAX_FREE_VIBRATION_GROWTH)
+        theta = w[None, :] / fine_steps[:, None]
+        growth = np.log1p(theta**2) / 2 if method == "euler" else np.log1p(theta**4 / 4) / 2
+        ax.contour(n_fixed, fine_steps, fine_steps[:, None] * growth, levels=[ratio], colors="r")
+        ax.set(xscale="log", yscale="log", xlabel="period ratio n", ylabel="steps over the rise",
+               title=f"{method}: Ct error (hatched: SolverError)")
+        fig.colorbar(mesh, ax=ax, label="|Ct - Ct_ref|")
+    ax = axes[0][2]
+    for label, (accepted, rejected) in work.items():
+        line, = ax.plot(n_jump, accepted, label=f"{label}: accepted")
+        ax.plot(n_jump, rejected, ls="--", color=line.get_color(), label=f"{label}: rejected")
+    ax.set(yscale="log", xlabel="period ratio n", ylabel="steps", title="Tsit5 rtol 1e-8: jump_ts or not")
+    ax.legend(fontsize=6)
+    ax = axes[1][0]
+    for label, err in f32.items():
+        ax.semilogy(n_f32, np.maximum(err, 1e-16), label=f"{label} (float32)")
+    ax.set(xlabel="period ratio n", ylabel="|Ct - Ct_ref (float64)|", title="float32 error floor (ModTrap)")
+    ax.legend(fontsize=7)
+    ax = axes[1][1]
+    for label, (err, _) in high.items():
+        ax.loglog(n_high, np.maximum(err, 1e-17), label=label)
+    ax.set(xlabel="period ratio n", ylabel="|Ct - Ct_ref|", title="high period ratios (ModTrap), float64")
+    ax.legend(fontsize=7)
+    ax = axes[1][2]
+    for label, (_, st) in high.items():
+        ax.loglog(n_high, st, label=label)
+    ax.set(xlabel="period ratio n", ylabel="steps (grid intervals for exact)", title="work at high period ratios")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / "atlas.png", dpi=120)
+
+    summary = {
+        "command": "python " + " ".join(sys.argv),
+        "fixed_step_failed_fraction": {m: float(failed[m].mean()) for m in failed},
+        "fixed_step_max_error_accepted": {m: float(np.nanmax(errors[m])) for m in errors},
+        "jump_ts_steps_total": {k: [int(a.sum()), int(r.sum())] for k, (a, r) in work.items()},
+        "float32_max_ct_error": {k: float(np.max(v)) for k, v in f32.items()},
+        "high_n_max_ct_error": {k: float(np.max(e)) for k, (e, _) in high.items()},
+        "high_n_max_steps": {k: int(np.max(s)) for k, (_, s) in high.items()},
+    }
+    (out / "atlas.json").write_text(json.dumps(summary, indent=1))
+    print(json.dumps(summary, indent=1))
+
+
+if __name__ == "__main__":
+    main()

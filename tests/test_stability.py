@@ -1,0 +1,167 @@
+"""Failure modes of the solution methods are detected (issue 3), and the bench helpers work."""
+
+import argparse
+
+import camjax  # noqa: F401  (float64)
+import diffrax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from camjax.cli import bench
+from camjax.solve import SOLVERS, SolveOptions, batch_metrics, response_metrics
+from camjax.solve._ode import MAX_FREE_VIBRATION_GROWTH, free_vibration_growth
+
+CYCLOIDAL = camjax.laws.get("cycloidal")
+
+
+def cycloidal_residual(n):
+    """Closed form R(n) = 2n |sin(pi n)| / |n^2 - 1| (MISSION.md)."""
+    return 2 * n * abs(np.sin(np.pi * n)) / abs(n**2 - 1)
+
+
+@pytest.mark.parametrize("method", ["euler", "heun", "midpoint", "ralston"])
+def test_free_vibration_growth_matches_the_method_on_the_free_oscillator(method):
+    """The growth formula equals the growth diffrax's own solver produces on q' = lambda q."""
+    omega, steps = 2 * np.pi * 3.0, 200
+    lam = 1j * omega
+    solution = diffrax.diffeqsolve(
+        diffrax.ODETerm(lambda t, y, args: (-omega**2 * y[1], y[0])),  # (x', x) of x'' = -w^2 x
+        SOLVERS[method](), 0.0, 1.0, 1.0 / steps, (jnp.array(1.0), jnp.array(0.0)),
+        stepsize_controller=diffrax.ConstantStepSize(), saveat=diffrax.SaveAt(t1=True),
+    )
+    velocity, position = (float(y[-1]) for y in solution.ys)
+    numerical = abs(velocity - np.conj(lam) * position)  # |q| with q(0) = 1
+    assert float(free_vibration_growth(method, omega, 0.0, steps)) == pytest.approx(numerical, rel=1e-9)
+
+
+def test_unstable_fixed_step_raises_instead_of_a_wrong_ct():
+    # Euler with 1000 steps at n = 30: w dt = 0.19, free vibration grows ~3e7-fold.
+    with pytest.raises(camjax.SolverError, match="euler.*period ratio 30"):
+        camjax.solve(CYCLOIDAL, camjax.SpringMass(30.0, 0.0), method="euler", steps=1000)
+    with pytest.raises(camjax.SolverError, match="heun"):
+        camjax.ct_curve(CYCLOIDAL, [2.0, 30.0], method="heun", steps=200)
+
+
+def test_detection_limit_is_where_the_growth_crosses_the_threshold():
+    """Just inside the limit a run succeeds and is close to the closed form; just past it, it fails."""
+    n = 5.5
+    omega = 2 * np.pi * n
+    steps = np.arange(100, 2000)
+    growth = np.asarray(free_vibration_growth("heun", omega, 0.0, steps))
+    first_stable = int(steps[np.argmax(growth <= MAX_FREE_VIBRATION_GROWTH)])
+    options = [SolveOptions(method="heun", steps=k).checked(n) for k in (first_stable - 1, first_stable)]
+    (bad, bad_result, _), (good, good_result, _) = (batch_metrics(CYCLOIDAL, jnp.array([n]), 0.0, o) for o in options)
+    assert not bool(bad_result == diffrax.RESULTS.successful)
+    assert np.isnan(np.asarray(bad.ct)).all() and np.isnan(np.asarray(bad.residual)).all()
+    assert bool(good_result == diffrax.RESULTS.successful)
+    # Accepted: the error is bounded by the spurious growth (10 %), not wild.
+    assert float(good.residual[0]) == pytest.approx(cycloidal_residual(n), rel=MAX_FREE_VIBRATION_GROWTH - 1)
+
+
+@pytest.mark.slow
+def test_stable_fixed_step_converges_at_second_order():
+    n = 2.5
+    errors = []
+    for steps in (2000, 4000):
+        response = camjax.solve(CYCLOIDAL, camjax.SpringMass(n, 0.0), method="heun", steps=steps)
+        errors.append(abs(float(response.metrics.residual) - cycloidal_residual(n)))
+    assert 3.0 < errors[0] / errors[1] < 5.0
+
+
+def test_max_steps_exhaustion_raises():
+    with pytest.raises(camjax.SolverError, match="maximum number of solver steps"):
+        camjax.solve(CYCLOIDAL, camjax.SpringMass(50.0, 0.0), method="tsit5", rtol=1e-12, atol=1e-14, max_steps=100)
+
+
+@pytest.mark.slow
+def test_adaptive_without_jump_ts_stays_accurate_on_an_acceleration_jump():
+    """Parabolic (acceleration jump at 0.5): both ways meet the tolerance's accuracy."""
+    law = camjax.laws.get("parabolic")
+    n = jnp.array([3.3, 7.9])
+    reference = camjax.ct_curve(law, n, resolution=4096).residual
+    for use_jump_ts in (True, False):
+        curve = camjax.ct_curve(law, n, method="tsit5", rtol=1e-8, atol=1e-10, use_jump_ts=use_jump_ts)
+        np.testing.assert_allclose(curve.residual, reference, atol=1e-6)
+
+
+def test_pareto_front_and_default_method():
+    times = [1.0, 2.0, 0.5, 3.0, 2.5]
+    errors = [1e-3, 1e-6, 1e-2, 1e-9, 1e-5]
+    assert bench.pareto_front(times, errors).tolist() == [2, 0, 1, 3]  # 4 is beaten by 1
+    rows = [
+        {"law": law, "method": m, "warm_s": t, "failed": f, "ct_error": e, "residual_error": e}
+        for law in ("a", "b")
+        for m, t, f, e in (("fast", 0.1, 0, 1e-3), ("good", 1.0, 0, 1e-8), ("broken", 0.01, 1, 0.0))
+    ]
+    assert bench.default_method(rows)["method"] == "good"
+    assert bench.default_method(rows, goal=1e-12) is None
+
+
+def test_bench_case_levels():
+    assert len(bench.study_cases("quick")) < len(bench.study_cases("medium")) < len(bench.study_cases("full"))
+    families = {case.family for case in bench.study_cases("full")}
+    assert families == {"exact", "fixed-step", "adaptive", "adaptive-no-jumps", "implicit"}
+    with pytest.raises(ValueError, match="level"):
+        bench.study_cases("huge")
+
+
+def _parse(argv):
+    parser = argparse.ArgumentParser()
+    bench.register(parser.add_subparsers())
+    return parser.parse_args(argv)
+
+
+def test_bench_cli_rejects_bad_arguments():
+    with pytest.raises(ValueError, match="nonsense"):
+        bench.run(_parse(["bench", "--laws", "nonsense"]))
+    with pytest.raises(camjax.cli._common.CliError, match="--n"):
+        bench.run(_parse(["bench", "--n=-1:2:3"]))
+
+
+def test_measure_reports_errors_against_the_reference():
+    """One cheap case through ``measure``: the error equals the closed form's distance."""
+    n = np.array([2.5, 3.5, 4.5])
+    case = bench.Case("exact res=64", "exact", SolveOptions(resolution=64))
+    reference = (np.zeros(3), np.asarray([cycloidal_residual(x) for x in n]) / 1.0)
+    row = bench.measure(CYCLOIDAL, n, case, (reference[0], reference[1] / 1.0), repeats=1)
+    curve = camjax.ct_curve(CYCLOIDAL, n, resolution=64)
+    assert row["failed"] == 0 and row["steps_max"] == 64
+    assert row["residual_error"] == pytest.approx(np.max(np.abs(curve.residual - reference[1])), abs=1e-12)
+    # R of the cycloidal law is in units of Ca = 2 pi: the closed form above is in those units too
+    assert row["residual_error"] < 1e-6
+
+
+@pytest.mark.slow
+def test_float32_error_floor_is_reported(tmp_path):
+    """float32 (a child process) gives errors near 1e-4, far above float64's."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "experiments" / "work_precision.py"
+    spec = tmp_path / "spec.json"
+    n = np.linspace(1.0, 10.0, 5)
+    spec.write_text(json.dumps({"law": "cycloidal", "n": n.tolist()}))
+    subprocess.run([sys.executable, str(script), "--float32-worker", str(spec)],
+                   env={**os.environ, "JAX_ENABLE_X64": "0"}, check=True)
+    data = json.loads(spec.read_text())["exact default"]
+    assert data["dtype"] == "float32"
+    error = np.max(np.abs(np.asarray(data["residual"]) - cycloidal_residual(n)))
+    assert 1e-9 < error < 1e-2
+
+
+@pytest.mark.slow
+def test_gradient_through_diffrax_matches_exact_path():
+    """d(R)/dn through Tsit5 (RecursiveCheckpointAdjoint) against the exact path's autodiff."""
+    import jax
+
+    options = SolveOptions(method="tsit5", rtol=1e-10, atol=1e-12, resolution=512)
+
+    def residual_tsit5(n):
+        return response_metrics(CYCLOIDAL, camjax.SpringMass(n, 0.0), options).residual
+
+    exact = jax.grad(lambda n: camjax.residual_vibration(CYCLOIDAL, n))(3.3)
+    assert float(jax.grad(residual_tsit5)(3.3)) == pytest.approx(float(exact), rel=1e-6)
