@@ -134,8 +134,8 @@ def modes_study():
         a_h, _ = peaks_of(u, order)
         rows.append([modes, natural, float(np.max(np.abs(v))), float(np.max(np.abs(u))), *(a for _, a in t_h[:3]), t_near[1], *(a for _, a in a_h[:3]), int(response.steps), seconds])
         print(f"N={modes}: max|v| {rows[-1][2]:.5f} mm, max|u| {rows[-1][3]:.2e} mm, {seconds:.1f} s (incl. compile)")
-    header = "modes,natural_rad_s,max_v_mm,max_u_mm,v1,v3,v5,v_near_natural,u1,u3,u5,steps,seconds_incl_compile"
-    np.savetxt(OUT / "modes.csv", np.array(rows, dtype=float), delimiter=",", header=header, comments="", fmt="%.6g")
+        header = "modes,natural_rad_s,max_v_mm,max_u_mm,v1,v3,v5,v_near_natural,u1,u3,u5,steps,seconds_incl_compile"
+        np.savetxt(OUT / "modes.csv", np.array(rows, dtype=float), delimiter=",", header=header, comments="", fmt="%.6g")
 
 
 def sdof_comparison(summary):
@@ -199,22 +199,26 @@ def main():
     parser.add_argument("--sdof", action="store_true")
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
-    summary_path = OUT / "summary.json"
-    summary = json.loads(summary_path.read_text()) if summary_path.exists() else {}
+    summary = {}
     profile_figure()
     rows = []
-    for name in args.sets.split(","):
+    names = [name for name in args.sets.split(",") if name]
+    for name in names:
         study_set(name, rows, summary)
     header = "set,law,natural_rad_s,v_1,v_3,v_5,v_near_order,v_near,u_1,u_3,u_5,u_near"
     csv = OUT / "peaks.csv"
-    old = [line for line in csv.read_text().splitlines()[1:] if line.split(",")[0] not in args.sets.split(",")] if csv.exists() else []
+    old_lines = csv.read_text().splitlines()[1:] if csv.exists() else []
+    old = [line for line in old_lines if line.split(",")[0] not in names]
     new = [",".join([r[0], r[1]] + [f"{x:.6g}" for x in r[2:]]) for r in rows]
-    csv.write_text("\n".join([header] + old + new) + "\n")
+    if new:
+        csv.write_text("\n".join([header] + old + new) + "\n")
     if args.modes_study:
         modes_study()
     if args.sdof:
         sdof_comparison(summary)
-    summary_path.write_text(json.dumps(summary, indent=1) + "\n")
+    summary_path = OUT / "summary.json"  # merged at the end, so runs of different sets combine
+    merged = json.loads(summary_path.read_text()) if summary_path.exists() else {}
+    summary_path.write_text(json.dumps(merged | summary, indent=1) + "\n")
 
 
 if __name__ == "__main__":

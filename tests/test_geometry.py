@@ -27,9 +27,9 @@ def test_program_segments_and_derivatives():
     np.testing.assert_allclose(y[(THETA >= beta) & (THETA <= math.pi)], lift, atol=1e-14)
     np.testing.assert_allclose(y[THETA >= 1.5 * math.pi], 0.0, atol=1e-14)
     # Derivatives are with respect to theta: compare with autodiff of the displacement.
-    grad = jax.vmap(jax.grad(program.displacement))(THETA)
+    grad = jax.jit(jax.vmap(jax.grad(program.displacement)))(THETA)
     np.testing.assert_allclose(dy, grad, atol=1e-12)
-    grad2 = jax.vmap(jax.grad(jax.grad(program.displacement)))(THETA + 1e-3)
+    grad2 = jax.jit(jax.vmap(jax.grad(jax.grad(program.displacement))))(THETA + 1e-3)
     np.testing.assert_allclose(program.evaluate(THETA + 1e-3)[2], grad2, atol=1e-10)
     # Periodic.
     np.testing.assert_allclose(program.displacement(THETA + 2 * math.pi), y, atol=1e-12)
@@ -43,9 +43,10 @@ def test_program_rejects_overlong_segments():
 def test_law_bank_matches_each_law():
     laws = (Cycloidal(), ModifiedSine(), PolynomialLaw(3))
     tau = jnp.linspace(-0.1, 1.1, 97)
+    evaluate = jax.jit(lambda law, t: law.evaluate(t))
     for i, law in enumerate(laws):
         bank = LawBank(laws, i)
-        for got, want in zip(bank.evaluate(tau), law.evaluate(tau)):
+        for got, want in zip(evaluate(bank, tau), evaluate(law, tau)):
             np.testing.assert_allclose(got, want, atol=1e-14)
         assert float(bank.Ca) == pytest.approx(float(law.Ca))
     values = jax.vmap(lambda i: LawBank(laws, i).s(0.3))(jnp.arange(3))
@@ -88,7 +89,7 @@ def test_flanks_are_envelopes_of_roller_circles():
     # Each flank point is r_r from its roller centre, and the joining line is normal to the pitch curve.
     for flank in (prof.inner, prof.outer):
         np.testing.assert_allclose(jnp.linalg.norm(flank - prof.pitch, axis=1), rr, rtol=1e-12)
-    tangent = jax.vmap(jax.jacfwd(lambda t: geometry.pitch_point(follower, program, t)))(THETA)
+    tangent = jax.jit(jax.vmap(jax.jacfwd(lambda t: geometry.pitch_point(follower, program, t))))(THETA)
     np.testing.assert_allclose(jnp.sum(tangent * (prof.outer - prof.pitch), axis=1), 0.0, atol=1e-14)
     # Envelope: distance from a fixed flank point to nearby roller circles is stationary (>= r_r).
     k = 100
@@ -132,6 +133,7 @@ def test_geometry_rejects_impossible_linkage():
 def test_pressure_angle_gradient_matches_finite_difference():
     program = MotionProgram(Cycloidal(), Cycloidal(), math.pi / 18)
 
+    @jax.jit
     def peak(d):
         f = geometry.SwingingRollerFollower(pivot_distance=d)
         return jnp.max(jnp.abs(geometry.cam_profile(f, program, THETA[::8]).pressure_angle))

@@ -263,8 +263,11 @@ def _vector_field(t, state, model):
     return qdot, model.accelerations(q, qdot, t)[0] / _RATE_SCALE
 
 
+SOLVERS = {"tsit5": diffrax.Tsit5, "dopri5": diffrax.Dopri5, "dopri8": diffrax.Dopri8}
+
+
 @eqx.filter_jit
-def _simulate(model, turns, samples_per_turn, rtol, atol, max_steps):
+def _simulate(model, turns, samples_per_turn, rtol, atol, max_steps, solver):
     period = 2 * math.pi / model.omega
     ts = jnp.arange(int(round(turns * samples_per_turn))) * (period / samples_per_turn)
     whole = math.ceil(turns)
@@ -272,7 +275,7 @@ def _simulate(model, turns, samples_per_turn, rtol, atol, max_steps):
     zero = jnp.zeros(model.size)
     solution = diffrax.diffeqsolve(
         diffrax.ODETerm(_vector_field),
-        diffrax.Tsit5(),
+        SOLVERS[solver](),
         t0=0.0,
         t1=turns * period,
         dt0=period * 1e-4,
@@ -309,6 +312,7 @@ def simulate(
     atol: float = 1e-11,
     max_steps: int = 400_000,
     check: bool = True,
+    solver: str = "tsit5",
 ) -> FollowerResponse:
     """Integrate ``turns`` cam turns (a whole number for spectra) from rest, rigid, at theta = 0.
 
@@ -318,7 +322,8 @@ def simulate(
     """
     require(isinstance(turns, int | float) and turns > 0, f"turns must be a positive number, got {turns}")
     require(isinstance(samples_per_turn, int) and samples_per_turn >= 16, "samples_per_turn must be an integer >= 16")
-    response = _simulate(model, turns, samples_per_turn, rtol, atol, max_steps)
+    require(solver in SOLVERS, f"solver must be one of {sorted(SOLVERS)}, got {solver!r}")
+    response = _simulate(model, turns, samples_per_turn, rtol, atol, max_steps, solver)
     if check:
         ok = jnp.all(response.result == diffrax.RESULTS.successful)
         finite = jnp.all(jnp.isfinite(response.transverse)) & jnp.all(jnp.isfinite(response.axial_end))
