@@ -192,6 +192,21 @@ def profile_figure():
     plt.close(fig)
 
 
+def write_tables():
+    """peaks.md: one markdown table of peaks.csv (amplitudes in mm)."""
+    lines = (OUT / "peaks.csv").read_text().splitlines()
+    out = [
+        "| set | law | fundamental (rad/s) | v 1 Omega | v 3 Omega | v 5 Omega | v near fund. (order) | u 1 Omega | u 3 Omega | u 5 Omega | u near fund. |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for line in lines[1:]:
+        f = line.split(",")
+        num = [float(x) for x in f[2:]]
+        cells = [f[0], f[1], f"{num[0]:.0f}", *(f"{x:.2e}" for x in num[1:4]), f"{num[5]:.2e} ({num[4]:.1f})", *(f"{x:.2e}" for x in num[6:])]
+        out.append("| " + " | ".join(cells) + " |")
+    (OUT / "peaks.md").write_text("\n".join(out) + "\n")
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--sets", default="base", help="comma-separated names from " + ",".join(SETS))
@@ -212,6 +227,8 @@ def main():
     new = [",".join([r[0], r[1]] + [f"{x:.6g}" for x in r[2:]]) for r in rows]
     if new:
         csv.write_text("\n".join([header] + old + new) + "\n")
+    if (OUT / "peaks.csv").exists():
+        write_tables()
     if args.modes_study:
         modes_study()
     if args.sdof:
