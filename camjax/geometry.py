@@ -149,7 +149,11 @@ def _profile_at(follower, program, theta, roller_radius):
 
 def cam_profile(follower: AbstractRollerFollower, program: MotionProgram, theta: ArrayLike) -> CamProfile:
     """Pitch curve, both groove flanks, pressure angle and radii of curvature at ``theta``."""
-    theta = jnp.atleast_1d(jnp.asarray(theta, dtype=float))
+    return _cam_profile(follower, program, jnp.atleast_1d(jnp.asarray(theta, dtype=float)))
+
+
+@eqx.filter_jit
+def _cam_profile(follower, program, theta) -> CamProfile:
     parts = jax.vmap(lambda t: _profile_at(follower, program, t, follower.roller_radius))(theta)
     return CamProfile(theta, *parts)
 
