@@ -19,7 +19,8 @@ model = SwingingFollower(rise=ModifiedSine(), fall=ModifiedSine(), modes=2)
 theta = np.linspace(0, 2 * math.pi, 361)
 profile = geometry.cam_profile(model.follower, model.program, theta)
 print("max |pressure angle| (deg):", float(np.degrees(np.max(np.abs(profile.pressure_angle)))))
-print("undercut:", geometry.undercut(profile, model.roller_radius)._asdict())
+flags = geometry.undercut(profile, model.roller_radius)
+print("undercut inner/outer:", bool(flags.inner.any()), bool(flags.outer.any()), "min flank radii (m):", float(flags.min_inner_radius), float(flags.min_outer_radius))
 
 # %%
 fig, ax = plt.subplots(figsize=(4, 4))
