@@ -210,5 +210,11 @@ def ca_ct_crossings(curve_a, curve_b, *, envelope: bool = True) -> list[float]:
         n = fine
     else:
         diff = np.asarray(curve_a.ca_ct) - np.asarray(curve_b.ca_ct)
-    sign_change = np.nonzero(np.sign(diff[:-1]) * np.sign(diff[1:]) < 0)[0]
-    return [float(n[i] - diff[i] * (n[i + 1] - n[i]) / (diff[i + 1] - diff[i])) for i in sign_change]
+    sign = np.sign(diff)
+    crossings = []
+    for i in range(len(diff) - 1):
+        if sign[i] * sign[i + 1] < 0:
+            crossings.append(float(n[i] - diff[i] * (n[i + 1] - n[i]) / (diff[i + 1] - diff[i])))
+        elif sign[i + 1] == 0 and i + 2 < len(diff) and sign[i] * sign[i + 2] < 0:
+            crossings.append(float(n[i + 1]))  # the curves meet exactly at a sample
+    return crossings

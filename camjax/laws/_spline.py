@@ -153,14 +153,13 @@ class BSplineLaw(AbstractMotionLaw):
         return _basis(trimmed, self.degree - order, jnp.asarray(tau)) @ points
 
     def _rise(self, tau) -> LawValues:
-        return tuple(self._derivative(tau, order) for order in range(4))
+        return _rise(self, tau)
 
     def breakpoints(self) -> Breakpoints:
         return tuple(float(x) for x in np.unique(self.knots)[1:-1])
 
     def _peak(self, order: int) -> jax.Array:
-        edges = np.unique(self.knots)
-        return max_abs_piecewise(lambda t: self._derivative(t, order), edges)
+        return _peak(self, order)
 
     @property
     def Cv(self):
@@ -186,3 +185,15 @@ class BSplineLaw(AbstractMotionLaw):
         target = np.asarray(law.s(tau)) - basis[:, -n_fixed:].sum(axis=1)
         free = np.linalg.lstsq(basis[:, n_fixed:-n_fixed], target, rcond=None)[0]
         return cls(jnp.asarray(free), degree=degree, zero_jerk=zero_jerk)
+
+
+# Compiled once per spline size: eager evaluation dispatches hundreds of small ops.
+@eqx.filter_jit
+def _rise(law: BSplineLaw, tau) -> LawValues:
+    return tuple(law._derivative(tau, order) for order in range(4))
+
+
+@eqx.filter_jit
+def _peak(law: BSplineLaw, order: int) -> jax.Array:
+    edges = np.unique(law.knots)
+    return max_abs_piecewise(lambda t: law._derivative(t, order), edges)

@@ -87,9 +87,12 @@ def _piece_counts(law: AbstractMotionLaw, resolution: int):
         edges = np.array([0.0, *breakpoints, 1.0])
         counts = [max(2, math.ceil(resolution * w)) for w in np.diff(edges)]
         return jnp.asarray(edges), counts
+    # Traced breakpoints (an SCCA law with free fractions): the widths are unknown when
+    # the grid's shape is fixed, so every piece gets the intervals a piece of half the
+    # rise needs; no SCCA piece is wider, since each lies within one half of the rise.
     n_pieces = breakpoints.shape[0] + 1
     edges = jnp.concatenate([jnp.zeros(1), jnp.sort(jnp.clip(breakpoints, 0.0, 1.0)), jnp.ones(1)])
-    return edges, [math.ceil(resolution / n_pieces)] * n_pieces
+    return edges, [math.ceil(resolution / 2)] * n_pieces
 
 
 def motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:

@@ -1,0 +1,138 @@
+"""Speed and accuracy of one law's 1000-point Ct curve: exact path, diffrax, scipy.
+
+For 1000 period ratios in [1, 30] and every standard law: warm time and compile time of
+the exact path and of the diffrax path (Tsit5), and the time of a scipy ``solve_ivp``
+(DOP853, rtol 1e-10) loop over the same n (timed on a subset and scaled, since it runs
+at Python speed), all in this process; each compared with the exact path at 4x the
+default resolution.  Writes results/bench_ct/results.md and .json.
+
+    python experiments/bench_ct.py [--scipy-subset 40]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import minimize_scalar
+
+import camjax
+from camjax import laws
+from camjax.solve import SolveOptions, batch_metrics
+
+
+def timed(fn, repeats=5):
+    """(first-call seconds, best warm seconds) of a function returning JAX arrays."""
+    start = time.perf_counter()
+    jax.block_until_ready(fn())
+    first = time.perf_counter() - start
+    best = math.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        jax.block_until_ready(fn())
+        best = min(best, time.perf_counter() - start)
+    return first, best
+
+
+def scipy_metrics(law, n):
+    """Ct and R of one period ratio from DOP853 with dense output and refined peaks."""
+    w = 2 * math.pi * n
+    breaks = [0.0, *[float(b) for b in law.breakpoints()], 1.0]
+    y = np.zeros(2)
+    peak = 0.0
+    for lo, hi in zip(breaks[:-1], breaks[1:]):  # restart at each breakpoint (jumps)
+        if hi <= lo:
+            continue
+        mid = 0.5 * (lo + hi)
+        acc = lambda t, mid=mid, lo=lo, hi=hi: float(law.a(min(max(t, lo), hi) * (1 - 1e-15)  # noqa: E731
+                                                        + mid * 1e-15))
+        sol = solve_ivp(lambda t, s: [s[1], acc(t) - w * w * s[0]], (lo, hi), y,
+                        method="DOP853", rtol=1e-10, atol=1e-12, dense_output=True)
+        t = np.linspace(lo, hi, max(8, int(32 * n * (hi - lo))))
+        xpp = np.abs(w * w * sol.sol(t)[0])
+        k = int(np.argmax(xpp))
+        res = minimize_scalar(lambda u: -abs(w * w * sol.sol(u)[0]), method="bounded",
+                              bounds=(t[max(k - 1, 0)], t[min(k + 1, t.size - 1)]),
+                              options={"xatol": 1e-12})
+        peak = max(peak, xpp[k], -res.fun)
+        y = sol.y[:, -1]
+    residual = w * math.hypot(y[0] * w, y[1]) / w  # w^2 * amplitude of e, undamped
+    ca = float(law.Ca)
+    return max(peak, residual) / ca, residual / ca
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scipy-subset", type=int, default=40,
+                        help="period ratios timed for the scipy loop (scaled to 1000)")
+    parser.add_argument("--out", default="results/bench_ct")
+    args = parser.parse_args()
+    n = np.linspace(1.0, 30.0, 1000)
+    nj = jnp.asarray(n)
+    rows = []
+    for law in laws.standard_laws():
+        exact_opts = SolveOptions().checked(30.0)
+        ref_opts = SolveOptions(resolution=4 * exact_opts.resolution).checked(30.0)
+        ode_opts = SolveOptions(method="tsit5", rtol=1e-10, atol=1e-12).checked(30.0)
+        ref = batch_metrics(law, nj, 0.0, ref_opts)[0]
+        exact_first, exact_warm = timed(lambda: batch_metrics(law, nj, 0.0, exact_opts))
+        ode_first, ode_warm = timed(lambda: batch_metrics(law, nj, 0.0, ode_opts), repeats=2)
+        exact = batch_metrics(law, nj, 0.0, exact_opts)[0]
+        ode = batch_metrics(law, nj, 0.0, ode_opts)[0]
+        subset = np.linspace(0, n.size - 1, args.scipy_subset).astype(int)
+        start = time.perf_counter()
+        sp = np.array([scipy_metrics(law, n[i]) for i in subset])
+        scipy_time = (time.perf_counter() - start) * n.size / subset.size
+
+        def err(m, idx=slice(None)):
+            ct_ref, r_ref = np.asarray(ref.ct)[idx], np.asarray(ref.residual)[idx]
+            return (float(np.max(np.abs(np.asarray(m[0]) - ct_ref) / ct_ref)),
+                    float(np.max(np.abs(np.asarray(m[1]) - r_ref))))
+
+        rows.append({
+            "law": law.name,
+            "exact_warm_s": exact_warm, "exact_compile_s": exact_first - exact_warm,
+            "exact_ct_rel_err": err((exact.ct, exact.residual))[0],
+            "exact_r_abs_err": err((exact.ct, exact.residual))[1],
+            "tsit5_warm_s": ode_warm, "tsit5_compile_s": ode_first - ode_warm,
+            "tsit5_ct_rel_err": err((ode.ct, ode.residual))[0],
+            "tsit5_r_abs_err": err((ode.ct, ode.residual))[1],
+            "scipy_s_scaled": scipy_time,
+            "scipy_ct_rel_err": err((sp[:, 0], sp[:, 1]), subset)[0],
+            "scipy_r_abs_err": err((sp[:, 0], sp[:, 1]), subset)[1],
+            "speedup_vs_scipy": scipy_time / exact_warm,
+        })
+        r = rows[-1]
+        print(f"{law.name:<20} exact {1e3 * exact_warm:6.1f} ms (compile {r['exact_compile_s']:.1f} s, "
+              f"Ct err {r['exact_ct_rel_err']:.1e})  tsit5 {1e3 * ode_warm:7.1f} ms "
+              f"(Ct err {r['tsit5_ct_rel_err']:.1e})  scipy {scipy_time:6.1f} s "
+              f"(Ct err {r['scipy_ct_rel_err']:.1e})  exact/scipy speed-up {r['speedup_vs_scipy']:.0f}x",
+              flush=True)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "results.json").write_text(json.dumps(rows, indent=1))
+    lines = [
+        "| law | exact warm (ms) | exact compile (s) | exact max Ct rel. err | tsit5 warm (ms) "
+        "| tsit5 max Ct rel. err | scipy DOP853 loop (s) | scipy max Ct rel. err | speed-up vs scipy |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['law']} | {1e3 * r['exact_warm_s']:.1f} | {r['exact_compile_s']:.2f} "
+            f"| {r['exact_ct_rel_err']:.1e} | {1e3 * r['tsit5_warm_s']:.0f} "
+            f"| {r['tsit5_ct_rel_err']:.1e} | {r['scipy_s_scaled']:.1f} "
+            f"| {r['scipy_ct_rel_err']:.1e} | {r['speedup_vs_scipy']:.0f}x |"
+        )
+    (out / "results.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,222 @@
+"""Motion laws against independent references: MISSION.md coefficients, textbook
+acceleration shapes integrated by scipy, autodiff, and property tests."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.integrate import quad
+
+from camjax import laws
+
+PI = math.pi
+KNOWN = {  # MISSION.md: Cv, Ca, Cj (None: not listed)
+    "cycloidal": (2.0, 2 * PI, 4 * PI**2),
+    "modified-sine": (1.7596, 4 * PI**2 / (PI + 4), None),
+    "modified-trapezoid": (2.0, 8 * PI / (PI + 2), None),
+    "harmonic": (PI / 2, PI**2 / 2, math.inf),
+    "parabolic": (2.0, 4.0, math.inf),
+    "poly345": (1.875, 5.7735, 60.0),
+    "poly4567": (2.1875, 7.5132, 52.5),
+}
+
+
+@pytest.mark.parametrize("name", list(KNOWN))
+def test_coefficients_match_mission(name):
+    law = laws.get(name)
+    cv, ca, cj = KNOWN[name]
+    c = law.peak_coefficients()
+    assert c["Cv"] == pytest.approx(cv, abs=1e-4)
+    assert c["Ca"] == pytest.approx(ca, abs=1e-4)
+    if cj is not None:
+        assert c["Cj"] == pytest.approx(cj, rel=1e-9) if math.isfinite(cj) else c["Cj"] == cj
+
+
+@pytest.mark.parametrize("name", list(KNOWN))
+def test_coefficients_match_dense_sampling(name):
+    law = laws.get(name)
+    tau = np.linspace(0, 1, 200001)
+    c = law.peak_coefficients()
+    assert float(jnp.max(jnp.abs(law.v(tau)))) == pytest.approx(c["Cv"], rel=1e-9)
+    assert float(jnp.max(jnp.abs(law.a(tau)))) == pytest.approx(c["Ca"], rel=1e-9)
+    if math.isfinite(c["Cj"]):
+        assert float(jnp.max(jnp.abs(law.j(tau)))) == pytest.approx(c["Cj"], rel=1e-6)
+
+
+def _textbook_acceleration(name):
+    """Acceleration shapes as the textbooks define them, written independently of SCCA."""
+    if name == "modified-sine":
+        A = 4 * PI**2 / (PI + 4)
+
+        def acc(t):
+            if t <= 1 / 8:
+                return A * math.sin(4 * PI * t)
+            if t <= 7 / 8:
+                return A * math.cos(4 * PI * (t - 1 / 8) / 3)
+            return A * math.sin(4 * PI * t)
+
+        return acc
+    if name == "modified-trapezoid":
+        A = 8 * PI / (PI + 2)
+
+        def acc(t):
+            if t <= 1 / 8 or t >= 7 / 8:
+                return A * math.sin(4 * PI * t)
+            if t <= 3 / 8:
+                return A
+            if t <= 5 / 8:
+                return A * math.cos(4 * PI * (t - 3 / 8))
+            return -A
+
+        return acc
+    if name == "cycloidal":
+        return lambda t: 2 * PI * math.sin(2 * PI * t)
+    if name == "harmonic":
+        return lambda t: PI**2 / 2 * math.cos(PI * t)
+    if name == "parabolic":
+        return lambda t: 4.0 if t < 0.5 else -4.0
+    raise KeyError(name)
+
+
+@pytest.mark.parametrize(
+    "name", ["modified-sine", "modified-trapezoid", "cycloidal", "harmonic", "parabolic"]
+)
+def test_scca_members_match_textbook_shapes(name):
+    acc = _textbook_acceleration(name)
+    law = laws.get(name)
+    breaks = [1 / 8, 3 / 8, 1 / 2, 5 / 8, 7 / 8]
+    for t in [0.05, 0.2, 0.37, 0.49, 0.61, 0.8, 0.93, 1.0]:
+        pts = [b for b in breaks if b < t]
+        v = quad(acc, 0, t, points=pts or None, epsabs=1e-13, epsrel=1e-13)[0]
+        s = quad(lambda u: quad(acc, 0, u, points=[b for b in breaks if b < u] or None,
+                                epsabs=1e-13, epsrel=1e-13)[0], 0, t, points=pts or None,
+                 epsabs=1e-12, epsrel=1e-12)[0]
+        assert float(law.a(t)) == pytest.approx(acc(t), abs=1e-12)
+        assert float(law.v(t)) == pytest.approx(v, abs=1e-11)
+        assert float(law.s(t)) == pytest.approx(s, abs=1e-10)
+
+
+@pytest.mark.parametrize("name", ["modified-sine", "modified-trapezoid", "cycloidal",
+                                  "harmonic", "parabolic"])
+def test_general_scca_equals_named_member(name):
+    named = laws.get(name)
+    general = laws.SCCA(*(jnp.asarray(x) for x in named.fractions))
+    tau = jnp.linspace(0, 1, 1001)
+    for f, g in zip(named.evaluate(tau), general.evaluate(tau)):
+        np.testing.assert_allclose(f, g, rtol=0, atol=1e-13)
+    assert float(general.Ca) == pytest.approx(float(named.Ca), rel=1e-15)
+
+
+@pytest.mark.parametrize("name", list(KNOWN))
+def test_closed_form_derivatives_match_autodiff(name):
+    law = laws.get(name)
+    tau = jnp.linspace(0.013, 0.987, 211)
+    for lower, upper in ((law.s, law.v), (law.v, law.a), (law.a, law.j)):
+        np.testing.assert_allclose(jax.vmap(jax.grad(lower))(tau), upper(tau), atol=2e-11,
+                                   rtol=1e-12)
+
+
+def test_outside_the_rise_is_a_dwell():
+    law = laws.ModifiedSine()
+    s, v, a, j = law.evaluate(jnp.array([-0.5, 1.5]))
+    np.testing.assert_array_equal(s, [0.0, 1.0])
+    for x in (v, a, j):
+        np.testing.assert_array_equal(x, [0.0, 0.0])
+
+
+fractions = st.tuples(*(st.floats(0, 1) for _ in range(3))).filter(lambda f: 0.05 < sum(f) <= 1)
+
+
+@settings(max_examples=40, deadline=None)
+@given(fractions)
+def test_scca_invariants(f):
+    law = laws.SCCA(*f)
+    tau = jnp.linspace(0, 1, 401)
+    s, v, a, _ = law.evaluate(tau)
+    assert float(law.s(0.0)) == pytest.approx(0.0, abs=1e-14)
+    assert float(law.s(1.0)) == pytest.approx(1.0, abs=1e-12)
+    assert float(law.v(0.0)) == pytest.approx(0.0, abs=1e-12)
+    assert float(law.v(1.0)) == pytest.approx(0.0, abs=1e-12)
+    np.testing.assert_allclose(s + s[::-1], 1.0, atol=1e-12)  # point symmetry
+    assert bool(jnp.all(v >= -1e-12))  # monotone rise
+    assert float(jnp.max(jnp.abs(a))) == pytest.approx(float(law.Ca), rel=1e-3)
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.lists(st.floats(-2, 3), min_size=6, max_size=6), st.booleans(),
+       st.sampled_from([3, 4, 5, 7]))
+def test_bspline_boundary_conditions_hold_for_any_coefficients(coefs, zero_jerk, degree):
+    law = laws.BSplineLaw(jnp.asarray(coefs), degree=degree, zero_jerk=zero_jerk)
+    s, v, a, j = law.evaluate(jnp.array([0.0, 1.0]))
+    np.testing.assert_allclose(s, [0.0, 1.0], atol=1e-12)
+    np.testing.assert_allclose(v, [0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(a, [0.0, 0.0], atol=1e-7)
+    if zero_jerk and degree >= 4:
+        np.testing.assert_allclose(j, [0.0, 0.0], atol=1e-5)
+
+
+def test_bspline_derivatives_and_peaks():
+    law = laws.BSplineLaw.fit(laws.Cycloidal(), 14)
+    tau = jnp.linspace(0.01, 0.99, 157)
+    np.testing.assert_allclose(jax.vmap(jax.grad(law.s))(tau), law.v(tau), atol=1e-10)
+    np.testing.assert_allclose(jax.vmap(jax.grad(law.a))(tau), law.j(tau), atol=1e-8)
+    dense = jnp.linspace(0, 1, 100001)
+    assert float(law.Ca) == pytest.approx(float(jnp.max(jnp.abs(law.a(dense)))), rel=1e-9)
+    assert float(law.Cj) == pytest.approx(float(jnp.max(jnp.abs(law.j(dense)))), rel=1e-6)
+    # A least-squares fit of the cycloidal law is close to it.
+    assert float(jnp.max(jnp.abs(law.s(tau) - laws.Cycloidal().s(tau)))) < 1e-4
+
+
+def test_polynomial_family():
+    np.testing.assert_allclose(laws.PolynomialLaw(3)._coefficients(0), [0, 0, 0, 10, -15, 6],
+                               atol=1e-12)
+    np.testing.assert_allclose(laws.PolynomialLaw(4)._coefficients(0),
+                               [0, 0, 0, 0, 35, -84, 70, -20], atol=1e-10)
+    assert laws.PolynomialLaw(5).name == "poly56789"
+    assert laws.get("poly:5").name == "poly56789"
+
+
+def test_registry_names_and_aliases():
+    for name in laws.names():
+        assert laws.get(name).name == name
+    assert laws.get("modsine").name == "modified-sine"
+    assert laws.get("ModTrap").name == "modified-trapezoid"
+    assert laws.get("SHM").name == "harmonic"
+    assert float(laws.get("scca:0.25,0.5,0.25").Ca) == pytest.approx(8 * PI / (PI + 2))
+
+
+@pytest.mark.parametrize(
+    "build, message",
+    [
+        (lambda: laws.get("nope"), "unknown law 'nope'; valid names: cycloidal"),
+        (lambda: laws.SCCA(-0.1, 0.5, 0.5), "non-negative"),
+        (lambda: laws.SCCA(0.5, 0.5, 0.5), "a + b + c <= 1"),
+        (lambda: laws.SCCA(0.0, 0.0, 0.0), "0 < a + b + c"),
+        (lambda: laws.SCCA(float("nan"), 0.5, 0.5), "finite"),
+        (lambda: laws.get("scca:0.1,0.2"), "three fractions"),
+        (lambda: laws.get("scca:x,y,z"), "cannot read"),
+        (lambda: laws.PolynomialLaw(1), "order must be"),
+        (lambda: laws.BSplineLaw(jnp.array([0.5, jnp.nan])), "finite"),
+        (lambda: laws.BSplineLaw(jnp.zeros(3), degree=2), "degree must be"),
+    ],
+)
+def test_bad_parameters_raise_clear_errors(build, message):
+    with pytest.raises(ValueError, match=message.replace("+", r"\+")):
+        build()
+
+
+def test_scca_gradients_match_finite_differences():
+    def peak_and_value(f):
+        law = laws.SCCA(f[0], f[1], f[2])
+        return law.Ca + law.Cv + law.s(0.37) + law.a(0.62)  # away from breakpoints
+
+    f0 = jnp.array([0.3, 0.3, 0.3])
+    grad = jax.grad(peak_and_value)(f0)
+    for i in range(3):
+        e = jnp.zeros(3).at[i].set(1e-6)
+        fd = (peak_and_value(f0 + e) - peak_and_value(f0 - e)) / 2e-6
+        assert float(grad[i]) == pytest.approx(float(fd), rel=1e-6, abs=1e-8)

@@ -1,0 +1,235 @@
+"""The SDOF response engine against closed forms, scipy and diffrax."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import camjax
+from camjax import laws
+from camjax.solve import response_metrics
+
+
+def cycloidal_residual(n):
+    return math.pi if n == 1 else 2 * n * abs(math.sin(math.pi * n)) / abs(n * n - 1)
+
+
+def residual_by_quadrature(law, n, points=400):
+    """R = w |int_0^1 a(u) exp(-i w u) du| / Ca (MISSION.md) by Gauss-Legendre per piece.
+
+    Direct quadrature of the oscillatory integrand: independent of the engine's exact
+    propagation, and converged for these n (400 points per smooth piece).
+    """
+    w = 2 * math.pi * n
+    edges = np.array([0.0, *[float(b) for b in law.breakpoints()], 1.0])
+    x, weights = np.polynomial.legendre.leggauss(points)
+    lo, hi = edges[:-1, None], edges[1:, None]
+    u = (lo + hi) / 2 + (hi - lo) / 2 * x
+    integrand = np.asarray(law.a(u)) * np.exp(-1j * w * u)
+    total = np.sum((hi - lo) / 2 * weights * integrand)
+    return w * abs(total) / float(law.Ca)
+
+
+def test_cycloidal_residual_matches_closed_form_over_wide_range():
+    n = np.linspace(0.5, 50, 397)
+    curve = camjax.ct_curve(laws.Cycloidal(), n)
+    expected = np.array([cycloidal_residual(x) for x in n])
+    np.testing.assert_allclose(curve.residual, expected, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["modified-sine", "modified-trapezoid", "harmonic",
+                                  "parabolic", "poly345", "poly4567"])
+def test_residual_matches_fourier_integral(name):
+    law = laws.get(name)
+    n = np.array([0.7, 3.3, 11.9, 41.3])
+    curve = camjax.ct_curve(law, n)
+    expected = [residual_by_quadrature(law, x) for x in n]
+    np.testing.assert_allclose(curve.residual, expected, rtol=1e-9, atol=1e-10)
+
+
+def test_residual_zeros_of_cycloidal_and_harmonic():
+    cyc = camjax.ct_curve(laws.Cycloidal(), np.arange(2.0, 21.0))
+    assert np.max(cyc.residual) < 1e-9
+    shm = camjax.ct_curve(laws.SimpleHarmonic(), np.arange(1.5, 20.0, 1.0))
+    assert np.max(shm.residual) < 1e-9
+
+
+def test_parabolic_and_harmonic_torsion_factor_bounds():
+    n = np.linspace(1, 30, 600)
+    par = camjax.ct_curve(laws.Parabolic(), n)
+    assert np.all(par.ct >= 2 - 1e-9) and np.all(par.ct <= 4 + 1e-9)
+    assert par.ct.max() == pytest.approx(4.0, abs=1e-6)  # the worst case is reached
+    # SHM: in the rise x'' = A w^2/(w^2 - pi^2) (cos(pi tau) - cos(w tau)), whose peak is
+    # 2A (1 - 0.37/n^2) to leading order, just below 2A; the crests of Ct come from the
+    # residual and tend to 2 from above.
+    n = np.linspace(10, 30, 400)
+    shm = camjax.ct_curve(laws.SimpleHarmonic(), n)
+    assert np.all(shm.ct >= 2 - 0.8 / n**2) and np.all(shm.ct <= 2 + 1 / n**2)
+    crests, values = camjax.metrics.upper_envelope(n, shm.ct)
+    assert np.all(values >= 2) and np.all(np.diff(values) <= 1e-12)
+
+
+@pytest.mark.parametrize("name", ["modified-trapezoid", "harmonic", "poly4567"])
+def test_torsion_factor_converges_under_grid_refinement(name):
+    law = laws.get(name)
+    n = np.array([1.7, 6.2, 14.9, 28.4])
+    values = [camjax.ct_curve(law, n, damping=0.03, resolution=r).ct for r in (512, 1024, 2048)]
+    assert np.max(np.abs(values[1] / values[2] - 1)) < 1e-8
+    coarse_error = np.max(np.abs(values[0] / values[2] - 1))
+    assert np.max(np.abs(values[1] / values[2] - 1)) <= max(coarse_error, 1e-12)
+
+
+@pytest.mark.parametrize("name", ["modified-sine", "parabolic", "poly345"])
+def test_diffrax_agrees_with_exact_path(name):
+    law = laws.get(name)
+    n = np.array([1.3, 4.6, 12.2])
+    exact = camjax.ct_curve(law, n, damping=0.05)
+    ode = camjax.ct_curve(law, n, damping=0.05, method="tsit5", rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(ode.ct, exact.ct, rtol=1e-7)
+    np.testing.assert_allclose(ode.residual, exact.residual, rtol=1e-7, atol=1e-9)
+    np.testing.assert_allclose(ode.peak_in_motion, exact.peak_in_motion, rtol=1e-7)
+
+
+def test_state_at_end_of_rise_matches_scipy():
+    law, n, zeta = laws.ModifiedTrapezoid(), 3.7, 0.08
+    w = 2 * math.pi * n
+    response = camjax.solve(law, camjax.SpringMass(n, zeta))
+    tau = np.asarray(response.tau)
+    nodes = [int(np.argmin(np.abs(tau - t))) for t in (0.25, 0.6, 1.0)]
+
+    def rhs(t, y):
+        return [y[1], float(law.a(t)) - w * w * y[0] - 2 * zeta * w * y[1]]
+
+    sol = solve_ivp(rhs, (0, 1), [0.0, 0.0], method="DOP853", rtol=1e-12, atol=1e-14,
+                    t_eval=tau[nodes])
+    for i, e in zip(nodes, sol.y[0]):
+        assert float(response.deflection[i]) == pytest.approx(e, rel=1e-8, abs=1e-12)
+    # Payload acceleration x'' = w^2 e + 2 zeta w e' at the end of the rise.
+    e1, de1 = sol.y[0][-1], sol.y[1][-1]
+    assert float(response.response_acceleration[nodes[-1]]) == pytest.approx(
+        w * w * e1 + 2 * zeta * w * de1, rel=1e-8)
+    # Residual: amplitude of x'' in the free vibration from (e1, de1), x'' = w^2 e + 2 zeta w e',
+    # sampled densely over one period of the dwell (undamped amplitude would be exact).
+    wd = w * math.sqrt(1 - zeta**2)
+    t = np.linspace(0, 2 * math.pi / wd, 20001)
+    b = (de1 + zeta * w * e1) / wd
+    e = np.exp(-zeta * w * t) * (e1 * np.cos(wd * t) + b * np.sin(wd * t))
+    de = np.gradient(e, t, edge_order=2)
+    xpp = w * w * e + 2 * zeta * w * de
+    envelope = np.abs(xpp) * np.exp(zeta * w * t)  # undo the decay: amplitude at t = 0
+    assert float(response.metrics.residual) * float(law.Ca) == pytest.approx(
+        envelope.max(), rel=1e-6)
+
+
+def test_undamped_torsion_factor_is_max_of_motion_peak_and_residual():
+    curve = camjax.ct_curve(laws.ModifiedSine(), np.linspace(1, 20, 77))
+    np.testing.assert_allclose(curve.ct, np.maximum(curve.peak_in_motion, curve.residual),
+                               rtol=1e-12)
+
+
+def test_batch_equals_python_loop_and_jit_equals_eager():
+    law = laws.Cycloidal()
+    n = np.array([1.1, 2.9, 7.3, 19.6])
+    curve = camjax.ct_curve(law, n, damping=0.02)
+    loop = [camjax.solve(law, camjax.SpringMass(x, 0.02)).metrics for x in n]
+    np.testing.assert_allclose(curve.ct, [float(m.ct) for m in loop], rtol=1e-12)
+    np.testing.assert_allclose(curve.residual, [float(m.residual) for m in loop], rtol=1e-12)
+    eager = camjax.torsion_factor(law, 7.3, 0.02)
+    jitted = jax.jit(camjax.torsion_factor, static_argnums=0)(law, 7.3, 0.02)
+    assert float(jitted) == pytest.approx(float(eager), rel=1e-13)
+
+
+def _central(f, x, h):
+    return (f(x + h) - f(x - h)) / (2 * h)
+
+
+@pytest.mark.parametrize("n", [2.37, 8.61])
+def test_gradients_in_period_ratio_and_damping(n):
+    law = laws.ModifiedSine()
+    for fn in (camjax.torsion_factor, camjax.residual_vibration):
+        d_n = jax.grad(lambda x, fn=fn: fn(law, x, 0.04))(n)
+        fd_n = _central(lambda x, fn=fn: float(fn(law, x, 0.04)), n, 1e-5)
+        assert float(d_n) == pytest.approx(fd_n, rel=1e-5, abs=1e-7)
+        d_z = jax.grad(lambda z, fn=fn: fn(law, n, z))(0.04)
+        fd_z = _central(lambda z, fn=fn: float(fn(law, n, z)), 0.04, 1e-6)
+        assert float(d_z) == pytest.approx(fd_z, rel=1e-5, abs=1e-7)
+
+
+def test_gradients_in_law_parameters():
+    n = 5.3
+
+    def metric(f, which):
+        law = laws.SCCA(f[0], f[1], f[2])
+        m = response_metrics(law, camjax.SpringMass(n, 0.0), camjax.SolveOptions(resolution=512))
+        return getattr(m, which)
+
+    f0 = jnp.array([0.3, 0.35, 0.3])
+    for which in ("residual", "ct"):
+        grad = jax.grad(metric)(f0, which)
+        for i in range(3):
+            e = jnp.zeros(3).at[i].set(1e-6)
+            fd = (metric(f0 + e, which) - metric(f0 - e, which)) / 2e-6
+            assert float(grad[i]) == pytest.approx(float(fd), rel=1e-5, abs=1e-7)
+
+
+def test_physical_period_ratio():
+    # 2 kg on 4e6 N/m: f = sqrt(2e6)/(2 pi) Hz; a 50 ms rise gives n = 0.05 f.
+    assert camjax.period_ratio(0.05, mass=2.0, stiffness=4e6) == pytest.approx(
+        0.05 * math.sqrt(2e6) / (2 * math.pi))
+    assert camjax.period_ratio(0.1, inertia=0.01, torsional_rigidity=2e4) == pytest.approx(
+        0.1 * math.sqrt(2e6) / (2 * math.pi))
+    with pytest.raises(ValueError, match="stiffness must be positive"):
+        camjax.period_ratio(0.05, mass=2.0, stiffness=-1.0)
+    with pytest.raises(ValueError, match="either mass and stiffness"):
+        camjax.period_ratio(0.05, mass=2.0, torsional_rigidity=1.0)
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: camjax.ct_curve(laws.Cycloidal(), [1.0, -2.0]), "must be positive, got -2"),
+        (lambda: camjax.ct_curve(laws.Cycloidal(), [0.0]), "must be positive, got 0"),
+        (lambda: camjax.ct_curve(laws.Cycloidal(), [np.nan]), "finite"),
+        (lambda: camjax.ct_curve(laws.Cycloidal(), []), "non-empty"),
+        (lambda: camjax.ct_curve(laws.Cycloidal(), [2.0], damping=1.0), r"in \[0, 1\)"),
+        (lambda: camjax.ct_curve(laws.Cycloidal(), [2.0], damping=-0.1), r"in \[0, 1\)"),
+        (lambda: camjax.ct_curve(laws.Cycloidal(), [2.0], method="rk99"), "unknown method"),
+        (lambda: camjax.ct_curve(laws.Cycloidal(), [2.0], dwell=-1), "dwell"),
+        (lambda: camjax.SpringMass(-3.0), "must be positive"),
+    ],
+)
+def test_bad_input_raises_clear_errors(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()
+
+
+def test_solver_failure_raises():
+    with pytest.raises(camjax.SolverError, match="maximum number of solver steps"):
+        camjax.ct_curve(laws.ModifiedSine(), [25.0], method="tsit5", max_steps=16)
+
+
+def test_fit_recovers_known_envelope():
+    n = np.linspace(1, 30, 2901)  # includes every integer
+    envelope = 2.5 / n**1.3 + 1.1
+    ct = envelope * (1 - 0.5 * np.abs(np.sin(np.pi * n)))  # crests at the integers, on it
+    curve = camjax.CtCurve(n, ct, ct, ct, 1.0, "synthetic")
+    fit = camjax.fit_torsion_factor(curve)
+    assert (fit.p, fit.q, fit.r) == pytest.approx((2.5, 1.3, 1.1), rel=1e-4)
+
+
+def test_crossings_of_two_curves():
+    n = np.linspace(1, 10, 901)
+    a = camjax.CtCurve(n, 2 / n + 1, n * 0, n * 0, 1.0, "a")
+    b = camjax.CtCurve(n, np.full_like(n, 1.5), n * 0, n * 0, 1.0, "b")
+    assert camjax.ca_ct_crossings(a, b, envelope=False) == pytest.approx([4.0], abs=1e-4)
+
+
+def test_batched_laws_equal_single_calls():
+    family = [laws.SCCA(0.25, 0.5, 0.25), laws.SCCA(0.3, 0.2, 0.4)]
+    n = np.array([2.2, 9.1])
+    batched = camjax.ct_curves(family, n)
+    for law in family:
+        np.testing.assert_allclose(batched[law.name].ct, camjax.ct_curve(law, n).ct, rtol=1e-10)
