@@ -13,3 +13,5 @@ from ._scca import ModifiedTrapezoid as ModifiedTrapezoid
 from ._scca import Parabolic as Parabolic
 from ._scca import SimpleHarmonic as SimpleHarmonic
 from ._spline import BSplineLaw as BSplineLaw
+from ._io import load as load
+from ._io import save as save
