@@ -143,7 +143,7 @@ def test_float32_error_floor_is_reported(tmp_path):
 
     script = Path(__file__).resolve().parents[1] / "experiments" / "work_precision.py"
     spec = tmp_path / "spec.json"
-    n = np.linspace(1.0, 10.0, 5)
+    n = np.linspace(1.5, 10.0, 5)
     spec.write_text(json.dumps({"law": "cycloidal", "n": n.tolist()}))
     subprocess.run([sys.executable, str(script), "--float32-worker", str(spec)],
                    env={**os.environ, "JAX_ENABLE_X64": "0"}, check=True)
