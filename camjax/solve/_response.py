@@ -16,7 +16,7 @@ from ..models import SpringMass
 from ..models._spring_mass import check_damping, check_period_ratios
 from ._exact import eigenvalue, propagate
 from ._grid import MotionGrid, default_resolution, motion_grid
-from ._ode import check_method, integrate
+from ._ode import FIXED_STEP_SOLVERS, MAX_FREE_VIBRATION_GROWTH, check_method, integrate
 
 
 class SolverError(RuntimeError):
@@ -174,6 +174,12 @@ def raise_on_failure(result, values, period_ratio, method: str) -> None:
     if failed.any():
         i = int(np.flatnonzero(np.atleast_1d(failed))[0])
         message = diffrax.RESULTS[jax.tree.map(lambda x: jnp.atleast_1d(x)[i], result)]
+        if method in FIXED_STEP_SOLVERS:
+            message += (
+                " The fixed-step solver's numerical free vibration grew by more than "
+                f"{MAX_FREE_VIBRATION_GROWTH} over the rise (w*dt past its stability limit): "
+                "take more steps, or use an adaptive solver or the exact path."
+            )
         raise SolverError(
             f"method {method!r} failed at period ratio {period_ratio[i]:g} "
             f"({int(failed.sum())} of {failed.size} failed): {message}"
