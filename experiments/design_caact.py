@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 import camjax
-from camjax import design as D
+import camjax.motion_design as D
 from camjax.laws import standard_laws
 
 

@@ -23,7 +23,7 @@ import numpy as np
 from scipy.optimize import linprog
 
 import camjax
-from camjax import design as D
+import camjax.motion_design as D
 from camjax.laws import BSplineLaw
 
 

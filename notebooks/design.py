@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import camjax
-from camjax import design as D
+import camjax.motion_design as D
 from camjax.laws import get
 from camjax.laws._io import load, save
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import camjax
-from camjax import design as D
+import camjax.motion_design as D
 from camjax.laws import BSplineLaw, get
 from camjax.laws._io import load
 

@@ -41,7 +41,7 @@ def _band(text: str) -> tuple[float, float]:
 
 
 def run(args) -> int:
-    from .. import design as D
+    from .. import motion_design as D
     from ..laws import standard_laws
     from ..laws._io import save
 

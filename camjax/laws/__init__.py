@@ -14,4 +14,6 @@ from ._scca import Parabolic as Parabolic
 from ._scca import SimpleHarmonic as SimpleHarmonic
 from ._spline import BSplineLaw as BSplineLaw
 from ._io import load as load
+from ._program import LawBank as LawBank
+from ._program import MotionProgram as MotionProgram
 from ._io import save as save

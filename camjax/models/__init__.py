@@ -23,3 +23,5 @@ from .two_mass import TwoMass as TwoMass
 from .two_mass import TwoMassResponse as TwoMassResponse
 from .two_mass import two_mass_ct_curve as two_mass_ct_curve
 from .two_mass import two_mass_response as two_mass_response
+from .swinging_follower import SwingingFollower as SwingingFollower
+from .swinging_follower import simulate as simulate_follower
