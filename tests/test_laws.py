@@ -143,7 +143,13 @@ def test_scca_invariants(f):
     assert float(law.v(1.0)) == pytest.approx(0.0, abs=1e-12)
     np.testing.assert_allclose(s + s[::-1], 1.0, atol=1e-12)  # point symmetry
     assert bool(jnp.all(v >= -1e-12))  # monotone rise
-    assert float(jnp.max(jnp.abs(a))) == pytest.approx(float(law.Ca), rel=1e-3)
+    # The peak |a| = Ca is reached at a breakpoint (the end of the sine ramp, the start of
+    # the cosine fall, or tau = 0), perhaps only as a one-sided limit where the acceleration
+    # steps; a uniform sample misses it when the plateau is narrow.
+    edges = jnp.asarray([0.0, *law.breakpoints(), 1.0])
+    at_breaks = jnp.abs(law.a(jnp.concatenate([edges - 1e-13, edges, edges + 1e-13])))
+    assert float(jnp.max(jnp.abs(a))) <= float(law.Ca) * (1 + 1e-12)
+    assert float(jnp.max(at_breaks)) == pytest.approx(float(law.Ca), rel=1e-9)
 
 
 @settings(max_examples=12, deadline=None)
