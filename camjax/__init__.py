@@ -14,9 +14,6 @@ if os.environ.get("JAX_ENABLE_X64", "").lower() not in ("0", "false"):
 
 from . import geometry as geometry  # noqa: E402
 from . import laws as laws  # noqa: E402
-from .motion_design import CapError as CapError  # noqa: E402
-from .motion_design import Caps as Caps  # noqa: E402
-from .motion_design import design as design  # noqa: E402
 from .metrics import TorsionFactorFit as TorsionFactorFit  # noqa: E402
 from .metrics import ca_ct_crossings as ca_ct_crossings  # noqa: E402
 from .metrics import fit_torsion_factor as fit_torsion_factor  # noqa: E402
@@ -27,6 +24,9 @@ from .models import SwingingFollower as SwingingFollower  # noqa: E402
 from .models import TwoMass as TwoMass  # noqa: E402
 from .models import natural_frequency as natural_frequency  # noqa: E402
 from .models import period_ratio as period_ratio  # noqa: E402
+from .motion_design import CapError as CapError  # noqa: E402
+from .motion_design import Caps as Caps  # noqa: E402
+from .motion_design import design as design  # noqa: E402
 from .solve import Metrics as Metrics  # noqa: E402
 from .solve import Response as Response  # noqa: E402
 from .solve import SolveOptions as SolveOptions  # noqa: E402

@@ -22,7 +22,6 @@
 
 # %%
 import camjax
-import jax.numpy as jnp
 import matplotlib.pyplot as plt
 import numpy as np
 

@@ -1,12 +1,12 @@
 """Coulomb friction with stick-slip: closed forms, the exact SDOF, and three solution paths."""
 
-import camjax
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import camjax
 from camjax.models.friction import CoulombFriction, free_vibration, solve_friction
 
 SAMPLES = 1024  # one static setting, so the events path compiles once for the module

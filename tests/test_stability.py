@@ -2,12 +2,12 @@
 
 import argparse
 
-import camjax  # noqa: F401  (float64)
 import diffrax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
+import camjax  # noqa: F401  (float64)
 from camjax.cli import bench
 from camjax.solve import SOLVERS, SolveOptions, batch_metrics, response_metrics
 from camjax.solve._ode import MAX_FREE_VIBRATION_GROWTH, free_vibration_growth

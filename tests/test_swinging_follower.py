@@ -8,7 +8,6 @@ import pytest
 from scipy.optimize import brentq
 
 import camjax
-from camjax.laws import Cycloidal
 from camjax.models.swinging_follower import SwingingFollower, simulate, spectral_peaks, spectrum
 
 

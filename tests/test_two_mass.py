@@ -1,12 +1,12 @@
 """Two-mass model (elastic input drive): limits that reduce it to the SDOF, energy balance."""
 
-import camjax
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.integrate import cumulative_simpson
 
+import camjax
 from camjax.models.two_mass import TwoMass, two_mass_ct_curve, two_mass_response
 
 OPTIONS = dict(samples=2048)  # one static setting: the model compiles once per law

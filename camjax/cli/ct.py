@@ -6,7 +6,6 @@ import csv
 import io
 import sys
 
-import numpy as np
 from tqdm import tqdm
 
 from .. import laws, plot
