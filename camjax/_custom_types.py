@@ -9,7 +9,6 @@ import numpy as np
 from jaxtyping import Array, Float
 
 ArrayLike: TypeAlias = jax.Array | np.ndarray | float
-Scalar: TypeAlias = Float[Array, ""]
 LawValues: TypeAlias = tuple[jax.Array, jax.Array, jax.Array, jax.Array]
 """``(s, v, a, j)`` of a motion law, each shaped like the ``tau`` it was evaluated at."""
 Breakpoints: TypeAlias = tuple[float, ...] | Float[Array, " b"]
