@@ -51,6 +51,10 @@ from .solve._response import _dwell_peak, _mode_gain
 EVALUATION_SAMPLES = 2000
 """Period ratios across a band on which reported (true) maxima are taken."""
 
+DEFAULT_STEPS = 6000
+"""Optimiser steps of a design (L-BFGS: 1000 per sharpness stage; a stage that has
+converged hands over early)."""
+
 _GAUSS_ORDER = 12
 _MAX_PHASE_PER_PANEL = 2.0  # radians of exp(lambda u) across one quadrature panel
 _DENSE_PER_PIECE = 24  # samples per smooth piece where caps and Ca are checked in training
@@ -558,7 +562,7 @@ def design(
     degree: int = 5,
     initial: AbstractMotionLaw | str = "cycloidal",
     optimizer: str = "lbfgs",
-    steps: int = 6000,
+    steps: int = DEFAULT_STEPS,
     learning_rate: float = 1e-2,
     sharpness: tuple[float, float] = (8.0, 8192.0),
     penalty: float = 1e4,

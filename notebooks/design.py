@@ -20,7 +20,7 @@ from camjax.laws._io import load, save
 # %%
 objective = D.MaxResidual(6.0, 12.0, samples=128)
 caps = D.Caps(max_ca=7.5, max_jerk=100.0)
-result = D.design(objective, caps=caps, knots=12, steps=60, progress=False)
+result = D.design(objective, caps=caps, knots=12, steps=300, progress=False)
 print(result.values, result.coefficients, f"{result.seconds:.1f} s")
 
 # %%

@@ -23,7 +23,8 @@ def register(subparsers) -> None:
     parser.add_argument("--damping", type=float, default=0.0, help="damping ratio zeta")
     parser.add_argument("--knots", type=int, default=24, help="free B-spline coefficients")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--steps", type=int, default=300, help="optimiser steps")
+    parser.add_argument("--steps", type=int, default=None,
+                        help="optimiser steps (default: camjax.motion_design.DEFAULT_STEPS)")
     parser.add_argument("--optimizer", choices=("lbfgs", "adam"), default="lbfgs")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument("--out", required=True, help="output directory")
@@ -56,7 +57,8 @@ def run(args) -> int:
         objective = (D.MaxCaCt(*band, damping=args.damping) if band
                      else D.CaCt(args.n, damping=args.damping))
     caps = D.Caps(args.max_ca, args.max_jerk)
-    result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=args.steps,
+    steps = D.DEFAULT_STEPS if args.steps is None else args.steps
+    result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=steps,
                       optimizer=args.optimizer, progress=not args.quiet)
     law = result.law
     save(law, out / "law.json")
@@ -79,7 +81,7 @@ def run(args) -> int:
     dump_json({"objective": objective.label, "value": result.values[objective.label],
                "caps": {"max_ca": args.max_ca, "max_jerk": args.max_jerk, "monotone": True},
                "coefficients": result.coefficients, "knots": args.knots, "seed": args.seed,
-               "steps": args.steps, "repaired": result.restored, "seconds": result.seconds,
+               "steps": steps, "repaired": result.restored, "seconds": result.seconds,
                "band": [n1, n2], "damping": args.damping}, out / "summary.json")
     _figures(law, ratios, curves, out)
     print(f"{objective.label}: designed {rows[0]['objective']:.5g}; best standard "
