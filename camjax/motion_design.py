@@ -440,7 +440,7 @@ class Caps:
 
     def violations(self, law: AbstractMotionLaw) -> dict[str, float]:
         """Relative excess over each cap (<= 0 when met), from refined peaks and a fine grid."""
-        ca, cj, v_min = (float(x) for x in _fine_checks(law))
+        _, ca, cj, v_min = (float(x) for x in _fine_checks(law))
         out = {}
         if self.max_ca is not None:
             out["Ca"] = ca / self.max_ca - 1
@@ -456,8 +456,8 @@ class Caps:
 
 @eqx.filter_jit
 def _fine_checks(law: AbstractMotionLaw):
-    """Refined Ca and Cj, and the least velocity on 20001 points (one compiled call)."""
-    return law.Ca, law.Cj, jnp.min(law.v(jnp.linspace(0.0, 1.0, 20001)))
+    """Refined Cv, Ca and Cj, and the least velocity on 20001 points (one compiled call)."""
+    return law.Cv, law.Ca, law.Cj, jnp.min(law.v(jnp.linspace(0.0, 1.0, 20001)))
 
 
 _ANCHORS = ("cycloidal", "modified-sine", "modified-trapezoid", "poly345", "poly4567")
@@ -691,7 +691,7 @@ def design(
         law=final,
         objectives=objectives,
         values=values,
-        coefficients=final.peak_coefficients(),
+        coefficients=dict(zip(("Cv", "Ca", "Cj"), (float(x) for x in _fine_checks(final)[:3]))),
         loss_history=np.concatenate(history),
         restored=final is not law,
         seconds=time.perf_counter() - started,
