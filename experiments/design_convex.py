@@ -109,7 +109,7 @@ def main(out=Path("results/design_convex")):
              "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| [{r['band'][0]}, {r['band'][1]}] | {r['max_ca']} | {r['max_jerk']} | {r['knots']} | "
-                     f"{r['lp_bound']:.5f} | {r['lp_law_max_r']:.5f} | {r['design_max_r']:.5f} | "
+                     f"{r['lp_bound']:.4g} | {r['lp_law_max_r']:.4g} | {r['design_max_r']:.4g} | "
                      f"{r['ratio']:.3f} | {r['design_seconds']:.1f} |")
     (out / "convex.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))

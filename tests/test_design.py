@@ -62,6 +62,24 @@ def test_objective_gradient_matches_finite_differences(objective):
     assert abs(derivative) > 1e-6  # a direction the objective actually moves in
 
 
+@pytest.mark.parametrize("objective", [D.MaxResidual(6.0, 12.0, samples=32, damping=0.02),
+                                       D.MaxCaCt(7.2, 8.8, samples=2)], ids=lambda o: type(o).__name__)
+def test_linear_maps_reproduce_the_features(objective):
+    # A design trains on offset + matrix @ theta; that must be the objective's features.
+    knots = 10
+    to_coefficients = D._acceleration_coordinates(knots, 5)
+
+    def features(theta):
+        law = BSplineLaw(START.coefficients + to_coefficients @ theta)
+        return objective.features(law), D.Caps(7.0, 90.0).features(law)
+
+    theta = jnp.asarray(np.random.default_rng(2).standard_normal(knots)) * 0.3
+    linear = jax.tree.leaves(D._linearised(features, knots)(theta))
+    direct = jax.tree.leaves(features(theta))
+    for got, want in zip(linear, direct):
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * float(jnp.max(jnp.abs(want))))
+
+
 def test_cap_penalty_gradient_matches_finite_differences():
     caps = D.Caps(max_ca=6.0, max_jerk=35.0)  # the cycloidal fit breaks both
     direction = jnp.asarray(np.random.default_rng(1).standard_normal(10)) * 1e-2
