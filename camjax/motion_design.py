@@ -626,7 +626,9 @@ def design(
         ca = caps.max_ca if caps.max_ca is not None else jnp.max(jnp.abs(acceleration))
         return jnp.stack([o.value(f, ca, p) for o, f in zip(objectives, objective_features)])
 
-    theta0 = noise * jax.random.normal(jax.random.PRNGKey(seed), (knots,))
+    theta0 = jnp.zeros(knots)
+    if noise:
+        theta0 = noise * jax.random.normal(jax.random.PRNGKey(seed), (knots,))
     scale = np.asarray(jax.jit(raw_values)(theta0, sharpness[0]))
     weights = np.array([o.weight for o in objectives]) / np.maximum(scale, 1e-300)
 

@@ -181,8 +181,10 @@ class BSplineLaw(AbstractMotionLaw):
         n_fixed = 4 if zero_jerk else 3
         knots = np.asarray(_knots(n_free + 2 * n_fixed, degree))
         tau = np.linspace(0.0, 1.0, 40 * (n_free + 2 * n_fixed))
-        basis = np.asarray(_basis(knots, degree, jnp.asarray(tau)))
-        target = np.asarray(law.s(tau)) - basis[:, -n_fixed:].sum(axis=1)
+        # One compiled call: evaluated eagerly, the basis and the law dispatch many small ops.
+        basis, s = jax.jit(lambda t: (_basis(knots, degree, t), law.s(t)))(jnp.asarray(tau))
+        basis = np.asarray(basis)
+        target = np.asarray(s) - basis[:, -n_fixed:].sum(axis=1)
         free = np.linalg.lstsq(basis[:, n_fixed:-n_fixed], target, rcond=None)[0]
         return cls(jnp.asarray(free), degree=degree, zero_jerk=zero_jerk)
 
