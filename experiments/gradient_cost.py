@@ -26,8 +26,7 @@ import numpy as np
 
 import camjax
 from camjax.laws import SCCA
-from camjax.solve import response_metrics
-from camjax.solve._ode import _vector_field
+from camjax.solve import response_metrics, sdof_term
 
 FRACTIONS = jnp.array([0.2, 0.4, 0.3])  # an SCCA with a zero-acceleration share d = 0.1
 PERIOD_RATIOS = jnp.array([2.3, 4.7, 7.7, 11.1, 15.1])
@@ -50,7 +49,7 @@ def diffrax_residual(fractions, n, adjoint, rtol=1e-10):
         # Step placement only: BacksolveAdjoint cannot differentiate a traced controller.
         jump_ts=jax.lax.stop_gradient(jnp.asarray(law.breakpoints())))
     solution = diffrax.diffeqsolve(
-        diffrax.ODETerm(_vector_field), diffrax.Tsit5(), 0.0, 1.0, None, (jnp.zeros(()), jnp.zeros(())),
+        sdof_term(), diffrax.Tsit5(), 0.0, 1.0, None, (jnp.zeros(()), jnp.zeros(())),
         args=(law, omega, 0.0), stepsize_controller=controller, adjoint=adjoint, max_steps=20_000,
         saveat=diffrax.SaveAt(t1=True))
     e, de = (y[-1] for y in solution.ys)

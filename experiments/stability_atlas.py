@@ -58,7 +58,7 @@ def jump_ts_work(n, law_names=("parabolic", "modified-trapezoid"), rtol=1e-8):
     import jax.numpy as jnp
 
     import camjax
-    from camjax.solve._ode import _vector_field
+    from camjax.solve import sdof_term
 
     out = {}
     for name in law_names:
@@ -71,9 +71,9 @@ def jump_ts_work(n, law_names=("parabolic", "modified-trapezoid"), rtol=1e-8):
 
             @jax.jit
             @jax.vmap
-            def stats(period_ratio, controller=controller):
+            def stats(period_ratio, controller=controller, law=law):
                 solution = diffrax.diffeqsolve(
-                    diffrax.ODETerm(_vector_field), diffrax.Tsit5(), 0.0, 1.0, None,
+                    sdof_term(), diffrax.Tsit5(), 0.0, 1.0, None,
                     (jnp.zeros(()), jnp.zeros(())), args=(law, 2 * jnp.pi * period_ratio, 0.0),
                     stepsize_controller=controller, max_steps=100_000)
                 return solution.stats["num_accepted_steps"], solution.stats["num_rejected_steps"]
@@ -128,7 +128,7 @@ def main() -> None:
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
 
-    from camjax.solve._ode import MAX_FREE_VIBRATION_GROWTH
+    from camjax.solve import MAX_FREE_VIBRATION_GROWTH
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -118,7 +118,7 @@ def scipy_metrics(law, n: float, method: str, rtol: float):
         values = np.abs(omega**2 * dense(t)[0])
         k = int(np.argmax(values))
         lo, hi = t[max(k - 1, 0)], t[min(k + 1, t.size - 1)]
-        polished = minimize_scalar(lambda s: -abs(omega**2 * dense(s)[0]), bounds=(lo, hi), method="bounded",
+        polished = minimize_scalar(lambda s, dense=dense: -abs(omega**2 * dense(s)[0]), bounds=(lo, hi), method="bounded",
                                    options={"xatol": 1e-12})
         peak = max(peak, values[k], -polished.fun)
     residual = omega * abs(complex(y[1], omega * y[0]))
@@ -203,8 +203,15 @@ def main() -> None:
         return
 
     import camjax
-    from camjax.cli.bench import (ACCURACY_GOAL, default_method, format_table, measure, reference_metrics,
-                                  reference_resolution, study_cases)
+    from camjax.cli.bench import (
+        ACCURACY_GOAL,
+        default_method,
+        format_table,
+        measure,
+        reference_metrics,
+        reference_resolution,
+        study_cases,
+    )
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

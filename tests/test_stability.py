@@ -9,8 +9,15 @@ import pytest
 
 import camjax  # noqa: F401  (float64)
 from camjax.cli import bench
-from camjax.solve import SOLVERS, SolveOptions, batch_metrics, response_metrics
-from camjax.solve._ode import MAX_FREE_VIBRATION_GROWTH, free_vibration_growth
+from camjax.solve import (
+    MAX_FREE_VIBRATION_GROWTH,
+    SOLVERS,
+    SolveOptions,
+    batch_metrics,
+    free_vibration_growth,
+    response_metrics,
+    sdof_term,
+)
 
 CYCLOIDAL = camjax.laws.get("cycloidal")
 
@@ -33,6 +40,20 @@ def test_free_vibration_growth_matches_the_method_on_the_free_oscillator(method)
     velocity, position = (float(y[-1]) for y in solution.ys)
     numerical = abs(velocity - np.conj(lam) * position)  # |q| with q(0) = 1
     assert float(free_vibration_growth(method, omega, 0.0, steps)) == pytest.approx(numerical, rel=1e-9)
+
+
+def test_public_sdof_term_gives_the_cycloidal_residual():
+    """``camjax.solve.sdof_term`` is the equation the diffrax path integrates."""
+    n = 2.5
+    omega = 2 * np.pi * n
+    solution = diffrax.diffeqsolve(
+        sdof_term(), diffrax.Tsit5(), 0.0, 1.0, None, (jnp.array(0.0), jnp.array(0.0)),
+        args=(CYCLOIDAL, omega, 0.0), stepsize_controller=diffrax.PIDController(rtol=1e-10, atol=1e-12),
+        saveat=diffrax.SaveAt(t1=True),
+    )
+    e, de = (float(y[-1]) for y in solution.ys)
+    residual = omega * abs(complex(de, omega * e)) / float(CYCLOIDAL.Ca)
+    assert residual == pytest.approx(cycloidal_residual(n), abs=1e-7)
 
 
 def test_unstable_fixed_step_raises_instead_of_a_wrong_ct():

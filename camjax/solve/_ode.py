@@ -73,10 +73,29 @@ def free_vibration_growth(method: str, omega, zeta, steps: int):
     return jnp.exp(steps * jnp.log(jnp.abs(amplification)))
 
 
-def _vector_field(t, y, args):
+def vector_field(t, y, args):
+    """Right-hand side of the SDOF deflection equation, in diffrax's ``(t, y, args)`` form.
+
+    ``y = (e, e')`` is the transmission deflection ``e = s - x`` and its rate;
+    ``args = (law, omega, zeta)`` with ``omega = 2 pi n``.  Returns ``(e', e'')`` with
+    ``e'' = a(t) - omega^2 e - 2 zeta omega e'``.  Parameters travel in ``args`` (not a
+    closure), so vmap and grad see them.
+    """
     law, omega, zeta = args
     e, de = y
     return de, law.a(t) - omega**2 * e - 2 * zeta * omega * de
+
+
+def sdof_term() -> diffrax.ODETerm:
+    """The diffrax term of the SDOF deflection equation (:func:`vector_field`).
+
+    For custom ``diffrax.diffeqsolve`` calls (other controllers, adjoints, saved
+    statistics) that the :func:`camjax.solve.solve` options do not cover::
+
+        diffrax.diffeqsolve(sdof_term(), diffrax.Tsit5(), 0.0, 1.0, None,
+                            (jnp.zeros(()), jnp.zeros(())), args=(law, 2 * jnp.pi * n, zeta))
+    """
+    return diffrax.ODETerm(vector_field)
 
 
 def integrate(
@@ -110,7 +129,7 @@ def integrate(
             controller = diffrax.ClipStepSizeController(controller, jump_ts=jumps)
         dt0 = None
     solution = diffrax.diffeqsolve(
-        diffrax.ODETerm(_vector_field),
+        sdof_term(),
         solver,
         t0=0.0,
         t1=1.0,
