@@ -4,7 +4,9 @@ For every standard law at one period ratio, sweeps the normalised friction level
 ``mu = F T^2 / (W h)`` with the stick-slip (events) path, and charts the residual
 vibration at the start and the end of a one-period dwell, the in-motion peak, and the
 offset at which the payload comes to rest (with the stick band ``mu / w^2``).  Then the
-error of the tanh regularisation against stick-slip as ``eps`` shrinks.
+same sweep with viscous damping added (Cycloidal and ModSine, ``zeta = 0.05``: does the
+richer dissipation model change the answers?), and the error of the tanh regularisation
+against stick-slip as ``eps`` shrinks.
 
     python experiments/friction.py [--n 5.25] [--dwell 1.0] [--quick]
 
@@ -18,11 +20,12 @@ import json
 import time
 from pathlib import Path
 
-import camjax
 import diffrax
 import jax
 import jax.numpy as jnp
 import matplotlib
+
+import camjax
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -32,6 +35,7 @@ from camjax.models.friction import CoulombFriction, friction_response  # noqa: E
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "friction"
 SAMPLES = 4096
+DAMPING_CHECK = 0.05  # viscous damping ratio of the comparison with a richer model
 
 
 def window_peak(response, start, stop):
@@ -41,12 +45,16 @@ def window_peak(response, start, stop):
     return jnp.max(jnp.where(inside, jnp.abs(response.acceleration), 0.0), axis=-1)
 
 
-def sweep(law, n, frictions, dwell):
+def sweep(law, n, frictions, dwell, damping=0.0):
     """Events-path responses over the friction levels (one vmapped call)."""
     batch = jax.jit(
-        jax.vmap(lambda mu: friction_response(law, CoulombFriction(n, mu), dwell=dwell, samples=SAMPLES))
+        jax.vmap(
+            lambda mu: friction_response(
+                law, CoulombFriction(n, mu, damping), dwell=dwell, samples=SAMPLES
+            )
+        )
     )(jnp.asarray(frictions))
-    # A failed member (the event root finder not converging) is charted as a gap.
+    # A failed member (a solve error, reported) would be charted as a gap.
     failed = ~np.asarray(batch.result == diffrax.RESULTS.successful)
     if failed.any():
         print(f"  {law.name}: solver failed at friction {np.asarray(frictions)[failed].tolist()}")
@@ -93,6 +101,16 @@ def main():
         f.write(header + "\n")
         for row in rows:
             f.write(",".join(str(x) for x in row) + "\n")
+
+    # The next richer dissipation model: viscous damping on top of the friction.
+    if not args.quick:
+        summary["viscous_damping"] = {"damping": DAMPING_CHECK, "laws": {}}
+        for law in (camjax.laws.Cycloidal(), camjax.laws.ModifiedSine()):
+            _, metrics, failed = sweep(law, n, frictions, dwell, DAMPING_CHECK)
+            summary["viscous_damping"]["laws"][law.name] = {
+                "failed_at_friction": frictions[failed].tolist(),
+                **{k: v.tolist() for k, v in metrics.items()},
+            }
 
     # Regularisation error against stick-slip (Cycloidal, one friction level).
     law, mu = camjax.laws.Cycloidal(), 0.5

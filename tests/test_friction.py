@@ -5,6 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 import camjax
 from camjax.models.friction import CoulombFriction, free_vibration, solve_friction
@@ -112,6 +113,70 @@ def test_events_agree_with_piecewise_exact_dwell_and_rest_in_band(law_name, n, m
     assert np.all(np.asarray(response.stuck)[after])
 
 
+def _poly4567(t):
+    """Position and velocity of the 4-5-6-7 polynomial rise, then the dwell (numpy)."""
+    t = np.minimum(t, 1.0)
+    return 35 * t**4 - 84 * t**5 + 70 * t**6 - 20 * t**7, 140 * t**3 * (1 - t) ** 3
+
+
+def _stick_slip_reference(command, n, mu, t_end):
+    """Stick-slip of the undamped SDOF by scipy: DOP853 slip phases ending at x' = 0
+    (events), stick phases ending where ``|w^2 (s - x)| = mu`` (grid scan and brentq).
+    Returns the phases as ``(start, mode, x0, dense solution or None)``."""
+    w2 = (2 * np.pi * n) ** 2
+    t, x, mode, phases = 0.0, 0.0, 0, []
+    while t < t_end:
+        if mode == 0:
+            phases.append((t, 0, x, None))
+            grid = np.linspace(t, t_end, int((t_end - t) * 4000) + 2)
+            above = np.nonzero(np.abs(w2 * (command(grid)[0] - x)) - mu > 0)[0]
+            if above.size == 0:
+                break
+            k = above[0]
+            t = brentq(lambda u, x=x: abs(w2 * (command(u)[0] - x)) - mu, grid[k - 1], grid[k], xtol=1e-15)
+            mode = 1 if command(t)[0] > x else -1
+        else:
+            def field(u, y, d=mode):
+                return [y[1], w2 * (command(u)[0] - y[0]) - mu * d]
+
+            reversal = lambda u, y: y[1]  # noqa: E731
+            reversal.terminal, reversal.direction = True, -mode
+            sol = solve_ivp(field, (t, t_end), [x, 0.0], method="DOP853", rtol=1e-12, atol=1e-14,
+                            events=reversal, dense_output=True, first_step=1e-5)
+            phases.append((t, mode, x, sol.sol))
+            if sol.t_events[0].size == 0:
+                break
+            t, x = sol.t_events[0][0], sol.y_events[0][0][0]
+            force = w2 * (command(t)[0] - x)
+            mode = 0 if abs(force) <= mu else int(np.sign(force))
+    return phases
+
+
+def test_stick_starting_near_the_end_of_the_rise_matches_scipy_reference():
+    """4-5-6-7 polynomial, n = 5.25, mu = 0.3: a stick phase from tau = 0.928 to 0.944,
+    where the transmission force w^2 (s - x) ~ 1088 (s - x) is resolved only to ~1e-11,
+    used to fail the event root finder (Newton, |g| < 1e-13)."""
+    law = camjax.laws.get("poly4567")
+    response = solve_friction(law, CoulombFriction(5.25, 0.3), samples=SAMPLES)
+    phases = _stick_slip_reference(_poly4567, 5.25, 0.3, 2.0)
+    assert [p[1] for p in phases] == [0, 1, -1, 0, 1, 0]
+    assert 0.92 < phases[3][0] < 0.93 < 0.94 < phases[4][0] < 0.95
+    tau = np.asarray(response.tau)
+    starts = np.array([p[0] for p in phases])
+    reference = []
+    for t in tau:
+        start, mode, x0, dense = phases[np.searchsorted(starts, t, side="right") - 1]
+        reference.append(x0 if mode == 0 else dense(t)[0])
+    np.testing.assert_allclose(np.asarray(response.position), reference, rtol=0, atol=2e-9)
+    assert int(response.segments) == len(phases)
+    assert bool(response.settled)
+    assert float(response.rest_offset) == pytest.approx(phases[-1][2] - 1.0, abs=1e-10)
+    # Stuck over the last two stick phases, slipping between them (2e-4 inside each phase).
+    for (start, mode, *_), end in zip(phases[3:], [*starts[4:], 2.0]):
+        inside = (tau > start + 2e-4) & (tau < end - 2e-4)
+        assert inside.any() and np.all(np.asarray(response.stuck)[inside] == (mode == 0))
+
+
 def test_regularised_converges_to_stick_slip_as_eps_shrinks(cycloidal):
     model = CoulombFriction(5.25, 0.5)
     events = solve_friction(cycloidal, model, samples=SAMPLES)
@@ -163,3 +228,9 @@ def test_regularised_gradient_matches_finite_differences(cycloidal):
     h = 1e-5
     fd = (float(offset(jnp.asarray(0.5 + h))) - float(offset(jnp.asarray(0.5 - h)))) / (2 * h)
     assert g == pytest.approx(fd, rel=1e-4, abs=1e-9)
+
+
+@pytest.mark.slow
+def test_a_failing_segment_names_where_it_failed(cycloidal):
+    with pytest.raises(camjax.SolverError, match=r"failed at tau = 0\.1.*maximum number of solver steps"):
+        solve_friction(cycloidal, CoulombFriction(5.25, 0.5), samples=SAMPLES, max_steps=8)

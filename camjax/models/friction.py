@@ -24,6 +24,8 @@ Three solution paths:
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import diffrax
 import equinox as eqx
 import jax
@@ -88,6 +90,7 @@ class FrictionResponse(eqx.Module):
             when the payload is stuck there.
         settled: whether the payload is stuck at the end of the dwell.
         segments: slip and stick phases integrated (events path).
+        reached: time the solution reached: ``1 + dwell``, or where a segment failed.
         result: diffrax result of the last segment that failed, else successful.
     """
 
@@ -101,6 +104,7 @@ class FrictionResponse(eqx.Module):
     rest_offset: jax.Array
     settled: jax.Array
     segments: jax.Array
+    reached: jax.Array
     result: diffrax.RESULTS
 
 
@@ -150,10 +154,62 @@ def _next_mode(law, model, t, x, mode):
     return jnp.where(sticks, 0, jnp.where(force > 0, 1, -1))
 
 
+class _BracketState(eqx.Module):
+    lower: jax.Array
+    upper: jax.Array
+    flip: jax.Array
+    width: jax.Array
+    stalled: jax.Array
+
+
+class EventBisection(optx.AbstractRootFinder):
+    """Bisection of the step in which diffrax detected the event, ended on time alone.
+
+    ``optx.Newton`` and ``optx.Bisection`` end only once ``|g| < atol`` for the event
+    function ``g`` as well.  The stick-phase event ``|F| - mu`` is a force per unit mass
+    of size ``w^2 (s - x)``: near the end of a rise, with ``s`` and ``x`` both close to 1,
+    its floating-point resolution is ``w^2`` times the rounding error of ``s(tau)``
+    (``1.2e-11`` for the degree-7 polynomial law at ``n = 5.25``, ``w^2 = 1088``), above
+    the ``atol = 1e-13`` Newton had here, so the root finder ran out of steps and the
+    solve failed (poly4567 at 3 of 31 friction levels).  The step ends bracket the root
+    (the event was detected by a sign change there), so bisecting until the bracket is
+    ``atol + rtol |tau|`` wide locates the event to that time tolerance whatever the
+    scale or noise of ``g``: noise only moves the result inside the band where ``g`` is
+    zero to within its resolution.  A bracket that cannot shrink further (adjacent
+    floats) also ends it.  Batch members without an event have the root at ``upper``.
+    """
+
+    rtol: float
+    atol: float
+    norm: Callable = optx.max_norm
+
+    def init(self, fn, y, args, options, f_struct, aux_struct, tags):
+        lower = jnp.asarray(options["lower"], f_struct.dtype)
+        upper = jnp.asarray(options["upper"], f_struct.dtype)
+        flip = fn(lower, args)[0] > fn(upper, args)[0]
+        return _BracketState(lower, upper, flip, upper - lower, jnp.asarray(False))
+
+    def step(self, fn, y, args, options, state, tags):
+        value, aux = fn(y, args)
+        below = state.flip ^ (value < 0)
+        lower = jnp.where(below, y, state.lower)
+        upper = jnp.where(below, state.upper, y)
+        middle = lower + 0.5 * (upper - lower)
+        stalled = (middle <= lower) | (middle >= upper)
+        return middle, _BracketState(lower, upper, state.flip, upper - lower, stalled), aux
+
+    def terminate(self, fn, y, args, options, state, tags):
+        narrow = state.width <= self.atol + self.rtol * jnp.abs(y)
+        return narrow | state.stalled, optx.RESULTS.successful
+
+    def postprocess(self, fn, y, aux, args, options, state, tags, result):
+        return y, aux, {}
+
+
 def _phase_solver(rtol, atol):
     return (
         diffrax.Dopri8(),
-        diffrax.Event(_phase_end, optx.Newton(rtol=1e-13, atol=1e-13), direction=True),
+        diffrax.Event(_phase_end, EventBisection(rtol=1e-14, atol=1e-14), direction=True),
     )
 
 
@@ -218,7 +274,7 @@ def _events_path(law, model, ts, t_end, rtol, atol, max_segments, max_steps):
     # Running out of segments is reported as running out of steps.
     out_of_segments = (t_last < t_end) & (result == diffrax.RESULTS.successful)
     result = diffrax.RESULTS.where(out_of_segments, diffrax.RESULTS.max_steps_reached, result)
-    return xs, dxs, modes, mode_last == 0, count, result
+    return xs, dxs, modes, mode_last == 0, count, t_last, result
 
 
 def _regularised_field(t, y, args):
@@ -247,7 +303,8 @@ def _regularised_path(law, model, ts, t_end, eps, rtol, atol, max_steps):
         throw=False,
     )
     xs, dxs = sol.ys
-    return xs, dxs, jnp.zeros(ts.shape, int) + 1, jnp.asarray(False), jnp.asarray(1), sol.result
+    reached = jnp.where(sol.result == diffrax.RESULTS.successful, t_end, jnp.nan)
+    return xs, dxs, jnp.zeros(ts.shape, int) + 1, jnp.asarray(False), jnp.asarray(1), reached, sol.result
 
 
 @eqx.filter_jit
@@ -272,11 +329,11 @@ def friction_response(
     t_end = 1.0 + dwell
     ts = jnp.linspace(0.0, t_end, samples + 1)
     if method == "events":
-        xs, dxs, modes, settled, count, result = _events_path(
+        xs, dxs, modes, settled, count, reached, result = _events_path(
             law, model, ts, t_end, rtol, atol, max_segments, max_steps
         )
     else:
-        xs, dxs, modes, settled, count, result = _regularised_path(
+        xs, dxs, modes, settled, count, reached, result = _regularised_path(
             law, model, ts, t_end, eps, rtol, atol, max_steps
         )
         modes = jnp.sign(dxs).astype(int)
@@ -300,6 +357,7 @@ def friction_response(
         rest_offset=xs[-1] - 1.0,
         settled=settled,
         segments=count,
+        reached=reached,
         result=result,
     )
 
@@ -327,14 +385,20 @@ def solve_friction(law: AbstractMotionLaw, model: CoulombFriction, **options) ->
     )
     # Traced leaves, not static settings: no recompilation per value.
     options["eps"] = jnp.asarray(eps)
-    options["max_segments"] = jnp.asarray(int(options.get("max_segments", 256)))
+    max_segments = int(options.get("max_segments", 256))
+    options["max_segments"] = jnp.asarray(max_segments)
     response = friction_response(law, model, **options)
     if response.result != diffrax.RESULTS.successful:
-        raise SolverError(
-            f"friction solve ({method}) failed at period ratio {float(model.period_ratio):g}, "
-            f"friction {float(model.friction):g}: {diffrax.RESULTS[response.result]}"
-            + (" (raise max_segments)" if method == "events" else "")
+        where = f"friction solve ({method}) at period ratio {float(model.period_ratio):g}, " + (
+            f"friction {float(model.friction):g}"
         )
+        if method == "events" and int(response.segments) >= max_segments:
+            raise SolverError(
+                f"{where} used all {max_segments} slip and stick phases by tau = "
+                f"{float(response.reached):.6g} of {1 + dwell:g} (raise max_segments)"
+            )
+        at = f" at tau = {float(response.reached):.6g}" if method == "events" else ""
+        raise SolverError(f"{where} failed{at}: {diffrax.RESULTS[response.result]}")
     if not bool(jnp.all(jnp.isfinite(response.position))):
         raise SolverError(f"friction solve ({method}) produced non-finite values")
     return response
