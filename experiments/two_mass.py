@@ -22,8 +22,9 @@ import json
 import time
 from pathlib import Path
 
-import camjax
 import matplotlib
+
+import camjax
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..laws import AbstractMotionLaw
 from ..laws._base import is_concrete, require
+from ..metrics import refined_peak
 from ._spring_mass import check_period_ratios
 
 
@@ -88,7 +89,7 @@ class TwoMassResponse(eqx.Module):
         deflection: output deflection ``e = s(theta) - x`` (units of stroke).
         deflection_rate: ``e'``.
         response_acceleration: payload acceleration ``x'' = w^2 e``.
-        ct: max ``|x''|`` over the samples (peak refined by a parabola), over Ca.
+        ct: max ``|x''|`` over Ca, refined between samples (``camjax.metrics.refined_peak``).
         residual: amplitude of the payload vibration at the end of the dwell, over Ca.
         result: diffrax result.
         steps: solver steps taken.
@@ -106,15 +107,21 @@ class TwoMassResponse(eqx.Module):
     steps: jax.Array
 
 
-def _refined_peak(values):
-    """Max of ``|values|`` with a parabola through the largest sample and its neighbours."""
-    magnitude = jnp.abs(values)
-    i = jnp.clip(jnp.argmax(magnitude), 1, values.shape[0] - 2)
-    y0, y1, y2 = magnitude[i - 1], magnitude[i], magnitude[i + 1]
-    curvature = y0 - 2 * y1 + y2
-    safe = jnp.where(curvature < 0, curvature, -1.0)
-    vertex = y1 - (y2 - y0) ** 2 / (8 * safe)
-    return jnp.maximum(jnp.max(magnitude), jnp.where(curvature < 0, vertex, 0.0))
+def _acceleration_derivatives(law, model, t, y):
+    """First three time derivatives of the payload acceleration ``w^2 e`` at ``(t, y)``.
+
+    ``e''`` is the vector field's; its derivative along the motion uses the law's jerk at
+    the camshaft angle and ``theta''' = w_i^2 phi' - m w^2 (e' v + e a theta')``.
+    """
+    phi, dphi, e, de = y
+    w2 = model.omega**2
+    _, v, a, j = law.evaluate(t - phi)
+    dtheta = 1.0 - dphi
+    ddtheta = model.input_omega**2 * phi - model.inertia_ratio * w2 * e * v
+    dddtheta = model.input_omega**2 * dphi - model.inertia_ratio * w2 * (de * v + e * a * dtheta)
+    dde = a * dtheta**2 + v * ddtheta - w2 * e
+    ddde = j * dtheta**3 + 3 * a * dtheta * ddtheta + v * dddtheta - w2 * de
+    return jnp.stack([w2 * de, w2 * dde, w2 * ddde], axis=-1)
 
 
 def two_mass_response(
@@ -132,7 +139,8 @@ def two_mass_response(
 
     Jittable and vmappable over the model's leaves.  ``solver`` is ``"dopri8"`` or
     ``"kvaerno5"`` (implicit, for a very stiff input shaft).  ``samples`` equal steps
-    sample the response; Ct is refined between samples by a parabola.
+    sample the response; Ct is refined between them by ``camjax.metrics.refined_peak``
+    (septic Hermite interpolation from the acceleration's first three derivatives).
     """
     model = jax.tree.map(jnp.asarray, model)  # traced leaves: one compilation for all values
     ts = jnp.linspace(0.0, 1.0 + dwell, samples + 1)
@@ -152,6 +160,15 @@ def two_mass_response(
     )
     phi, dphi, e, de = sol.ys
     acc = w**2 * e
+
+    def derivatives(interval):
+        # The law's breakpoints fall at camshaft angles, not at sample times: a node lies
+        # inside a piece (almost surely), and both of its sides see the same derivatives.
+        def at(i):
+            return _acceleration_derivatives(law, model, ts[i], (phi[i], dphi[i], e[i], de[i]))
+
+        return at(interval), at(interval + 1)
+
     residual = w**2 * jnp.sqrt(e[-1] ** 2 + (de[-1] / w) ** 2)
     return TwoMassResponse(
         tau=ts,
@@ -160,7 +177,7 @@ def two_mass_response(
         deflection=e,
         deflection_rate=de,
         response_acceleration=acc,
-        ct=_refined_peak(acc) / law.Ca,
+        ct=refined_peak(acc, jnp.diff(ts), derivatives) / law.Ca,
         residual=residual / law.Ca,
         result=sol.result,
         steps=sol.stats["num_steps"],
