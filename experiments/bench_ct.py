@@ -23,7 +23,6 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
-import camjax
 from camjax import laws
 from camjax.solve import SolveOptions, batch_metrics
 
@@ -64,12 +63,12 @@ def scipy_metrics(law, n):
         mid = 0.5 * (lo + hi)
         acc = lambda t, mid=mid, lo=lo, hi=hi: float(  # noqa: E731
             law_a(min(max(t, lo), hi) * (1 - 1e-15) + mid * 1e-15))
-        sol = solve_ivp(lambda t, s: [s[1], acc(t) - w * w * s[0]], (lo, hi), y,
+        sol = solve_ivp(lambda t, s, acc=acc: [s[1], acc(t) - w * w * s[0]], (lo, hi), y,
                         method="DOP853", rtol=1e-10, atol=1e-12, dense_output=True)
         t = np.linspace(lo, hi, max(8, int(32 * n * (hi - lo))))
         xpp = np.abs(w * w * sol.sol(t)[0])
         k = int(np.argmax(xpp))
-        res = minimize_scalar(lambda u: -abs(w * w * sol.sol(u)[0]), method="bounded",
+        res = minimize_scalar(lambda u, sol=sol: -abs(w * w * sol.sol(u)[0]), method="bounded",
                               bounds=(t[max(k - 1, 0)], t[min(k + 1, t.size - 1)]),
                               options={"xatol": 1e-12})
         peak = max(peak, xpp[k], -res.fun)
@@ -93,8 +92,8 @@ def main() -> None:
         ref_opts = SolveOptions(resolution=4 * exact_opts.resolution).checked(30.0)
         ode_opts = SolveOptions(method="tsit5", rtol=1e-10, atol=1e-12).checked(30.0)
         ref = batch_metrics(law, nj, 0.0, ref_opts)[0]
-        exact_first, exact_warm = timed(lambda: batch_metrics(law, nj, 0.0, exact_opts))
-        ode_first, ode_warm = timed(lambda: batch_metrics(law, nj, 0.0, ode_opts), repeats=2)
+        exact_first, exact_warm = timed(lambda law=law, o=exact_opts: batch_metrics(law, nj, 0.0, o))
+        ode_first, ode_warm = timed(lambda law=law, o=ode_opts: batch_metrics(law, nj, 0.0, o), repeats=2)
         exact = batch_metrics(law, nj, 0.0, exact_opts)[0]
         ode = batch_metrics(law, nj, 0.0, ode_opts)[0]
         subset = np.linspace(0, n.size - 1, args.scipy_subset).astype(int)
@@ -102,7 +101,7 @@ def main() -> None:
         sp = np.array([scipy_metrics(law, n[i]) for i in subset])
         scipy_time = (time.perf_counter() - start) * n.size / subset.size
 
-        def err(m, idx=slice(None)):
+        def err(m, idx=slice(None), ref=ref):
             ct_ref, r_ref = np.asarray(ref.ct)[idx], np.asarray(ref.residual)[idx]
             return (float(np.max(np.abs(np.asarray(m[0]) - ct_ref) / ct_ref)),
                     float(np.max(np.abs(np.asarray(m[1]) - r_ref))))

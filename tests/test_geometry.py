@@ -7,7 +7,6 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import camjax
 from camjax import geometry
 from camjax.laws import Cycloidal, ModifiedSine, PolynomialLaw
 from camjax.laws._program import LawBank, MotionProgram

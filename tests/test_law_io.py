@@ -5,7 +5,6 @@ import json
 import numpy as np
 import pytest
 
-import camjax
 from camjax.laws import BSplineLaw, get, names
 from camjax.laws._io import from_dict, load, save, to_dict
 
