@@ -12,7 +12,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-import camjax
 import camjax.motion_design as D
 from camjax.laws import get
 from camjax.laws._io import load, save

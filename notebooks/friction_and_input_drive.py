@@ -21,10 +21,10 @@
 # and can leave the payload at rest out of position.
 
 # %%
-import camjax
 import matplotlib.pyplot as plt
 import numpy as np
 
+import camjax
 from camjax.models.friction import CoulombFriction, free_vibration, solve_friction
 from camjax.models.two_mass import TwoMass, two_mass_response
 

@@ -10,7 +10,6 @@ import math
 import matplotlib.pyplot as plt
 import numpy as np
 
-import camjax
 from camjax import geometry
 from camjax.laws import ModifiedSine
 from camjax.models.swinging_follower import SwingingFollower, simulate, spectral_peaks, spectrum

@@ -20,7 +20,6 @@ from .friction import free_vibration as free_vibration
 from .friction import friction_response as friction_response
 from .friction import solve_friction as solve_friction
 from .swinging_follower import SwingingFollower as SwingingFollower
-from .swinging_follower import simulate as simulate_follower
 from .two_mass import TwoMass as TwoMass
 from .two_mass import TwoMassResponse as TwoMassResponse
 from .two_mass import two_mass_ct_curve as two_mass_ct_curve
