@@ -253,6 +253,43 @@ def test_repeated_impacts_raise_when_they_exceed_the_segment_budget():
         _dynamic(20, dwell=8.0)
 
 
+class _DeceleratingHalf(camjax.laws.AbstractMotionLaw):
+    """The decelerating half of a cycloidal rise, ``s = tau + sin(pi tau)/pi``: the cam
+    starts at its peak velocity and decelerates at once (``a = -pi sin(pi tau)``)."""
+
+    name = "decelerating-half"
+    Cv, Ca, Cj = 2.0, math.pi, math.pi**2
+
+    def _rise(self, tau):
+        p = jnp.pi
+        return (
+            tau + jnp.sin(p * tau) / p,
+            1 + jnp.cos(p * tau),
+            -p * jnp.sin(p * tau),
+            -(p**2) * jnp.cos(p * tau),
+        )
+
+    def breakpoints(self):
+        return ()
+
+
+def test_separation_from_exactly_zero_deflection_is_located():
+    """dn = 0: the payload starts at rest on the driving flank with e = 0 exactly and the
+    cam decelerates from tau = 0, so the first step's event bracket starts at a root.
+    ``optx.Bisection`` rejected that bracket (EquinoxRuntimeError, not SolverError); the
+    event bisection separates at tau = 0 and the flight is free from the start, whatever
+    the contact stiffness: gap ``2 tau - s = tau - sin(pi tau)/pi``, closed form."""
+    bk = 0.05
+    tau_i = brentq(lambda t: t - math.sin(math.pi * t) / math.pi - bk, 1e-3, 1.0, xtol=1e-15)
+    for n in (5.0, 80.0):
+        response = bl.solve_backlash(_DeceleratingHalf(), bl.Backlash(n, bk, 0.0, 0.1), samples=64)
+        assert int(response.impact_flank[0]) == bl.OTHER_FLANK
+        assert float(response.first_impact_tau) == pytest.approx(tau_i, rel=1e-9)
+        assert float(response.first_impact_velocity) == pytest.approx(
+            1 - math.cos(math.pi * tau_i), rel=1e-8
+        )
+
+
 def test_very_stiff_contact_explicit_solver_raises():
     with pytest.raises(camjax.SolverError, match="maximum number"):
         _dynamic(2e5, damping=0.9)

@@ -33,9 +33,9 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 
 from ..laws._base import AbstractMotionLaw, is_concrete, require
+from ._events import EventBisection
 from ._spring_mass import check_damping, check_period_ratios
 
 # Status codes of a kinematic case.
@@ -371,7 +371,7 @@ def _backlash_path(law, model, ts, t_end, solver, rtol, atol, max_segments, max_
     controller = diffrax.ClipStepSizeController(
         diffrax.PIDController(rtol=rtol, atol=atol), jump_ts=jumps
     )
-    event = diffrax.Event(_contact_end, optx.Bisection(rtol=1e-14, atol=1e-14), direction=True)
+    event = diffrax.Event(_contact_end, EventBisection(rtol=1e-14, atol=1e-14), direction=True)
     nan_impacts = jnp.full((max_segments,), jnp.nan)
 
     def segment(state):
@@ -476,8 +476,11 @@ def solve_backlash(
     One diffrax solve per contact state, each ended by an event at the next contact
     change, so separations and impacts are located by root finding, not by a grid.
     Raises ``camjax.SolverError`` when a segment reaches ``max_steps`` (very stiff
-    contact for an explicit ``method``: use an implicit one such as ``"kvaerno5"``) or
-    when the contact changes more than ``max_segments`` times (chattering).
+    contact for an explicit ``method``: use an implicit one such as ``"kvaerno5"``), when
+    the contact changes more than ``max_segments`` times (chattering), or when a contact
+    change cannot be located.  Contact changes are located by
+    :class:`camjax.models._events.EventBisection` (the step bracket bisected to ``1e-14``
+    in ``tau``), which also accepts a step that starts exactly at ``e = 0``.
     """
     from ..solve import SolverError  # here, not at the top: camjax.solve imports camjax.models
     from ..solve._ode import ADAPTIVE_SOLVERS
@@ -506,10 +509,18 @@ def solve_backlash(
         max_steps,
     )
     if result != diffrax.RESULTS.successful:
+        where = (
+            f"backlash solve ({key}, period ratio {float(model.period_ratio):g}, "
+            f"bk {float(model.backlash):g}, dn {float(model.natural_deceleration):g}) "
+            f"failed at tau = {float(t_last):.6g}"
+        )
+        if result == diffrax.RESULTS.max_steps_reached:
+            raise SolverError(
+                f"{where}: {diffrax.RESULTS[result]}; for very stiff contact use an implicit "
+                "method (e.g. method='kvaerno5') or raise max_steps"
+            )
         raise SolverError(
-            f"backlash solve ({key}) failed at tau = {float(t_last):.6g}: "
-            f"{diffrax.RESULTS[result]}; for very stiff contact use an implicit method "
-            "(e.g. method='kvaerno5') or raise max_steps"
+            f"{where} locating the next contact change (event root find): {diffrax.RESULTS[result]}"
         )
     if float(t_last) < t_end:
         raise SolverError(
