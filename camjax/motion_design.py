@@ -584,7 +584,7 @@ def design(
             sharpness stage) or ``"adam"`` (rate decaying 100-fold, sharpness ramped
             geometrically over the run).
         steps: optimiser steps in all; L-BFGS splits them evenly over the stages (rounded
-            up to whole chunks of at most 500) and moves to the next stage early once a
+            up to whole chunks of at most 200) and moves to the next stage early once a
             stage has converged.
         sharpness: power-mean exponent of maxima at the first and the last stage; L-BFGS
             stages grow it about fourfold each.
@@ -646,7 +646,7 @@ def design(
         exponents = _sharpness_stages(sharpness)
         per_stage = math.ceil(int(steps) / len(exponents))
         stages = [np.full(per_stage, p) for p in exponents]
-    chunk = min(500, max(len(ps) for ps in stages))
+    chunk = min(200, max(len(ps) for ps in stages))
 
     @jax.jit
     def run_chunk(theta, state, ps):
