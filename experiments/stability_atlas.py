@@ -7,9 +7,12 @@ Panels (results/stability_atlas/atlas.png):
 2. adaptive solvers with and without ``jump_ts`` on laws with jumps: accepted and
    rejected steps against period ratio (the wasted work);
 3. float32 against float64: the Ct error of the exact path and of Tsit5 against n;
-4. very high period ratios: error and steps of the exact path and of Tsit5 up to n = 300.
+4. very high period ratios: error and steps of the exact path and of Tsit5 up to n = 300
+   (one grid for the batch, set by n = 300);
+5. the exact path on the default grid of a range [1, top] (top 30, 100, 200, 300): the
+   ratios near the top, sampled at w h near 0.5, where the peak search can miss the crest.
 
-    python experiments/stability_atlas.py            # about five minutes on 2 cores
+    python experiments/stability_atlas.py            # about six minutes on 2 cores (under load)
     python experiments/stability_atlas.py --quick    # a smoke run
 """
 
@@ -116,6 +119,35 @@ def high_period_ratio(n, law_name="modified-trapezoid"):
     return out
 
 
+def default_grid_ranges(range_tops, count, law_names=("harmonic", "modified-trapezoid")):
+    """Ct error of the exact path on the default grid of each range ``[1, top]``.
+
+    ``ct_curve(law, n)`` picks its grid from the largest ``n`` (``w h <= 0.5``), so the
+    ratios near the top of a range are sampled at about 0.5 rad per interval.  Each
+    segment ``(previous top, top]`` is computed on the grid of ``[1, top]``, as a user
+    sweeping ``[1, top]`` gets it; the reference is the exact path at four times that grid.
+    Returns ``{law: (n, error)}``.
+    """
+    import jax.numpy as jnp
+
+    import camjax
+    from camjax.cli.bench import reference_metrics
+    from camjax.solve import SolveOptions, batch_metrics
+
+    out = {}
+    for name in law_names:
+        law = camjax.laws.get(name)
+        n_all, err_all = [], []
+        for low, top in zip((1.0, *range_tops[:-1]), range_tops):
+            n = np.linspace(low, top, count + 1)[1:] if low > 1.0 else np.linspace(low, top, count)
+            ref_ct, _ = reference_metrics(law, n, max_period_ratio=top)
+            metrics, _, _ = batch_metrics(law, jnp.asarray(n), 0.0, SolveOptions().checked(float(top)))
+            n_all.append(n)
+            err_all.append(np.abs(np.asarray(metrics.ct) - ref_ct))
+        out[name] = (np.concatenate(n_all), np.concatenate(err_all))
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
@@ -142,8 +174,10 @@ def main() -> None:
     f32 = float32_errors(n_f32)
     n_high = np.geomspace(1.0, 300.0, count)
     high = high_period_ratio(n_high)
+    range_tops = (30.0, 100.0, 200.0, 300.0)
+    grid_errors = default_grid_ranges(range_tops, 5 * count)
 
-    fig, axes = plt.subplots(2, 3, figsize=(15, 8.5))
+    fig, axes = plt.subplots(2, 4, figsize=(20, 8.5))
     for ax, method in zip(axes[0][:2], errors):
         err = np.where(failed[method], np.nan, np.maximum(errors[method], 1e-16))
         mesh = ax.pcolormesh(n_fixed, steps, err, norm=LogNorm(1e-10, 1.0), shading="nearest", cmap="viridis")
@@ -180,6 +214,16 @@ def main() -> None:
         ax.loglog(n_high, st, label=label)
     ax.set(xlabel="period ratio n", ylabel="steps (grid intervals for exact)", title="work at high period ratios")
     ax.legend(fontsize=7)
+    ax = axes[0][3]
+    for label, (n_grid, err) in grid_errors.items():
+        ax.semilogy(n_grid, np.maximum(err, 1e-16), ".", ms=3, label=label)
+    for top in range_tops:
+        ax.axvline(top, color="grey", lw=0.6, ls=":")
+    ax.axhline(1e-6, color="k", lw=0.8, ls="--", label="1e-6")
+    ax.set(xlabel="period ratio n (grid of the range [1, next dotted line])", ylabel="|Ct - Ct_ref|",
+           title="exact path, default grid of each range (w h -> 0.5)")
+    ax.legend(fontsize=7)
+    axes[1][3].axis("off")
     fig.tight_layout()
     fig.savefig(out / "atlas.png", dpi=120)
 
@@ -191,6 +235,10 @@ def main() -> None:
         "float32_max_ct_error": {k: float(np.max(v)) for k, v in f32.items()},
         "high_n_max_ct_error": {k: float(np.max(e)) for k, (e, _) in high.items()},
         "high_n_max_steps": {k: int(np.max(s)) for k, (_, s) in high.items()},
+        "default_grid_ranges": list(range_tops),
+        "default_grid_max_ct_error": {k: float(np.max(e)) for k, (_, e) in grid_errors.items()},
+        "default_grid_ratios_above_1e-6": {
+            k: [round(float(x), 3) for x in n_grid[e > 1e-6]] for k, (n_grid, e) in grid_errors.items()},
     }
     (out / "atlas.json").write_text(json.dumps(summary, indent=1))
     print(json.dumps(summary, indent=1))
