@@ -539,18 +539,23 @@ def _sharpness_stages(sharpness: tuple[float, float]) -> np.ndarray:
     return np.geomspace(first, last, count)
 
 
-def _linearised(features, knots: int):
-    """``features(theta)`` (a pytree of arrays, affine in ``theta``) as offset + matrix.
+def linear_maps(features, knots: int):
+    """``(offset, jacobian)`` of ``features(theta)``, a pytree of arrays affine in ``theta``
+    (``knots`` entries): ``features(theta) = offset + jacobian @ theta`` leaf by leaf.
 
-    One jitted Jacobian at zero gives the maps; the returned function evaluates them as
-    matrix products, which is all the optimiser then needs.
+    One jitted ``jax.linearize`` at zero, and its tangent map applied to the unit vectors.
     """
     @jax.jit
     def maps(zero):
         offset, tangent = jax.linearize(features, zero)
         return offset, jax.vmap(tangent, out_axes=-1)(jnp.eye(knots))
 
-    offset, jacobian = maps(jnp.zeros(knots))
+    return maps(jnp.zeros(knots))
+
+
+def _linearised(features, knots: int):
+    """``features`` as matrix products (``linear_maps``), which is all the optimiser needs."""
+    offset, jacobian = linear_maps(features, knots)
     return lambda theta: jax.tree.map(lambda b, m: b + m @ theta, offset, jacobian)
 
 

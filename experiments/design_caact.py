@@ -75,8 +75,10 @@ def lp_lower_bound(n1, n2, max_jerk, knots=KNOTS, samples=64, directions=32):
     """
     ratios = np.linspace(n1, n2, samples)
     law_of = lambda c: BSplineLaw(c)  # noqa: E731
-    m, b = _affine(law_of, knots, lambda law: D._payload_acceleration(law, ratios, 0.0)[0])
-    e_m, e_b = _affine(law_of, knots, lambda law: D._payload_acceleration(law, ratios, 0.0)[1])
+    (b, e_b), (m, e_m) = (tuple(np.asarray(x) for x in pair) for pair in D.linear_maps(
+        lambda c: D._payload_acceleration(law_of(c), ratios, 0.0), knots))
+    m, b = m.reshape(b.size, knots), b.reshape(-1)
+    e_m, e_b = e_m.reshape(e_b.size, knots), e_b.reshape(-1)
     omega = 2 * np.pi * ratios
     q_m = (e_m[0::2] + 1j * e_m[1::2]) * omega[:, None]  # rows alternate Re, Im per ratio
     q_b = (e_b[0::2] + 1j * e_b[1::2]) * omega

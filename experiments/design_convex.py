@@ -17,7 +17,6 @@ import sys
 import time
 from pathlib import Path
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 from scipy.optimize import linprog
@@ -27,10 +26,8 @@ from camjax.laws import BSplineLaw
 
 
 def _affine(law_of, knots, fn):
-    """``(M, b)`` with ``fn(law_of(c)) = M c + b`` (the map is affine in c)."""
-    zero = jnp.zeros(knots)
-    b = np.asarray(fn(law_of(zero)))
-    m = np.asarray(jax.jacfwd(lambda c: fn(law_of(c)))(zero))
+    """``(M, b)`` with ``fn(law_of(c)).ravel() = M c + b`` (the map is affine in c)."""
+    b, m = (np.asarray(x) for x in D.linear_maps(lambda c: fn(law_of(c)), knots))
     return m.reshape(b.size, knots), b.reshape(-1)
 
 
