@@ -161,13 +161,9 @@ def two_mass_response(
     phi, dphi, e, de = sol.ys
     acc = w**2 * e
 
-    def derivatives(interval):
-        # The law's breakpoints fall at camshaft angles, not at sample times: a node lies
-        # inside a piece (almost surely), and both of its sides see the same derivatives.
-        def at(i):
-            return _acceleration_derivatives(law, model, ts[i], (phi[i], dphi[i], e[i], de[i]))
-
-        return at(interval), at(interval + 1)
+    # The law's breakpoints fall at camshaft angles, not at sample times: a node lies
+    # inside a piece (almost surely), and both of its sides see the same derivatives.
+    derivatives = _acceleration_derivatives(law, model, ts, (phi, dphi, e, de))
 
     residual = w**2 * jnp.sqrt(e[-1] ** 2 + (de[-1] / w) ** 2)
     return TwoMassResponse(
@@ -177,7 +173,7 @@ def two_mass_response(
         deflection=e,
         deflection_rate=de,
         response_acceleration=acc,
-        ct=refined_peak(acc, jnp.diff(ts), derivatives) / law.Ca,
+        ct=refined_peak(acc, jnp.diff(ts), derivatives[:-1], derivatives[1:]) / law.Ca,
         residual=residual / law.Ca,
         result=sol.result,
         steps=sol.stats["num_steps"],

