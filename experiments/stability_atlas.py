@@ -10,7 +10,8 @@ Panels (results/stability_atlas/atlas.png):
 4. very high period ratios: error and steps of the exact path and of Tsit5 up to n = 300
    (one grid for the batch, set by n = 300);
 5. the exact path on the default grid of a range [1, top] (top 30, 100, 200, 300): the
-   ratios near the top, sampled at w h near 0.5, where the peak search can miss the crest.
+   ratios near the top, sampled at w h near 0.5, where a peak search that refines only the
+   largest samples misses the crest (camjax's refines every interval, so none is skipped).
 
     python experiments/stability_atlas.py            # about six minutes on 2 cores (under load)
     python experiments/stability_atlas.py --quick    # a smoke run

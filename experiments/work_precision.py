@@ -248,7 +248,7 @@ def write_outputs(rows: list[dict], summary: dict, out: Path, tag: str, title: s
 
 
 NOTE = ("scipy rows: timed on a subset of period ratios and scaled to the batch; "
-        "warm times are of one shared 2-core CPU under load and provisional")
+        "warm times: best of two runs on a shared 2-core CPU (docs/work-precision.md gives each run's load)")
 
 
 def combine(tags: list[str], out: Path, tag: str) -> None:
