@@ -149,7 +149,8 @@ def main() -> None:
         f"Law: SCCA fractions (a, b, c) = {FRACTIONS.tolist()} ; period ratios "
         f"{PERIOD_RATIOS.tolist()} in one vmapped batch. Reference: exact-path autodiff at resolution 8192; "
         f"its distance to its own central differences: dR {residual_check:.2g}, dCt/dn {ct_check:.2g}.",
-        "Timings: one shared 2-core CPU, provisional.", "", format_table(rows, columns)]
+        "Timings: one shared 2-core CPU (see docs/work-precision.md for the load of the committed run).", "",
+        format_table(rows, columns)]
     (out / "gradient_cost.md").write_text("\n".join(text) + "\n")
     (out / "gradient_cost.json").write_text(json.dumps(
         {"rows": rows, "reference_check": {"dR": residual_check, "dCt_dn": ct_check}}, indent=1))
