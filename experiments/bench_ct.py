@@ -39,12 +39,6 @@ def timed(fn, repeats=5):
     return first, best
 
 
-def scipy_ct_and_residual(law, n):
-    """Ct and R of one period ratio from DOP853 (rtol 1e-10), the work-precision peer."""
-    ct, residual, _ = scipy_metrics(law, n, "DOP853", 1e-10)
-    return ct, residual
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scipy-subset", type=int, default=40,
@@ -65,7 +59,7 @@ def main() -> None:
         ode = batch_metrics(law, nj, 0.0, ode_opts)[0]
         subset = np.linspace(0, n.size - 1, args.scipy_subset).astype(int)
         start = time.perf_counter()
-        sp = np.array([scipy_ct_and_residual(law, n[i]) for i in subset])
+        sp = np.array([scipy_metrics(law, n[i], "DOP853", 1e-10)[:2] for i in subset])
         scipy_time = (time.perf_counter() - start) * n.size / subset.size
 
         def err(m, idx=slice(None), ref=ref):
