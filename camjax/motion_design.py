@@ -12,7 +12,7 @@ How the pieces fit:
   ``w |int a exp(-i w u) du| / Ca``), integrated by Gauss-Legendre on every smooth piece of
   the law: one matrix-vector product per batch of period ratios, so thousands of n cost
   little.  Ca*Ct needs the whole response: the payload acceleration by exact propagation
-  (``camjax.solve.propagate``) on a fine grid, and the dwell's peak in closed form.
+  (``camjax.propagation.propagate``) on a fine grid, and the dwell's peak in closed form.
 - Every quantity an objective or a cap needs (the residual's Fourier integral, the payload
   acceleration on a fine grid, the law's a, j, v on a dense grid) is linear in the spline
   coefficients, because the law is and the SDOF model is linear.  A design computes these
@@ -45,8 +45,8 @@ from tqdm.auto import tqdm
 
 from .laws import AbstractMotionLaw, BSplineLaw
 from .laws import get as get_law
-from .solve import SolveOptions, batch_metrics, default_resolution, motion_grid, propagate
-from .solve._response import _dwell_peak, _mode_gain
+from .propagation import SolveOptions, batch_metrics, default_resolution, motion_grid, propagate
+from .propagation._response import _dwell_peak, _mode_gain
 
 EVALUATION_SAMPLES = 2000
 """Period ratios across a band on which reported (true) maxima are taken."""

@@ -11,7 +11,7 @@ import numpy as np
 
 from .laws import AbstractMotionLaw
 from .models._spring_mass import check_damping, check_period_ratios
-from .solve._response import SolveOptions, batch_metrics, raise_on_failure
+from .propagation._response import SolveOptions, batch_metrics, raise_on_failure
 
 
 class CtCurve(eqx.Module):
@@ -69,7 +69,7 @@ def ct_curve(
 
     One compiled, vmapped call covers the whole batch.  ``method`` is ``"exact"`` (closed-
     form propagation, the default) or a diffrax solver name; ``solver_options`` go to
-    :class:`camjax.solve.SolveOptions` (``rtol``, ``atol``, ``steps``, ``max_steps``,
+    :class:`camjax.propagation.SolveOptions` (``rtol``, ``atol``, ``steps``, ``max_steps``,
     ``use_jump_ts``).  Raises ``ValueError`` for bad input and ``SolverError`` if the
     solver fails at any period ratio.
     """

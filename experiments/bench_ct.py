@@ -23,7 +23,7 @@ import numpy as np
 from work_precision import scipy_metrics
 
 from camjax import laws
-from camjax.solve import SolveOptions, batch_metrics
+from camjax.propagation import SolveOptions, batch_metrics
 
 
 def timed(fn, repeats=5):

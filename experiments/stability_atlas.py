@@ -38,7 +38,7 @@ def fixed_step_map(n, step_counts, methods=("euler", "heun")):
 
     import camjax
     from camjax.cli.bench import reference_metrics
-    from camjax.solve import SolveOptions, batch_metrics
+    from camjax.propagation import SolveOptions, batch_metrics
 
     law = camjax.laws.get("cycloidal")
     ref_ct, _ = reference_metrics(law, n)
@@ -62,7 +62,7 @@ def jump_ts_work(n, law_names=("parabolic", "modified-trapezoid"), rtol=1e-8):
     import jax.numpy as jnp
 
     import camjax
-    from camjax.solve import sdof_term
+    from camjax.propagation import sdof_term
 
     out = {}
     for name in law_names:
@@ -108,7 +108,7 @@ def high_period_ratio(n, law_name="modified-trapezoid"):
 
     import camjax
     from camjax.cli.bench import reference_metrics
-    from camjax.solve import SolveOptions, batch_metrics
+    from camjax.propagation import SolveOptions, batch_metrics
 
     law = camjax.laws.get(law_name)
     ref_ct, _ = reference_metrics(law, n)
@@ -133,7 +133,7 @@ def default_grid_ranges(range_tops, count, law_names=("harmonic", "modified-trap
 
     import camjax
     from camjax.cli.bench import reference_metrics
-    from camjax.solve import SolveOptions, batch_metrics
+    from camjax.propagation import SolveOptions, batch_metrics
 
     out = {}
     for name in law_names:
@@ -161,7 +161,7 @@ def main() -> None:
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
 
-    from camjax.solve import MAX_FREE_VIBRATION_GROWTH
+    from camjax.propagation import MAX_FREE_VIBRATION_GROWTH
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

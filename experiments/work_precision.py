@@ -44,7 +44,7 @@ def float32_worker(path: Path) -> None:
     import jax.numpy as jnp
 
     import camjax
-    from camjax.solve import SolveOptions, batch_metrics
+    from camjax.propagation import SolveOptions, batch_metrics
 
     spec = json.loads(path.read_text())
     n = jnp.asarray(spec["n"], dtype=jnp.float32)
@@ -313,7 +313,7 @@ def main() -> None:
         reference_resolution,
         study_cases,
     )
-    from camjax.solve import SolveOptions
+    from camjax.propagation import SolveOptions
 
     n = np.linspace(1.0, args.n_max, args.n_count)
     cases = [] if args.level == "none" else study_cases(args.level)

@@ -10,7 +10,7 @@ from scipy.integrate import solve_ivp
 
 import camjax
 from camjax import laws
-from camjax.solve import response_metrics
+from camjax.propagation import response_metrics
 
 
 def cycloidal_residual(n):

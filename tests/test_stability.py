@@ -9,7 +9,7 @@ import pytest
 
 import camjax  # noqa: F401  (float64)
 from camjax.cli import bench
-from camjax.solve import (
+from camjax.propagation import (
     MAX_FREE_VIBRATION_GROWTH,
     SOLVERS,
     SolveOptions,
@@ -43,7 +43,7 @@ def test_free_vibration_growth_matches_the_method_on_the_free_oscillator(method)
 
 
 def test_public_sdof_term_gives_the_cycloidal_residual():
-    """``camjax.solve.sdof_term`` is the equation the diffrax path integrates."""
+    """``camjax.propagation.sdof_term`` is the equation the diffrax path integrates."""
     n = 2.5
     omega = 2 * np.pi * n
     solution = diffrax.diffeqsolve(

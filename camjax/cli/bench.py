@@ -1,7 +1,7 @@
 """``camjax bench``: a small work-precision study (time against error of each method).
 
 Every method computes the Ct and residual curves of a law over a batch of period ratios
-in one compiled call (``camjax.solve.batch_metrics``); its errors are measured against
+in one compiled call (``camjax.propagation.batch_metrics``); its errors are measured against
 the exact path at a high resolution.  The full study, with scipy peers, float32 and the
 charts, is ``experiments/work_precision.py``; it reuses the pieces defined here.
 """
@@ -17,7 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..laws import get as get_law
-from ..solve import FIXED_STEP_SOLVERS, SolveOptions, batch_metrics, default_resolution
+from ..propagation import FIXED_STEP_SOLVERS, SolveOptions, batch_metrics, default_resolution
 from ._common import CliError, add_format, dump_json, parse_range
 
 ACCURACY_GOAL = 1e-6

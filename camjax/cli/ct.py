@@ -10,7 +10,7 @@ from tqdm import tqdm
 
 from .. import laws, plot
 from ..metrics import ca_ct_crossings, fit_torsion_factor
-from ..solve import SOLVERS
+from ..propagation import SOLVERS
 from ..sweep import ct_curve
 from ._common import add_format, dump_json, output_dir, parse_range
 

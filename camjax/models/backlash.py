@@ -482,8 +482,8 @@ def solve_backlash(
     :class:`camjax.models._events.EventBisection` (the step bracket bisected to ``1e-14``
     in ``tau``), which also accepts a step that starts exactly at ``e = 0``.
     """
-    from ..solve import SolverError  # here, not at the top: camjax.solve imports camjax.models
-    from ..solve._ode import ADAPTIVE_SOLVERS
+    from ..propagation import SolverError  # here, not at the top: camjax.solve imports camjax.models
+    from ..propagation._ode import ADAPTIVE_SOLVERS
 
     key = str(method).strip().lower()
     require(

@@ -200,7 +200,7 @@ def two_mass_ct_curve(
 
     ``options`` as :func:`two_mass_response`.  Raises ``SolverError`` if any member fails.
     """
-    from ..solve._response import raise_on_failure
+    from ..propagation._response import raise_on_failure
 
     n = check_period_ratios(period_ratios)
     TwoMass(1.0, float(stiffness_ratio), float(inertia_ratio))  # validates the ratios

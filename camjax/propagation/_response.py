@@ -28,7 +28,7 @@ class SolveOptions:
     """Static settings of a solution (each distinct value compiles once).
 
     Attributes:
-        method: ``"exact"`` or a diffrax solver name (see ``camjax.solve.SOLVERS``).
+        method: ``"exact"`` or a diffrax solver name (see ``camjax.propagation.SOLVERS``).
         dwell: length of the dwell after the rise, in motion periods (Ct looks over it).
         resolution: grid intervals per unit tau; ``None`` picks one from the largest
             period ratio (``default_resolution``).
@@ -231,7 +231,7 @@ def solve(
     """Response of ``model`` driven by ``law``: time histories and metrics.
 
     ``method="exact"`` propagates the linear model in closed form; any name in
-    ``camjax.solve.SOLVERS`` integrates it with diffrax (``rtol``, ``atol``, ``steps``,
+    ``camjax.propagation.SOLVERS`` integrates it with diffrax (``rtol``, ``atol``, ``steps``,
     ``max_steps``, ``use_jump_ts`` tune it).  Raises ``SolverError`` if the solver fails.
     """
     n = float(check_period_ratios(model.period_ratio)[0])
