@@ -482,7 +482,7 @@ def solve_backlash(
     :class:`camjax.models._events.EventBisection` (the step bracket bisected to ``1e-14``
     in ``tau``), which also accepts a step that starts exactly at ``e = 0``.
     """
-    from ..propagation import SolverError  # here, not at the top: camjax.solve imports camjax.models
+    from ..errors import SolverError
     from ..propagation._ode import ADAPTIVE_SOLVERS
 
     key = str(method).strip().lower()

@@ -314,7 +314,7 @@ def solve_friction(law: AbstractMotionLaw, model: CoulombFriction, **options) ->
     Options as :func:`friction_response`; ``method`` is ``"events"`` (true stick-slip)
     or ``"regularised"`` (``tanh(x'/eps)``, for gradients).
     """
-    from ..propagation import SolverError
+    from ..errors import SolverError
 
     method = options.get("method", "events")
     require(method in METHODS, f"unknown friction method {method!r}; valid: {', '.join(METHODS)}")

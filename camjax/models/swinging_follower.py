@@ -30,7 +30,7 @@ from .. import geometry
 from ..laws._base import AbstractMotionLaw, is_concrete, require
 from ..laws._program import MotionProgram
 from ..laws._scca import Cycloidal
-from ..propagation._response import SolverError
+from ..errors import SolverError
 
 _QUADRATURE_POINTS = 24
 

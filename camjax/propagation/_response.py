@@ -10,6 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..errors import SolverError
 from ..laws import AbstractMotionLaw
 from ..metrics import refined_peak
 from ..models import SpringMass
@@ -17,10 +18,6 @@ from ..models._spring_mass import check_damping, check_period_ratios
 from ._exact import eigenvalue, propagate
 from ._grid import MotionGrid, default_resolution, motion_grid
 from ._ode import FIXED_STEP_SOLVERS, MAX_FREE_VIBRATION_GROWTH, check_method, integrate
-
-
-class SolverError(RuntimeError):
-    """A solution path failed (step limit, non-finite values): no result is returned."""
 
 
 @dataclasses.dataclass(frozen=True)
