@@ -27,10 +27,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import geometry
+from ..errors import SolverError
 from ..laws._base import AbstractMotionLaw, is_concrete, require
 from ..laws._program import MotionProgram
 from ..laws._scca import Cycloidal
-from ..errors import SolverError
 
 _QUADRATURE_POINTS = 24
 
