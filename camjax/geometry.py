@@ -19,7 +19,7 @@ import jax
 import jax.numpy as jnp
 
 from ._custom_types import ArrayLike
-from .laws._base import is_concrete, require
+from .checks import is_concrete, require
 from .laws._program import MotionProgram
 
 

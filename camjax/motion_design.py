@@ -45,8 +45,8 @@ from tqdm.auto import tqdm
 
 from .laws import AbstractMotionLaw, BSplineLaw
 from .laws import get as get_law
-from .propagation import SolveOptions, batch_metrics, default_resolution, motion_grid, propagate
-from .propagation._response import _dwell_peak, _mode_gain
+from .models.spring_mass import SpringMassOptions, batch_metrics, dwell_peak, mode_gain
+from .propagation import default_resolution, motion_grid, propagate
 
 EVALUATION_SAMPLES = 2000
 """Period ratios across a band on which reported (true) maxima are taken."""
@@ -308,7 +308,7 @@ def _payload_acceleration(law, period_ratios, damping):
 
     def one(w):
         q = propagate(grid, w, damping)
-        return jnp.real(_mode_gain(w, damping) * q), jnp.stack([q[-1].real, q[-1].imag])
+        return jnp.real(mode_gain(w, damping) * q), jnp.stack([q[-1].real, q[-1].imag])
 
     return jax.vmap(one)(jnp.asarray(omega))
 
@@ -318,7 +318,7 @@ def _peak_load_value(features, period_ratios, damping, dwell, sharpness):
     samples, ends = features
     omega = 2 * np.pi * np.atleast_1d(np.asarray(period_ratios, dtype=float))
     q_end = ends[:, 0] + 1j * ends[:, 1]
-    dwell_peaks = jax.vmap(lambda q, w: _dwell_peak(q, w, damping, dwell))(q_end, jnp.asarray(omega))
+    dwell_peaks = jax.vmap(lambda q, w: dwell_peak(q, w, damping, dwell))(q_end, jnp.asarray(omega))
     return _power_mean(jnp.concatenate([jnp.abs(samples).ravel(), dwell_peaks]), sharpness)
 
 
@@ -391,7 +391,7 @@ class MaxCaCt(AbstractObjective):
 def peak_loads(law, period_ratios, damping=0.0, dwell=1.0) -> np.ndarray:
     """Ca*Ct at every period ratio from one vmapped exact-path call (NumPy)."""
     n = np.atleast_1d(np.asarray(period_ratios, dtype=float))
-    options = SolveOptions(dwell=dwell).checked(float(n.max()))
+    options = SpringMassOptions(dwell=dwell).checked(float(n.max()))
     metrics, _, _ = batch_metrics(law, jnp.asarray(n), float(damping), options)
     return np.asarray(metrics.ct) * float(law.Ca)
 

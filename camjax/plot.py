@@ -80,7 +80,7 @@ def response(result, title: str = "") -> plt.Figure:
     """Command and payload acceleration of one ``Response`` over the rise and dwell."""
     fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
     ax.plot(result.tau, result.command_acceleration, color="k", lw=1.2, label="command s''")
-    ax.plot(result.tau, result.response_acceleration, color="C3", lw=1.0, label="payload x''")
+    ax.plot(result.tau, result.payload_acceleration, color="C3", lw=1.0, label="payload x''")
     ax.axvline(1.0, color="0.5", lw=0.6)
     ax.set_xlabel("tau = t / T")
     ax.set_ylabel("acceleration (units of h/T^2)")

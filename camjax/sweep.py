@@ -9,15 +9,18 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import checks
+from .errors import raise_if_failed
 from .laws import AbstractMotionLaw
-from .models._spring_mass import check_damping, check_period_ratios
-from .propagation._response import SolveOptions, batch_metrics, raise_on_failure
+from .models import AbstractModel, SpringMass
+from .models._base import as_arrays
 
 
 class CtCurve(eqx.Module):
     """Ct, residual and peak-in-motion of one law over a set of period ratios.
 
     All values are in units of the law's Ca (multiply by ``ca`` for units of h/T^2).
+    ``model`` names the model swept (its parameters other than the period ratio).
     """
 
     period_ratio: np.ndarray
@@ -28,6 +31,7 @@ class CtCurve(eqx.Module):
     name: str = eqx.field(static=True)
     damping: float = eqx.field(static=True, default=0.0)
     method: str = eqx.field(static=True, default="exact")
+    model: str = eqx.field(static=True, default="SpringMass")
 
     @property
     def ca_ct(self) -> np.ndarray:
@@ -35,14 +39,35 @@ class CtCurve(eqx.Module):
         return self.ca * self.ct
 
 
-def _options(period_ratios, damping, method, dwell, resolution, solver_options):
-    n = check_period_ratios(period_ratios)
-    zeta = check_damping(damping)
-    options = SolveOptions(method, dwell, resolution, **solver_options).checked(float(n.max()))
-    return n, zeta, options
+@eqx.filter_jit
+def _sweep(law, template: AbstractModel, period_ratios, options):
+    return template._sweep(law, period_ratios, options)
 
 
-def _curve(law, n, zeta, options, metrics) -> CtCurve:
+def _template(model, damping) -> AbstractModel:
+    if model is None:
+        return SpringMass(1.0, damping)
+    if not isinstance(model, AbstractModel):
+        raise TypeError(f"model must be a camjax model, got {type(model).__name__}")
+    if damping != 0.0:
+        raise ValueError(
+            "give the damping in the model (e.g. CoulombFriction(1.0, mu, damping=0.05)), "
+            "not as the damping argument, when a model is given"
+        )
+    if getattr(model, "carries_laws", False):
+        raise TypeError(f"{type(model).__name__} has no period-ratio sweep (it is not an SDOF-family model)")
+    return model
+
+
+def _prepare(period_ratios, model, damping, method, dwell, solver_options):
+    n = checks.period_ratios(period_ratios)
+    template = _template(model, damping).with_period_ratio(float(n[0])).validated()
+    options = template.options(method, dwell, max_period_ratio=float(n.max()), **solver_options)
+    return n, as_arrays(template), options
+
+
+def _curve(law, n, template, options, metrics) -> CtCurve:
+    damping = getattr(template, "damping", 0.0)
     return CtCurve(
         period_ratio=n,
         ct=np.asarray(metrics.ct),
@@ -50,43 +75,63 @@ def _curve(law, n, zeta, options, metrics) -> CtCurve:
         peak_in_motion=np.asarray(metrics.peak_in_motion),
         ca=float(law.Ca),
         name=law.name,
-        damping=zeta,
+        damping=float(damping),
         method=options.method,
+        model=type(template).__name__,
     )
+
+
+def _check(result, metrics, n, template, options):
+    def describe(i):
+        return f"{options.method} solve of {template.with_period_ratio(n[i]).describe()}"
+
+    raise_if_failed(result, describe, metrics.ct, metrics.residual)
 
 
 def ct_curve(
     law: AbstractMotionLaw,
     period_ratios,
     *,
+    model: AbstractModel | None = None,
     damping: float = 0.0,
-    method: str = "exact",
+    method: str | None = None,
     dwell: float = 1.0,
-    resolution: int | None = None,
     **solver_options,
 ) -> CtCurve:
     """Ct, residual vibration and peak in motion of ``law`` at every period ratio.
 
-    One compiled, vmapped call covers the whole batch.  ``method`` is ``"exact"`` (closed-
-    form propagation, the default) or a diffrax solver name; ``solver_options`` go to
-    :class:`camjax.propagation.SolveOptions` (``rtol``, ``atol``, ``steps``, ``max_steps``,
-    ``use_jump_ts``).  Raises ``ValueError`` for bad input and ``SolverError`` if the
-    solver fails at any period ratio.
+    One compiled, vmapped call covers the whole batch.
+
+    Args:
+        law: the rise.
+        period_ratios: positive finite period ratios (1-D).
+        model: a model instance used as a template whose period ratio is swept
+            (:class:`SpringMass` by default; also :class:`CoulombFriction`,
+            :class:`Backlash`, :class:`TwoMass`), e.g.
+            ``model=TwoMass(period_ratio=1.0, stiffness_ratio=1.0, inertia_ratio=1.0)``.
+        damping: damping ratio of the default SpringMass (give it in ``model`` otherwise).
+        method: solution method (default: the model's; for SpringMass ``"exact"``).
+        dwell: dwell after the rise, in motion periods.
+        solver_options: the model's static options (e.g. ``resolution``, ``rtol``).
+
+    Raises:
+        ValueError: bad input, named.
+        SolverError: the solver failed at any period ratio (the first is named).
     """
-    n, zeta, options = _options(period_ratios, damping, method, dwell, resolution, solver_options)
-    metrics, result, _ = batch_metrics(law, jnp.asarray(n), zeta, options)
-    raise_on_failure(result, (metrics.ct, metrics.residual), n, options.method)
-    return _curve(law, n, zeta, options, metrics)
+    n, template, options = _prepare(period_ratios, model, damping, method, dwell, solver_options)
+    metrics, result = _sweep(law, template, jnp.asarray(n), options)
+    _check(result, metrics, n, template, options)
+    return _curve(law, n, template, options, metrics)
 
 
 def ct_curves(
     laws: Iterable[AbstractMotionLaw] | Mapping[str, AbstractMotionLaw],
     period_ratios,
     *,
+    model: AbstractModel | None = None,
     damping: float = 0.0,
-    method: str = "exact",
+    method: str | None = None,
     dwell: float = 1.0,
-    resolution: int | None = None,
     **solver_options,
 ) -> dict[str, CtCurve]:
     """:func:`ct_curve` for several laws, keyed by name (or by the mapping's keys).
@@ -95,20 +140,26 @@ def ct_curves(
     are stacked and vmapped together, so a family of laws costs one compiled call.
     """
     named = dict(laws) if isinstance(laws, Mapping) else {law.name: law for law in laws}
-    n, zeta, options = _options(period_ratios, damping, method, dwell, resolution, solver_options)
+    n, template, options = _prepare(period_ratios, model, damping, method, dwell, solver_options)
     groups: dict = {}
     for key, law in named.items():
         groups.setdefault(jax.tree.structure(law), []).append(key)
     curves = {}
+    ratios = jnp.asarray(n)
     for keys in groups.values():
         members = [named[k] for k in keys]
         if len(members) == 1 or not jax.tree.leaves(members[0]):
-            batch = [batch_metrics(m, jnp.asarray(n), zeta, options) for m in members]
+            batch = [_sweep(m, template, ratios, options) for m in members]
         else:
             stacked = jax.tree.map(lambda *x: jnp.stack(x), *members)
-            out = jax.vmap(lambda law: batch_metrics(law, jnp.asarray(n), zeta, options))(stacked)
+            out = _stacked_sweep(stacked, template, ratios, options)
             batch = [jax.tree.map(lambda x, i=i: x[i], out) for i in range(len(members))]
-        for key, law, (metrics, result, _) in zip(keys, members, batch):
-            raise_on_failure(result, (metrics.ct, metrics.residual), n, options.method)
-            curves[key] = _curve(law, n, zeta, options, metrics)
+        for key, law, (metrics, result) in zip(keys, members, batch):
+            _check(result, metrics, n, template, options)
+            curves[key] = _curve(law, n, template, options, metrics)
     return {key: curves[key] for key in named}
+
+
+@eqx.filter_jit
+def _stacked_sweep(stacked_laws, template, period_ratios, options):
+    return jax.vmap(lambda law: template._sweep(law, period_ratios, options))(stacked_laws)

@@ -105,7 +105,7 @@ def dynamic_vs_kinematic(summary: list[str]) -> None:
         kin = float(bl.kinematic_impact(law, bk, dn).impact_velocity)
         ratios = []
         for n in PERIOD_RATIOS:
-            r = bl.solve_backlash(law, bl.Backlash(float(n), bk, dn, 0.05), dwell=0.5)
+            r = camjax.solve(law, bl.Backlash(float(n), bk, dn, 0.05), dwell=0.5)
             ratios.append(float(r.first_impact_velocity) / kin)
             rows.append([name, bk, dn, n, kin, float(r.first_impact_velocity), int(r.n_impacts)])
         ax.plot(PERIOD_RATIOS, ratios, "o-", label=f"{name}, bk={bk:g}, dn={dn:g}")
@@ -141,7 +141,7 @@ def solver_limits(summary: list[str]) -> None:
     for method, rtol, atol in settings:
         for n in (80.0, 500.0, 2000.0, 20000.0, 2e5):
             try:
-                r = bl.solve_backlash(
+                r = camjax.solve(
                     law,
                     bl.Backlash(n, 0.02, 1.0, 0.5),
                     method=method,
@@ -158,8 +158,8 @@ def solver_limits(summary: list[str]) -> None:
                         0.5,
                         "ok",
                         float(r.first_impact_velocity),
-                        int(r.steps),
-                        int(r.segments),
+                        int(r.stats["steps"]),
+                        int(r.stats["segments"]),
                     ]
                 )
             except camjax.SolverError as error:

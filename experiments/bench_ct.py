@@ -23,7 +23,7 @@ import numpy as np
 from work_precision import scipy_metrics
 
 from camjax import laws
-from camjax.propagation import SolveOptions, batch_metrics
+from camjax.models.spring_mass import SpringMassOptions, batch_metrics
 
 
 def timed(fn, repeats=5):
@@ -49,9 +49,9 @@ def main() -> None:
     nj = jnp.asarray(n)
     rows = []
     for law in laws.standard_laws():
-        exact_opts = SolveOptions().checked(30.0)
-        ref_opts = SolveOptions(resolution=4 * exact_opts.resolution).checked(30.0)
-        ode_opts = SolveOptions(method="tsit5", rtol=1e-10, atol=1e-12).checked(30.0)
+        exact_opts = SpringMassOptions().checked(30.0)
+        ref_opts = SpringMassOptions(resolution=4 * exact_opts.resolution).checked(30.0)
+        ode_opts = SpringMassOptions(method="tsit5", rtol=1e-10, atol=1e-12).checked(30.0)
         ref = batch_metrics(law, nj, 0.0, ref_opts)[0]
         exact_first, exact_warm = timed(lambda law=law, o=exact_opts: batch_metrics(law, nj, 0.0, o))
         ode_first, ode_warm = timed(lambda law=law, o=ode_opts: batch_metrics(law, nj, 0.0, o), repeats=2)

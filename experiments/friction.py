@@ -20,7 +20,6 @@ import json
 import time
 from pathlib import Path
 
-import diffrax
 import jax
 import jax.numpy as jnp
 import matplotlib
@@ -31,10 +30,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from camjax.models.friction import CoulombFriction, friction_response  # noqa: E402
+from camjax.models.friction import CoulombFriction  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "friction"
-SAMPLES = 4096
+SAMPLES = 2048  # per rise
 DAMPING_CHECK = 0.05  # viscous damping ratio of the comparison with a richer model
 
 
@@ -42,26 +41,26 @@ def window_peak(response, start, stop):
     """Max |x''| over tau in [start, stop] (samples), per batch member."""
     tau = response.tau[0]
     inside = (tau >= start) & (tau <= stop)
-    return jnp.max(jnp.where(inside, jnp.abs(response.acceleration), 0.0), axis=-1)
+    return jnp.max(jnp.where(inside, jnp.abs(response.payload_acceleration), 0.0), axis=-1)
 
 
 def sweep(law, n, frictions, dwell, damping=0.0):
     """Events-path responses over the friction levels (one vmapped call)."""
     batch = jax.jit(
         jax.vmap(
-            lambda mu: friction_response(
-                law, CoulombFriction(n, mu, damping), dwell=dwell, samples=SAMPLES
+            lambda mu: camjax.solve(
+                law, CoulombFriction(n, mu, damping), dwell=dwell, samples=SAMPLES, throw=False
             )
         )
     )(jnp.asarray(frictions))
     # A failed member (a solve error, reported) would be charted as a gap.
-    failed = ~np.asarray(batch.result == diffrax.RESULTS.successful)
+    failed = ~np.asarray(batch.result == camjax.RESULTS.successful)
     if failed.any():
         print(f"  {law.name}: solver failed at friction {np.asarray(frictions)[failed].tolist()}")
     period = 1.0 / n
     ca = float(law.Ca)
     metrics = {
-        "peak_in_motion": np.asarray(batch.peak_in_motion),
+        "peak_in_motion": np.asarray(batch.metrics.peak_in_motion),
         "residual_start": np.asarray(window_peak(batch, 1.0, 1.0 + period)) / ca,
         "residual_end": np.asarray(window_peak(batch, 1.0 + dwell - period, 1.0 + dwell)) / ca,
         "rest_offset": np.asarray(batch.rest_offset),
@@ -114,18 +113,18 @@ def main():
 
     # Regularisation error against stick-slip (Cycloidal, one friction level).
     law, mu = camjax.laws.Cycloidal(), 0.5
-    exact = friction_response(law, CoulombFriction(n, mu), dwell=dwell, samples=SAMPLES)
+    exact = camjax.solve(law, CoulombFriction(n, mu), dwell=dwell, samples=SAMPLES)
     epsilons = np.logspace(-1, -5, 9)
     smooth = jax.jit(
         jax.vmap(
-            lambda eps: friction_response(
-                law, CoulombFriction(n, mu), method="regularised", eps=eps, dwell=dwell, samples=SAMPLES
+            lambda eps: camjax.solve(
+                law, CoulombFriction(n, mu), method="regularised", eps=eps, dwell=dwell, samples=SAMPLES, throw=False
             )
         )
     )(jnp.asarray(epsilons))
     in_motion = exact.tau <= 1.0
     err_motion = np.asarray(jnp.max(jnp.where(in_motion, jnp.abs(smooth.position - exact.position), 0), axis=1))
-    err_peak = np.abs(np.asarray(smooth.peak_in_motion) - float(exact.peak_in_motion))
+    err_peak = np.abs(np.asarray(smooth.metrics.peak_in_motion) - float(exact.metrics.peak_in_motion))
     err_rest = np.abs(np.asarray(smooth.rest_offset) - float(exact.rest_offset))
     summary["regularisation"] = {
         "law": law.name,
@@ -168,7 +167,7 @@ def main():
     batch = histories[name]
     tau = np.asarray(batch.tau[0])
     for i in np.linspace(0, len(frictions) - 1, 4).astype(int):
-        ax.plot(tau, np.asarray(batch.acceleration[i]) / float(camjax.laws.get(name).Ca),
+        ax.plot(tau, np.asarray(batch.payload_acceleration[i]) / float(camjax.laws.get(name).Ca),
                 label=f"$\\mu$ = {frictions[i]:.2f}", lw=1)
     ax.plot(tau, np.asarray(camjax.laws.get(name).a(tau)) / float(camjax.laws.get(name).Ca), "k--",
             lw=0.8, label="command")

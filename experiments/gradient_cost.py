@@ -26,7 +26,7 @@ import numpy as np
 
 import camjax
 from camjax.laws import SCCA
-from camjax.propagation import response_metrics, sdof_term
+from camjax.models.spring_mass import response_metrics, sdof_term
 
 FRACTIONS = jnp.array([0.2, 0.4, 0.3])  # an SCCA with a zero-acceleration share d = 0.1
 PERIOD_RATIOS = jnp.array([2.3, 4.7, 7.7, 11.1, 15.1])
@@ -57,7 +57,7 @@ def diffrax_residual(fractions, n, adjoint, rtol=1e-10):
 
 
 def diffrax_ct(n, rtol=1e-10):
-    options = camjax.SolveOptions(method="tsit5", rtol=rtol, atol=rtol * 1e-2, resolution=1024)
+    options = camjax.models.SpringMassOptions(method="tsit5", rtol=rtol, atol=rtol * 1e-2, resolution=1024)
     return response_metrics(camjax.laws.get("modified-trapezoid"), camjax.SpringMass(n, 0.0), options).ct
 
 

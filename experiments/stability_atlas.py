@@ -33,12 +33,11 @@ HERE = Path(__file__).resolve().parent
 
 def fixed_step_map(n, step_counts, methods=("euler", "heun")):
     """``{method: (len(steps), len(n))}`` Ct error (NaN where camjax reported a failure)."""
-    import diffrax
     import jax.numpy as jnp
 
     import camjax
     from camjax.cli.bench import reference_metrics
-    from camjax.propagation import SolveOptions, batch_metrics
+    from camjax.models.spring_mass import SpringMassOptions, batch_metrics
 
     law = camjax.laws.get("cycloidal")
     ref_ct, _ = reference_metrics(law, n)
@@ -47,9 +46,9 @@ def fixed_step_map(n, step_counts, methods=("euler", "heun")):
         err = np.full((len(step_counts), n.size), np.nan)
         bad = np.zeros_like(err, dtype=bool)
         for i, steps in enumerate(step_counts):
-            options = SolveOptions(method=method, steps=int(steps)).checked(float(n.max()))
+            options = SpringMassOptions(method=method, steps=int(steps)).checked(float(n.max()))
             metrics, result, _ = batch_metrics(law, jnp.asarray(n), 0.0, options)
-            bad[i] = ~np.asarray(result == diffrax.RESULTS.successful)
+            bad[i] = ~np.asarray(result == camjax.RESULTS.successful)
             err[i] = np.where(bad[i], np.nan, np.abs(np.asarray(metrics.ct) - ref_ct))
         errors[method], failed[method] = err, bad
     return errors, failed
@@ -62,7 +61,7 @@ def jump_ts_work(n, law_names=("parabolic", "modified-trapezoid"), rtol=1e-8):
     import jax.numpy as jnp
 
     import camjax
-    from camjax.propagation import sdof_term
+    from camjax.models.spring_mass import sdof_term
 
     out = {}
     for name in law_names:
@@ -108,13 +107,13 @@ def high_period_ratio(n, law_name="modified-trapezoid"):
 
     import camjax
     from camjax.cli.bench import reference_metrics
-    from camjax.propagation import SolveOptions, batch_metrics
+    from camjax.models.spring_mass import SpringMassOptions, batch_metrics
 
     law = camjax.laws.get(law_name)
     ref_ct, _ = reference_metrics(law, n)
     out = {}
-    for label, options in (("exact default", SolveOptions()),
-                           ("tsit5 rtol=1e-8", SolveOptions(method="tsit5", rtol=1e-8, atol=1e-10))):
+    for label, options in (("exact default", SpringMassOptions()),
+                           ("tsit5 rtol=1e-8", SpringMassOptions(method="tsit5", rtol=1e-8, atol=1e-10))):
         metrics, _, steps = batch_metrics(law, jnp.asarray(n), 0.0, options.checked(float(n.max())))
         out[label] = (np.abs(np.asarray(metrics.ct) - ref_ct), np.asarray(steps))
     return out
@@ -133,7 +132,7 @@ def default_grid_ranges(range_tops, count, law_names=("harmonic", "modified-trap
 
     import camjax
     from camjax.cli.bench import reference_metrics
-    from camjax.propagation import SolveOptions, batch_metrics
+    from camjax.models.spring_mass import SpringMassOptions, batch_metrics
 
     out = {}
     for name in law_names:
@@ -142,7 +141,7 @@ def default_grid_ranges(range_tops, count, law_names=("harmonic", "modified-trap
         for low, top in zip((1.0, *range_tops[:-1]), range_tops):
             n = np.linspace(low, top, count + 1)[1:] if low > 1.0 else np.linspace(low, top, count)
             ref_ct, _ = reference_metrics(law, n, max_period_ratio=top)
-            metrics, _, _ = batch_metrics(law, jnp.asarray(n), 0.0, SolveOptions().checked(float(top)))
+            metrics, _, _ = batch_metrics(law, jnp.asarray(n), 0.0, SpringMassOptions().checked(float(top)))
             n_all.append(n)
             err_all.append(np.abs(np.asarray(metrics.ct) - ref_ct))
         out[name] = (np.concatenate(n_all), np.concatenate(err_all))
@@ -161,7 +160,7 @@ def main() -> None:
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
 
-    from camjax.propagation import MAX_FREE_VIBRATION_GROWTH
+    from camjax.solvers import MAX_FREE_VIBRATION_GROWTH
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

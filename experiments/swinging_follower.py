@@ -16,7 +16,6 @@ import math
 import time
 from pathlib import Path
 
-import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -30,7 +29,7 @@ import camjax  # noqa: E402
 from camjax import geometry  # noqa: E402
 from camjax.laws import Cycloidal, ModifiedSine, ModifiedTrapezoid, PolynomialLaw  # noqa: E402
 from camjax.laws._program import LawBank  # noqa: E402
-from camjax.models.swinging_follower import SwingingFollower, simulate, spectral_peaks, spectrum  # noqa: E402
+from camjax.models.swinging_follower import SwingingFollower, spectral_peaks, spectrum  # noqa: E402
 
 OUT = Path("results/swinging_follower")
 LAWS = (Cycloidal(), ModifiedSine(), ModifiedTrapezoid(), PolynomialLaw(3))
@@ -54,7 +53,7 @@ TURNS, PER_TURN = 3, 512
 def _four_laws(params, modes):
     def one(index):
         bank = LawBank(LAWS, index)
-        return simulate(SwingingFollower(rise=bank, fall=bank, modes=modes, **params), TURNS, PER_TURN, check=False)
+        return camjax.solve(None, SwingingFollower(rise=bank, fall=bank, modes=modes, **params), turns=TURNS, samples_per_turn=PER_TURN, throw=False)
 
     return jax.vmap(one)(jnp.arange(len(LAWS)))
 
@@ -66,7 +65,7 @@ def run_set(name: str, modes: int = 3):
     start = time.perf_counter()
     responses = jax.block_until_ready(_four_laws(params, modes))
     seconds = time.perf_counter() - start
-    if not bool(jnp.all(responses.result == diffrax.RESULTS.successful)):
+    if not bool(jnp.all(responses.result == camjax.RESULTS.successful)):
         raise camjax.SolverError(f"set {name}: a solve failed")
     return base, responses, seconds
 
@@ -111,7 +110,7 @@ def study_set(name, rows, summary):
             "max_transverse_mm": float(np.max(np.abs(v))),
             "max_axial_mm": float(np.max(np.abs(u))),
             "max_constraint_error_m": float(responses.max_constraint_error[k]),
-            "steps": int(responses.steps[k]),
+            "steps": int(responses.stats["steps"][k]),
         }
         rows.append(
             [name, label, natural, *(a for _, a in t_h[:3]), t_near[0], t_near[1], *(a for _, a in a_h[:3]), a_near[1]]
@@ -138,7 +137,7 @@ def modes_study():
     for modes in range(1, 6):
         model = SwingingFollower(modes=modes)
         start = time.perf_counter()
-        response = simulate(model, TURNS, PER_TURN)
+        response = camjax.solve(None, model, turns=TURNS, samples_per_turn=PER_TURN)
         seconds = time.perf_counter() - start
         v = np.asarray(response.transverse) * 1e3
         u = np.asarray(response.axial_end) * 1e3
@@ -146,7 +145,7 @@ def modes_study():
         order = natural / model.omega if modes > 1 else 41.5
         t_h, t_near = peaks_of(v, order)
         a_h, _ = peaks_of(u, order)
-        rows.append([modes, natural, float(np.max(np.abs(v))), float(np.max(np.abs(u))), *(a for _, a in t_h[:3]), t_near[1], *(a for _, a in a_h[:3]), int(response.steps), seconds])
+        rows.append([modes, natural, float(np.max(np.abs(v))), float(np.max(np.abs(u))), *(a for _, a in t_h[:3]), t_near[1], *(a for _, a in a_h[:3]), int(response.stats["steps"]), seconds])
         print(f"N={modes}: max|v| {rows[-1][2]:.5f} mm, max|u| {rows[-1][3]:.2e} mm, {seconds:.1f} s (incl. compile)")
         header = "modes,natural_rad_s,max_v_mm,max_u_mm,v1,v3,v5,v_near_natural,u1,u3,u5,steps,seconds_incl_compile"
         np.savetxt(OUT / "modes.csv", np.array(rows, dtype=float), delimiter=",", header=header, comments="", fmt="%.6g")
@@ -162,7 +161,7 @@ def sdof_comparison(summary):
     model = SwingingFollower(modes=3)
     rows = []
     for law, label in zip(LAWS, LABELS):
-        response = simulate(eqx.tree_at(lambda m: (m.rise, m.fall), model, (law, law)), 1, PER_TURN)
+        response = camjax.solve(law, model, turns=1, samples_per_turn=PER_TURN)
         angle = np.degrees(np.asarray(response.cam_angle))
         dwell = (angle > 95) & (angle < 175)
         full = float(np.max(np.abs(np.asarray(response.transverse)[dwell]))) * 1e3

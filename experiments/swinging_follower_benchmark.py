@@ -22,15 +22,13 @@ import os
 import time
 from pathlib import Path
 
-import diffrax
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 import camjax  # noqa: F401  (float64)
-from camjax.laws import Cycloidal, ModifiedSine, ModifiedTrapezoid, PolynomialLaw
-from camjax.laws._program import LawBank
-from camjax.models.swinging_follower import SwingingFollower, simulate, spectral_peaks, spectrum
+from camjax.laws import Cycloidal, LawBank, ModifiedSine, ModifiedTrapezoid, PolynomialLaw
+from camjax.models.swinging_follower import SwingingFollower, spectral_peaks, spectrum
 
 OUT = Path("results/swinging_follower")
 TURNS, PER_TURN = 3, 512
@@ -38,12 +36,12 @@ LAWS = (Cycloidal(), ModifiedSine(), ModifiedTrapezoid(), PolynomialLaw(3))
 I_CONTROLLER = {"pcoeff": 0.0, "icoeff": 1.0}
 PI_CONTROLLER = {"pcoeff": 0.3, "icoeff": 0.3}
 VARIANTS = {
-    "full, tsit5, I controller (old default)": ({}, {"solver": "tsit5", **I_CONTROLLER}),
-    "full, tsit5, PI controller": ({}, {"solver": "tsit5", **PI_CONTROLLER}),
-    "full, dopri8, PI controller (default)": ({}, {"solver": "dopri8", **PI_CONTROLLER}),
-    "axial_modes=1, tsit5, PI controller": ({"axial_modes": 1}, {"solver": "tsit5", **PI_CONTROLLER}),
-    "axial_modes=1, dopri8, PI controller": ({"axial_modes": 1}, {"solver": "dopri8", **PI_CONTROLLER}),
-    "axial_modes=1, modes=2, dopri8, PI controller": ({"axial_modes": 1, "modes": 2}, {"solver": "dopri8", **PI_CONTROLLER}),
+    "full, tsit5, I controller (old default)": ({}, {"method": "tsit5", **I_CONTROLLER}),
+    "full, tsit5, PI controller": ({}, {"method": "tsit5", **PI_CONTROLLER}),
+    "full, dopri8, PI controller (default)": ({}, {"method": "dopri8", **PI_CONTROLLER}),
+    "axial_modes=1, tsit5, PI controller": ({"axial_modes": 1}, {"method": "tsit5", **PI_CONTROLLER}),
+    "axial_modes=1, dopri8, PI controller": ({"axial_modes": 1}, {"method": "dopri8", **PI_CONTROLLER}),
+    "axial_modes=1, modes=2, dopri8, PI controller": ({"axial_modes": 1, "modes": 2}, {"method": "dopri8", **PI_CONTROLLER}),
 }
 
 
@@ -89,14 +87,14 @@ def vmapped_study(model_kwargs, solver_kwargs):
         def one(i):
             bank = LawBank(LAWS, i)
             model = SwingingFollower(rise=bank, fall=bank, **model_kwargs)
-            return simulate(model, TURNS, PER_TURN, check=False, **solver_kwargs)
+            return camjax.solve(None, model, turns=TURNS, samples_per_turn=PER_TURN, throw=False, **solver_kwargs)
 
         return jax.vmap(one)(index)
 
     index = jnp.arange(len(LAWS))
     responses, compile_s, run_s, cpu_s = timed(lambda: study(index), 1)
-    assert bool(jnp.all(responses.result == diffrax.RESULTS.successful))
-    return {"compile_s": compile_s, "run_s": run_s, "run_cpu_s": cpu_s, "steps_per_law": [int(s) for s in responses.steps]}
+    assert bool(jnp.all(responses.result == camjax.RESULTS.successful))
+    return {"compile_s": compile_s, "run_s": run_s, "run_cpu_s": cpu_s, "steps_per_law": [int(s) for s in responses.stats["steps"]]}
 
 
 def main():
@@ -109,14 +107,14 @@ def main():
     report["load_before"] = os.getloadavg()
     base = SwingingFollower()
     order = float(base.fundamental_frequency()) / base.omega
-    reference, compile_s, run_s, _ = timed(lambda: simulate(base, TURNS, PER_TURN, rtol=1e-10, atol=1e-14, solver="dopri8"), 1)
-    report["reference"] = {"solver": "dopri8", "rtol": 1e-10, "atol": 1e-14, "steps": int(reference.steps), "run_s": run_s}
-    print(f"reference: {int(reference.steps)} steps, {run_s:.2f} s")
+    reference, compile_s, run_s, _ = timed(lambda: camjax.solve(None, base, turns=TURNS, samples_per_turn=PER_TURN, rtol=1e-10, atol=1e-14, method="dopri8"), 1)
+    report["reference"] = {"solver": "dopri8", "rtol": 1e-10, "atol": 1e-14, "steps": int(reference.stats["steps"]), "run_s": run_s}
+    print(f"reference: {int(reference.stats['steps'])} steps, {run_s:.2f} s")
     report["variants"] = {}
     for name, (model_kwargs, solver_kwargs) in VARIANTS.items():
         model = SwingingFollower(**model_kwargs)
-        response, compile_s, run_s, cpu_s = timed(lambda m=model, k=solver_kwargs: simulate(m, TURNS, PER_TURN, **k), args.repeats)
-        entry = {"compile_s": compile_s, "run_s": run_s, "run_cpu_s": cpu_s, "steps": int(response.steps)}
+        response, compile_s, run_s, cpu_s = timed(lambda m=model, k=solver_kwargs: camjax.solve(None, m, turns=TURNS, samples_per_turn=PER_TURN, **k), args.repeats)
+        entry = {"compile_s": compile_s, "run_s": run_s, "run_cpu_s": cpu_s, "steps": int(response.stats["steps"])}
         entry |= {"max_constraint_error_m": float(response.max_constraint_error)} | errors(response, reference, order)
         report["variants"][name] = entry
         print(

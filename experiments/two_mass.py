@@ -30,18 +30,19 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from camjax.models.two_mass import two_mass_ct_curve  # noqa: E402
+from camjax.models.two_mass import TwoMass  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "two_mass"
 LAWS = ("modified-sine", "modified-trapezoid", "cycloidal")
-OPTIONS = dict(samples=2048, rtol=1e-8, atol=1e-10)  # chart accuracy, ~1e-6 in Ct
+OPTIONS = dict(samples=1024, rtol=1e-8, atol=1e-10)  # chart accuracy, ~1e-6 in Ct
 
 
 def curve(law, n, k, m):
     """A ``CtCurve`` of the two-mass model (``k = inf``: the rigid-input SDOF)."""
     if np.isinf(k):
         return camjax.ct_curve(law, n)
-    ct, residual = two_mass_ct_curve(law, n, k, m, **OPTIONS)
+    curve = camjax.ct_curve(law, n, model=TwoMass(1.0, k, m), **OPTIONS)
+    ct, residual = curve.ct, curve.residual
     return camjax.CtCurve(
         period_ratio=np.asarray(n), ct=ct, residual=residual, peak_in_motion=ct,
         ca=float(law.Ca), name=law.name,

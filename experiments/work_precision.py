@@ -39,19 +39,18 @@ SCIPY_METHODS = (("RK45", 1e-6), ("RK45", 1e-9), ("DOP853", 1e-6), ("DOP853", 1e
 
 def float32_worker(path: Path) -> None:
     """Run in a child with JAX_ENABLE_X64=0: Ct and R of each float32 case, to ``path``."""
-    import diffrax
     import jax
     import jax.numpy as jnp
 
     import camjax
-    from camjax.propagation import SolveOptions, batch_metrics
+    from camjax.models.spring_mass import SpringMassOptions, batch_metrics
 
     spec = json.loads(path.read_text())
     n = jnp.asarray(spec["n"], dtype=jnp.float32)
     out = {}
     for label, kwargs in FLOAT32_CASES:
         law = camjax.laws.get(spec["law"])
-        options = SolveOptions(**kwargs).checked(float(n.max()))
+        options = SpringMassOptions(**kwargs).checked(float(n.max()))
         start = time.perf_counter()
         jax.block_until_ready(batch_metrics(law, n, 0.0, options))
         first = time.perf_counter() - start
@@ -62,7 +61,7 @@ def float32_worker(path: Path) -> None:
             "dtype": str(metrics.ct.dtype), "warm_s": warm, "compile_s": max(first - warm, 0.0),
             "ct": np.asarray(metrics.ct, dtype=float).tolist(),
             "residual": np.asarray(metrics.residual, dtype=float).tolist(),
-            "ok": np.asarray(result == diffrax.RESULTS.successful).tolist(),
+            "ok": np.asarray(result == camjax.RESULTS.successful).tolist(),
             "steps_mean": float(np.mean(np.asarray(steps))),
         }
     path.write_text(json.dumps(out))
@@ -313,11 +312,11 @@ def main() -> None:
         reference_resolution,
         study_cases,
     )
-    from camjax.propagation import SolveOptions
+    from camjax.models.spring_mass import SpringMassOptions
 
     n = np.linspace(1.0, args.n_max, args.n_count)
     cases = [] if args.level == "none" else study_cases(args.level)
-    cases += [Case(f"exact res={int(r)}", "exact", SolveOptions(resolution=int(r)))
+    cases += [Case(f"exact res={int(r)}", "exact", SpringMassOptions(resolution=int(r)))
               for r in args.resolutions.split(",") if r.strip()]
     rows, checks = [], {}
     for name in args.laws.split(","):

@@ -56,7 +56,7 @@ print(f"V = {V:.3f} m/s, impact force = {bl.impact_force(V, mass=2.0, stiffness=
 
 # %%
 law = camjax.laws.ModifiedSine()
-response = bl.solve_backlash(law, bl.Backlash(40.0, 0.02, 1.0, 0.05))
+response = camjax.solve(law, bl.Backlash(40.0, 0.02, 1.0, 0.05))
 kinematic = bl.kinematic_impact(law, 0.02, 1.0)
 print(
     "first impact: dynamic",

@@ -10,9 +10,10 @@ import math
 import matplotlib.pyplot as plt
 import numpy as np
 
+import camjax
 from camjax import geometry
 from camjax.laws import ModifiedSine
-from camjax.models.swinging_follower import SwingingFollower, simulate, spectral_peaks, spectrum
+from camjax.models.swinging_follower import SwingingFollower, spectral_peaks, spectrum
 
 model = SwingingFollower(rise=ModifiedSine(), fall=ModifiedSine(), modes=2)
 theta = np.linspace(0, 2 * math.pi, 361)
@@ -38,7 +39,7 @@ closed_form = math.sqrt(E * I * (math.pi / l) ** 4 / (rho * A * (1 + I / A * (ma
 print("model", float(model.fundamental_frequency()), "closed form", closed_form, "rad/s")
 
 # %%
-response = simulate(model, turns=1, samples_per_turn=256)
+response = camjax.solve(None, model, turns=1, samples_per_turn=256)
 print("max constraint error (m):", float(response.max_constraint_error))
 plt.figure(figsize=(7, 3))
 plt.plot(np.degrees(response.cam_angle), np.asarray(response.transverse) * 1e3)

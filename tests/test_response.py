@@ -10,7 +10,7 @@ from scipy.integrate import solve_ivp
 
 import camjax
 from camjax import laws
-from camjax.propagation import response_metrics
+from camjax.models.spring_mass import response_metrics
 
 
 def cycloidal_residual(n):
@@ -109,7 +109,7 @@ def test_state_at_end_of_rise_matches_scipy():
         assert float(response.deflection[i]) == pytest.approx(e, rel=1e-8, abs=1e-12)
     # Payload acceleration x'' = w^2 e + 2 zeta w e' at the end of the rise.
     e1, de1 = sol.y[0][-1], sol.y[1][-1]
-    assert float(response.response_acceleration[nodes[-1]]) == pytest.approx(
+    assert float(response.payload_acceleration[nodes[-1]]) == pytest.approx(
         w * w * e1 + 2 * zeta * w * de1, rel=1e-8)
     # Residual: amplitude of x'' in the free vibration from (e1, de1), x'' = w^2 e + 2 zeta w e',
     # sampled densely over one period of the dwell (undamped amplitude would be exact).
@@ -163,7 +163,7 @@ def test_gradients_in_law_parameters():
 
     def metric(f, which):
         law = laws.SCCA(f[0], f[1], f[2])
-        m = response_metrics(law, camjax.SpringMass(n, 0.0), camjax.SolveOptions(resolution=512))
+        m = response_metrics(law, camjax.SpringMass(n, 0.0), camjax.models.SpringMassOptions(resolution=512))
         return getattr(m, which)
 
     f0 = jnp.array([0.3, 0.35, 0.3])

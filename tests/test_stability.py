@@ -9,15 +9,8 @@ import pytest
 
 import camjax  # noqa: F401  (float64)
 from camjax.cli import bench
-from camjax.propagation import (
-    MAX_FREE_VIBRATION_GROWTH,
-    SOLVERS,
-    SolveOptions,
-    batch_metrics,
-    free_vibration_growth,
-    response_metrics,
-    sdof_term,
-)
+from camjax.models.spring_mass import SpringMassOptions, batch_metrics, response_metrics, sdof_term
+from camjax.solvers import MAX_FREE_VIBRATION_GROWTH, SOLVERS, free_vibration_growth
 
 CYCLOIDAL = camjax.laws.get("cycloidal")
 
@@ -43,7 +36,7 @@ def test_free_vibration_growth_matches_the_method_on_the_free_oscillator(method)
 
 
 def test_public_sdof_term_gives_the_cycloidal_residual():
-    """``camjax.propagation.sdof_term`` is the equation the diffrax path integrates."""
+    """``camjax.models.spring_mass.sdof_term`` is the equation the diffrax path integrates."""
     n = 2.5
     omega = 2 * np.pi * n
     solution = diffrax.diffeqsolve(
@@ -71,11 +64,11 @@ def test_detection_limit_is_where_the_growth_crosses_the_threshold():
     steps = np.arange(100, 2000)
     growth = np.asarray(free_vibration_growth("heun", omega, 0.0, steps))
     first_stable = int(steps[np.argmax(growth <= MAX_FREE_VIBRATION_GROWTH)])
-    options = [SolveOptions(method="heun", steps=k).checked(n) for k in (first_stable - 1, first_stable)]
+    options = [SpringMassOptions(method="heun", steps=k).checked(n) for k in (first_stable - 1, first_stable)]
     (bad, bad_result, _), (good, good_result, _) = (batch_metrics(CYCLOIDAL, jnp.array([n]), 0.0, o) for o in options)
-    assert not bool(bad_result == diffrax.RESULTS.successful)
+    assert not bool(bad_result == camjax.RESULTS.successful)
     assert np.isnan(np.asarray(bad.ct)).all() and np.isnan(np.asarray(bad.residual)).all()
-    assert bool(good_result == diffrax.RESULTS.successful)
+    assert bool(good_result == camjax.RESULTS.successful)
     # Accepted: the error is bounded by the spurious growth (10 %), not wild.
     assert float(good.residual[0]) == pytest.approx(cycloidal_residual(n), rel=MAX_FREE_VIBRATION_GROWTH - 1)
 
@@ -182,7 +175,7 @@ def test_bench_cli_rejects_bad_arguments():
 def test_measure_reports_errors_against_the_reference():
     """One cheap case through ``measure``: the error equals the closed form's distance."""
     n = np.array([2.5, 3.5, 4.5])
-    case = bench.Case("exact res=64", "exact", SolveOptions(resolution=64))
+    case = bench.Case("exact res=64", "exact", SpringMassOptions(resolution=64))
     reference = (np.zeros(3), np.asarray([cycloidal_residual(x) for x in n]) / 1.0)
     row = bench.measure(CYCLOIDAL, n, case, (reference[0], reference[1] / 1.0), repeats=1)
     curve = camjax.ct_curve(CYCLOIDAL, n, resolution=64)
@@ -218,7 +211,7 @@ def test_gradient_through_diffrax_matches_exact_path():
     """d(R)/dn through Tsit5 (RecursiveCheckpointAdjoint) against the exact path's autodiff."""
     import jax
 
-    options = SolveOptions(method="tsit5", rtol=1e-10, atol=1e-12, resolution=512)
+    options = SpringMassOptions(method="tsit5", rtol=1e-10, atol=1e-12, resolution=512)
 
     def residual_tsit5(n):
         return response_metrics(CYCLOIDAL, camjax.SpringMass(n, 0.0), options).residual

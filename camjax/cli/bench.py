@@ -11,13 +11,15 @@ from __future__ import annotations
 import dataclasses
 import time
 
-import diffrax
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..errors import RESULTS
 from ..laws import get as get_law
-from ..propagation import FIXED_STEP_SOLVERS, SolveOptions, batch_metrics, default_resolution
+from ..models.spring_mass import SpringMassOptions, batch_metrics
+from ..propagation import default_resolution
+from ..solvers import FIXED_STEP_SOLVERS
 from ._common import CliError, add_format, dump_json, parse_range
 
 ACCURACY_GOAL = 1e-6
@@ -38,7 +40,7 @@ class Case:
 
     label: str
     family: str
-    options: SolveOptions
+    options: SpringMassOptions
 
 
 def _adaptive(method: str, rtol: float, family: str, use_jump_ts: bool = True) -> Case:
@@ -46,7 +48,7 @@ def _adaptive(method: str, rtol: float, family: str, use_jump_ts: bool = True) -
     return Case(
         f"{method} rtol={rtol:.0e}{suffix}",
         family,
-        SolveOptions(method=method, rtol=rtol, atol=rtol * 1e-2, use_jump_ts=use_jump_ts),
+        SpringMassOptions(method=method, rtol=rtol, atol=rtol * 1e-2, use_jump_ts=use_jump_ts),
     )
 
 
@@ -65,19 +67,19 @@ def study_cases(level: str = "quick") -> list[Case]:
         raise ValueError(f"unknown study level {level!r}; valid levels: {', '.join(LEVELS)}")
     if level == "quick":
         return [
-            Case("exact res=256", "exact", SolveOptions(resolution=256)),
-            Case("exact default", "exact", SolveOptions()),
-            Case("heun steps=4000", "fixed-step", SolveOptions(method="heun", steps=4000)),
+            Case("exact res=256", "exact", SpringMassOptions(resolution=256)),
+            Case("exact default", "exact", SpringMassOptions()),
+            Case("heun steps=4000", "fixed-step", SpringMassOptions(method="heun", steps=4000)),
             _adaptive("tsit5", 1e-6, "adaptive"),
             _adaptive("tsit5", 1e-10, "adaptive"),
             _adaptive("tsit5", 1e-10, "adaptive-no-jumps", use_jump_ts=False),
         ]
     if level == "medium":
         return [
-            *(Case(f"exact res={r}", "exact", SolveOptions(resolution=r)) for r in (64, 256)),
-            Case("exact default", "exact", SolveOptions()),
-            Case("euler steps=16000", "fixed-step", SolveOptions(method="euler", steps=16000)),
-            *(Case(f"heun steps={k}", "fixed-step", SolveOptions(method="heun", steps=k)) for k in (2000, 16000)),
+            *(Case(f"exact res={r}", "exact", SpringMassOptions(resolution=r)) for r in (64, 256)),
+            Case("exact default", "exact", SpringMassOptions()),
+            Case("euler steps=16000", "fixed-step", SpringMassOptions(method="euler", steps=16000)),
+            *(Case(f"heun steps={k}", "fixed-step", SpringMassOptions(method="heun", steps=k)) for k in (2000, 16000)),
             *(_adaptive("tsit5", rtol, "adaptive") for rtol in (1e-4, 1e-6, 1e-8, 1e-11)),
             _adaptive("bosh3", 1e-6, "adaptive"),
             _adaptive("dopri8", 1e-8, "adaptive"),
@@ -85,11 +87,11 @@ def study_cases(level: str = "quick") -> list[Case]:
             _adaptive("dopri8", 1e-8, "adaptive-no-jumps", use_jump_ts=False),
             _adaptive("kvaerno5", 1e-6, "implicit"),
         ]
-    cases = [Case(f"exact res={r}", "exact", SolveOptions(resolution=r)) for r in (64, 128, 256, 512, 1024, 2048)]
-    cases.append(Case("exact default", "exact", SolveOptions()))
+    cases = [Case(f"exact res={r}", "exact", SpringMassOptions(resolution=r)) for r in (64, 128, 256, 512, 1024, 2048)]
+    cases.append(Case("exact default", "exact", SpringMassOptions()))
     for method in FIXED_STEP_SOLVERS:
         for steps in (1000, 4000, 16000, 64000):
-            cases.append(Case(f"{method} steps={steps}", "fixed-step", SolveOptions(method=method, steps=steps)))
+            cases.append(Case(f"{method} steps={steps}", "fixed-step", SpringMassOptions(method=method, steps=steps)))
     for method in ("bosh3", "tsit5", "dopri5", "dopri8"):
         for rtol in (1e-3, 1e-6, 1e-9, 1e-12):
             cases.append(_adaptive(method, rtol, "adaptive"))
@@ -110,7 +112,7 @@ def reference_metrics(law, period_ratios, max_period_ratio: float | None = None)
     """Exact-path Ct and R at :func:`reference_resolution` (NumPy arrays)."""
     n = jnp.asarray(period_ratios, dtype=float)
     resolution = reference_resolution(float(max_period_ratio or jnp.max(n)))
-    metrics, _, _ = batch_metrics(law, n, 0.0, SolveOptions(resolution=resolution).checked(float(jnp.max(n))))
+    metrics, _, _ = batch_metrics(law, n, 0.0, SpringMassOptions(resolution=resolution).checked(float(jnp.max(n))))
     return np.asarray(metrics.ct), np.asarray(metrics.residual)
 
 
@@ -137,7 +139,7 @@ def measure(law, period_ratios, case: Case, reference, *, repeats: int = 2) -> d
         _block(batch_metrics(law, n, 0.0, options))
         warm = min(warm, time.perf_counter() - start)
     ct, residual = np.asarray(metrics.ct), np.asarray(metrics.residual)
-    ok = np.asarray(result == diffrax.RESULTS.successful) & np.isfinite(ct) & np.isfinite(residual)
+    ok = np.asarray(result == RESULTS.successful) & np.isfinite(ct) & np.isfinite(residual)
     ref_ct, ref_residual = reference
     steps = np.asarray(steps)
     where = locate_errors(np.asarray(n), ok, ct - ref_ct, residual - ref_residual)

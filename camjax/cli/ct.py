@@ -10,9 +10,9 @@ from tqdm import tqdm
 
 from .. import laws, plot
 from ..metrics import ca_ct_crossings, fit_torsion_factor
-from ..propagation import SOLVERS
+from ..solvers import SOLVERS
 from ..sweep import ct_curve
-from ._common import add_format, dump_json, output_dir, parse_range
+from ._common import CliError, add_format, dump_json, output_dir, parse_range
 
 DEFAULT_N = "1:30:1000"
 
@@ -32,11 +32,41 @@ def register(sub) -> None:
     parser.add_argument("--damping", type=float, default=0.0, help="damping ratio zeta in [0, 1)")
     parser.add_argument("--dwell", type=float, default=1.0,
                         help="dwell after the rise, in motion periods (default 1)")
-    parser.add_argument("--method", default="exact",
-                        help=f"exact or a diffrax solver: {', '.join(SOLVERS)}")
+    parser.add_argument("--model", default="spring-mass", metavar="MODEL",
+                        help="spring-mass (default), friction:MU, backlash:BK,DN or two-mass:K,M "
+                        "(the model whose period ratio is swept; --damping applies to it)")
+    parser.add_argument("--method", default=None,
+                        help=f"solution method (default: the model's own; spring-mass: exact or a "
+                        f"diffrax solver: {', '.join(SOLVERS)})")
     parser.add_argument("--out", metavar="DIR", help="write CSV, JSON, figures and tables here")
     add_format(parser)
     parser.set_defaults(func=run)
+
+
+def parse_model(text: str, damping: float):
+    """The model template named by ``--model`` (its period ratio is swept)."""
+    from ..models import Backlash, CoulombFriction, SpringMass, TwoMass
+
+    name, _, values = str(text).strip().lower().partition(":")
+    try:
+        numbers = [float(v) for v in values.split(",")] if values else []
+    except ValueError as error:
+        raise CliError(f"--model {text!r}: parameters must be numbers") from error
+    expected = {"spring-mass": 0, "friction": 1, "backlash": 2, "two-mass": 2}
+    if name not in expected:
+        raise CliError(f"--model {text!r}: unknown model; valid: spring-mass, friction:MU, "
+                       "backlash:BK,DN, two-mass:K,M")
+    if len(numbers) != expected[name]:
+        raise CliError(f"--model {name} takes {expected[name]} parameter(s), got {len(numbers)}")
+    if name == "spring-mass":
+        return SpringMass(1.0, damping)
+    if name == "friction":
+        return CoulombFriction(1.0, numbers[0], damping)
+    if name == "backlash":
+        return Backlash(1.0, numbers[0], numbers[1], damping)
+    if damping:
+        raise CliError("--model two-mass has no damping ratio (leave --damping at 0)")
+    return TwoMass(1.0, numbers[0], numbers[1])
 
 
 def _fit_or_none(curve):
@@ -72,6 +102,7 @@ def _json(curves, args, selected) -> dict:
     return {
         "period_ratio": first.period_ratio,
         "damping": args.damping,
+        "model": args.model,
         "method": first.method,
         "laws": {
             name: {
@@ -106,12 +137,12 @@ def run(args) -> int:
         law = laws.get(name)
         selected[law.name] = law
     n = parse_range(args.n, "--n")
+    model = parse_model(args.model, args.damping)
     out = output_dir(args.out)
     curves = {}
     for name, law in tqdm(selected.items(), desc="camjax ct", unit="law", file=sys.stderr,
                           disable=not sys.stderr.isatty()):
-        curves[name] = ct_curve(law, n, damping=args.damping, method=args.method,
-                                dwell=args.dwell)
+        curves[name] = ct_curve(law, n, model=model, method=args.method, dwell=args.dwell)
     fits = {k: f for k, f in ((k, _fit_or_none(c)) for k, c in curves.items()) if f}
     if out is not None:
         (out / "ct.csv").write_text(_csv(curves))

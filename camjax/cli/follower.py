@@ -13,7 +13,8 @@ import math
 import numpy as np
 
 from .. import laws
-from ..models.swinging_follower import SwingingFollower, simulate, spectral_peaks, spectrum
+from ..models import solve
+from ..models.swinging_follower import SwingingFollower, spectral_peaks, spectrum
 from ._common import CliError, add_format, dump_json, output_dir
 
 _TURNS = 3
@@ -68,7 +69,7 @@ def _model(args) -> SwingingFollower:
 
 def follower_report(model: SwingingFollower, law_name: str) -> tuple[dict, object]:
     """The JSON-ready report of one three-turn run, and the response."""
-    response = simulate(model, _TURNS)
+    response = solve(None, model, turns=_TURNS)
     natural = float(model.fundamental_frequency())
     order = natural / float(model.omega)
     report = {
@@ -89,7 +90,7 @@ def follower_report(model: SwingingFollower, law_name: str) -> tuple[dict, objec
     report["max_transverse_mm"] = float(np.max(np.abs(response.transverse))) * 1e3
     report["max_axial_mm"] = float(np.max(np.abs(response.axial_end))) * 1e3
     report["max_constraint_error"] = float(response.max_constraint_error)
-    report["steps"] = int(response.steps)
+    report["steps"] = int(response.stats["steps"])
     return report, response
 
 

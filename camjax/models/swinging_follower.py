@@ -17,8 +17,9 @@ with diffrax.  The drift of the position constraint is reported on every saved s
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from typing import NamedTuple
+from typing import ClassVar, NamedTuple
 
 import diffrax
 import equinox as eqx
@@ -26,11 +27,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import geometry
-from ..errors import SolverError
-from ..laws._base import AbstractMotionLaw, is_concrete, require
-from ..laws._program import MotionProgram
-from ..laws._scca import Cycloidal
+from .. import checks, geometry
+from ..checks import is_concrete, require
+from ..errors import RESULTS
+from ..laws import AbstractMotionLaw, Cycloidal, MotionProgram
+from ._base import AbstractModel, Options, Response
 
 _QUADRATURE_POINTS = 24
 
@@ -62,7 +63,74 @@ class _ProgramJet(eqx.Module):
         return self.evaluate(theta)[0]
 
 
-class SwingingFollower(eqx.Module):
+class FollowerResponse(Response):
+    """Samples over the simulated turns (SI units).  ``payload_acceleration`` and
+    ``metrics`` are ``None``: the rod's output end is held in the groove, so there is no
+    single payload lagging a command; the follower's answers are its deflections and
+    their spectra (:func:`spectrum`).  ``tau`` is time in rise periods.
+
+    Attributes:
+        t: time, s.
+        cam_angle: rad.
+        axial_end: u(l), axial deflection at the rod's output (roller) end, m.
+        transverse: v at the observation point (default mid-rod), m.
+        transverse_end: v(l), m: small, because the groove holds the end in its normal direction.
+        constraint_error: |Phi| at each sample, m.
+        coordinates: q at each sample, ``(samples, size)``.
+        velocities: dq/dt at each sample.
+        max_constraint_error: the largest |Phi|, m (checked against the option of that name).
+    """
+
+    t: jax.Array
+    cam_angle: jax.Array
+    axial_end: jax.Array
+    transverse: jax.Array
+    transverse_end: jax.Array
+    constraint_error: jax.Array
+    coordinates: jax.Array
+    velocities: jax.Array
+    max_constraint_error: jax.Array
+
+
+@dataclasses.dataclass(frozen=True)
+class FollowerOptions(Options):
+    """Static settings of a swinging-follower solution.
+
+    The step is limited by stability, not accuracy: the undamped axial modes (up to 3.5e5
+    rad/s at N = 3) sit on the imaginary axis, where Tsit5 and Dopri5 amplify slightly
+    beyond omega h of about 1 and Dopri8 stays stable to about 3.7.  Hence the default
+    Dopri8 with a PI controller (``pcoeff = icoeff = 0.3``, fewer rejected steps): 4.8x
+    fewer steps than Tsit5 and 25x more accurate.  ``model.axial_modes = 1`` removes
+    those modes (quasi-static axial).
+
+    Attributes:
+        method: ``"dopri8"``, ``"tsit5"`` or ``"dopri5"``.
+        dwell: unused (the program sets the dwells); kept for the common signature.
+        turns: cam turns simulated from rest (a whole number for spectra).
+        samples_per_turn: samples per turn.
+        rtol, atol, max_steps, pcoeff, icoeff: diffrax settings.
+        max_constraint_error: largest accepted drift |Phi| of the groove constraint, m.
+    """
+
+    method: str = "dopri8"
+    turns: float = 3
+    samples_per_turn: int = 512
+    rtol: float = 1e-6
+    atol: float = 1e-11
+    max_steps: int = 400_000
+    pcoeff: float = 0.3
+    icoeff: float = 0.3
+    max_constraint_error: float = 1e-6
+
+    def checked(self, max_period_ratio: float) -> FollowerOptions:
+        base = super().checked(max_period_ratio)
+        require(isinstance(self.turns, int | float) and self.turns > 0, f"turns must be a positive number, got {self.turns}")
+        require(isinstance(self.samples_per_turn, int) and self.samples_per_turn >= 16, "samples_per_turn must be an integer >= 16")
+        require(self.max_constraint_error > 0, "max_constraint_error must be positive")
+        return base
+
+
+class SwingingFollower(AbstractModel):
     """The cam - flexible rod - roller system.  SI units; every default is written here once.
 
     Defaults (the paper gives omega, l, rod radius, phi_T; the rest are chosen here):
@@ -100,17 +168,41 @@ class SwingingFollower(eqx.Module):
     """Axial assumed modes (default ``modes``).  ``1`` keeps only the end mode ``x/l``: the
     quasi-static treatment of the stiff axial sin modes (see ``docs/swinging-follower.md``)."""
 
+    methods: ClassVar[tuple[str, ...]] = ("dopri8", "tsit5", "dopri5")
+    options_type: ClassVar[type[Options]] = FollowerOptions
+    carries_laws: ClassVar[bool] = True
+    """``camjax.solve(None, follower)`` uses the model's own rise and fall laws."""
+
+    @property
+    def period_ratio(self):
+        """Rise duration over the rod's fundamental period (the SDOF view of the rise)."""
+        return self.program.rise_angle / self.omega * self.fundamental_frequency() / (2 * math.pi)
+
+    def _option_scale(self) -> float:
+        return 1.0  # the follower's options do not depend on a period ratio
+
+    def _checked(self) -> dict:
+        names = ("omega", "length", "rod_radius", "youngs_modulus", "density", "roller_radius", "roller_mass", "base_radius")
+        return {name: checks.positive(getattr(self, name), name) for name in names}
+
+    def _response(self, law, options: FollowerOptions) -> FollowerResponse:
+        model = self.validated()
+        if law is not None:
+            model = dataclasses.replace(model, rise=law, fall=law)
+        response = _simulate(model, options)
+        failed = response.result != RESULTS.successful
+        drift = response.max_constraint_error > options.max_constraint_error  # NaN: not caught here
+        finite = jnp.all(jnp.isfinite(response.transverse)) & jnp.all(jnp.isfinite(response.axial_end))
+        result = RESULTS.where(failed, response.result, RESULTS.where(
+            ~finite, RESULTS.nonfinite, RESULTS.where(drift, RESULTS.invariant_violated, RESULTS.successful)))
+        return dataclasses.replace(response, result=result)
+
     def __check_init__(self):
         require(isinstance(self.modes, int) and 1 <= self.modes <= 12, f"modes must be an integer 1..12, got {self.modes}")
         axial = self.axial_modes
         require(
             axial is None or (isinstance(axial, int) and 1 <= axial <= 12), f"axial_modes must be None or an integer 1..12, got {axial}"
         )
-        names = ("omega", "length", "rod_radius", "youngs_modulus", "density", "roller_radius", "roller_mass", "base_radius")
-        for name in names:
-            value = getattr(self, name)
-            if is_concrete(value):
-                require(np.all(np.isfinite(value)) and np.all(np.asarray(value) > 0), f"{name} must be positive, got {value}")
         if is_concrete(self.total_swing, self.observation_point):
             require(0 < float(self.total_swing) < math.pi / 2, f"total_swing must be in (0, pi/2) rad, got {self.total_swing}")
             require(0 < float(self.observation_point) <= 1, "observation_point must be in (0, 1]")
@@ -293,28 +385,6 @@ def _natural_frequencies(model, cam_angle):
     return jnp.sqrt(jnp.clip(jnp.linalg.eigvalsh(0.5 * (reduced + reduced.T)), 0.0))
 
 
-class FollowerResponse(NamedTuple):
-    """Samples over the simulated turns (SI units)."""
-
-    t: jax.Array
-    cam_angle: jax.Array
-    axial_end: jax.Array
-    """u(l): axial deflection at the rod's output (roller) end, m."""
-    transverse: jax.Array
-    """v at the observation point (default mid-rod), m."""
-    transverse_end: jax.Array
-    """v(l), m: small, because the groove holds the end in its normal direction."""
-    constraint_error: jax.Array
-    """|Phi| at each sample, m."""
-    coordinates: jax.Array
-    """q at each sample, ``(samples, size)``."""
-    velocities: jax.Array
-    """dq/dt at each sample."""
-    max_constraint_error: jax.Array
-    steps: jax.Array
-    result: diffrax.RESULTS
-
-
 # Velocities are integrated as ``qdot / _RATE_SCALE`` so that one absolute tolerance suits
 # deflections (m) and their rates (m/s, about 1e4 times larger at the rod's frequencies).
 _RATE_SCALE = 1e4
@@ -329,8 +399,8 @@ def _vector_field(t, state, model):
 SOLVERS = {"tsit5": diffrax.Tsit5, "dopri5": diffrax.Dopri5, "dopri8": diffrax.Dopri8}
 
 
-@eqx.filter_jit
-def _simulate(model, turns, samples_per_turn, rtol, atol, max_steps, solver, pcoeff, icoeff):
+def _simulate(model, options: FollowerOptions) -> FollowerResponse:
+    turns, samples_per_turn = options.turns, options.samples_per_turn
     period = 2 * math.pi / model.omega
     ts = jnp.arange(int(round(turns * samples_per_turn))) * (period / samples_per_turn)
     whole = math.ceil(turns)
@@ -338,15 +408,17 @@ def _simulate(model, turns, samples_per_turn, rtol, atol, max_steps, solver, pco
     zero = jnp.zeros(model.size)
     solution = diffrax.diffeqsolve(
         diffrax.ODETerm(_vector_field),
-        SOLVERS[solver](),
+        SOLVERS[options.method](),
         t0=0.0,
         t1=turns * period,
         dt0=period * 1e-4,
         y0=(zero, zero),
         args=model,
         saveat=diffrax.SaveAt(ts=ts),
-        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol, pcoeff=pcoeff, icoeff=icoeff, jump_ts=jumps),
-        max_steps=max_steps,
+        stepsize_controller=diffrax.PIDController(
+            rtol=options.rtol, atol=options.atol, pcoeff=options.pcoeff, icoeff=options.icoeff, jump_ts=jumps
+        ),
+        max_steps=options.max_steps,
         throw=False,
     )
     q, qdot = solution.ys[0], solution.ys[1] * _RATE_SCALE
@@ -355,6 +427,11 @@ def _simulate(model, turns, samples_per_turn, rtol, atol, max_steps, solver, pco
     na, n = model.n_axial, model.modes
     error = jnp.linalg.norm(jax.vmap(model.constraint)(q, ts), axis=1)
     return FollowerResponse(
+        tau=ts * model.omega / model.program.rise_angle,
+        payload_acceleration=None,
+        metrics=None,
+        result=RESULTS.promote(solution.result),
+        stats={"steps": solution.stats["num_steps"]},
         t=ts,
         cam_angle=model.omega * ts,
         axial_end=q[:, 0],
@@ -364,47 +441,7 @@ def _simulate(model, turns, samples_per_turn, rtol, atol, max_steps, solver, pco
         coordinates=q,
         velocities=qdot,
         max_constraint_error=jnp.max(error),
-        steps=solution.stats["num_steps"],
-        result=solution.result,
     )
-
-
-def simulate(
-    model: SwingingFollower,
-    turns: float = 3,
-    samples_per_turn: int = 512,
-    rtol: float = 1e-6,
-    atol: float = 1e-11,
-    max_steps: int = 400_000,
-    check: bool = True,
-    solver: str = "dopri8",
-    pcoeff: float = 0.3,
-    icoeff: float = 0.3,
-) -> FollowerResponse:
-    """Integrate ``turns`` cam turns (a whole number for spectra) from rest, rigid, at theta = 0.
-
-    Jittable and vmappable over the model's leaves with ``check=False`` (then inspect
-    ``result`` and ``max_constraint_error`` yourself); with ``check=True`` a failed solve or a
-    non-finite answer raises ``SolverError``.
-
-    The step is limited by stability, not accuracy: the undamped axial modes (up to 3.5e5
-    rad/s at N = 3) sit on the imaginary axis, where Tsit5 and Dopri5 amplify slightly beyond
-    omega h of about 1 and Dopri8 stays stable to about 3.7.  Hence the default Dopri8 with a
-    PI controller (``pcoeff = icoeff = 0.3``, fewer rejected steps): 4.8x fewer steps than Tsit5
-    and 25x more accurate.  ``model.axial_modes = 1`` removes those modes (quasi-static axial).
-    """
-    require(isinstance(turns, int | float) and turns > 0, f"turns must be a positive number, got {turns}")
-    require(isinstance(samples_per_turn, int) and samples_per_turn >= 16, "samples_per_turn must be an integer >= 16")
-    require(solver in SOLVERS, f"solver must be one of {sorted(SOLVERS)}, got {solver!r}")
-    response = _simulate(model, turns, samples_per_turn, rtol, atol, max_steps, solver, pcoeff, icoeff)
-    if check:
-        ok = jnp.all(response.result == diffrax.RESULTS.successful)
-        finite = jnp.all(jnp.isfinite(response.transverse)) & jnp.all(jnp.isfinite(response.axial_end))
-        if not bool(ok):
-            raise SolverError(f"swinging-follower solve failed: {response.result}; raise max_steps or loosen rtol")
-        if not bool(finite):
-            raise SolverError("swinging-follower solve produced non-finite deflections")
-    return response
 
 
 class Spectrum(NamedTuple):

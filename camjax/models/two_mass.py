@@ -22,19 +22,47 @@ The cam's ratio ``v(theta)`` varies over the rise, so the model is nonlinear in
 
 from __future__ import annotations
 
+import dataclasses
+from typing import ClassVar
+
 import diffrax
-import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 
-from ..laws import AbstractMotionLaw
-from ..laws._base import is_concrete, require
+from .. import checks
+from ..checks import require
+from ..errors import RESULTS
 from ..metrics import refined_peak
-from ._spring_mass import check_period_ratios
+from ._base import AbstractModel, Metrics, Options, Response
+from ._hybrid import sample_times
 
 
-class TwoMass(eqx.Module):
+@dataclasses.dataclass(frozen=True)
+class TwoMassOptions(Options):
+    """Static settings of a two-mass solution.
+
+    Attributes:
+        method: ``"dopri8"`` or ``"kvaerno5"`` (implicit, for a very stiff input shaft).
+        dwell: dwell after the rise, in motion periods.
+        samples: equal sample steps over the rise (the dwell is sampled as finely); Ct is
+            refined between them.
+        rtol, atol, max_steps: diffrax tolerances and step limit.
+    """
+
+    method: str = "dopri8"
+    samples: int = 2048
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    max_steps: int = 200_000
+
+    def checked(self, max_period_ratio: float) -> TwoMassOptions:
+        base = super().checked(max_period_ratio)
+        require(int(self.samples) >= 8, f"samples must be at least 8, got {self.samples}")
+        require(int(self.max_steps) >= 1, f"max_steps must be positive, got {self.max_steps}")
+        return base
+
+
+class TwoMass(AbstractModel):
     """Camshaft on an elastic input shaft, driving the payload through the output transmission.
 
     Attributes:
@@ -46,27 +74,62 @@ class TwoMass(eqx.Module):
     period_ratio: float | jax.Array
     stiffness_ratio: float | jax.Array
     inertia_ratio: float | jax.Array
+    methods: ClassVar[tuple[str, ...]] = ("dopri8", "kvaerno5")
+    options_type: ClassVar[type[Options]] = TwoMassOptions
 
-    def __check_init__(self):
-        if is_concrete(self.period_ratio, self.stiffness_ratio, self.inertia_ratio):
-            if jnp.ndim(self.period_ratio) == 0:
-                check_period_ratios(self.period_ratio)
-            if jnp.ndim(self.stiffness_ratio) == 0:
-                k = float(self.stiffness_ratio)
-                require(np.isfinite(k) and k > 0, f"stiffness_ratio must be positive and finite, got {k}")
-            if jnp.ndim(self.inertia_ratio) == 0:
-                m = float(self.inertia_ratio)
-                require(np.isfinite(m) and m >= 0, f"inertia_ratio must be >= 0 and finite, got {m}")
-
-    @property
-    def omega(self):
-        """Output natural frequency ``w = 2 pi n`` (radians per motion period)."""
-        return 2 * jnp.pi * self.period_ratio
+    def _checked(self) -> dict:
+        return {
+            "period_ratio": checks.positive(self.period_ratio, "period ratio"),
+            "stiffness_ratio": checks.positive(self.stiffness_ratio, "stiffness_ratio"),
+            "inertia_ratio": checks.non_negative(self.inertia_ratio, "inertia_ratio"),
+        }
 
     @property
     def input_omega(self):
         """Camshaft natural frequency with the motor end held, ``w_i = w sqrt(k m)``."""
         return self.omega * jnp.sqrt(self.stiffness_ratio * self.inertia_ratio)
+
+    def _response(self, law, options: TwoMassOptions) -> TwoMassResponse:
+        model = self.validated()
+        ts = sample_times(options.samples, options.dwell)
+        w = model.omega
+        sol = diffrax.diffeqsolve(
+            diffrax.ODETerm(_vector_field),
+            {"dopri8": diffrax.Dopri8, "kvaerno5": diffrax.Kvaerno5}[options.method](),
+            t0=0.0,
+            t1=ts[-1],
+            dt0=None,
+            y0=tuple(jnp.zeros(()) for _ in range(4)),
+            args=(law, model),
+            saveat=diffrax.SaveAt(ts=ts),
+            stepsize_controller=diffrax.PIDController(rtol=options.rtol, atol=options.atol),
+            max_steps=options.max_steps,
+            throw=False,
+        )
+        phi, dphi, e, de = sol.ys
+        acc = w**2 * e
+        # The law's breakpoints fall at camshaft angles, not at sample times: a node lies
+        # inside a piece (almost surely), and both of its sides see the same derivatives.
+        derivatives = _acceleration_derivatives(law, model, ts, (phi, dphi, e, de))
+        widths = jnp.diff(ts)
+        rise = ts <= 1.0
+        in_motion = refined_peak(
+            jnp.where(rise, acc, 0.0), jnp.where(rise[1:], widths, 0.0), derivatives[:-1], derivatives[1:]
+        )
+        peak = refined_peak(acc, widths, derivatives[:-1], derivatives[1:])
+        i_end = options.samples  # tau = 1: the output transmission is undamped
+        residual = w**2 * jnp.sqrt(e[i_end] ** 2 + (de[i_end] / w) ** 2)
+        return TwoMassResponse(
+            tau=ts,
+            payload_acceleration=acc,
+            metrics=Metrics(peak / law.Ca, residual / law.Ca, in_motion / law.Ca),
+            result=RESULTS.promote(sol.result),
+            stats={"steps": jnp.asarray(sol.stats["num_steps"])},
+            twist=phi,
+            twist_rate=dphi,
+            deflection=e,
+            deflection_rate=de,
+        )
 
 
 def _vector_field(t, y, args):
@@ -79,32 +142,20 @@ def _vector_field(t, y, args):
     return dphi, -ddtheta, de, dde
 
 
-class TwoMassResponse(eqx.Module):
-    """Time histories and metrics of the two-mass model (metrics in units of Ca).
+class TwoMassResponse(Response):
+    """Time histories of the two-mass model (adds to :class:`camjax.models.Response`).
 
     Attributes:
-        tau: sample times over the rise and the dwell.
         twist: input-shaft twist ``phi = tau - theta`` (camshaft lag, units of the rise angle).
         twist_rate: ``phi'``.
         deflection: output deflection ``e = s(theta) - x`` (units of stroke).
         deflection_rate: ``e'``.
-        response_acceleration: payload acceleration ``x'' = w^2 e``.
-        ct: max ``|x''|`` over Ca, refined between samples (``camjax.metrics.refined_peak``).
-        residual: amplitude of the payload vibration at the end of the dwell, over Ca.
-        result: diffrax result.
-        steps: solver steps taken.
     """
 
-    tau: jax.Array
     twist: jax.Array
     twist_rate: jax.Array
     deflection: jax.Array
     deflection_rate: jax.Array
-    response_acceleration: jax.Array
-    ct: jax.Array
-    residual: jax.Array
-    result: diffrax.RESULTS
-    steps: jax.Array
 
 
 def _acceleration_derivatives(law, model, t, y):
@@ -122,94 +173,3 @@ def _acceleration_derivatives(law, model, t, y):
     dde = a * dtheta**2 + v * ddtheta - w2 * e
     ddde = j * dtheta**3 + 3 * a * dtheta * ddtheta + v * dddtheta - w2 * de
     return jnp.stack([w2 * de, w2 * dde, w2 * ddde], axis=-1)
-
-
-def two_mass_response(
-    law: AbstractMotionLaw,
-    model: TwoMass,
-    *,
-    dwell: float = 1.0,
-    samples: int = 4096,
-    solver: str = "dopri8",
-    rtol: float = 1e-10,
-    atol: float = 1e-12,
-    max_steps: int = 200_000,
-) -> TwoMassResponse:
-    """Integrate the two-mass model over the rise and ``dwell`` motion periods.
-
-    Jittable and vmappable over the model's leaves.  ``solver`` is ``"dopri8"`` or
-    ``"kvaerno5"`` (implicit, for a very stiff input shaft).  ``samples`` equal steps
-    sample the response; Ct is refined between them by ``camjax.metrics.refined_peak``
-    (septic Hermite interpolation from the acceleration's first three derivatives).
-    """
-    model = jax.tree.map(jnp.asarray, model)  # traced leaves: one compilation for all values
-    ts = jnp.linspace(0.0, 1.0 + dwell, samples + 1)
-    w = model.omega
-    sol = diffrax.diffeqsolve(
-        diffrax.ODETerm(_vector_field),
-        {"dopri8": diffrax.Dopri8, "kvaerno5": diffrax.Kvaerno5}[solver](),
-        t0=0.0,
-        t1=1.0 + dwell,
-        dt0=None,
-        y0=tuple(jnp.zeros(()) for _ in range(4)),
-        args=(law, model),
-        saveat=diffrax.SaveAt(ts=ts),
-        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
-        max_steps=max_steps,
-        throw=False,
-    )
-    phi, dphi, e, de = sol.ys
-    acc = w**2 * e
-
-    # The law's breakpoints fall at camshaft angles, not at sample times: a node lies
-    # inside a piece (almost surely), and both of its sides see the same derivatives.
-    derivatives = _acceleration_derivatives(law, model, ts, (phi, dphi, e, de))
-
-    residual = w**2 * jnp.sqrt(e[-1] ** 2 + (de[-1] / w) ** 2)
-    return TwoMassResponse(
-        tau=ts,
-        twist=phi,
-        twist_rate=dphi,
-        deflection=e,
-        deflection_rate=de,
-        response_acceleration=acc,
-        ct=refined_peak(acc, jnp.diff(ts), derivatives[:-1], derivatives[1:]) / law.Ca,
-        residual=residual / law.Ca,
-        result=sol.result,
-        steps=sol.stats["num_steps"],
-    )
-
-
-@eqx.filter_jit
-def _batch(law, period_ratio, stiffness_ratio, inertia_ratio, options):
-    def one(n):
-        r = two_mass_response(law, TwoMass(n, stiffness_ratio, inertia_ratio), **dict(options))
-        return r.ct, r.residual, r.result
-
-    return jax.vmap(one)(period_ratio)
-
-
-def two_mass_ct_curve(
-    law: AbstractMotionLaw,
-    period_ratios,
-    stiffness_ratio: float,
-    inertia_ratio: float,
-    **options,
-) -> tuple[np.ndarray, np.ndarray]:
-    """``(ct, residual)`` over ``period_ratios`` in one vmapped call (units of Ca).
-
-    ``options`` as :func:`two_mass_response`.  Raises ``SolverError`` if any member fails.
-    """
-    from ..propagation._response import raise_on_failure
-
-    n = check_period_ratios(period_ratios)
-    TwoMass(1.0, float(stiffness_ratio), float(inertia_ratio))  # validates the ratios
-    ct, residual, result = _batch(
-        law,
-        jnp.asarray(n),
-        jnp.asarray(float(stiffness_ratio)),
-        jnp.asarray(float(inertia_ratio)),
-        tuple(sorted(options.items())),
-    )
-    raise_on_failure(result, (ct, residual), n, options.get("solver", "dopri8"))
-    return np.asarray(ct), np.asarray(residual)

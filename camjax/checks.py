@@ -1,0 +1,82 @@
+"""Input checks that hold on concrete values and under ``jit``, ``vmap`` and ``grad``.
+
+On concrete values a failed check raises ``ValueError`` naming the problem and the value.
+On traced values (inside ``jax.jit``, ``jax.vmap``, ``jax.grad``) it goes through
+``equinox.error_if``: the computation raises a runtime error carrying the same message
+when it runs, instead of returning a plausible number.  (Floor 1: imports nothing from
+the rest of camjax.)
+"""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+
+def is_concrete(*values) -> bool:
+    """True when no value is a JAX tracer, so that Python-side checks can run."""
+    return not any(isinstance(v, jax.core.Tracer) for v in jax.tree.leaves(values))
+
+
+def require(condition: bool, message: str) -> None:
+    """Raise ``ValueError(message)`` when a concrete validity condition fails."""
+    if not bool(condition):
+        raise ValueError(message)
+
+
+def ensure(value, predicate, message: str):
+    """``value`` unchanged if ``predicate(value)`` holds everywhere; else a clear error.
+
+    ``predicate`` maps an array to booleans (NaN must give False) and works on NumPy and
+    JAX arrays.  Concrete ``value``: ``ValueError`` naming the first bad value.  Traced:
+    ``value`` is wrapped with ``equinox.error_if``, so the compiled computation raises
+    ``message`` when it runs with a bad value.
+    """
+    if is_concrete(value):
+        array = np.asarray(value, dtype=float)
+        ok = np.asarray(predicate(array))
+        if not np.all(ok):
+            bad = np.broadcast_to(array, ok.shape)[~ok].ravel()[0]
+            raise ValueError(f"{message}, got {bad:g}")
+        return value
+    return eqx.error_if(value, ~predicate(jnp.asarray(value)), message)
+
+
+def positive(value, name: str):
+    """``value`` if every entry is finite and > 0 (period ratios, stiffnesses)."""
+    return ensure(value, lambda v: (v > 0) & (v < np.inf), f"{name} must be positive and finite")
+
+
+def non_negative(value, name: str):
+    """``value`` if every entry is finite and >= 0 (friction, deceleration)."""
+    return ensure(value, lambda v: (v >= 0) & (v < np.inf), f"{name} must be >= 0 and finite")
+
+
+def damping_ratio(value, name: str = "damping ratio"):
+    """``value`` if every entry is in ``[0, 1)`` (an underdamped payload)."""
+    return ensure(value, lambda v: (v >= 0) & (v < 1), f"{name} must be in [0, 1) (an underdamped payload)")
+
+
+def period_ratios(values, *, what: str = "period ratio") -> np.ndarray:
+    """Concrete period ratios as a non-empty 1-D float array, or a ``ValueError``."""
+    try:
+        n = np.atleast_1d(np.asarray(values, dtype=float))
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{what} must be numbers, got {values!r}") from error
+    require(n.ndim == 1 and n.size > 0, f"{what} must be a non-empty 1-D list of numbers")
+    require(bool(np.all(np.isfinite(n))), f"{what} must be finite (got NaN or inf)")
+    if np.any(n <= 0):
+        raise ValueError(f"{what} must be positive, got {n[n <= 0][0]:g}")
+    return n
+
+
+def concrete_float(value, name: str) -> float:
+    """A concrete scalar as a Python float (for static settings), or a ``ValueError``."""
+    require(is_concrete(value) and np.ndim(value) == 0, f"{name} must be a concrete number")
+    x = float(value)
+    require(math.isfinite(x), f"{name} must be finite, got {x}")
+    return x

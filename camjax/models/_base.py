@@ -1,0 +1,180 @@
+"""The model interface: every dynamic model is reached through :func:`camjax.solve` and
+the sweeps (:func:`camjax.ct_curve`) in the same way.
+
+A model is an equinox module whose parameters are pytree leaves (so ``jit``, ``vmap`` and
+``grad`` see them).  Subclasses supply the few pieces that differ: the methods they offer,
+their static options, a traced-safe check of their parameters, and one jittable
+``_response(law, options)`` that never raises but reports failure in ``result``.  The base
+supplies the rest: option checking, the period-ratio sweep and the failure convention.
+"""
+
+from __future__ import annotations
+
+import abc
+import dataclasses
+import math
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ..checks import is_concrete, require
+from ..errors import RESULTS
+from ..laws import AbstractMotionLaw
+
+
+@dataclasses.dataclass(frozen=True)
+class Options:
+    """Static settings of a solution (each distinct value compiles once).
+
+    Attributes:
+        method: solution method; each model lists its own (``Model.methods``).
+        dwell: length of the dwell after the rise, in motion periods (Ct looks over it).
+    """
+
+    method: str
+    dwell: float = 1.0
+
+    def checked(self, max_period_ratio: float) -> Options:
+        """These options validated (``ValueError`` naming the field), filled in."""
+        dwell = float(self.dwell)
+        require(
+            math.isfinite(dwell) and dwell >= 0,
+            f"dwell must be a non-negative number of motion periods, got {self.dwell}",
+        )
+        return dataclasses.replace(self, dwell=dwell)
+
+
+class Metrics(eqx.Module):
+    """Response metrics in units of the law's Ca (multiply by Ca for units of h/T^2).
+
+    The same definitions hold for every model:
+
+    Attributes:
+        ct: torsion factor, max |x''| over the rise and the following dwell, over Ca,
+            refined between samples.
+        residual: amplitude of the payload-acceleration vibration at the start of the
+            dwell, over Ca: ``w^2`` times the amplitude of the free vibration of the
+            transmission that the state at ``tau = 1`` starts (it decays as
+            ``exp(-zeta w t)`` in a linear dwell).
+        peak_in_motion: max |x''| over the rise alone, over Ca.
+    """
+
+    ct: jax.Array
+    residual: jax.Array
+    peak_in_motion: jax.Array
+
+
+class Response(eqx.Module):
+    """What every model's solution returns; models subclass it to add their own fields.
+
+    Attributes:
+        tau: normalised time of the samples (the rise, then the dwell).
+        payload_acceleration: the payload's acceleration ``x''`` at ``tau`` (units of
+            h/T^2), or ``None`` for a model without a single payload.
+        metrics: :class:`Metrics` (units of Ca), or ``None`` likewise.
+        result: a :class:`camjax.errors.RESULTS` code (``successful`` unless it failed).
+        stats: solver statistics (``steps``, and ``segments`` for event models).
+    """
+
+    tau: jax.Array
+    payload_acceleration: jax.Array | None
+    metrics: Metrics | None
+    result: RESULTS
+    stats: dict
+
+
+class AbstractModel(eqx.Module):
+    """A scene the cam drives: its parameters, methods and one jittable solution.
+
+    Subclasses define ``period_ratio`` (a field, or a property derived from physical
+    parameters), ``methods`` (the first is the default), ``options_type``, and
+    :meth:`validated` and :meth:`_response`.
+    """
+
+    period_ratio: eqx.AbstractVar[float | jax.Array]
+    methods: ClassVar[tuple[str, ...]]
+    options_type: ClassVar[type[Options]]
+
+    @property
+    def omega(self):
+        """Normalised natural angular frequency ``w = 2 pi n`` (radians per motion period)."""
+        return 2 * jnp.pi * self.period_ratio
+
+    def __check_init__(self):
+        if is_concrete(self):
+            self._checked()  # ValueError naming the parameter
+
+    @abc.abstractmethod
+    def _checked(self) -> dict:
+        """The parameters that need checks, checked (``camjax.checks``), by field name."""
+
+    def validated(self) -> AbstractModel:
+        """This model with every parameter checked, on concrete and traced values alike:
+        a bad value raises ``ValueError`` now, or a runtime error from inside ``jit``,
+        ``vmap`` or ``grad`` when the computation runs."""
+        return dataclasses.replace(self, **self._checked())
+
+    @abc.abstractmethod
+    def _response(self, law, options: Options) -> Response:
+        """The solution: jittable, vmappable, never raising (failures go in ``result``)."""
+
+    def _metrics(self, law, options: Options) -> tuple[Metrics, RESULTS]:
+        """Metrics and result code of one solution (a lighter path where a model has one)."""
+        response = self._response(law, options)
+        return response.metrics, response.result
+
+    def _sweep(self, law, period_ratios: jax.Array, options: Options):
+        """Metrics and result codes over a batch of period ratios (one vmapped program)."""
+        return jax.vmap(lambda n: self.with_period_ratio(n)._metrics(law, options))(period_ratios)
+
+    def with_period_ratio(self, period_ratio) -> AbstractModel:
+        """This model at another period ratio (the template of a sweep)."""
+        return eqx.tree_at(lambda m: m.period_ratio, self, period_ratio)
+
+    def options(self, method: str | None = None, dwell: float = 1.0, *,
+                max_period_ratio: float | None = None, **options) -> Options:
+        """Validated static options for this model (``ValueError`` naming what is wrong)."""
+        method = self.methods[0] if method is None else str(method).strip().lower()
+        if method not in self.methods:
+            raise ValueError(
+                f"unknown method {method!r} for {type(self).__name__}; valid methods: "
+                f"{', '.join(self.methods)}"
+            )
+        fields = {f.name for f in dataclasses.fields(self.options_type)} - {"method", "dwell"}
+        unknown = sorted(set(options) - fields)
+        if unknown:
+            raise ValueError(
+                f"unknown option {unknown[0]!r} for {type(self).__name__}; valid options: "
+                f"{', '.join(sorted(fields)) or 'none'}"
+            )
+        n = max_period_ratio if max_period_ratio is not None else self._option_scale()
+        return self.options_type(method=method, dwell=dwell, **options).checked(n)
+
+    def _option_scale(self) -> float | None:
+        """The period ratio that sizes default options (a grid's resolution); ``None``
+        when it is traced (then such options must be given explicitly)."""
+        return float(self.period_ratio) if is_concrete(self.period_ratio) else None
+
+    def describe(self) -> str:
+        """The model and its concrete parameters, for messages."""
+        parts = []
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            if isinstance(value, float | int) or (hasattr(value, "ndim") and value.ndim == 0):
+                try:
+                    parts.append(f"{field.name.replace('_', ' ')} {float(value):g}")
+                except (TypeError, jax.errors.ConcretizationTypeError):
+                    pass
+        return f"{type(self).__name__}({', '.join(parts)})"
+
+
+def as_arrays(model: AbstractModel) -> AbstractModel:
+    """``model`` with its numeric leaves as float arrays: traced, so one compilation serves
+    every value (Python floats would be static under ``filter_jit``)."""
+    return jax.tree.map(
+        lambda x: jnp.asarray(x, dtype=float) if isinstance(x, float | int) else x,
+        model,
+        is_leaf=lambda x: isinstance(x, AbstractMotionLaw),  # a law keeps its own leaves
+    )

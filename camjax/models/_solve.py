@@ -1,0 +1,67 @@
+"""The one entry point: :func:`solve` any model driven by any law."""
+
+from __future__ import annotations
+
+import equinox as eqx
+
+from ..errors import raise_if_failed
+from ..laws import AbstractMotionLaw
+from ._base import AbstractModel, Response, as_arrays
+
+
+@eqx.filter_jit
+def _solve(law, model: AbstractModel, options) -> Response:
+    return model._response(law, options)
+
+
+def solve(
+    law: AbstractMotionLaw | None,
+    model: AbstractModel,
+    *,
+    dwell: float = 1.0,
+    method: str | None = None,
+    throw: bool = True,
+    **options,
+) -> Response:
+    """Response of ``model`` driven by ``law``: time histories and metrics.
+
+    Works for every model (:class:`SpringMass`, :class:`CoulombFriction`,
+    :class:`Backlash`, :class:`TwoMass`, :class:`SwingingFollower`); each picks a sound
+    default ``method`` and lists the others in ``type(model).methods``.  ``options`` are
+    the model's static settings (see its options class, e.g.
+    :class:`camjax.models.SpringMassOptions`); an unknown one is a ``ValueError``.
+
+    Args:
+        law: the rise (followed by a dwell).  For :class:`SwingingFollower`, ``None`` keeps
+            the model's own rise and fall laws; a law replaces both.
+        model: the scene, with its parameters.
+        dwell: dwell after the rise, in motion periods.
+        method: solution method (``None``: the model's default).
+        throw: raise :class:`camjax.SolverError` if the solution failed (default); with
+            ``throw=False`` the response comes back with its ``result`` code instead.
+
+    Raises:
+        TypeError: ``model`` is not a camjax model, or ``law`` not a motion law.
+        ValueError: a bad parameter or option, named.
+        SolverError: the solution failed (with ``throw=True``).
+    """
+    if not isinstance(model, AbstractModel):
+        raise TypeError(
+            "model must be a camjax model (SpringMass, CoulombFriction, Backlash, TwoMass, "
+            f"SwingingFollower), got {type(model).__name__}"
+        )
+    if law is not None and not isinstance(law, AbstractMotionLaw):
+        raise TypeError(f"law must be a camjax motion law, got {type(law).__name__}")
+    if law is None and not getattr(model, "carries_laws", False):
+        raise TypeError(f"{type(model).__name__} needs a motion law (law is None)")
+    opts = model.options(method, dwell, **options)
+    response = _solve(law, as_arrays(model), opts)
+    if throw:
+        reached = response.stats.get("reached")
+        where = f" (reached tau = {float(reached):.6g})" if reached is not None else ""
+        raise_if_failed(
+            response.result,
+            lambda i: f"{opts.method} solve of {model.describe()}{where}",
+            *([response.payload_acceleration] if response.payload_acceleration is not None else []),
+        )
+    return response
