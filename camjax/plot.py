@@ -3,20 +3,19 @@
 Every figure says the conditions it was computed under (model, damping, dwell) and labels
 normalised quantities with their units (Ct and R in units of the law's Ca, Ca*Ct in units
 of h/T^2, tau = t/T).
+
+The module leaves matplotlib's backend alone: without a display matplotlib draws with Agg,
+and in a notebook the figures show inline.
 """
 
 from __future__ import annotations
 
 import math
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from .metrics import fit_torsion_factor  # noqa: E402
+from .metrics import fit_torsion_factor
 
 PERIOD_RATIO_LABEL = "period ratio n = T f (motion period / natural period)"
 R_FLOOR = 1e-6
