@@ -13,7 +13,7 @@
 # %% [markdown]
 # # Ct curves, residual vibration and Ca*Ct of the standard motion laws
 #
-# The linear single-degree-of-freedom model of MISSION.md: the cam commands `s(tau)`, the
+# The linear single-degree-of-freedom model (see Conventions and units): the cam commands `s(tau)`, the
 # payload follows through a spring, `x'' = w^2 (s - x) + 2 zeta w (s' - x')`, `w = 2 pi n`.
 # camjax propagates it exactly and sweeps many period ratios `n` in one compiled call.
 # `N_POINTS` keeps the run small; raise it for smoother curves.
@@ -44,7 +44,9 @@ plot.law_curves(laws.standard_laws()[:3]);
 
 # %%
 response = camjax.solve(laws.ModifiedSine(), camjax.SpringMass(3.0, damping=0.02))
-print(response.metrics)
+m = response.metrics
+print(f"Ct = {float(m.ct):.4f}, R = {float(m.residual):.4f}, "
+      f"peak in motion = {float(m.peak_in_motion):.4f} (units of Ca)")
 plot.response(response, "modified sine, n = 3, zeta = 0.02");
 
 # %% [markdown]
@@ -56,7 +58,7 @@ plot.ct_curves(curves)
 plot.residual_curves(curves);
 
 # %% [markdown]
-# The closed form of MISSION.md checks the cycloidal residual: `R = 2n|sin(pi n)|/|n^2 - 1|`.
+# A closed form checks the cycloidal residual: `R = 2n|sin(pi n)|/|n^2 - 1|`.
 
 # %%
 cyc = curves["cycloidal"]

@@ -6,15 +6,11 @@
 # law with that Ca), check the caps, save the law and load it back.
 
 # %%
-import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
 import camjax.motion_design as D
-from camjax.laws import get
-from camjax.laws._io import load, save
+from camjax.laws import get, load, save
 
 # %%
 objective = D.MaxResidual(6.0, 12.0, samples=128)

@@ -12,7 +12,7 @@
 # %% [markdown]
 # # Coulomb friction and an elastic input drive
 #
-# Two scenes the linear SDOF cannot answer (issue 5, sections 1 and 3).
+# Two scenes the linear SDOF cannot answer.
 #
 # **Friction.** A constant friction force on the payload, normalised as
 # `mu = F_friction T^2 / (W h)`, adds `-mu sign(x')` to the SDOF; the payload sticks when

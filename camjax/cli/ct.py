@@ -148,10 +148,10 @@ def run(args) -> int:
         (out / "ct.csv").write_text(_csv(curves))
         dump_json(_json(curves, args, selected), out / "ct.json")
         (out / "torsion_factor_fit.md").write_text(_fit_report(curves, fits))
-        plot.save(plot.ct_curves(curves), out / "ct_curves.png")
+        plot.save(plot.ct_curves(curves, dwell=args.dwell), out / "ct_curves.png")
         plot.save(plot.residual_curves(curves), out / "residual_curves.png")
         if fits:
-            plot.save(plot.ca_ct_chart(curves, fits), out / "ca_ct.png")
+            plot.save(plot.ca_ct_chart(curves, fits, dwell=args.dwell), out / "ca_ct.png")
         print(f"wrote {out}/: ct.csv, ct.json, torsion_factor_fit.md, ct_curves.png, "
               "residual_curves.png, ca_ct.png", file=sys.stderr)
     if args.format == "json":

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import plot
 from ._common import CliError, dump_json, output_dir, parse_float_list
 
 
@@ -86,7 +87,9 @@ def run(args) -> int:
                "coefficients": result.coefficients, "knots": args.knots, "seed": args.seed,
                "steps": steps, "repaired": result.restored, "seconds": result.seconds,
                "band": [n1, n2], "damping": args.damping}, out / "summary.json")
-    _figures(law, ratios, curves, out)
+    title = plot.design_title(objective.label, caps, args.damping)
+    plot.save(plot.law_curves([law], title=title), out / "law.png")
+    plot.save(plot.design_comparison(ratios, curves, title=title), out / "curves.png")
     print(f"{objective.label}: designed {rows[0]['objective']:.5g}; best standard "
           f"{min(rows[1:], key=lambda r: r['objective'])['law']} "
           f"{min(r['objective'] for r in rows[1:]):.5g}; wrote {out}")
@@ -103,35 +106,3 @@ def _write_table(rows, label, out) -> None:
            f"{r['max_R']:.4g} | {r['max_CaCt']:.4g} |" for r in rows]
     (out / "comparison.md").write_text("\n".join(md) + "\n")
 
-
-def _figures(law, ratios, curves, out) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    tau = np.linspace(0.0, 1.0, 2001)
-    fig, axes = plt.subplots(2, 2, figsize=(9, 6), sharex=True)
-    for ax, values, label in zip(axes.flat, law.evaluate(tau), ("s", "v", "a", "j")):
-        ax.plot(tau, np.asarray(values))
-        ax.set_ylabel(label)
-        ax.grid(alpha=0.3)
-    for ax in axes[1]:
-        ax.set_xlabel("tau")
-    fig.suptitle("designed law")
-    fig.tight_layout()
-    fig.savefig(out / "law.png", dpi=120)
-    plt.close(fig)
-    fig, (ax_r, ax_c) = plt.subplots(1, 2, figsize=(11, 4.5))
-    for name, (r, load) in curves.items():
-        style = dict(lw=2.2, color="k") if name == "designed" else dict(lw=1)
-        ax_r.semilogy(ratios, np.maximum(r, 1e-6), label=name, **style)
-        ax_c.plot(ratios, load, label=name, **style)
-    ax_r.set(xlabel="period ratio n", ylabel="residual R (units of Ca)")
-    ax_c.set(xlabel="period ratio n", ylabel="Ca*Ct (h/T^2)")
-    for ax in (ax_r, ax_c):
-        ax.grid(alpha=0.3)
-    ax_c.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out / "curves.png", dpi=120)
-    plt.close(fig)
