@@ -413,7 +413,7 @@ def test_grazing_strike_in_the_dwell_is_found():
     """A free flight in the dwell (a parabola, which a Runge-Kutta step integrates exactly)
     that just reaches the other flank, 1e-7 past it for about 1e-3 of a period: the
     closed-form flight's search finds the strike where a growing RK step would skip it."""
-    law, n, dn = camjax.laws.get("cycloidal"), 40.0, 1.0
+    law, n, dn = camjax.laws.get("cycloidal"), 40.0, 3.0
     free = camjax.solve(law, bl.Backlash(n, 1.0, dn, 0.0), samples=512)  # no strike at bk = 1
     tau, e = np.asarray(free.tau), np.asarray(free.deflection)
     in_flight = (tau > 1.0) & (np.asarray(free.contact) == bl.FREE)
