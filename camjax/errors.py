@@ -1,8 +1,8 @@
 """Errors and result codes (floor 1: nothing here imports the rest of camjax).
 
-Every solution path returns a ``result`` code of :class:`RESULTS` (diffrax's codes plus
-camjax's own); :func:`camjax.solve` and the sweeps turn a failure into
-:class:`SolverError` unless asked for the code with ``throw=False``.
+Every solution path returns a ``result`` code of ``RESULTS`` (diffrax's codes plus
+camjax's own); ``camjax.solve`` and the sweeps turn a failure into
+``SolverError`` unless asked for the code with ``throw=False``.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ class RESULTS(diffrax.RESULTS):  # type: ignore[misc]
 
 
 def promote(result) -> RESULTS:
-    """A diffrax or optimistix result code as a camjax :class:`RESULTS` code."""
+    """A diffrax or optimistix result code as a camjax ``RESULTS`` code."""
     return RESULTS.promote(result) if not isinstance(result, RESULTS) else result
 
 
@@ -47,10 +47,10 @@ def first_failure(result) -> int | None:
 
 
 def raise_if_failed(result, describe, *values) -> None:
-    """Raise :class:`SolverError` for the first failed batch entry, or a non-finite value.
+    """Raise ``SolverError`` for the first failed batch entry, or a non-finite value.
 
     Args:
-        result: a :class:`RESULTS` code, scalar or batched.
+        result: a ``RESULTS`` code, scalar or batched.
         describe: ``describe(i)`` names batch entry ``i`` (the model and its parameters).
         values: arrays (batched like ``result``) that must be finite where it succeeded.
     """

@@ -20,7 +20,7 @@ import jax.numpy as jnp
 
 from ._custom_types import ArrayLike
 from .checks import is_concrete, require
-from .laws._program import MotionProgram
+from .laws import MotionProgram
 
 
 def _rot(angle, vector):

@@ -2,7 +2,7 @@
 
 Fixed-step explicit solvers carry their stability polynomial, which lets a solution path
 refuse a step count at which the method's numerical free vibration grows
-(:func:`free_vibration_growth`); adaptive solvers bound it by error control.
+(``free_vibration_growth``); adaptive solvers bound it by error control.
 """
 
 from __future__ import annotations

@@ -13,7 +13,6 @@ from . import checks
 from .errors import raise_if_failed
 from .laws import AbstractMotionLaw
 from .models import AbstractModel, SpringMass
-from .models._base import as_arrays
 
 
 class CtCurve(eqx.Module):
@@ -63,7 +62,7 @@ def _prepare(period_ratios, model, damping, method, dwell, solver_options):
     n = checks.period_ratios(period_ratios)
     template = _template(model, damping).with_period_ratio(float(n[0])).validated()
     options = template.options(method, dwell, max_period_ratio=float(n.max()), **solver_options)
-    return n, as_arrays(template), options
+    return n, template.with_array_leaves(), options
 
 
 def _curve(law, n, template, options, metrics) -> CtCurve:
@@ -106,8 +105,8 @@ def ct_curve(
         law: the rise.
         period_ratios: positive finite period ratios (1-D).
         model: a model instance used as a template whose period ratio is swept
-            (:class:`SpringMass` by default; also :class:`CoulombFriction`,
-            :class:`Backlash`, :class:`TwoMass`), e.g.
+            (``SpringMass`` by default; also ``CoulombFriction``,
+            ``Backlash``, ``TwoMass``), e.g.
             ``model=TwoMass(period_ratio=1.0, stiffness_ratio=1.0, inertia_ratio=1.0)``.
         damping: damping ratio of the default SpringMass (give it in ``model`` otherwise).
         method: solution method (default: the model's; for SpringMass ``"exact"``).
@@ -134,7 +133,7 @@ def ct_curves(
     dwell: float = 1.0,
     **solver_options,
 ) -> dict[str, CtCurve]:
-    """:func:`ct_curve` for several laws, keyed by name (or by the mapping's keys).
+    """``ct_curve`` for several laws, keyed by name (or by the mapping's keys).
 
     Laws of the same type (for example several ``SCCA`` or ``BSplineLaw`` of one size)
     are stacked and vmapped together, so a family of laws costs one compiled call.

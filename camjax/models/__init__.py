@@ -1,8 +1,8 @@
 """Dynamic models of the driven payload, simplest first: the linear SDOF, then friction,
 backlash, an elastic input drive and a flexible swinging follower.
 
-Every model is an :class:`AbstractModel`; :func:`solve` solves any of them and
-:func:`camjax.ct_curve` sweeps the period ratio of any SDOF-family model, so a scene moves
+Every model is an ``AbstractModel``; ``solve`` solves any of them and
+``camjax.ct_curve`` sweeps the period ratio of any SDOF-family model, so a scene moves
 up or down the hierarchy by changing one argument.
 """
 

@@ -1,5 +1,5 @@
-"""The model interface: every dynamic model is reached through :func:`camjax.solve` and
-the sweeps (:func:`camjax.ct_curve`) in the same way.
+"""The model interface: every dynamic model is reached through ``camjax.solve`` and
+the sweeps (``camjax.ct_curve``) in the same way.
 
 A model is an equinox module whose parameters are pytree leaves (so ``jit``, ``vmap`` and
 ``grad`` see them).  Subclasses supply the few pieces that differ: the methods they offer,
@@ -73,8 +73,8 @@ class Response(eqx.Module):
         tau: normalised time of the samples (the rise, then the dwell).
         payload_acceleration: the payload's acceleration ``x''`` at ``tau`` (units of
             h/T^2), or ``None`` for a model without a single payload.
-        metrics: :class:`Metrics` (units of Ca), or ``None`` likewise.
-        result: a :class:`camjax.errors.RESULTS` code (``successful`` unless it failed).
+        metrics: ``Metrics`` (units of Ca), or ``None`` likewise.
+        result: a ``camjax.errors.RESULTS`` code (``successful`` unless it failed).
         stats: solver statistics (``steps``, and ``segments`` for event models).
     """
 
@@ -90,7 +90,7 @@ class AbstractModel(eqx.Module):
 
     Subclasses define ``period_ratio`` (a field, or a property derived from physical
     parameters), ``methods`` (the first is the default), ``options_type``, and
-    :meth:`validated` and :meth:`_response`.
+    ``validated`` and ``_response``.
     """
 
     period_ratio: eqx.AbstractVar[float | jax.Array]
@@ -128,6 +128,16 @@ class AbstractModel(eqx.Module):
     def _sweep(self, law, period_ratios: jax.Array, options: Options):
         """Metrics and result codes over a batch of period ratios (one vmapped program)."""
         return jax.vmap(lambda n: self.with_period_ratio(n)._metrics(law, options))(period_ratios)
+
+    def with_array_leaves(self) -> AbstractModel:
+        """This model with its numeric leaves as float arrays: traced, so one compilation
+        serves every value (Python floats would be static under ``filter_jit``).  A law
+        inside the model keeps its own leaves."""
+        return jax.tree.map(
+            lambda x: jnp.asarray(x, dtype=float) if isinstance(x, float | int) else x,
+            self,
+            is_leaf=lambda x: isinstance(x, AbstractMotionLaw),
+        )
 
     def with_period_ratio(self, period_ratio) -> AbstractModel:
         """This model at another period ratio (the template of a sweep)."""
@@ -168,13 +178,3 @@ class AbstractModel(eqx.Module):
                 except (TypeError, jax.errors.ConcretizationTypeError):
                     pass
         return f"{type(self).__name__}({', '.join(parts)})"
-
-
-def as_arrays(model: AbstractModel) -> AbstractModel:
-    """``model`` with its numeric leaves as float arrays: traced, so one compilation serves
-    every value (Python floats would be static under ``filter_jit``)."""
-    return jax.tree.map(
-        lambda x: jnp.asarray(x, dtype=float) if isinstance(x, float | int) else x,
-        model,
-        is_leaf=lambda x: isinstance(x, AbstractMotionLaw),  # a law keeps its own leaves
-    )

@@ -5,7 +5,7 @@ integrator.  A phase is solved one of two ways:
 
 - **in closed form** where the model knows the motion exactly (a stuck payload, a free
   flight under a constant force).  Its end is the first time an *exit function*
-  ``g_i(t)`` reaches zero from below, located by :func:`first_exit`, which cannot step
+  ``g_i(t)`` reaches zero from below, located by ``first_exit``, which cannot step
   over an event: a sample interval is searched whenever its end values plus the bound
   ``G h^2 / 8`` on the excursion of a function with ``|g''| <= G`` reach zero, so a
   grazing excursion between two samples is found (the apex by bisection on ``g'``, then
@@ -13,7 +13,7 @@ integrator.  A phase is solved one of two ways:
   flight: its error estimate is zero there, its step grows without a cap, and a step
   that spans an excursion past a flank sees no sign change.
 - **with diffrax** otherwise (the phases in which the transmission acts), the step capped
-  at an eighth of the natural period and the event root-found by :class:`EventBisection`.
+  at an eighth of the natural period and the event root-found by ``EventBisection``.
 
 After the solve, each model checks its invariants on every sample (contact state
 consistent with the deflection, a stuck payload inside its stick band); a violation is
@@ -154,7 +154,7 @@ def first_exit(g, dg, t0, t_end, curvature, points):
 
 
 def search_points(law, t_end):
-    """Screening times for :func:`first_exit`: a fine grid plus the law's breakpoints."""
+    """Screening times for ``first_exit``: a fine grid plus the law's breakpoints."""
     grid = jnp.linspace(0.0, t_end, SEARCH_POINTS + 1)
     breaks = jnp.asarray(law.breakpoints(), dtype=float).reshape(-1)
     return jnp.sort(jnp.concatenate([grid, breaks, jnp.ones(1)]))
@@ -207,7 +207,7 @@ class AbstractHybridModel(AbstractModel):
 
     @abc.abstractmethod
     def _closed_exits(self, t0, y0, law, mode):
-        """``(g, dg, curvature)`` of the closed-form phase (see :func:`first_exit`)."""
+        """``(g, dg, curvature)`` of the closed-form phase (see ``first_exit``)."""
 
     @abc.abstractmethod
     def _acceleration(self, t, y, law, mode):
@@ -309,7 +309,7 @@ class AbstractHybridModel(AbstractModel):
         """``(max |x''| over the rise, over everything)``, refined between samples.
 
         Intervals inside one phase get the septic Hermite refinement of
-        :func:`camjax.metrics.refined_peak`; an interval with an event inside is bounded by
+        ``camjax.metrics.refined_peak``; an interval with an event inside is bounded by
         its end samples and the one-sided values at the event, which are added as samples.
         """
         acc, jets = jax.vmap(lambda t, y, m: self._acceleration_jet(t, y, law, m))(

@@ -1,4 +1,4 @@
-"""The one entry point: :func:`solve` any model driven by any law."""
+"""The one entry point: ``solve`` any model driven by any law."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import equinox as eqx
 
 from ..errors import raise_if_failed
 from ..laws import AbstractMotionLaw
-from ._base import AbstractModel, Response, as_arrays
+from ._base import AbstractModel, Response
 
 
 @eqx.filter_jit
@@ -25,19 +25,19 @@ def solve(
 ) -> Response:
     """Response of ``model`` driven by ``law``: time histories and metrics.
 
-    Works for every model (:class:`SpringMass`, :class:`CoulombFriction`,
-    :class:`Backlash`, :class:`TwoMass`, :class:`SwingingFollower`); each picks a sound
+    Works for every model (``SpringMass``, ``CoulombFriction``,
+    ``Backlash``, ``TwoMass``, ``SwingingFollower``); each picks a sound
     default ``method`` and lists the others in ``type(model).methods``.  ``options`` are
     the model's static settings (see its options class, e.g.
-    :class:`camjax.models.SpringMassOptions`); an unknown one is a ``ValueError``.
+    ``camjax.models.SpringMassOptions``); an unknown one is a ``ValueError``.
 
     Args:
-        law: the rise (followed by a dwell).  For :class:`SwingingFollower`, ``None`` keeps
+        law: the rise (followed by a dwell).  For ``SwingingFollower``, ``None`` keeps
             the model's own rise and fall laws; a law replaces both.
         model: the scene, with its parameters.
         dwell: dwell after the rise, in motion periods.
         method: solution method (``None``: the model's default).
-        throw: raise :class:`camjax.SolverError` if the solution failed (default); with
+        throw: raise ``camjax.SolverError`` if the solution failed (default); with
             ``throw=False`` the response comes back with its ``result`` code instead.
 
     Raises:
@@ -55,7 +55,7 @@ def solve(
     if law is None and not getattr(model, "carries_laws", False):
         raise TypeError(f"{type(model).__name__} needs a motion law (law is None)")
     opts = model.options(method, dwell, **options)
-    response = _solve(law, as_arrays(model), opts)
+    response = _solve(law, model.with_array_leaves(), opts)
     if throw:
         reached = response.stats.get("reached")
         where = f" (reached tau = {float(reached):.6g})" if reached is not None else ""

@@ -3,7 +3,7 @@
 Two models of the same scene (MISSION.md conventions; ``bk = backlash/stroke``,
 ``dn = Dn T^2/h``, ``v = V T/h``):
 
-* :func:`kinematic_impact` - the reference note's kinematic analysis.  The payload rides
+* ``kinematic_impact`` - the reference note's kinematic analysis.  The payload rides
   the driving (lower) flank ``s(tau)`` while the contact force ``a(tau) + dn`` is
   non-negative; it departs at the first ``tau_d`` with ``a(tau_d) < -dn`` and flies on the
   parabola ``s_free(tau) = s(tau_d) + v(tau_d) u - dn u^2/2`` (``u = tau - tau_d``; ``dn`` is
@@ -15,11 +15,11 @@ Two models of the same scene (MISSION.md conventions; ``bk = backlash/stroke``,
   exactly (grid bracket, then bisection to machine precision); the flight after the
   rise (cam at rest) is solved in closed form.  Jittable, vmappable and differentiable in
   the law's parameters, ``bk`` and ``dn`` (implicit differentiation through the roots).
-* :class:`Backlash` (through :func:`camjax.solve` and :func:`camjax.ct_curve`) - the SDOF
+* ``Backlash`` (through ``camjax.solve`` and ``camjax.ct_curve``) - the SDOF
   of ``camjax.SpringMass`` whose transmission spring has a dead zone of width ``bk``:
   contact with either flank engages the spring (stiffness from the period ratio) and its
   viscous damping, the free flight feels only ``-dn``.  One smooth phase per contact
-  state (:mod:`camjax.models._hybrid`): contact phases by diffrax, ended by an event at
+  state (``camjax.models._hybrid``): contact phases by diffrax, ended by an event at
   the next contact change; free flights in closed form, ended by an exact search that
   cannot step over a grazing strike.  The follower can separate and strike any number of
   times.
@@ -127,7 +127,7 @@ def kinematic_impact(
 
 @eqx.filter_jit
 def _kinematic_impact(law, bk, dn, samples):
-    """:func:`kinematic_impact` on validated array inputs (compiled once per law type)."""
+    """``kinematic_impact`` on validated array inputs (compiled once per law type)."""
     # Roots are located on constants (no tangents through the loops), then given their
     # implicit derivatives by one Newton step on the differentiable functions.
     law_c, bk_c, dn_c = jax.lax.stop_gradient((law, bk, dn))
@@ -200,7 +200,7 @@ def _impact_table(law, bk, dn, samples):
 def kinematic_impact_table(
     law: AbstractMotionLaw, backlash, natural_deceleration, *, samples: int = 512
 ) -> KinematicImpact:
-    """:func:`kinematic_impact` for every ``(dn, bk)`` pair: arrays of shape ``(n_dn, n_bk)``."""
+    """``kinematic_impact`` for every ``(dn, bk)`` pair: arrays of shape ``(n_dn, n_bk)``."""
     bk = jnp.atleast_1d(jnp.asarray(backlash, dtype=float))
     dn = jnp.atleast_1d(jnp.asarray(natural_deceleration, dtype=float))
     require(bk.ndim == 1 and dn.ndim == 1, "backlash and natural deceleration must be 1-D lists")
@@ -344,7 +344,7 @@ class Backlash(AbstractHybridModel):
     friction while the payload moves forward); it holds the payload on the driving flank
     at rest, where it starts (``e = dn / w^2``).  Contact phases are integrated with
     diffrax; a free flight is the parabola ``x'' = -dn``, solved in closed form, and its
-    end is found by :func:`camjax.models._hybrid.first_exit`, which cannot miss a grazing
+    end is found by ``camjax.models._hybrid.first_exit``, which cannot miss a grazing
     strike.
 
     Attributes:

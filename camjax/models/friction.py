@@ -12,14 +12,14 @@ transmission force ``F = w^2 (s - x) + 2 zeta w s'`` is within the stick band
 ``|F| <= mu``; it slips again, in the direction of ``F``, when ``|F|`` reaches ``mu``.
 In a dwell (``s = 1``) a stuck payload rests out of position by ``|x - 1| <= mu / w^2``.
 
-Three solution paths (the first two through :func:`camjax.solve` and the sweeps):
+Three solution paths (the first two through ``camjax.solve`` and the sweeps):
 - ``method="events"`` (default): one phase per slip or stick phase (true stick-slip,
-  :mod:`camjax.models._hybrid`): slip phases by diffrax, ended by an event where the
+  ``camjax.models._hybrid``): slip phases by diffrax, ended by an event where the
   velocity reverses; stick phases in closed form (the payload is at rest), ended by an
   exact search for ``|F| = mu`` that cannot step over a short excursion;
 - ``method="regularised"``: ``sign(x')`` replaced by ``tanh(x'/eps)``, smooth and
   differentiable, but it creeps instead of sticking;
-- :func:`free_vibration`: the exact piecewise closed form of the unforced vibration
+- ``free_vibration``: the exact piecewise closed form of the unforced vibration
   (a dwell): between velocity reversals the motion is a linear oscillator about a
   centre shifted by ``mu / w^2``.
 """
@@ -211,7 +211,7 @@ def _piecewise_jerk_bound(law):
 
 
 class FrictionResponse(Response):
-    """Response of :class:`CoulombFriction` over the rise and the following dwell.
+    """Response of ``CoulombFriction`` over the rise and the following dwell.
 
     Attributes:
         position: payload position ``x`` (units of stroke).

@@ -6,7 +6,7 @@ integrates the deflection ``e = s - x`` of the transmission, which obeys
 
 - ``method="exact"`` (default) propagates the complex mode ``q = e' - conj(lambda) e``
   in closed form over a grid with the law's breakpoints as nodes
-  (:mod:`camjax.propagation`); peaks are refined between nodes, the dwell follows in
+  (``camjax.propagation``); peaks are refined between nodes, the dwell follows in
   closed form.
 - any diffrax solver name (``"tsit5"``, ``"dopri8"``, ``"kvaerno5"``, ``"heun"``, ...)
   integrates the same equation, with ``jump_ts`` at the law's breakpoints, and is checked:
@@ -93,7 +93,7 @@ class SpringMassOptions(Options):
 
 
 class SpringMassResponse(Response):
-    """SDOF response; adds the command and the deflection to :class:`Response`.
+    """SDOF response; adds the command and the deflection to ``Response``.
 
     Attributes:
         command_acceleration: the law's acceleration ``s''`` (0 in the dwell).
@@ -169,7 +169,7 @@ def vector_field(t, y, args):
 
 
 def sdof_term() -> diffrax.ODETerm:
-    """The diffrax term of the SDOF deflection equation (:func:`vector_field`), for custom
+    """The diffrax term of the SDOF deflection equation (``vector_field``), for custom
     ``diffrax.diffeqsolve`` calls (other controllers, adjoints, saved statistics)::
 
         diffrax.diffeqsolve(sdof_term(), diffrax.Tsit5(), 0.0, 1.0, None,

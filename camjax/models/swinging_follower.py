@@ -67,7 +67,7 @@ class FollowerResponse(Response):
     """Samples over the simulated turns (SI units).  ``payload_acceleration`` and
     ``metrics`` are ``None``: the rod's output end is held in the groove, so there is no
     single payload lagging a command; the follower's answers are its deflections and
-    their spectra (:func:`spectrum`).  ``tau`` is time in rise periods.
+    their spectra (``spectrum``).  ``tau`` is time in rise periods.
 
     Attributes:
         t: time, s.

@@ -143,7 +143,7 @@ def _vector_field(t, y, args):
 
 
 class TwoMassResponse(Response):
-    """Time histories of the two-mass model (adds to :class:`camjax.models.Response`).
+    """Time histories of the two-mass model (adds to ``camjax.models.Response``).
 
     Attributes:
         twist: input-shaft twist ``phi = tau - theta`` (camshaft lag, units of the rise angle).

@@ -1,0 +1,158 @@
+"""The model interface: every model through every entry point, and the joins between them.
+
+Bad input must raise whether it arrives concrete or traced (jit, vmap, grad); a non-model
+is refused; the sweep of a model equals its solves one by one; the modules import in any
+order (no import circle).
+"""
+
+import itertools
+import subprocess
+import sys
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import camjax
+from camjax.models import Backlash, CoulombFriction, SpringMass, TwoMass
+
+LAW = camjax.laws.get("cycloidal")
+
+
+def _torsion_factor(n, zeta=0.0):
+    return camjax.torsion_factor(LAW, n, zeta, resolution=256)
+
+
+BAD_PERIOD_RATIOS = [-3.0, 0.0, float("nan"), float("inf")]
+
+
+@pytest.mark.parametrize("n", BAD_PERIOD_RATIOS)
+def test_bad_period_ratio_raises_concrete_and_under_jit_grad_vmap(n):
+    with pytest.raises(ValueError, match="period ratio must be positive"):
+        _torsion_factor(n)
+    with pytest.raises(Exception, match="period ratio must be positive"):
+        jax.jit(_torsion_factor)(n)
+    with pytest.raises(Exception, match="period ratio must be positive"):
+        jax.grad(_torsion_factor)(n)
+    with pytest.raises(Exception, match="period ratio must be positive"):
+        jax.vmap(_torsion_factor)(jnp.array([3.0, n]))
+
+
+@pytest.mark.parametrize("zeta", [-0.1, 1.0, 1.5, float("nan")])
+def test_bad_damping_raises_concrete_and_traced(zeta):
+    with pytest.raises(ValueError, match="damping ratio must be in"):
+        _torsion_factor(3.0, zeta)
+    with pytest.raises(Exception, match="damping ratio must be in"):
+        jax.jit(lambda z: _torsion_factor(3.0, z))(zeta)
+    with pytest.raises(Exception, match="damping ratio must be in"):
+        jax.grad(lambda z: _torsion_factor(3.0, z))(zeta)
+
+
+def test_good_input_under_jit_grad_vmap_gives_the_eager_numbers():
+    eager = float(_torsion_factor(6.4, 0.02))
+    assert float(jax.jit(_torsion_factor)(6.4, 0.02)) == pytest.approx(eager, rel=1e-13)
+    batch = jax.vmap(_torsion_factor)(jnp.array([6.4, 3.0]), jnp.array([0.02, 0.0]))
+    assert float(batch[0]) == pytest.approx(eager, rel=1e-13)
+    h = 1e-5
+    fd = (float(_torsion_factor(6.4 + h, 0.02)) - float(_torsion_factor(6.4 - h, 0.02))) / (2 * h)
+    assert float(jax.grad(_torsion_factor)(6.4, 0.02)) == pytest.approx(fd, rel=1e-5)
+
+
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda x: CoulombFriction(3.0, x), "friction must be >= 0"),
+        (lambda x: Backlash(3.0, x, 1.0), "backlash bk must be positive"),
+        (lambda x: Backlash(3.0, 0.1, x), "natural deceleration dn must be >= 0"),
+        (lambda x: TwoMass(3.0, x, 1.0), "stiffness_ratio must be positive"),
+        (lambda x: TwoMass(3.0, 1.0, x), "inertia_ratio must be >= 0"),
+    ],
+)
+def test_model_parameters_are_checked_concrete_and_traced(make, message):
+    with pytest.raises(ValueError, match=message):
+        make(-1.0)
+    # traced: the model's own check, which every solution path runs first
+    with pytest.raises(Exception, match=message):
+        jax.jit(lambda x: make(x).validated().period_ratio)(-1.0)
+
+
+def test_solve_refuses_what_is_not_a_model_or_a_law():
+    with pytest.raises(TypeError, match="model must be a camjax model"):
+        camjax.solve(LAW, 6.4)
+    with pytest.raises(TypeError, match="model must be a camjax model"):
+        camjax.solve(LAW, {"period_ratio": 6.4})
+    with pytest.raises(TypeError, match="law must be a camjax motion law"):
+        camjax.solve("cycloidal", SpringMass(6.4))
+    with pytest.raises(TypeError, match="needs a motion law"):
+        camjax.solve(None, SpringMass(6.4))
+    with pytest.raises(ValueError, match="unknown method 'exact' for Backlash"):
+        camjax.solve(LAW, Backlash(6.4, 0.1), method="exact")
+    with pytest.raises(ValueError, match="unknown option 'resolution' for CoulombFriction"):
+        camjax.solve(LAW, CoulombFriction(6.4, 0.1), resolution=512)
+    with pytest.raises(TypeError, match="no period-ratio sweep"):
+        camjax.ct_curve(LAW, [5.0], model=camjax.SwingingFollower())
+    with pytest.raises(ValueError, match="give the damping in the model"):
+        camjax.ct_curve(LAW, [5.0], model=CoulombFriction(1.0, 0.1), damping=0.05)
+
+
+def test_a_period_ratio_too_large_for_memory_is_refused_before_any_work():
+    with pytest.raises(ValueError, match=r"needs a grid of 12,566,400 intervals.*limit is 1,048,576"):
+        camjax.ct_curve(LAW, [1e6])
+
+
+def test_every_sdof_family_model_goes_through_solve_and_ct_curve_alike():
+    """One call shape for every model; the sweep equals the solves one by one, and with the
+    extra physics switched off every model gives the SDOF's numbers."""
+    ns = [3.3, 6.4]
+    sdof = camjax.ct_curve(LAW, ns, damping=0.05)
+    for template, options, tol in [
+        (CoulombFriction(1.0, 0.0, 0.05), dict(samples=256), 1e-7),
+        (Backlash(1.0, 0.5, 20.0, 0.05), dict(samples=256), 1e-7),  # dn holds it on the flank
+        (TwoMass(1.0, 1.0, 0.0), dict(samples=256), None),  # m = 0: a rigid camshaft
+    ]:
+        curve = camjax.ct_curve(LAW, ns, model=template, **options)
+        assert curve.model == type(template).__name__
+        for k, n in enumerate(ns):
+            one = camjax.solve(LAW, template.with_period_ratio(n), **options)
+            assert isinstance(one, camjax.Response)
+            assert float(one.metrics.ct) == pytest.approx(curve.ct[k], rel=1e-8)
+            assert float(one.metrics.residual) == pytest.approx(curve.residual[k], rel=1e-8)
+            assert one.payload_acceleration.shape == one.tau.shape
+        if tol is not None:  # damped like the SDOF
+            np.testing.assert_allclose(curve.ct, sdof.ct, rtol=tol)
+            np.testing.assert_allclose(curve.residual, sdof.residual, rtol=tol)
+            np.testing.assert_allclose(curve.peak_in_motion, sdof.peak_in_motion, rtol=tol)
+
+
+def test_throw_false_returns_the_result_code():
+    response = camjax.solve(LAW, SpringMass(6.4), method="tsit5", max_steps=4, throw=False)
+    assert not bool(response.result == camjax.RESULTS.successful)
+    assert camjax.RESULTS[response.result] == camjax.RESULTS[camjax.RESULTS.max_steps_reached]
+    with pytest.raises(camjax.SolverError, match="tsit5 solve of SpringMass.*maximum number"):
+        camjax.solve(LAW, SpringMass(6.4), method="tsit5", max_steps=4)
+
+
+def test_no_recompile_for_new_parameter_values():
+    """Model parameters are traced leaves: one compilation serves every value."""
+    camjax.solve(LAW, SpringMass(5.0, 0.01))
+    before = camjax.models._solve._solve._cached._cache_size()
+    for n, zeta in [(5.5, 0.02), (7.0, 0.0)]:
+        camjax.solve(LAW, SpringMass(n, zeta))
+    assert camjax.models._solve._solve._cached._cache_size() == before
+
+
+MODULES = ["camjax.models", "camjax.propagation", "camjax.sweep", "camjax.laws", "camjax.errors"]
+
+
+@pytest.mark.parametrize("order", list(itertools.permutations(MODULES, 3))[::7])
+def test_submodules_import_in_any_order(order):
+    code = "; ".join(f"import {m}" for m in order) + "; import camjax; camjax.solve"
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+
+
+def test_equinox_module_checks_hold():
+    assert isinstance(SpringMass(2.0), eqx.Module)
+    assert SpringMass.methods[0] == "exact" and Backlash.methods[0] == "tsit5"
