@@ -75,7 +75,7 @@ def test_model_parameters_are_checked_concrete_and_traced(make, message):
         make(-1.0)
     # traced: the model's own check, which every solution path runs first
     with pytest.raises(Exception, match=message):
-        jax.jit(lambda x: make(x).validated().period_ratio)(-1.0)
+        jax.jit(lambda x: sum(jax.tree.leaves(make(x).validated())))(-1.0)
 
 
 def test_solve_refuses_what_is_not_a_model_or_a_law():

@@ -8,8 +8,6 @@ their static options, a traced-safe check of their parameters, and one jittable
 supplies the rest: option checking, the period-ratio sweep and the failure convention.
 """
 
-from __future__ import annotations
-
 import abc
 import dataclasses
 import math
@@ -18,6 +16,7 @@ from typing import ClassVar
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+from equinox import AbstractVar
 
 from ..checks import is_concrete, require
 from ..errors import RESULTS
@@ -36,7 +35,7 @@ class Options:
     method: str
     dwell: float = 1.0
 
-    def checked(self, max_period_ratio: float) -> Options:
+    def checked(self, max_period_ratio: float) -> "Options":
         """These options validated (``ValueError`` naming the field), filled in."""
         dwell = float(self.dwell)
         require(
@@ -93,7 +92,7 @@ class AbstractModel(eqx.Module):
     ``validated`` and ``_response``.
     """
 
-    period_ratio: eqx.AbstractVar[float | jax.Array]
+    period_ratio: AbstractVar[float | jax.Array]
     methods: ClassVar[tuple[str, ...]]
     options_type: ClassVar[type[Options]]
 
@@ -110,7 +109,7 @@ class AbstractModel(eqx.Module):
     def _checked(self) -> dict:
         """The parameters that need checks, checked (``camjax.checks``), by field name."""
 
-    def validated(self) -> AbstractModel:
+    def validated(self) -> "AbstractModel":
         """This model with every parameter checked, on concrete and traced values alike:
         a bad value raises ``ValueError`` now, or a runtime error from inside ``jit``,
         ``vmap`` or ``grad`` when the computation runs."""
@@ -129,7 +128,7 @@ class AbstractModel(eqx.Module):
         """Metrics and result codes over a batch of period ratios (one vmapped program)."""
         return jax.vmap(lambda n: self.with_period_ratio(n)._metrics(law, options))(period_ratios)
 
-    def with_array_leaves(self) -> AbstractModel:
+    def with_array_leaves(self) -> "AbstractModel":
         """This model with its numeric leaves as float arrays: traced, so one compilation
         serves every value (Python floats would be static under ``filter_jit``).  A law
         inside the model keeps its own leaves."""
@@ -139,12 +138,12 @@ class AbstractModel(eqx.Module):
             is_leaf=lambda x: isinstance(x, AbstractMotionLaw),
         )
 
-    def with_period_ratio(self, period_ratio) -> AbstractModel:
+    def with_period_ratio(self, period_ratio) -> "AbstractModel":
         """This model at another period ratio (the template of a sweep)."""
         return eqx.tree_at(lambda m: m.period_ratio, self, period_ratio)
 
     def options(self, method: str | None = None, dwell: float = 1.0, *,
-                max_period_ratio: float | None = None, **options) -> Options:
+                max_period_ratio: float | None = None, **options) -> "Options":
         """Validated static options for this model (``ValueError`` naming what is wrong)."""
         method = self.methods[0] if method is None else str(method).strip().lower()
         if method not in self.methods:
