@@ -145,6 +145,7 @@ def solver_limits(summary: list[str]) -> None:
                     law,
                     bl.Backlash(n, 0.02, 1.0, 0.5),
                     method=method,
+                    max_step=None if method == "kvaerno5" else 0.125,  # stiff implicit: no cap
                     rtol=rtol,
                     atol=atol,
                     dwell=0.5,

@@ -156,3 +156,16 @@ def test_submodules_import_in_any_order(order):
 def test_equinox_module_checks_hold():
     assert isinstance(SpringMass(2.0), eqx.Module)
     assert SpringMass.methods[0] == "exact" and Backlash.methods[0] == "tsit5"
+
+
+def test_cli_refuses_a_huge_period_ratio_and_a_bad_model_before_any_work(capsys):
+    from camjax.cli import main
+
+    assert main(["ct", "--n", "1e6"]) == 2
+    assert "needs a grid of 12,566,400 intervals" in capsys.readouterr().err
+    assert main(["ct", "--n", "5", "--model", "bogus:1"]) == 2
+    assert "unknown model" in capsys.readouterr().err
+    assert main(["ct", "--n", "5", "--model", "backlash:0.1"]) == 2
+    assert "takes 2 parameter(s)" in capsys.readouterr().err
+    assert main(["ct", "--n", "5", "--model", "friction:-1"]) == 2
+    assert "friction must be >= 0" in capsys.readouterr().err

@@ -213,12 +213,17 @@ class AbstractHybridModel(AbstractModel):
     def _acceleration(self, t, y, law, mode):
         """Payload acceleration ``x''`` (units of h/T^2) in ``mode``."""
 
-    def _integrate(self, law, ts, y0, mode0, *, solver, rtol, atol, max_steps, max_segments):
-        """Phases from ``(0, y0, mode0)`` to ``ts[-1]``; one loop iteration per phase."""
+    def _integrate(self, law, ts, y0, mode0, *, solver, rtol, atol, max_steps, max_segments,
+                   max_step=0.125):
+        """Phases from ``(0, y0, mode0)`` to ``ts[-1]``; one loop iteration per phase.
+
+        ``max_step`` caps the diffrax step in natural periods (``1/n``); ``None`` leaves it
+        to error control.
+        """
         t_end = ts[-1]
         points = search_points(law, t_end)
         jumps = jnp.concatenate([jnp.asarray(law.breakpoints(), dtype=float).reshape(-1), jnp.ones(1)])
-        dtmax = 0.125 / jnp.maximum(self.period_ratio, 1.0)
+        dtmax = None if max_step is None else max_step / jnp.maximum(self.period_ratio, 1.0)
         controller = diffrax.ClipStepSizeController(
             diffrax.PIDController(rtol=rtol, atol=atol, dtmax=dtmax), jump_ts=jumps
         )

@@ -285,6 +285,11 @@ class BacklashOptions(Options):
         rtol, atol: tolerances of the contact phases.
         max_steps: step limit of one contact phase.
         max_segments: most contact phases and flights in one solve.
+        max_step: largest step of a contact phase, in natural periods ``1/n`` (default
+            1/8), so that a step cannot span a short loss of contact; ``None`` leaves the
+            step to error control, which a very stiff contact solved with an implicit
+            method needs (hundreds of steps instead of ``8 n``); a separation shorter
+            than a step could then go unseen between samples.
     """
 
     method: str = "tsit5"
@@ -293,12 +298,14 @@ class BacklashOptions(Options):
     atol: float = 1e-12
     max_steps: int = 16384
     max_segments: int = 64
+    max_step: float | None = 0.125
 
     def checked(self, max_period_ratio: float) -> BacklashOptions:
         base = super().checked(max_period_ratio)
         require(int(self.samples) >= 2, f"samples must be at least 2, got {self.samples}")
         require(int(self.max_segments) >= 1, f"max_segments must be positive, got {self.max_segments}")
         require(int(self.max_steps) >= 1, f"max_steps must be positive, got {self.max_steps}")
+        require(self.max_step is None or self.max_step > 0, f"max_step must be positive or None, got {self.max_step}")
         return base
 
 
@@ -429,7 +436,7 @@ class Backlash(AbstractHybridModel):
         sol = model._integrate(
             law, ts, (rest, jnp.zeros(())), DRIVING_FLANK,
             solver=ADAPTIVE_SOLVERS[options.method](), rtol=options.rtol, atol=options.atol,
-            max_steps=options.max_steps, max_segments=options.max_segments,
+            max_steps=options.max_steps, max_segments=options.max_segments, max_step=options.max_step,
         )
         e, de = sol.y
         # Invariant: every sample's contact state agrees with its deflection.
