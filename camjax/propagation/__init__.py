@@ -1,6 +1,8 @@
 """Solution paths for the SDOF response: exact propagation and diffrax."""
 
+from ._exact import eigenvalue as eigenvalue
 from ._exact import propagate as propagate
+from ._exact import psi as psi
 from ._grid import MotionGrid as MotionGrid
 from ._grid import default_resolution as default_resolution
 from ._grid import motion_grid as motion_grid
