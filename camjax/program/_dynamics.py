@@ -241,13 +241,17 @@ class Solver:
         rpm = float(check_rpm(rpm)[0])
         return jax.tree.map(np.asarray, self._one(rpm))
 
+    def lam(self, rpm: float) -> complex:
+        """Eigenvalue of the train in cycle time (``lambda T``) at ``rpm``."""
+        return complex(eigenvalue(self.train.omega * 60.0 / rpm, self.train.zeta))
+
     def mode_at(self, q_nodes, rpm: float, s) -> np.ndarray:
         """The complex mode at cycle times ``s`` (anywhere, exactly) from its node values."""
         s = np.mod(np.atleast_1d(np.asarray(s, dtype=float)), 1.0)
         g = self.grid
         k = np.clip(np.searchsorted(g.nodes, s, side="right") - 1, 0, g.piece.size - 1)
         period = 60.0 / rpm
-        lam = complex(eigenvalue(self.train.omega * period, self.train.zeta))
+        lam = self.lam(rpm)
         beta = self.train.ks / self.train.m * period**2
         coeff = g.acceleration[k] + beta * g.lift[k]
         delta = s - g.nodes[k]
