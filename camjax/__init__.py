@@ -27,6 +27,7 @@ from .models import period_ratio as period_ratio  # noqa: E402
 from .motion_design import CapError as CapError  # noqa: E402
 from .motion_design import Caps as Caps  # noqa: E402
 from .motion_design import design as design  # noqa: E402
+from .program import Program as Program  # noqa: E402
 from .propagation import Metrics as Metrics  # noqa: E402
 from .propagation import Response as Response  # noqa: E402
 from .propagation import SolveOptions as SolveOptions  # noqa: E402

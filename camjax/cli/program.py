@@ -80,15 +80,14 @@ def _csv(report: dict) -> str:
     return buffer.getvalue().rstrip()
 
 
-def _write_outputs(out: Path, program, report: dict, rpm, points: int) -> None:
-    from ..program import Solver, profile, response, write_csv, write_dxf
+def _write_outputs(out: Path, program, solver, report: dict, rpm, points: int) -> None:
+    from ..program import profile, response, write_csv, write_dxf
     from ..program._figures import save_figures
 
     dump_json(report, out / "summary.json")
     prof = profile(program, points)
     write_csv(prof, out / "profile.csv", outer=program.follower.form_closed)
     write_dxf(prof, out / "profile.dxf", outer=program.follower.form_closed)
-    solver = Solver(program, float(min(rpm)))
     histories = [(float(r), response(program, float(r), solver=solver)) for r in list(rpm)[:10]]
     with (out / "response.csv").open("w", newline="") as handle:
         writer = csv.writer(handle)
@@ -101,7 +100,7 @@ def _write_outputs(out: Path, program, report: dict, rpm, points: int) -> None:
 
 
 def run(args) -> int:
-    from ..program import Program, analyse, example_path
+    from ..program import Program, Solver, analyse, example_path
 
     rpm = parse_range(args.rpm, "--rpm")
     if not all(r > 0 for r in rpm):
@@ -111,9 +110,10 @@ def run(args) -> int:
     path = Path(args.file) if args.file else example_path()
     program = Program.load(path)
     out = output_dir(args.out)
-    report = analyse(program, rpm, with_flight=not args.no_flight)
+    solver = Solver(program, float(min(rpm)))
+    report = analyse(program, rpm, with_flight=not args.no_flight, solver=solver)
     if out is not None:
-        _write_outputs(out, program, report, rpm, args.points)
+        _write_outputs(out, program, solver, report, rpm, args.points)
     if args.format == "json":
         print(dump_json(report))
     elif args.format == "csv":

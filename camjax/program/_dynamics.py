@@ -205,7 +205,8 @@ class Solver:
     """A program's compiled steady-state response over a speed range.
 
     Build once per program and slowest speed (which fixes the grid); every call over any
-    batch of speeds is one vmapped, compiled call (batches are padded to a multiple of 16).
+    batch of speeds is one vmapped, compiled call (batches are padded to a power of two,
+    at least 16, so that few batch shapes compile).
     """
 
     def __init__(self, program: Program, rpm_min: float):
@@ -229,7 +230,7 @@ class Solver:
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(f"rpm {rpm.min():g} below the solver's slowest speed {self.rpm_min:g}")
         size = rpm.size
-        padded = np.pad(rpm, (0, (-size) % 16), mode="edge")
+        padded = np.pad(rpm, (0, max(16, 1 << (size - 1).bit_length()) - size), mode="edge")
         accel, fmin, fmax, residual = (np.asarray(x)[:size] for x in self._batch(jnp.asarray(padded)))
         if not np.all(np.isfinite(fmin)) or not np.all(np.isfinite(accel)):
             raise ValueError("non-finite response: check the follower's numbers")
@@ -270,19 +271,22 @@ def check_rpm(rpm) -> np.ndarray:
     return rpm
 
 
-def startup(program: Program, rpm: float, cycles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def startup(program: Program, rpm: float, cycles: int, *, solver: Solver | None = None):
     """Start-up from rest on the base circle: ``(s, payload acceleration m/s^2, contact force N)``.
 
-    ``s`` runs over ``cycles`` turns; the cycle map ``q -> E q + F`` carries the state.
+    ``s`` runs over ``cycles`` turns (grid nodes of each, the last node left to the next
+    turn); the exact cycle map carries the state from turn to turn.
     """
-    solver_grid = cycle_grid(program, resolution(program, rpm))
+    rpm = float(check_rpm(rpm)[0])
+    grid = solver.grid if solver is not None else cycle_grid(program, resolution(program, rpm))
     train = _Train.of(program)
+    run_cycle = jax.jit(lambda q0: _cycle(grid, train, rpm, q_start=q0, periodic=False))
     s, accel, force = [], [], []
-    q_start = 0.0
+    q_start = jnp.zeros((), complex)
     for c in range(int(cycles)):
-        run = jax.tree.map(np.asarray, _cycle(solver_grid, train, rpm, q_start=q_start, periodic=False))
-        s.append(c + solver_grid.nodes[:-1])
-        accel.append(run.payload_acceleration_m_s2[:-1])
-        force.append(run.contact_force_n[:-1])
+        run = run_cycle(q_start)
+        s.append(c + grid.nodes[:-1])
+        accel.append(np.asarray(run.payload_acceleration_m_s2[:-1]))
+        force.append(np.asarray(run.contact_force_n[:-1]))
         q_start = run.q[-1]
     return np.concatenate(s), np.concatenate(accel), np.concatenate(force)
