@@ -151,13 +151,15 @@ def test_min_preload_tends_to_the_rigid_closed_form():
     m, ks = 1.5, 10e3
     rigid = max(0.0, np.max(-(m * 1e-3 * ddy * rate**2 + ks * 1e-3 * y)))
     gaps = []
-    for k in (1e4, 1e5, 4e5):
+    for k in (1e5, 4e5):
         program = two_cycloids(stiffness_n_per_mm=k, damping_ratio=0.2)
         preload = analyse(program, [rpm], with_flight=False)["speeds"][0]["min_preload_n"]
         gaps.append(abs(preload - rigid) / rigid)
     assert rigid > 50
-    assert gaps[0] > gaps[1] > gaps[2]
-    assert gaps[2] < 2e-3
+    # The quasi-static deflection m y'' / k makes the gap fall as 1/k (measured: 2.4e-2,
+    # 2.4e-3, 6.0e-4 at k = 1e4, 1e5, 4e5 N/mm).
+    assert gaps[0] / gaps[1] == pytest.approx(4.0, rel=0.05)
+    assert gaps[1] < 1e-3
 
 
 def test_flight_and_reimpact_match_a_scipy_event_solve(cam, solver):
@@ -324,3 +326,20 @@ def test_cli_json_and_out_dir(tmp_path, capsys):
         assert (tmp_path / name).stat().st_size > 0
     assert math.isclose(json.loads((tmp_path / "summary.json").read_text())["jump_speed_rpm"],
                         report["jump_speed_rpm"])
+
+
+def test_swinging_roller_program_geometry():
+    law = laws.get("cycloidal")
+    follower = Follower(**{**FOLLOWER, "kind": "swinging-roller", "arm_mm": 98.0, "pivot_mm": 110.0})
+    program = Program("swing", (Segment(120, 15.0, law), Segment(60), Segment(120, -15.0, law), Segment(60)), follower)
+    prof = profile(program, 360)
+    theta = np.radians(prof.theta_deg)
+    # Roller centre back in the fixed frame: on the arm's circle about the pivot, swung by lift / arm.
+    c, s = np.cos(theta), np.sin(theta)
+    fixed = np.stack([c * prof.pitch[:, 0] - s * prof.pitch[:, 1], s * prof.pitch[:, 0] + c * prof.pitch[:, 1]], 1)
+    assert np.abs(np.linalg.norm(fixed - [110.0, 0.0], axis=1) - 98.0).max() < 1e-9
+    swing = np.arctan2(fixed[:, 1], fixed[:, 0] - 110.0)
+    assert np.abs(np.unwrap(swing[0] - swing) - prof.lift_mm / 98.0).max() < 1e-9
+    assert np.abs(np.linalg.norm(prof.profile - prof.pitch, axis=1) - 12.0).max() < 1e-9
+    with pytest.raises(ValueError, match="follower.arm_mm must be a number"):
+        Program("swing", program.segments, Follower(**{**FOLLOWER, "kind": "swinging-roller"}))

@@ -32,6 +32,7 @@ _GAUSS = (np.polynomial.legendre.leggauss(_DEGREE + 1)[0] + 1) / 2
 _TO_MONOMIAL = np.linalg.inv(np.vander(_GAUSS, _DEGREE + 1, increasing=True))
 _PHASE_STEP = 0.5  # largest w h per interval (as camjax.propagation.default_resolution)
 _MIN_PER_SEGMENT = 64
+_CHUNK_NODES = 1 << 18
 
 
 class CycleGrid(NamedTuple):
@@ -205,8 +206,9 @@ class Solver:
     """A program's compiled steady-state response over a speed range.
 
     Build once per program and slowest speed (which fixes the grid); every call over any
-    batch of speeds is one vmapped, compiled call (batches are padded to a power of two,
-    at least 16, so that few batch shapes compile).
+    batch of speeds is one compiled call, vmapped over chunks of speeds whose grids hold
+    about ``_CHUNK_NODES`` nodes in all (batch and chunk counts are padded to powers of two,
+    so that few shapes compile).
     """
 
     def __init__(self, program: Program, rpm_min: float):
@@ -217,7 +219,9 @@ class Solver:
         self.train = _Train.of(program)
         self.rpm_min = float(rpm_min)
         self.grid = cycle_grid(program, resolution(program, rpm_min))
-        self._batch = jax.jit(jax.vmap(self._summary))
+        # Chunks of speeds small enough to keep the working set bounded (as batch_metrics).
+        self.chunk = max(1, _CHUNK_NODES // self.grid.nodes.size)
+        self._batch = jax.jit(lambda rpm: jax.lax.map(jax.vmap(self._summary), rpm))
         self._one = jax.jit(lambda rpm: _cycle(self.grid, self.train, rpm))
 
     def _summary(self, rpm):
@@ -230,8 +234,11 @@ class Solver:
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(f"rpm {rpm.min():g} below the solver's slowest speed {self.rpm_min:g}")
         size = rpm.size
-        padded = np.pad(rpm, (0, max(16, 1 << (size - 1).bit_length()) - size), mode="edge")
-        accel, fmin, fmax, residual = (np.asarray(x)[:size] for x in self._batch(jnp.asarray(padded)))
+        width = min(self.chunk, max(16, 1 << (size - 1).bit_length()))
+        chunks = 1 << (-(-size // width) - 1).bit_length()
+        padded = np.pad(rpm, (0, chunks * width - size), mode="edge").reshape(chunks, width)
+        accel, fmin, fmax, residual = (np.asarray(x).reshape(chunks * width, *x.shape[2:])[:size]
+                                       for x in self._batch(jnp.asarray(padded)))
         if not np.all(np.isfinite(fmin)) or not np.all(np.isfinite(accel)):
             raise ValueError("non-finite response: check the follower's numbers")
         return {"rpm": rpm, "max_payload_acceleration_m_s2": accel, "min_contact_force_n": fmin,
