@@ -32,7 +32,7 @@ _GAUSS = (np.polynomial.legendre.leggauss(_DEGREE + 1)[0] + 1) / 2
 _TO_MONOMIAL = np.linalg.inv(np.vander(_GAUSS, _DEGREE + 1, increasing=True))
 _PHASE_STEP = 0.5  # largest w h per interval (as camjax.propagation.default_resolution)
 _MIN_PER_SEGMENT = 64
-_CHUNK_NODES = 1 << 18
+_CHUNK_NODES = 1 << 16
 
 
 class CycleGrid(NamedTuple):
@@ -73,26 +73,27 @@ def cycle_grid(program: Program, intervals: int) -> CycleGrid:
         s0, f = start_deg / 360.0, seg.angle_deg / 360.0
         starts.append(sum(len(x) for x in left))
         edges = np.array([0.0, *seg.law.breakpoints(), 1.0]) if seg.moving else np.array([0.0, 1.0])
-        for a, b in zip(edges[:-1], edges[1:]):
-            count = max(4, math.ceil(intervals * f * (b - a)))
-            h = (b - a) / count
-            tau_left = a + h * np.arange(count)
-            tau_gauss = tau_left[:, None] + h * _GAUSS
-            if seg.moving:
-                s_g, _, a_g, _ = (np.asarray(x) for x in seg.law.evaluate(tau_gauss))
-                y_g, yss_g = y0 + seg.lift_mm * s_g, seg.lift_mm * a_g / f**2
-                s_l, v_l = (np.asarray(x) for x in seg.law.evaluate(tau_left)[:2])
-                y_l, ys_l = y0 + seg.lift_mm * s_l, seg.lift_mm * v_l / f
-            else:
-                y_g, yss_g = np.full_like(tau_gauss, y0), np.zeros_like(tau_gauss)
-                y_l, ys_l = np.full_like(tau_left, y0), np.zeros_like(tau_left)
-            left.append(s0 + f * tau_left)
-            piece.append(np.full(count, len(piece_width)))
-            piece_width.append(f * h)
-            acc.append(yss_g @ _TO_MONOMIAL.T)
-            lift.append(y_g @ _TO_MONOMIAL.T)
-            lift_nodes.append(y_l)
-            vel_nodes.append(ys_l)
+        counts = [max(4, math.ceil(intervals * f * (b - a))) for a, b in zip(edges[:-1], edges[1:])]
+        h = np.repeat(np.diff(edges) / counts, counts)
+        tau_left = np.concatenate([a + (b - a) / n * np.arange(n) for a, b, n in zip(edges[:-1], edges[1:], counts)])
+        tau_gauss = tau_left[:, None] + h[:, None] * _GAUSS
+        if seg.moving:  # one evaluation of the law per segment (eager JAX calls are slow)
+            values = seg.law.evaluate(np.concatenate([tau_gauss.ravel(), tau_left]))
+            s_all, v_all, a_all = (np.asarray(x) for x in values[:3])
+            n_gauss = tau_gauss.size
+            y_g = y0 + seg.lift_mm * s_all[:n_gauss].reshape(tau_gauss.shape)
+            yss_g = seg.lift_mm * a_all[:n_gauss].reshape(tau_gauss.shape) / f**2
+            y_l, ys_l = y0 + seg.lift_mm * s_all[n_gauss:], seg.lift_mm * v_all[n_gauss:] / f
+        else:
+            y_g, yss_g = np.full_like(tau_gauss, y0), np.zeros_like(tau_gauss)
+            y_l, ys_l = np.full_like(tau_left, y0), np.zeros_like(tau_left)
+        left.append(s0 + f * tau_left)
+        piece.append(np.repeat(len(piece_width) + np.arange(len(counts)), counts))
+        piece_width.extend(f * np.diff(edges) / counts)
+        acc.append(yss_g @ _TO_MONOMIAL.T)
+        lift.append(y_g @ _TO_MONOMIAL.T)
+        lift_nodes.append(y_l)
+        vel_nodes.append(ys_l)
     return CycleGrid(
         nodes=np.concatenate([*left, [1.0]]),
         piece=np.concatenate(piece),
@@ -207,8 +208,8 @@ class Solver:
 
     Build once per program and slowest speed (which fixes the grid); every call over any
     batch of speeds is one compiled call, vmapped over chunks of speeds whose grids hold
-    about ``_CHUNK_NODES`` nodes in all (batch and chunk counts are padded to powers of two,
-    so that few shapes compile).
+    about ``_CHUNK_NODES`` nodes in all (a chunk's width is padded to a multiple of 16, so
+    that few shapes compile).
     """
 
     def __init__(self, program: Program, rpm_min: float):
@@ -234,8 +235,8 @@ class Solver:
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(f"rpm {rpm.min():g} below the solver's slowest speed {self.rpm_min:g}")
         size = rpm.size
-        width = min(self.chunk, max(16, 1 << (size - 1).bit_length()))
-        chunks = 1 << (-(-size // width) - 1).bit_length()
+        chunks = -(-size // self.chunk)
+        width = 16 * -(-size // (16 * chunks))
         padded = np.pad(rpm, (0, chunks * width - size), mode="edge").reshape(chunks, width)
         accel, fmin, fmax, residual = (np.asarray(x).reshape(chunks * width, *x.shape[2:])[:size]
                                        for x in self._batch(jnp.asarray(padded)))
