@@ -343,3 +343,20 @@ def test_swinging_roller_program_geometry():
     assert np.abs(np.linalg.norm(prof.profile - prof.pitch, axis=1) - 12.0).max() < 1e-9
     with pytest.raises(ValueError, match="follower.arm_mm must be a number"):
         Program("swing", program.segments, Follower(**{**FOLLOWER, "kind": "swinging-roller"}))
+
+
+def test_design_one_segment_for_a_speed_range(tmp_path, capsys):
+    program = Program.load(example_path())
+    n1, n2 = camjax.program.segment_band(program, 1, 300.0, 600.0)
+    f_n = program.follower.natural_frequency_hz
+    assert (n1, n2) == pytest.approx((f_n * 100 / 360 * 60 / 600, f_n * 100 / 360 * 60 / 300), rel=1e-12)
+    with pytest.raises(ValueError, match="segment 2 is a dwell"):
+        camjax.program.segment_band(program, 2, 300.0, 600.0)
+    code = main(["design", "--program", str(example_path()), "--segment", "1", "--rpm", "300:600",
+                 "--steps", "20", "--knots", "8", "--quiet", "--out", str(tmp_path)])
+    assert code == 0
+    designed = Program.load(tmp_path / "program.toml")
+    assert designed.segments[0].law.name.startswith("bspline")
+    assert designed.segments[1:] == program.segments[1:] and designed.follower == program.follower
+    assert main(["design", "--program", str(example_path()), "--out", str(tmp_path)]) == 2
+    assert "--program needs --segment and --rpm" in capsys.readouterr().err

@@ -11,6 +11,9 @@ from ._analysis import analyse as analyse
 from ._analysis import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s2
 from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
+from ._design import design_segment as design_segment
+from ._design import segment_band as segment_band
+from ._design import write_program as write_program
 from ._dynamics import Solver as Solver
 from ._dynamics import startup as startup
 from ._export import Profile as Profile

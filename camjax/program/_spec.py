@@ -204,13 +204,14 @@ class Program:
                 raise ValueError(f"[follower] needs {required}")
         return cls(str(header.get("name", "program")), tuple(segments), Follower(**follower_data))
 
-    def to_toml(self) -> str:
-        """The program as TOML text (laws by registry name)."""
+    def to_toml(self, law_files: dict[int, str] | None = None) -> str:
+        """The program as TOML text: laws by registry name, or by ``law_files[i]`` (1-based)."""
+        law_files = law_files or {}
         lines = ["[program]", f'name = "{self.name}"', ""]
-        for seg in self.segments:
+        for i, seg in enumerate(self.segments, 1):
             lines.append("[[segment]]")
             if seg.law is not None:
-                lines += [f'law = "{seg.law.name}"', f"lift_mm = {seg.lift_mm!r}"]
+                lines += [f'law = "{law_files.get(i, seg.law.name)}"', f"lift_mm = {seg.lift_mm!r}"]
             lines += [f"angle_deg = {seg.angle_deg!r}", ""]
         lines.append("[follower]")
         for field in dataclasses.fields(Follower):
