@@ -358,5 +358,8 @@ def test_design_one_segment_for_a_speed_range(tmp_path, capsys):
     designed = Program.load(tmp_path / "program.toml")
     assert designed.segments[0].law.name.startswith("bspline")
     assert designed.segments[1:] == program.segments[1:] and designed.follower == program.follower
+    # A designed law has array leaves: the profile still builds (the lift is a pytree).
+    prof = profile(designed, 90)
+    assert np.abs(np.linalg.norm(prof.pitch, axis=1) - 52.0 - designed.lift(prof.theta_deg)[0]).max() < 1e-9
     assert main(["design", "--program", str(example_path()), "--out", str(tmp_path)]) == 2
     assert "--program needs --segment and --rpm" in capsys.readouterr().err

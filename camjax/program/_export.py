@@ -49,7 +49,7 @@ def profile(program: Program, points: int = 3600) -> Profile:
         raise ValueError(f"points must be at least 8, got {points}")
     theta_deg = np.arange(int(points)) * 360.0 / int(points)
     follower = follower_geometry(program)
-    cam = geometry.cam_profile(follower, program, np.radians(theta_deg))
+    cam = geometry.cam_profile(follower, program.lift_curve(), np.radians(theta_deg))
     cut = geometry.undercut(cam, follower.roller_radius)
     return Profile(
         theta_deg=theta_deg,

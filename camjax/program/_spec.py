@@ -11,6 +11,7 @@ import math
 import tomllib
 from pathlib import Path
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
@@ -249,25 +250,49 @@ class Program:
                 ddy[inside] = seg.lift_mm * a / seg.angle_deg**2
         return y, dy, ddy
 
-    def displacement(self, theta):
-        """Follower displacement at cam angle ``theta`` (radians), jittable, for geometry.
+    def lift_curve(self) -> LiftCurve:
+        """The lift as a pytree (laws as leaves) for ``camjax.geometry`` and other JAX code."""
+        moving = [i for i, seg in enumerate(self.segments) if seg.moving]
+        scale = 1.0 / self.follower.arm_mm if self.follower.kind == "swinging-roller" else 1.0
+        return LiftCurve(
+            laws=tuple(self.segments[i].law for i in moving),
+            start_deg=tuple(float(self.start_deg[i]) for i in moving),
+            angle_deg=tuple(float(self.segments[i].angle_deg) for i in moving),
+            lift_mm=tuple(float(self.segments[i].lift_mm) for i in moving),
+            scale=scale,
+        )
 
-        Millimetres for a translating follower, radians of swing for a swinging one.
-        """
-        theta_deg = jnp.mod(jnp.asarray(theta, dtype=float) * (180 / math.pi), 360.0)
-        y = jnp.zeros_like(theta_deg)
-        for seg, start, y0 in zip(self.segments, self.start_deg, self.start_lift_mm):
-            part = y0 + (seg.lift_mm * seg.law.s((theta_deg - start) / seg.angle_deg) if seg.moving else 0.0)
-            y = jnp.where((theta_deg >= start) & (theta_deg < start + seg.angle_deg), part, y)
-        if self.follower.kind == "swinging-roller":
-            return y / self.follower.arm_mm
-        return y
+    def displacement(self, theta):
+        """Follower displacement at cam angle ``theta`` (radians), jittable: see ``LiftCurve``."""
+        return self.lift_curve().displacement(theta)
 
     def moving_segments(self) -> list[int]:
         return [i for i, s in enumerate(self.segments) if s.moving]
 
     def dwell_segments(self) -> list[int]:
         return [i for i, s in enumerate(self.segments) if not s.moving]
+
+
+class LiftCurve(eqx.Module):
+    """The program's lift over the turn as a JAX pytree, ``camjax.geometry``'s program interface.
+
+    The lift is the sum of each moving segment's contribution ``lift * s(tau)`` (0 before
+    the segment, ``lift`` after it), so dwells need no term.  ``displacement`` is in mm
+    for a translating follower and radians of swing for a swinging one (``scale = 1/arm``).
+    """
+
+    laws: tuple
+    start_deg: tuple = eqx.field(static=True)
+    angle_deg: tuple = eqx.field(static=True)
+    lift_mm: tuple = eqx.field(static=True)
+    scale: float = eqx.field(static=True)
+
+    def displacement(self, theta):
+        theta_deg = jnp.mod(jnp.asarray(theta, dtype=float) * (180 / math.pi), 360.0)
+        y = jnp.zeros_like(theta_deg)
+        for law, start, angle, lift in zip(self.laws, self.start_deg, self.angle_deg, self.lift_mm):
+            y = y + lift * law.s((theta_deg - start) / angle)
+        return self.scale * y
 
 
 def _no_unknown(table, allowed: set[str], where: str) -> None:
