@@ -36,6 +36,7 @@ from .models import torsion_factor as torsion_factor  # noqa: E402
 from .motion_design import CapError as CapError  # noqa: E402
 from .motion_design import Caps as Caps  # noqa: E402
 from .motion_design import design as design  # noqa: E402
+from .program import Program as Program  # noqa: E402
 from .sweep import CtCurve as CtCurve  # noqa: E402
 from .sweep import ct_curve as ct_curve  # noqa: E402
 from .sweep import ct_curves as ct_curves  # noqa: E402

@@ -16,7 +16,7 @@ def register(subparsers) -> None:
         "law (JSON, CSV), figures and a comparison with every standard law.",
     )
     parser.add_argument("--objective", choices=("residual", "ca-ct"), default="residual")
-    where = parser.add_mutually_exclusive_group(required=True)
+    where = parser.add_mutually_exclusive_group()
     where.add_argument("--band", help="period-ratio band N1:N2 (worst case over it)")
     where.add_argument("--n", type=float, help="a single period ratio")
     parser.add_argument("--max-ca", type=float, default=None, help="cap on Ca")
@@ -29,7 +29,38 @@ def register(subparsers) -> None:
     parser.add_argument("--optimizer", choices=("lbfgs", "adam"), default="lbfgs")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument("--out", required=True, help="output directory")
+    parser.add_argument("--program", metavar="FILE", help="design one segment of this cam program "
+                        "(with --segment and --rpm; writes DIR/program.toml and the law beside it)")
+    parser.add_argument("--segment", type=int, help="segment number (1-based) to design, with --program")
+    parser.add_argument("--rpm", metavar="LO:HI", help="speed range, with --program (maps to the segment's band)")
     parser.set_defaults(func=run)
+
+
+def _run_program(args, out) -> int:
+    from ..motion_design import Caps
+    from ..program import Program, design_segment, segment_band, write_program
+
+    if args.segment is None or args.rpm is None:
+        raise CliError("--program needs --segment and --rpm LO:HI")
+    if args.objective not in ("residual", "ca-ct"):
+        raise CliError(f"--objective {args.objective} is not available with --program")
+    parts = args.rpm.split(":")
+    if len(parts) != 2:
+        raise CliError(f"--rpm: expected LO:HI, got {args.rpm!r}")
+    rpm_lo, rpm_hi = (parse_float_list(p, "--rpm")[0] for p in parts)
+    if not 0 < rpm_lo < rpm_hi:
+        raise CliError(f"--rpm: need 0 < LO < HI, got {args.rpm!r}")
+    program = Program.load(args.program)
+    n1, n2 = segment_band(program, args.segment, rpm_lo, rpm_hi)
+    new, result = design_segment(
+        program, args.segment, rpm_lo, rpm_hi, objective=args.objective,
+        caps=Caps(args.max_ca, args.max_jerk), knots=args.knots, seed=args.seed,
+        optimizer=args.optimizer, progress=not args.quiet,
+        **({} if args.steps is None else {"steps": args.steps}))
+    path = write_program(new, out)
+    (label, value), = result.values.items()
+    print(f"segment {args.segment}: band n = {n1:.4g}..{n2:.4g}; {label} = {value:.5g}; wrote {path}")
+    return 0
 
 
 def _band(text: str) -> tuple[float, float]:
@@ -48,6 +79,10 @@ def run(args) -> int:
     from ..laws._io import save
 
     out = output_dir(args.out)
+    if args.program:
+        return _run_program(args, out)
+    if args.band is None and args.n is None:
+        raise CliError("one of --band, --n or --program is required")
     if args.n is not None and not args.n > 0:
         raise CliError(f"--n: period ratio must be positive, got {args.n}")
     band = _band(args.band) if args.band else None

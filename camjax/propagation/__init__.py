@@ -1,8 +1,8 @@
 """Exact propagation of linear models: the sample grid over a rise and the closed-form step.
 
 The linear SDOF ``e'' + 2 zeta w e' + w^2 e = a(tau)`` is one complex mode
-``q = e' - conj(lambda) e`` with ``q' = lambda q + a``; :func:`propagate` steps it exactly
-over a :class:`MotionGrid` (degree-5 interpolant of the forcing on each interval).
+``q = e' - conj(lambda) e`` with ``q' = lambda q + a``; ``propagate`` steps it exactly
+over a ``MotionGrid`` (degree-5 interpolant of the forcing on each interval).
 """
 
 from ._exact import eigenvalue as eigenvalue

@@ -1,0 +1,75 @@
+"""Design one segment's law of a program for a speed range (a thin layer over ``camjax.design``).
+
+A speed range ``[rpm_lo, rpm_hi]`` maps to the segment's period-ratio band
+``n = f_n t_segment = f_n (angle / 360) 60 / rpm``, from ``n(rpm_hi)`` to ``n(rpm_lo)``,
+with the oscillator's damping ratio ``zeta sqrt(k / (k + k_s))``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+from .. import laws
+from ._spec import Program
+
+OBJECTIVES = ("residual", "ca-ct")
+
+
+def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -> tuple[float, float]:
+    """Period-ratio band ``(n1, n2)`` of segment ``segment`` (1-based) over the speed range."""
+    if not 0 < rpm_lo < rpm_hi:
+        raise ValueError(f"need 0 < rpm_lo < rpm_hi, got {rpm_lo:g}, {rpm_hi:g}")
+    if not 1 <= segment <= len(program.segments):
+        raise ValueError(f"segment must be 1..{len(program.segments)}, got {segment}")
+    seg = program.segments[segment - 1]
+    if not seg.moving:
+        raise ValueError(f"segment {segment} is a dwell: nothing to design")
+    ratio = program.follower.natural_frequency_hz * seg.angle_deg / 360.0 * 60.0
+    return ratio / rpm_hi, ratio / rpm_lo
+
+
+def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float, *,
+                   objective: str = "residual", caps=None, **design_options):
+    """Design segment ``segment``'s law for the speed range; returns ``(new program, DesignResult)``.
+
+    ``objective`` is ``"residual"`` (largest residual vibration over the band) or ``"ca-ct"``
+    (largest Ca*Ct); ``design_options`` go to ``camjax.design`` (``knots``, ``steps``, ...).
+    """
+    from .. import motion_design
+
+    n1, n2 = segment_band(program, segment, rpm_lo, rpm_hi)
+    f = program.follower
+    zeta = f.damping_ratio * (f.stiffness / (f.stiffness + f.spring_rate)) ** 0.5
+    if objective == "residual":
+        goal = motion_design.MaxResidual(n1, n2, damping=zeta)
+    elif objective == "ca-ct":
+        goal = motion_design.MaxCaCt(n1, n2, damping=zeta)
+    else:
+        raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
+    seg = program.segments[segment - 1]
+    result = motion_design.design(goal, caps=caps or motion_design.Caps(), initial=seg.law, **design_options)
+    segments = list(program.segments)
+    segments[segment - 1] = dataclasses.replace(seg, law=result.law)
+    return dataclasses.replace(program, segments=tuple(segments)), result
+
+
+def write_program(program: Program, directory) -> Path:
+    """Write ``program.toml`` into ``directory``, with laws not in the registry as JSON beside it."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    files = {}
+    for i, seg in enumerate(program.segments, 1):
+        if seg.law is None:
+            continue
+        try:
+            known = laws.get(seg.law.name) == seg.law
+        except ValueError:
+            known = False
+        if not known:
+            files[i] = f"segment{i}.json"
+            laws.save(seg.law, directory / files[i])
+    path = directory / "program.toml"
+    path.write_text(program.to_toml(law_files=files))
+    return path
+

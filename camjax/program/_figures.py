@@ -1,0 +1,95 @@
+"""Figures of a cam program: one turn at one speed, the speed sweep, the profile."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .. import plot
+from ._export import Profile
+from ._spec import Program
+
+plt = plot.plt
+
+
+def svaj(program: Program, rpm: float, history: dict) -> plt.Figure:
+    """Lift, velocity, kinematic and payload acceleration over one turn."""
+    theta = history["theta_deg"]
+    _, dy, _ = program.lift(theta)
+    fig, axes = plt.subplots(3, 1, figsize=(8, 7), sharex=True, constrained_layout=True)
+    axes[0].plot(theta, history["lift_mm"])
+    axes[0].set_ylabel("lift y (mm)")
+    axes[1].plot(theta, 1e-3 * dy * 360 * rpm / 60)
+    axes[1].set_ylabel("velocity y' (m/s)")
+    axes[2].plot(theta, history["kinematic_acceleration_m_s2"], lw=1, label="cam y''")
+    axes[2].plot(theta, history["payload_acceleration_m_s2"], lw=1, label="payload x''")
+    axes[2].set_ylabel("acceleration (m/s^2)")
+    axes[2].legend(fontsize=8)
+    axes[2].set_xlabel("cam angle (deg)")
+    axes[0].set_title(f"{program.name} at {rpm:g} rpm (periodic steady state)")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    return fig
+
+
+def contact_force(program: Program, rpm: float, history: dict) -> plt.Figure:
+    """Contact force over one turn, with the zero line and the preload."""
+    fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
+    ax.plot(history["theta_deg"], history["contact_force_n"], lw=1)
+    ax.axhline(0.0, color="k", lw=0.8)
+    ax.axhline(program.follower.preload_n, color="C1", lw=0.8, ls="--", label="preload")
+    ax.set_xlabel("cam angle (deg)")
+    ax.set_ylabel("contact force (N)")
+    ax.set_title(f"{program.name} at {rpm:g} rpm")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    return fig
+
+
+def sweep(report: dict) -> plt.Figure:
+    """Minimum preload and peak accelerations against speed."""
+    speeds = report["speeds"]
+    rpm = [s["rpm"] for s in speeds]
+    fig, (a, b) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, constrained_layout=True)
+    a.plot(rpm, [s["min_preload_n"] or 0.0 for s in speeds], marker=".")
+    a.set_ylabel("minimum preload (N)")
+    b.plot(rpm, [s["max_payload_acceleration_m_s2"] for s in speeds], marker=".", label="payload")
+    b.plot(rpm, [s["max_kinematic_acceleration_m_s2"] for s in speeds], marker=".", label="cam (kinematic)")
+    b.set_ylabel("max |acceleration| (m/s^2)")
+    b.set_xlabel("speed (rpm)")
+    b.legend(fontsize=8)
+    for ax in (a, b):
+        ax.grid(True, alpha=0.3)
+    return fig
+
+
+def cam(prof: Profile) -> plt.Figure:
+    """The profile and pitch curve, with the pressure angle and radius of curvature."""
+    fig = plt.figure(figsize=(11, 5), constrained_layout=True)
+    ax = fig.add_subplot(1, 2, 1)
+    ax.plot(*prof.pitch.T, lw=0.8, ls="--", label="pitch curve")
+    ax.plot(*prof.profile.T, lw=1.2, label="profile")
+    ax.set_aspect("equal")
+    ax.set_xlabel("mm")
+    ax.legend(fontsize=8)
+    right = fig.add_subplot(2, 2, 2)
+    right.plot(prof.theta_deg, prof.pressure_angle_deg)
+    right.set_ylabel("pressure angle (deg)")
+    low = fig.add_subplot(2, 2, 4, sharex=right)
+    rho = np.clip(prof.profile_radius_of_curvature_mm, -500, 500)
+    low.plot(prof.theta_deg, rho)
+    low.set_ylabel("profile radius of curvature (mm)")
+    low.set_xlabel("cam angle (deg)")
+    for a in (right, low):
+        a.grid(True, alpha=0.3)
+    return fig
+
+
+def save_figures(out: Path, program: Program, report: dict, history: tuple, prof: Profile) -> None:
+    rpm, h = history
+    plot.save(svaj(program, rpm, h), out / "svaj.png")
+    plot.save(contact_force(program, rpm, h), out / "contact_force.png")
+    if len(report["speeds"]) > 1:
+        plot.save(sweep(report), out / "sweep.png")
+    plot.save(cam(prof), out / "profile.png")

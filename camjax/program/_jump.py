@@ -1,0 +1,204 @@
+"""Contact loss of a force-closed cam: minimum preload, jump speed, flight and re-impact.
+
+While in contact, the contact force is ``F_c = F_0 + k e + c e'`` (``e = y - x``).  When it
+reaches zero the roller leaves the cam.  The roller is massless, so in flight the train
+carries no force: the payload moves under the return spring alone,
+``m x'' = -(F_0 + k_s x)``, while the train relaxes, ``F_0 + k e_f + c e_f' = 0``, and the
+roller rides at ``r = x + e_f``.  It re-impacts where ``r`` meets the cam lift ``y``; from
+there contact holds again with ``e = y - x``, ``e' = y' - x'``, and the response is the
+periodic steady state plus the free vibration of the difference.  Every phase is closed
+form (the steady state by exact propagation), so the events are found by bracketing and
+bisection on exact values.  The cycle is taken to be on the contact-held steady state up
+to the first separation (the linear answer is exact until then).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..propagation import eigenvalue
+from ._dynamics import Solver
+
+_BISECTIONS = 4  # rounds of 64-way subdivision: a bracket shrinks by 65^4, ~2e7
+_SAMPLES_PER_INTERVAL = 8
+
+
+def min_preload_n(min_contact_force_n, preload_n):
+    """Preload that just keeps contact: ``max(0, max over the cycle of -(k e + c e'))``."""
+    return np.maximum(0.0, preload_n - np.asarray(min_contact_force_n))
+
+
+def _first_root(f, lo: float, hi: float) -> float:
+    """A root of ``f`` (vectorised) in ``[lo, hi]`` with ``f(lo) > 0 >= f(hi)``: the first one."""
+    for _ in range(_BISECTIONS):
+        t = np.linspace(lo, hi, 66)
+        values = f(t)
+        i = int(np.argmax(values <= 0)) if np.any(values[1:] <= 0) else 65
+        lo, hi = t[max(i - 1, 0)], t[i]
+    return 0.5 * (lo + hi)
+
+
+def jump_speed_rpm(solver: Solver, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1):
+    """Lowest speed in ``[rpm_lo, rpm_hi]`` at which the contact force goes negative, or ``None``.
+
+    The scan samples evenly in ``1/rpm`` with 16 samples per natural-frequency cycle
+    that a cycle of the cam gains or loses across the range (every period ratio of the
+    program moves by 1/16 between samples), then bisects the first crossing to
+    ``tolerance_rpm``.
+    """
+    if solver.program.follower.form_closed:
+        return None
+    f_n = solver.program.follower.natural_frequency_hz
+    count = max(16, math.ceil(16 * f_n * 60 * (1 / rpm_lo - 1 / rpm_hi)) + 1)
+    rpm = np.sort(1.0 / np.linspace(1 / rpm_hi, 1 / rpm_lo, count))
+    rpm[0], rpm[-1] = rpm_lo, rpm_hi
+    force = solver.summary(rpm)["min_contact_force_n"]
+    if not np.any(force < 0):
+        return None
+    i = int(np.argmax(force < 0))
+    if i == 0:
+        return float(rpm_lo)
+    lo, hi = rpm[i - 1], rpm[i]
+    while hi - lo > tolerance_rpm:
+        trial = np.linspace(lo, hi, 18)[1:-1]
+        f = solver.summary(trial)["min_contact_force_n"]
+        below = np.flatnonzero(f < 0)
+        if below.size:
+            hi = trial[below[0]]
+            lo = trial[below[0] - 1] if below[0] > 0 else lo
+        else:
+            lo = trial[-1]
+    return float(0.5 * (lo + hi))
+
+
+@dataclasses.dataclass(frozen=True)
+class Flight:
+    """The first loss of contact in a cycle: angles in degrees, velocity in m/s, force in N."""
+
+    separation_deg: float
+    reimpact_deg: float | None
+    impact_velocity_m_s: float | None
+    peak_impact_force_n: float | None
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+class _SteadyState:
+    """Exact contact-held steady state at one speed, in SI, at any time ``t`` (seconds)."""
+
+    def __init__(self, solver: Solver, rpm: float):
+        self.solver, self.rpm = solver, rpm
+        self.period = 60.0 / rpm
+        train = solver.train
+        self.lam = complex(eigenvalue(train.omega * self.period, train.zeta))
+        self.cycle = solver.cycle(rpm)
+
+    def lift(self, t):
+        """Cam lift (m) and its rate (m/s) at times ``t``."""
+        y, dy, _ = self.solver.program.lift(360.0 * np.atleast_1d(t) / self.period)
+        return 1e-3 * y, 1e-3 * dy * 360.0 / self.period
+
+    def deflection(self, t):
+        """``e`` (m) and ``e'`` (m/s) of the steady state at times ``t``."""
+        q = self.solver.mode_at(self.cycle.q, self.rpm, np.atleast_1d(t) / self.period)
+        e = q.imag / self.lam.imag
+        e_rate = (q.real + self.lam.real * e) / self.period
+        return 1e-3 * e, 1e-3 * e_rate
+
+    def contact_force(self, t):
+        tr = self.solver.train
+        e, e_rate = self.deflection(t)
+        return tr.preload + tr.k * e + tr.c * e_rate
+
+
+def flight(solver: Solver, rpm: float) -> Flight | None:
+    """Separation, flight and re-impact at ``rpm``, or ``None`` where contact holds."""
+    tr = solver.train
+    if solver.program.follower.form_closed:
+        return None
+    ss = _SteadyState(solver, rpm)
+    T = ss.period
+    force = ss.cycle.contact_force_n
+    if not ss.cycle.min_contact_force_n < 0:
+        return None
+    s_nodes = solver.grid.nodes
+    start = int(np.argmax(force))
+    order = (start + np.arange(force.size - 1)) % (force.size - 1)
+    j = order[int(np.argmax(force[order] < 0))]
+    if force[j] >= 0:  # negative between nodes only: find the refined dip
+        dense = np.linspace(0, T, 16 * force.size)
+        values = ss.contact_force(dense)
+        j_t = dense[int(np.argmin(values))]
+        t_lo = j_t - T / force.size
+        t_sep = _first_root(ss.contact_force, t_lo, j_t)
+    else:
+        prev = (j - 1) % (force.size - 1)
+        t_lo = s_nodes[prev] * T
+        t_hi = s_nodes[j] * T + (T if s_nodes[j] < s_nodes[prev] else 0.0)
+        t_sep = _first_root(ss.contact_force, t_lo, t_hi)
+    y0, dy0 = ss.lift(t_sep)
+    e0, de0 = ss.deflection(t_sep)
+    x0, v0 = y0 - e0, dy0 - de0
+    x0, v0, e0 = float(x0[0]), float(v0[0]), float(e0[0])
+    w_f = math.sqrt(tr.ks / tr.m)
+    x_eq = -tr.preload / tr.ks
+    e_eq = -tr.preload / tr.k
+
+    def payload(tau):
+        return (x_eq + (x0 - x_eq) * np.cos(w_f * tau) + v0 / w_f * np.sin(w_f * tau),
+                -(x0 - x_eq) * w_f * np.sin(w_f * tau) + v0 * np.cos(w_f * tau))
+
+    def train(tau):
+        if tr.c == 0:
+            return np.full_like(tau, e_eq), np.zeros_like(tau)
+        decay = (e0 - e_eq) * np.exp(-tr.k * tau / tr.c)
+        return e_eq + decay, -tr.k / tr.c * decay
+
+    def gap(tau):
+        x, _ = payload(tau)
+        ef, _ = train(tau)
+        return x + ef - ss.lift(t_sep + tau)[0]
+
+    step = T * float(np.min(solver.grid.piece_width)) / 2
+    tau = np.arange(1, int(T / step) + 2) * step
+    g = gap(tau)
+    hits = np.flatnonzero(g <= 0)
+    separation_deg = float(np.mod(360 * t_sep / T, 360))
+    if hits.size == 0:
+        return Flight(separation_deg, None, None, None)
+    i = int(hits[0])
+    tau_i = _first_root(lambda t: gap(t), tau[i - 1] if i else 0.5 * step, tau[i])
+    t_i = t_sep + tau_i
+    x_i, v_i = (float(v) for v in payload(tau_i))
+    ef_i, def_i = (float(v[0]) for v in train(np.array([tau_i])))
+    y_i, dy_i = (float(v[0]) for v in ss.lift(t_i))
+    impact_velocity = dy_i - (v_i + def_i)  # cam surface velocity relative to the falling roller
+    # Contact again: steady state plus the free vibration of the difference.
+    es, des = (float(v[0]) for v in ss.deflection(t_i))
+    u0, du0 = (y_i - x_i) - es, (dy_i - v_i) - des
+    lam = ss.lam / T
+    qu = du0 - np.conj(lam) * u0
+
+    def force_after(t):
+        z = qu * np.exp(lam * t)
+        u = z.imag / lam.imag
+        return ss.contact_force(t_i + t) + tr.k * u + tr.c * (z.real + lam.real * u)
+
+    samples = np.linspace(0, T, _SAMPLES_PER_INTERVAL * force.size)
+    values = force_after(samples)
+    again = np.flatnonzero(values[1:] < 0)
+    stop = again[0] + 1 if again.size else values.size
+    k = int(np.argmax(values[:stop]))
+    peak = float(values[k])
+    if 0 < k < stop - 1:  # polish by golden-section search on the bracketing samples
+        lo, hi = samples[k - 1], samples[k + 1]
+        for _ in range(60):
+            a, b = lo + 0.382 * (hi - lo), lo + 0.618 * (hi - lo)
+            fa, fb = force_after(np.array([a, b]))
+            lo, hi = (a, hi) if fb > fa else (lo, b)
+        peak = max(peak, float(force_after(np.array([0.5 * (lo + hi)]))[0]))
+    return Flight(separation_deg, float(np.mod(360 * t_i / T, 360)), float(impact_velocity), peak)

@@ -1,0 +1,338 @@
+"""A whole cam: a program of segments over 360 degrees and its follower, in physical units.
+
+A program is read from TOML (``Program.load``) or built directly.  Every check names the
+segment or the field that fails, with a ``ValueError``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from pathlib import Path
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from .. import laws
+from ..laws import AbstractMotionLaw
+
+FOLLOWER_KINDS = ("translating-roller", "swinging-roller")
+_ANGLE_TOLERANCE_DEG = 1e-9
+_LIFT_TOLERANCE_MM = 1e-9
+
+
+@dataclasses.dataclass(frozen=True)
+class Segment:
+    """One stretch of the cam turn: a rise or return by ``law`` over ``angle_deg``, or a dwell.
+
+    ``lift_mm`` is the change of lift over the segment (negative for a return); a dwell has
+    ``law=None`` and ``lift_mm=0``.
+    """
+
+    angle_deg: float
+    lift_mm: float = 0.0
+    law: AbstractMotionLaw | None = None
+
+    @property
+    def moving(self) -> bool:
+        return self.law is not None and self.lift_mm != 0.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Follower:
+    """The follower train, referred to the roller (lengths in mm, forces in N).
+
+    ``spring_rate_n_per_mm=None`` is a form-closed (grooved) cam: no return spring, no
+    preload, no jump.  For ``kind="swinging-roller"`` the lift is the arc length of the
+    roller centre (swing angle times ``arm_mm``) and ``pivot_mm`` is the cam-centre to pivot
+    distance.
+    """
+
+    mass_kg: float
+    stiffness_n_per_mm: float
+    damping_ratio: float = 0.0
+    spring_rate_n_per_mm: float | None = None
+    preload_n: float = 0.0
+    base_radius_mm: float = 40.0
+    roller_radius_mm: float = 10.0
+    offset_mm: float = 0.0
+    kind: str = "translating-roller"
+    arm_mm: float | None = None
+    pivot_mm: float | None = None
+
+    @property
+    def form_closed(self) -> bool:
+        return self.spring_rate_n_per_mm is None
+
+    @property
+    def spring_rate(self) -> float:
+        """Return-spring rate in N/m (0 for a form-closed cam)."""
+        return 0.0 if self.form_closed else 1e3 * self.spring_rate_n_per_mm
+
+    @property
+    def stiffness(self) -> float:
+        """Train stiffness in N/m."""
+        return 1e3 * self.stiffness_n_per_mm
+
+    @property
+    def damping(self) -> float:
+        """Train damping ``c = 2 zeta sqrt(k m)`` in N s/m."""
+        return 2 * self.damping_ratio * math.sqrt(self.stiffness * self.mass_kg)
+
+    @property
+    def natural_frequency_hz(self) -> float:
+        """``sqrt((k + k_s) / m) / (2 pi)``."""
+        return math.sqrt((self.stiffness + self.spring_rate) / self.mass_kg) / (2 * math.pi)
+
+
+def _finite(value, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{what} must be a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{what} must be finite, got {value}")
+    return value
+
+
+def _positive(value, what: str) -> float:
+    value = _finite(value, what)
+    if value <= 0:
+        raise ValueError(f"{what} must be positive, got {value:g}")
+    return value
+
+
+def _check_follower(f: Follower) -> None:
+    if f.kind not in FOLLOWER_KINDS:
+        raise ValueError(f"follower.kind must be one of {', '.join(FOLLOWER_KINDS)}, got {f.kind!r}")
+    for name in ("mass_kg", "stiffness_n_per_mm", "base_radius_mm", "roller_radius_mm"):
+        _positive(getattr(f, name), f"follower.{name}")
+    zeta = _finite(f.damping_ratio, "follower.damping_ratio")
+    if not 0 <= zeta < 1:
+        raise ValueError(f"follower.damping_ratio must be in [0, 1), got {zeta:g}")
+    if not f.form_closed:
+        _positive(f.spring_rate_n_per_mm, "follower.spring_rate_n_per_mm")
+    if _finite(f.preload_n, "follower.preload_n") < 0:
+        raise ValueError(f"follower.preload_n must be non-negative, got {f.preload_n:g}")
+    offset = _finite(f.offset_mm, "follower.offset_mm")
+    if f.kind == "translating-roller" and abs(offset) >= f.base_radius_mm + f.roller_radius_mm:
+        raise ValueError("follower.offset_mm: |offset| must be below base_radius_mm + roller_radius_mm")
+    if f.kind == "swinging-roller":
+        arm = _positive(f.arm_mm, "follower.arm_mm")
+        pivot = _positive(f.pivot_mm, "follower.pivot_mm")
+        rp = f.base_radius_mm + f.roller_radius_mm
+        if not abs(pivot - arm) < rp < pivot + arm:
+            raise ValueError("follower.arm_mm, pivot_mm: the arm cannot reach the base circle "
+                             "(|pivot - arm| < base + roller < pivot + arm fails)")
+
+
+@dataclasses.dataclass(frozen=True)
+class Program:
+    """A cam program: segments covering one turn and the follower they drive.
+
+    Checks (each a ``ValueError`` naming the segment or field): angles positive and
+    summing to 360 degrees; a law on every segment with a lift and a lift on every
+    segment with a law; the cumulative lift never below zero and back to zero at 360
+    degrees (the program starts and ends on the base circle); the follower's numbers
+    positive and finite.  Any number of segments, in any order.
+    """
+
+    name: str
+    segments: tuple[Segment, ...]
+    follower: Follower
+
+    def __post_init__(self):
+        object.__setattr__(self, "segments", tuple(self.segments))
+        if not self.segments:
+            raise ValueError("a program needs at least one segment")
+        lift = 0.0
+        for i, seg in enumerate(self.segments, 1):
+            _positive(seg.angle_deg, f"segment {i}: angle_deg")
+            _finite(seg.lift_mm, f"segment {i}: lift_mm")
+            if seg.law is None and seg.lift_mm != 0:
+                raise ValueError(f"segment {i}: lift_mm = {seg.lift_mm:g} needs a law")
+            if seg.law is not None and not isinstance(seg.law, AbstractMotionLaw):
+                raise ValueError(f"segment {i}: law must be a camjax motion law")
+            if seg.law is not None and not isinstance(seg.law.breakpoints(), tuple):
+                raise ValueError(f"segment {i}: the law's breakpoints must be fixed numbers")
+            lift += seg.lift_mm
+            if lift < -_LIFT_TOLERANCE_MM:
+                raise ValueError(f"segment {i}: the cumulative lift goes below zero ({lift:g} mm)")
+        total = sum(seg.angle_deg for seg in self.segments)
+        if abs(total - 360.0) > _ANGLE_TOLERANCE_DEG:
+            raise ValueError(f"segment angles sum to {total:g} degrees, not 360")
+        if abs(lift) > _LIFT_TOLERANCE_MM:
+            raise ValueError(f"the cumulative lift ends at {lift:g} mm, not back at zero (the base circle)")
+        _check_follower(self.follower)
+
+    # -- reading and writing -------------------------------------------------------------
+
+    @classmethod
+    def load(cls, path) -> Program:
+        """Read a program TOML file (law files named in it are relative to it)."""
+        path = Path(path)
+        try:
+            text = path.read_text()
+        except OSError as error:
+            raise ValueError(f"{path}: cannot read the program file ({error.strerror})") from None
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as error:
+            raise ValueError(f"{path}: not valid TOML ({error})") from None
+        try:
+            return cls.from_dict(data, base=path.parent)
+        except ValueError as error:
+            raise ValueError(f"{path}: {error}") from None
+
+    @classmethod
+    def from_dict(cls, data: dict, *, base: Path | None = None) -> Program:
+        """A program from the TOML structure (``program``, ``segment`` list, ``follower``)."""
+        _no_unknown(data, {"program", "segment", "follower"}, "top level")
+        header = data.get("program", {})
+        _no_unknown(header, {"name"}, "[program]")
+        segments_data = data.get("segment")
+        if not isinstance(segments_data, list) or not segments_data:
+            raise ValueError("no [[segment]] tables: a program needs at least one segment")
+        segments = [_segment(i, s, base) for i, s in enumerate(segments_data, 1)]
+        follower_data = data.get("follower")
+        if not isinstance(follower_data, dict):
+            raise ValueError("no [follower] table")
+        fields = {f.name for f in dataclasses.fields(Follower)}
+        _no_unknown(follower_data, fields, "[follower]")
+        for required in ("mass_kg", "stiffness_n_per_mm"):
+            if required not in follower_data:
+                raise ValueError(f"[follower] needs {required}")
+        return cls(str(header.get("name", "program")), tuple(segments), Follower(**follower_data))
+
+    def to_toml(self, law_files: dict[int, str] | None = None) -> str:
+        """The program as TOML text: laws by registry name, or by ``law_files[i]`` (1-based)."""
+        law_files = law_files or {}
+        lines = ["[program]", f'name = "{self.name}"', ""]
+        for i, seg in enumerate(self.segments, 1):
+            lines.append("[[segment]]")
+            if seg.law is not None:
+                lines += [f'law = "{law_files.get(i, seg.law.name)}"', f"lift_mm = {seg.lift_mm!r}"]
+            lines += [f"angle_deg = {seg.angle_deg!r}", ""]
+        lines.append("[follower]")
+        for field in dataclasses.fields(Follower):
+            value = getattr(self.follower, field.name)
+            if value is not None:
+                lines.append(f'{field.name} = "{value}"' if isinstance(value, str) else f"{field.name} = {value!r}")
+        return "\n".join(lines) + "\n"
+
+    # -- the lift over the turn ----------------------------------------------------------
+
+    @property
+    def start_deg(self) -> np.ndarray:
+        """Cam angle at the start of each segment (degrees)."""
+        return np.concatenate([[0.0], np.cumsum([s.angle_deg for s in self.segments])[:-1]])
+
+    @property
+    def start_lift_mm(self) -> np.ndarray:
+        """Lift at the start of each segment (mm)."""
+        return np.concatenate([[0.0], np.cumsum([s.lift_mm for s in self.segments])[:-1]])
+
+    def lift(self, theta_deg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Lift (mm) and its first two derivatives in cam angle (mm/deg, mm/deg^2), periodic."""
+        theta = np.mod(np.asarray(theta_deg, dtype=float), 360.0)
+        y, dy, ddy = (np.zeros_like(theta) for _ in range(3))
+        for seg, start, y0 in zip(self.segments, self.start_deg, self.start_lift_mm):
+            inside = (theta >= start) & (theta < start + seg.angle_deg)
+            if not inside.any():
+                continue
+            y[inside] = y0
+            if seg.moving:
+                tau = (theta[inside] - start) / seg.angle_deg
+                s, v, a, _ = (np.asarray(x) for x in seg.law.evaluate(tau))
+                y[inside] += seg.lift_mm * s
+                dy[inside] = seg.lift_mm * v / seg.angle_deg
+                ddy[inside] = seg.lift_mm * a / seg.angle_deg**2
+        return y, dy, ddy
+
+    def lift_curve(self) -> LiftCurve:
+        """The lift as a pytree (laws as leaves) for ``camjax.geometry`` and other JAX code."""
+        moving = [i for i, seg in enumerate(self.segments) if seg.moving]
+        scale = 1.0 / self.follower.arm_mm if self.follower.kind == "swinging-roller" else 1.0
+        return LiftCurve(
+            laws=tuple(self.segments[i].law for i in moving),
+            start_deg=tuple(float(self.start_deg[i]) for i in moving),
+            angle_deg=tuple(float(self.segments[i].angle_deg) for i in moving),
+            lift_mm=tuple(float(self.segments[i].lift_mm) for i in moving),
+            scale=scale,
+        )
+
+    def displacement(self, theta):
+        """Follower displacement at cam angle ``theta`` (radians), jittable: see ``LiftCurve``."""
+        return self.lift_curve().displacement(theta)
+
+    def moving_segments(self) -> list[int]:
+        return [i for i, s in enumerate(self.segments) if s.moving]
+
+    def dwell_segments(self) -> list[int]:
+        return [i for i, s in enumerate(self.segments) if not s.moving]
+
+
+class LiftCurve(eqx.Module):
+    """The program's lift over the turn as a JAX pytree, ``camjax.geometry``'s program interface.
+
+    The lift is the sum of each moving segment's contribution ``lift * s(tau)`` (0 before
+    the segment, ``lift`` after it), so dwells need no term.  ``displacement`` is in mm
+    for a translating follower and radians of swing for a swinging one (``scale = 1/arm``).
+    """
+
+    laws: tuple
+    start_deg: tuple = eqx.field(static=True)
+    angle_deg: tuple = eqx.field(static=True)
+    lift_mm: tuple = eqx.field(static=True)
+    scale: float = eqx.field(static=True)
+
+    def displacement(self, theta):
+        theta_deg = jnp.mod(jnp.asarray(theta, dtype=float) * (180 / math.pi), 360.0)
+        y = jnp.zeros_like(theta_deg)
+        for law, start, angle, lift in zip(self.laws, self.start_deg, self.angle_deg, self.lift_mm):
+            y = y + lift * law.s((theta_deg - start) / angle)
+        return self.scale * y
+
+
+def _no_unknown(table, allowed: set[str], where: str) -> None:
+    if not isinstance(table, dict):
+        raise ValueError(f"{where} must be a table")
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise ValueError(f"{where}: unknown field(s) {', '.join(unknown)}; expected {', '.join(sorted(allowed))}")
+
+
+def _segment(i: int, data, base: Path | None) -> Segment:
+    _no_unknown(data, {"law", "lift_mm", "angle_deg"}, f"segment {i}")
+    if "angle_deg" not in data:
+        raise ValueError(f"segment {i}: needs angle_deg")
+    lift = data.get("lift_mm", 0.0)
+    law = None
+    if "law" in data:
+        if "lift_mm" not in data:
+            raise ValueError(f"segment {i}: law given without lift_mm")
+        law = _law(i, data["law"], base)
+    return Segment(angle_deg=data["angle_deg"], lift_mm=lift, law=law)
+
+
+def _law(i: int, name, base: Path | None) -> AbstractMotionLaw:
+    if not isinstance(name, str):
+        raise ValueError(f"segment {i}: law must be a name or a file, got {name!r}")
+    if name.endswith(".json"):
+        path = Path(name) if base is None else base / name
+        if not path.exists():
+            raise ValueError(f"segment {i}: law file {str(path)!r} not found")
+        try:
+            return laws.load(path)
+        except (ValueError, KeyError, TypeError) as error:
+            raise ValueError(f"segment {i}: law file {str(path)!r}: {error}") from None
+    try:
+        return laws.get(name)
+    except ValueError as error:
+        raise ValueError(f"segment {i}: {error}") from None
+
+
+def example_path(name: str = "indexer") -> Path:
+    """Path of a program file shipped with camjax (``camjax/program/examples``)."""
+    return Path(__file__).parent / "examples" / f"{name}.toml"

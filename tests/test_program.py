@@ -1,0 +1,365 @@
+"""Whole cam programs against independent references (closed forms, ct_curve, scipy)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import camjax
+from camjax import laws
+from camjax.cli import main
+from camjax.program import (
+    Follower,
+    Program,
+    Segment,
+    Solver,
+    analyse,
+    example_path,
+    flight,
+    jump_speed_rpm,
+    profile,
+    startup,
+    write_dxf,
+)
+
+FOLLOWER = dict(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0, damping_ratio=0.05,
+                spring_rate_n_per_mm=10.0, preload_n=300.0, base_radius_mm=40.0, roller_radius_mm=12.0)
+
+
+def two_cycloids(**follower) -> Program:
+    """Rise 20 mm (cycloidal, 100 deg), dwell 80, return (cycloidal, 100), dwell 80."""
+    law = laws.get("cycloidal")
+    return Program("two-cycloids", (Segment(100, 20.0, law), Segment(80), Segment(100, -20.0, law), Segment(80)),
+                   Follower(**{**FOLLOWER, **follower}))
+
+
+def cycloid_lift(theta_deg):
+    """Lift (mm) and its first two derivatives in degrees of ``two_cycloids``, in numpy."""
+    theta = np.mod(theta_deg, 360.0)
+    y, dy, ddy = np.zeros_like(theta), np.zeros_like(theta), np.zeros_like(theta)
+    for start, lift in ((0.0, 20.0), (180.0, -20.0)):
+        tau = (theta - start) / 100.0
+        inside = (tau >= 0) & (tau < 1)
+        t = tau[inside]
+        y[inside] = (0.0 if lift > 0 else 20.0) + lift * (t - np.sin(2 * np.pi * t) / (2 * np.pi))
+        dy[inside] = lift * (1 - np.cos(2 * np.pi * t)) / 100.0
+        ddy[inside] = lift * 2 * np.pi * np.sin(2 * np.pi * t) / 100.0**2
+    y[(theta >= 100) & (theta < 180)] = 20.0
+    return y, dy, ddy
+
+
+@pytest.fixture(scope="module")
+def cam():
+    return two_cycloids()
+
+
+@pytest.fixture(scope="module")
+def solver(cam):
+    return Solver(cam, 300.0)
+
+
+def test_example_loads_and_matches_the_constructor():
+    program = Program.load(example_path())
+    assert [s.angle_deg for s in program.segments] == [100, 80, 100, 80]
+    assert program.segments[2].law.name == laws.get("modified-sine").name
+    assert Program.from_dict(__import__("tomllib").loads(program.to_toml())) == program
+    assert camjax.Program is Program
+
+
+def test_one_rise_and_dwell_reproduces_ct_curve():
+    """A 10-degree rise, then 170 degrees of damped dwell (the vibration decays to 2e-8
+    before the mirrored return): max |x''| / (h Ca / t_r^2) is Ct at n = f_n t_r."""
+    law = laws.get("cycloidal")
+    follower = Follower(mass_kg=1.0, stiffness_n_per_mm=1000.0, damping_ratio=0.05, base_radius_mm=40.0,
+                        roller_radius_mm=10.0)  # form-closed: no spring, the forcing is y'' alone
+    program = Program("rise", (Segment(10, 10.0, law), Segment(170), Segment(10, -10.0, law), Segment(170)),
+                      follower)
+    n = 3.3
+    rpm = 60.0 * follower.natural_frequency_hz * (10 / 360) / n
+    reference = camjax.ct_curve(law, np.array([n]), damping=0.05)
+    scale = 1e-3 * 10.0 * float(law.Ca) / (60.0 / rpm * 10 / 360) ** 2  # h Ca / t_r^2 in m/s^2
+    report = analyse(program, [rpm], with_flight=False)["speeds"][0]
+    assert report["max_payload_acceleration_m_s2"] / scale == pytest.approx(float(reference.ct[0]), rel=1e-6)
+    assert report["max_kinematic_acceleration_m_s2"] == pytest.approx(scale, rel=1e-12)
+    assert report["period_ratios"] == pytest.approx([n, n], rel=1e-12)
+    # Residual vibration after the rise: its acceleration amplitude w^2 A is R Ca h / t_r^2.
+    omega = 2 * np.pi * follower.natural_frequency_hz
+    residual = omega**2 * 1e-3 * report["residual_vibration_mm"][0] / scale
+    assert residual == pytest.approx(float(reference.residual[0]), rel=1e-6)
+    assert report["jump"] is False and report["min_preload_n"] is None
+
+
+def test_start_up_converges_to_the_periodic_steady_state(cam, solver):
+    rpm = 600.0
+    steady = solver.cycle(rpm)
+    s, accel, force = startup(cam, rpm, 12, solver=solver)
+    nodes = solver.grid.nodes.size - 1
+    first = np.abs(force[:nodes] - steady.contact_force_n[:-1]).max()
+    last = np.abs(force[-nodes:] - steady.contact_force_n[:-1]).max()
+    assert first > 1.0  # the start from rest is visibly off the steady state
+    assert last < 1e-8 * np.abs(steady.contact_force_n).max()
+    assert np.abs(accel[-nodes:] - steady.payload_acceleration_m_s2[:-1]).max() < 1e-8 * np.abs(accel).max()
+
+
+def _shooting(program, rpm, times):
+    """Periodic deflection by scipy: one cycle from three starts, then the fixed point."""
+    f = program.follower
+    m, k, ks, c = f.mass_kg, f.stiffness, f.spring_rate, f.damping
+    period = 60.0 / rpm
+    rate = 360.0 / period  # deg/s
+
+    def rhs(t, z):
+        y, _, ddy = cycloid_lift(np.array([rate * t]))
+        forcing = 1e-3 * (ddy[0] * rate**2 + ks / m * y[0])
+        return [z[1], forcing - c / m * z[1] - (k + ks) / m * z[0]]
+
+    def run(z0, t_eval=None):
+        edges = np.array([0, 100, 180, 280, 360]) / rate
+        z = np.asarray(z0, float)
+        out = []
+        for a, b in zip(edges[:-1], edges[1:]):  # piece by piece: y'' jumps at segment ends
+            sol = solve_ivp(rhs, (a, b), z, method="DOP853", rtol=1e-12, atol=1e-16, dense_output=True)
+            inside = np.asarray([]) if t_eval is None else t_eval[(t_eval >= a) & (t_eval < b)]
+            if inside.size:
+                out.append(sol.sol(inside))
+            z = sol.y[:, -1]
+        return z, (np.concatenate(out, axis=1) if out else None)
+
+    b, _ = run([0.0, 0.0])
+    monodromy = np.column_stack([run(e)[0] - b for e in ([1.0, 0.0], [0.0, 1.0])])
+    z0 = np.linalg.solve(np.eye(2) - monodromy, b)
+    return run(z0, times)[1]
+
+
+def test_periodic_steady_state_matches_a_scipy_shooting_solve(cam, solver):
+    rpm = 900.0
+    steady = solver.cycle(rpm)
+    period = 60.0 / rpm
+    pick = np.arange(0, solver.grid.nodes.size - 1, 7)
+    e_scipy, de_scipy = _shooting(cam, rpm, solver.grid.nodes[pick] * period)
+    tr = solver.train
+    force = tr.preload + tr.k * e_scipy + tr.c * de_scipy
+    assert np.abs(steady.contact_force_n[pick] - force).max() < 1e-7 * np.abs(force).max()
+
+
+def test_min_preload_tends_to_the_rigid_closed_form():
+    rpm = 600.0
+    rate = 360.0 * rpm / 60.0
+    y, _, ddy = cycloid_lift(np.linspace(0, 360, 360001))
+    m, ks = 1.5, 10e3
+    rigid = max(0.0, np.max(-(m * 1e-3 * ddy * rate**2 + ks * 1e-3 * y)))
+    gaps = []
+    for k in (1e5, 4e5):
+        program = two_cycloids(stiffness_n_per_mm=k, damping_ratio=0.2)
+        preload = analyse(program, [rpm], with_flight=False)["speeds"][0]["min_preload_n"]
+        gaps.append(abs(preload - rigid) / rigid)
+    assert rigid > 50
+    # The quasi-static deflection m y'' / k makes the gap fall as 1/k (measured: 2.4e-2,
+    # 2.4e-3, 6.0e-4 at k = 1e4, 1e5, 4e5 N/mm).
+    assert gaps[0] / gaps[1] == pytest.approx(4.0, rel=0.05)
+    assert gaps[1] < 1e-3
+
+
+def test_flight_and_reimpact_match_a_scipy_event_solve(cam, solver):
+    rpm = 900.0
+    result = flight(solver, rpm)
+    tr = solver.train
+    period = 60.0 / rpm
+    rate = 360.0 / period
+
+    def lift(t):
+        y, dy, _ = cycloid_lift(np.array([rate * t]))
+        return 1e-3 * y[0], 1e-3 * dy[0] * rate
+
+    def contact(t, s):
+        y, dy = lift(t)
+        return [s[1], (tr.k * (y - s[0]) + tr.c * (dy - s[1]) - tr.ks * s[0]) / tr.m]
+
+    def force(t, s):
+        y, dy = lift(t)
+        return tr.preload + tr.k * (y - s[0]) + tr.c * (dy - s[1])
+
+    force.terminal, force.direction = True, -1
+    # Start on the steady state where contact surely holds (the base-circle dwell).
+    t0 = 330.0 / rate
+    e_s, de_s = _shooting(cam, rpm, np.array([t0]))
+    y0, dy0 = lift(t0)
+    opts = dict(method="DOP853", rtol=1e-12, atol=1e-15, max_step=period / 2000)
+    a = solve_ivp(contact, (t0, t0 + period), [y0 - e_s[0], dy0 - de_s[0]], events=force, **opts)
+    t_sep = a.t_events[0][0]
+    xs, vs = a.y_events[0][0]
+
+    def flying(t, s):
+        return [s[1], -(tr.preload + tr.ks * s[0]) / tr.m, -(tr.preload + tr.k * s[2]) / tr.c]
+
+    def gap(t, s):
+        return s[0] + s[2] - lift(t)[0]
+
+    gap.terminal, gap.direction = True, -1
+    b = solve_ivp(flying, (t_sep, t_sep + period), [xs, vs, lift(t_sep)[0] - xs], events=gap, **opts)
+    t_i = b.t_events[0][0]
+    xi, vi, efi = b.y_events[0][0]
+    impact_velocity = lift(t_i)[1] - (vi - (tr.preload + tr.k * efi) / tr.c)
+    c = solve_ivp(contact, (t_i, t_i + period), [xi, vi], events=force, dense_output=True, **opts)
+    t_end = c.t_events[0][0] if len(c.t_events[0]) else t_i + period
+    tt = np.linspace(t_i, t_end, 400001)
+    states = c.sol(tt)
+    y, dy, _ = cycloid_lift(rate * tt)
+    peak = np.max(tr.preload + tr.k * (1e-3 * y - states[0]) + tr.c * (1e-3 * dy * rate - states[1]))
+    assert result.separation_deg == pytest.approx(np.mod(rate * t_sep, 360), abs=1e-6)
+    assert result.reimpact_deg == pytest.approx(np.mod(rate * t_i, 360), abs=1e-5)
+    assert result.impact_velocity_m_s == pytest.approx(impact_velocity, rel=1e-6)
+    assert result.peak_impact_force_n == pytest.approx(peak, rel=1e-6)
+
+
+def test_jump_speed_is_the_first_loss_of_contact(cam, solver):
+    speed = jump_speed_rpm(solver, 300.0, 1200.0)
+    below, above = solver.summary([speed - 0.1, speed + 0.1])["min_contact_force_n"]
+    assert below >= 0 > above
+    # Contact holds everywhere below it: a dense check of the scan.
+    assert np.all(solver.summary(np.linspace(300.0, speed - 0.1, 500))["min_contact_force_n"] >= 0)
+    # And a one-speed call agrees with the sweep (one compiled, vmapped call).
+    sweep = solver.summary([400.0, 700.0, 1000.0])
+    one = solver.cycle(700.0)
+    assert sweep["min_contact_force_n"][1] == pytest.approx(float(one.min_contact_force_n), rel=1e-12)
+
+
+def test_dxf_reads_back_with_the_profile_at_roller_radius(cam, tmp_path):
+    import ezdxf
+
+    prof = profile(cam, 720)
+    path = write_dxf(prof, tmp_path / "cam.dxf")
+    doc = ezdxf.readfile(path)
+    shapes = {e.dxf.layer: e for e in doc.modelspace().query("LWPOLYLINE")}
+    assert set(shapes) == {"PROFILE", "PITCH"} and all(e.closed for e in shapes.values())
+    outline = np.array([p[:2] for p in shapes["PROFILE"].get_points()])
+    pitch = np.array([p[:2] for p in shapes["PITCH"].get_points()])
+    # Pitch curve of a radial follower: the roller centre at base + roller + lift from the centre.
+    y, _, _ = cycloid_lift(prof.theta_deg)
+    assert np.abs(np.linalg.norm(pitch, axis=1) - (52.0 + y)).max() < 1e-9
+    # Every profile point lies at the roller radius from its pitch point, along the normal.
+    offset = outline - pitch
+    assert np.abs(np.linalg.norm(offset, axis=1) - 12.0).max() < 1e-9
+    tangent = np.roll(pitch, -1, axis=0) - np.roll(pitch, 1, axis=0)
+    cosine = np.sum(offset * tangent, axis=1) / (12.0 * np.linalg.norm(tangent, axis=1))
+    assert np.abs(cosine).max() < 1e-3
+    # ... and no closer than the roller radius to any pitch point (a true envelope, no undercut).
+    gaps = np.linalg.norm(outline[:, None, :] - pitch[None, :, :], axis=2).min(axis=1)
+    assert gaps.min() > 12.0 - 1e-6 and not prof.undercut.any()
+
+
+GOOD = """
+[program]
+name = "t"
+[[segment]]
+law = "cycloidal"
+lift_mm = 10
+angle_deg = 180
+[[segment]]
+law = "cycloidal"
+lift_mm = -10
+angle_deg = 180
+[follower]
+mass_kg = 1.0
+stiffness_n_per_mm = 1000
+damping_ratio = 0.05
+spring_rate_n_per_mm = 5
+preload_n = 100
+"""
+
+BAD = [
+    (GOOD.replace("angle_deg = 180\n[[segment]]", "angle_deg = 170\n[[segment]]"), "sum to 350 degrees, not 360"),
+    (GOOD.replace("angle_deg = 180\n[[segment]]", "angle_deg = -180\n[[segment]]"), "segment 1: angle_deg must be positive"),
+    (GOOD.replace("lift_mm = 10", "lift_mm = -10"), "segment 1: the cumulative lift goes below zero"),
+    (GOOD.replace("lift_mm = -10", "lift_mm = -5"), "not back at zero"),
+    (GOOD.replace('law = "cycloidal"\nlift_mm = 10', 'law = "cycloidl"\nlift_mm = 10'), "segment 1: unknown law 'cycloidl'"),
+    (GOOD.replace('law = "cycloidal"\nlift_mm = 10', 'lift_mm = 10'), "segment 1: lift_mm = 10 needs a law"),
+    (GOOD.replace('lift_mm = 10\n', ''), "segment 1: law given without lift_mm"),
+    (GOOD.replace('law = "cycloidal"\nlift_mm = 10', 'law = "missing.json"\nlift_mm = 10'), "segment 1: law file"),
+    (GOOD.replace("mass_kg = 1.0", "mass_kg = -1.0"), "follower.mass_kg must be positive"),
+    (GOOD.replace("stiffness_n_per_mm = 1000", "stiffness_n_per_mm = nan"), "follower.stiffness_n_per_mm must be finite"),
+    (GOOD.replace("damping_ratio = 0.05", "damping_ratio = 1.5"), "follower.damping_ratio must be in"),
+    (GOOD.replace("preload_n = 100", "preload_n = -1"), "follower.preload_n must be non-negative"),
+    (GOOD.replace("mass_kg = 1.0", "mass_kg = 1.0\nkind = \"flat\""), "follower.kind must be one of"),
+    (GOOD.replace("mass_kg = 1.0", "mass_kg = 1.0\nmas_kg = 1"), r"\[follower\]: unknown field\(s\) mas_kg"),
+    (GOOD.replace("mass_kg = 1.0\n", ""), r"\[follower\] needs mass_kg"),
+    (GOOD.replace("[follower]", "[follower"), "not valid TOML"),
+]
+
+
+@pytest.mark.parametrize("text, message", BAD, ids=[m[:30] for _, m in BAD])
+def test_bad_program_files_give_clear_errors(tmp_path, capsys, text, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=message):
+        Program.load(path)
+    assert main(["program", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("camjax program: error: ") and "\n" not in err
+
+
+def test_good_file_loads_and_missing_file_is_an_error(tmp_path, capsys):
+    path = tmp_path / "good.toml"
+    path.write_text(GOOD)
+    assert [s.lift_mm for s in Program.load(path).segments] == [10, -10]
+    with pytest.raises(ValueError, match="cannot read the program file"):
+        Program.load(tmp_path / "none.toml")
+    assert main(["program", str(tmp_path / "none.toml")]) == 2
+    assert main(["program", "--rpm", "0,600"]) == 2
+    assert "--rpm: speeds must be positive" in capsys.readouterr().err
+
+
+def test_cli_json_and_out_dir(tmp_path, capsys):
+    assert main(["program", "--rpm", "300,900", "--format", "json", "--out", str(tmp_path)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["program"] == "indexer" and len(report["speeds"]) == 2
+    slow, fast = report["speeds"]
+    assert slow["jump"] is False and slow["flight"] is None and slow["min_preload_n"] < 300
+    assert fast["jump"] is True and fast["flight"]["reimpact_deg"] > fast["flight"]["separation_deg"]
+    assert fast["min_preload_n"] == pytest.approx(300 - fast["min_contact_force_n"], rel=1e-12)
+    assert 300 < report["jump_speed_rpm"] < 900
+    assert len(slow["residual_vibration_mm"]) == 2 and len(slow["period_ratios"]) == 2
+    for name in ("profile.csv", "profile.dxf", "response.csv", "summary.json", "svaj.png",
+                 "contact_force.png", "sweep.png", "profile.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    assert math.isclose(json.loads((tmp_path / "summary.json").read_text())["jump_speed_rpm"],
+                        report["jump_speed_rpm"])
+
+
+def test_swinging_roller_program_geometry():
+    law = laws.get("cycloidal")
+    follower = Follower(**{**FOLLOWER, "kind": "swinging-roller", "arm_mm": 98.0, "pivot_mm": 110.0})
+    program = Program("swing", (Segment(120, 15.0, law), Segment(60), Segment(120, -15.0, law), Segment(60)), follower)
+    prof = profile(program, 360)
+    theta = np.radians(prof.theta_deg)
+    # Roller centre back in the fixed frame: on the arm's circle about the pivot, swung by lift / arm.
+    c, s = np.cos(theta), np.sin(theta)
+    fixed = np.stack([c * prof.pitch[:, 0] - s * prof.pitch[:, 1], s * prof.pitch[:, 0] + c * prof.pitch[:, 1]], 1)
+    assert np.abs(np.linalg.norm(fixed - [110.0, 0.0], axis=1) - 98.0).max() < 1e-9
+    swing = np.arctan2(fixed[:, 1], fixed[:, 0] - 110.0)
+    assert np.abs(np.unwrap(swing[0] - swing) - prof.lift_mm / 98.0).max() < 1e-9
+    assert np.abs(np.linalg.norm(prof.profile - prof.pitch, axis=1) - 12.0).max() < 1e-9
+    with pytest.raises(ValueError, match="follower.arm_mm must be a number"):
+        Program("swing", program.segments, Follower(**{**FOLLOWER, "kind": "swinging-roller"}))
+
+
+def test_design_one_segment_for_a_speed_range(tmp_path, capsys):
+    program = Program.load(example_path())
+    n1, n2 = camjax.program.segment_band(program, 1, 300.0, 600.0)
+    f_n = program.follower.natural_frequency_hz
+    assert (n1, n2) == pytest.approx((f_n * 100 / 360 * 60 / 600, f_n * 100 / 360 * 60 / 300), rel=1e-12)
+    with pytest.raises(ValueError, match="segment 2 is a dwell"):
+        camjax.program.segment_band(program, 2, 300.0, 600.0)
+    code = main(["design", "--program", str(example_path()), "--segment", "1", "--rpm", "300:600",
+                 "--steps", "20", "--knots", "8", "--quiet", "--out", str(tmp_path)])
+    assert code == 0
+    designed = Program.load(tmp_path / "program.toml")
+    assert designed.segments[0].law.name.startswith("bspline")
+    assert designed.segments[1:] == program.segments[1:] and designed.follower == program.follower
+    # A designed law has array leaves: the profile still builds (the lift is a pytree).
+    prof = profile(designed, 90)
+    assert np.abs(np.linalg.norm(prof.pitch, axis=1) - 52.0 - designed.lift(prof.theta_deg)[0]).max() < 1e-9
+    assert main(["design", "--program", str(example_path()), "--out", str(tmp_path)]) == 2
+    assert "--program needs --segment and --rpm" in capsys.readouterr().err
