@@ -400,6 +400,26 @@ def peak_loads(law, period_ratios, damping=0.0, dwell=1.0) -> np.ndarray:
 # Caps
 
 
+MIN_CJ = 32.0
+"""Least peak jerk of any rise from rest to rest in unit time (see :func:`least_jerk`)."""
+
+
+def least_jerk(max_ca: float | None = None) -> float:
+    """Least Cj of any rise whose acceleration stays within ``max_ca`` (None: no cap).
+
+    The rise of least peak jerk is the time-optimal rest-to-rest motion under a jerk
+    bound (Pontryagin: the jerk is bang-bang).  Without an acceleration cap the jerk is
+    +J, -J, +J with switches at tau = 1/4 and 3/4, which travels J/32: so Cj >= 32.  With
+    ``|a| <= A < J/4`` the acceleration is a trapezoid (ramps of A/J, flat at A), which
+    travels ``A (1/2 - A/J) / 2``; reaching 1 needs ``J >= 2 A^2 / (A - 4)``.
+    """
+    if max_ca is None or max_ca >= 8.0:
+        return MIN_CJ
+    if max_ca <= 4.0:
+        return math.inf
+    return max(MIN_CJ, 2 * max_ca**2 / (max_ca - 4.0))
+
+
 @dataclasses.dataclass(frozen=True)
 class Caps:
     """Limits the designed law must meet: ``Ca <= max_ca``, ``Cj <= max_jerk``, ``v >= 0``."""
@@ -417,6 +437,18 @@ class Caps:
                 f"Caps: max_ca = {self.max_ca} is infeasible: every rise has Ca >= 4 "
                 "(the parabolic law's bound)"
             )
+        if self.max_jerk is not None and self.max_jerk < MIN_CJ:
+            raise ValueError(
+                f"Caps: max_jerk = {self.max_jerk} is infeasible: every rise has Cj >= {MIN_CJ:g} "
+                "(the least is a jerk of +-32 switching at tau = 1/4 and 3/4)"
+            )
+        if self.max_ca is not None and self.max_jerk is not None:
+            least = least_jerk(self.max_ca)
+            if self.max_jerk < least:
+                raise ValueError(
+                    f"Caps: max_jerk = {self.max_jerk} is infeasible with max_ca = {self.max_ca}: "
+                    f"every rise with Ca <= {self.max_ca} has Cj >= {least:.6g}"
+                )
 
     def features(self, law):
         """``(v, a, j)`` on a dense grid of every smooth piece (linear in the law)."""

@@ -6,6 +6,10 @@ import numpy as np
 
 from ._common import CliError, dump_json, output_dir, parse_float_list
 
+DEFAULT_STEPS = 6000
+"""The design's own default (``camjax.motion_design.DEFAULT_STEPS``; a test checks they agree)."""
+
+
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
@@ -14,20 +18,30 @@ def register(subparsers) -> None:
         description="Optimise a B-spline rise for a period-ratio band under caps; write the "
         "law (JSON, CSV), figures and a comparison with every standard law.",
     )
-    parser.add_argument("--objective", choices=("residual", "ca-ct"), default="residual")
+    parser.add_argument("--objective", choices=("residual", "ca-ct"), default="residual",
+                        help="what to minimise: residual vibration R (units of Ca) or the peak "
+                        "inertia load Ca*Ct (units of h/T^2), worst case over the band")
     where = parser.add_mutually_exclusive_group(required=True)
-    where.add_argument("--band", help="period-ratio band N1:N2 (worst case over it)")
-    where.add_argument("--n", type=float, help="a single period ratio")
-    parser.add_argument("--max-ca", type=float, default=None, help="cap on Ca")
-    parser.add_argument("--max-jerk", type=float, default=None, help="cap on Cj")
-    parser.add_argument("--damping", type=float, default=0.0, help="damping ratio zeta")
+    where.add_argument("--band", metavar="N1:N2",
+                       help="period-ratio band (dimensionless, rise time / natural period)")
+    where.add_argument("--n", type=float, help="a single period ratio (dimensionless)")
+    parser.add_argument("--max-ca", type=float, default=None,
+                        help="cap on Ca, the peak acceleration in units of h/T^2 (>= 4; "
+                        "default: none)")
+    parser.add_argument("--max-jerk", type=float, default=None,
+                        help="cap on Cj, the peak jerk in units of h/T^3 (>= 32, more "
+                        "with --max-ca below 8; "
+                        "default: none)")
+    parser.add_argument("--damping", type=float, default=0.0,
+                        help="damping ratio zeta in [0, 1) (dimensionless)")
     parser.add_argument("--knots", type=int, default=24, help="free B-spline coefficients")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--steps", type=int, default=None,
-                        help="optimiser steps (default: camjax.motion_design.DEFAULT_STEPS)")
-    parser.add_argument("--optimizer", choices=("lbfgs", "adam"), default="lbfgs")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    parser.add_argument("--out", required=True, help="output directory")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the random restarts of the optimiser")
+    parser.add_argument("--steps", type=int, default=DEFAULT_STEPS, help="optimiser steps")
+    parser.add_argument("--optimizer", choices=("lbfgs", "adam"), default="lbfgs",
+                        help="optimisation method")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.set_defaults(func=run)
 
 
@@ -57,7 +71,7 @@ def run(args) -> int:
         objective = (D.MaxCaCt(*band, damping=args.damping) if band
                      else D.CaCt(args.n, damping=args.damping))
     caps = D.Caps(args.max_ca, args.max_jerk)
-    steps = D.DEFAULT_STEPS if args.steps is None else args.steps
+    steps = args.steps
     result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=steps,
                       optimizer=args.optimizer, progress=not args.quiet)
     law = result.law
