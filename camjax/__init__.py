@@ -19,7 +19,7 @@ if os.environ.get("JAX_ENABLE_X64", "").lower() not in ("0", "false"):
         # JAX reads this when it is first imported (by whichever camjax module needs it).
         os.environ["JAX_ENABLE_X64"] = "1"
 
-_SUBMODULES = ("geometry", "laws", "metrics", "models", "plot", "propagation", "studies")
+_SUBMODULES = ("geometry", "law_design", "laws", "metrics", "models", "plot", "propagation", "studies")
 _ATTRIBUTES = {
     "TorsionFactorFit": "metrics",
     "ca_ct_crossings": "metrics",
@@ -31,9 +31,9 @@ _ATTRIBUTES = {
     "TwoMass": "models",
     "natural_frequency": "models",
     "period_ratio": "models",
-    "CapError": "motion_design",
-    "Caps": "motion_design",
-    "design": "motion_design",
+    "CapError": "law_design",
+    "Caps": "law_design",
+    "design": "law_design",
     "Metrics": "propagation",
     "Response": "propagation",
     "SolveOptions": "propagation",

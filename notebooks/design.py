@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-import camjax.motion_design as D
+import camjax.law_design as D
 from camjax.laws import get
 from camjax.laws._io import load, save
 

@@ -110,15 +110,15 @@ def test_help_imports_no_jax_and_states_defaults():
 
 
 def test_cli_defaults_agree_with_the_library():
-    from camjax import motion_design
+    from camjax import law_design
     from camjax.cli import design
 
-    assert design.DEFAULT_STEPS == motion_design.DEFAULT_STEPS
+    assert design.DEFAULT_STEPS == law_design.DEFAULT_STEPS
 
 
 def test_least_jerk_matches_the_bang_bang_rise():
     """The bang-bang jerk +-32 (switches at 1/4, 3/4) travels exactly 1; others need more."""
-    from camjax.motion_design import MIN_CJ, least_jerk
+    from camjax.law_design import MIN_CJ, least_jerk
 
     # From rest, s(1) = int j (1-t)^2/2, v(1) = int j (1-t), a(1) = int j: exact per piece.
     pieces = [(0.0, 0.25, MIN_CJ), (0.25, 0.75, -MIN_CJ), (0.75, 1.0, MIN_CJ)]

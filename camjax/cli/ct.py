@@ -60,6 +60,10 @@ def _table(curves, fits) -> str:
         fit = f"{f.p:7.3f} {f.q:6.3f} {f.r:6.3f}" if f else f"{'-':>7} {'-':>6} {'-':>6}"
         lines.append(f"{name:<20} {c.ca:7.4f} {c.ct.max():7.4f} {c.ca_ct.max():8.4f} "
                      f"{c.residual.max():7.4f} {fit}")
+    lines.append("Ca and Ca*Ct in units of h/T^2 (stroke over rise time squared); Ct and R in "
+                 "units of Ca; maxima over the period ratios given.")
+    lines.append("p, q, r: the fit Ct ~ p/n^q + r of the upper envelope; '-' where it cannot "
+                 "be fitted (too few period ratios or envelope points).")
     return "\n".join(lines)
 
 

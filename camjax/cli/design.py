@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
 from ._common import CliError, dump_json, output_dir, parse_float_list
 
 DEFAULT_STEPS = 6000
-"""The design's own default (``camjax.motion_design.DEFAULT_STEPS``; a test checks they agree)."""
+"""The design's own default (``camjax.law_design.DEFAULT_STEPS``; a test checks they agree)."""
 
 
 
@@ -56,7 +58,9 @@ def _band(text: str) -> tuple[float, float]:
 
 
 def run(args) -> int:
-    from .. import motion_design as D
+    from tqdm import tqdm
+
+    from .. import law_design as D
     from ..laws import standard_laws
     from ..laws._io import save
 
@@ -84,13 +88,19 @@ def run(args) -> int:
     ratios = np.linspace(n1, n2, D.EVALUATION_SAMPLES)
     laws = [("designed", law)] + [(x.name, x) for x in standard_laws()]
     rows, curves = [], {}
+    # The standard laws share compiled programs by family (SCCA, polynomial), so this
+    # costs a few compilations, not one per law; the bar covers it and the figures.
+    bar = tqdm(total=len(laws) + 1, desc="compare", unit="law", disable=args.quiet,
+               file=sys.stderr)
     for name, each in laws:
+        bar.set_postfix_str(name)
         r = np.asarray(D.residual(each, ratios, args.damping))
         load = D.peak_loads(each, ratios, args.damping)
         curves[name] = (r, load)
         peaks = each.peak_coefficients()
         rows.append({"law": name, "objective": objective.report(each), "Ca": peaks["Ca"],
                      "Cj": peaks["Cj"], "max_R": float(r.max()), "max_CaCt": float(load.max())})
+        bar.update()
     where = ("the objective on 2000 period ratios across the band" if band else
              f"the objective at n = {args.n:g}")
     _write_table(rows, f"{objective.label} ({where}; max R and max Ca*Ct over "
@@ -100,7 +110,10 @@ def run(args) -> int:
                "coefficients": result.coefficients, "knots": args.knots, "seed": args.seed,
                "steps": steps, "repaired": result.restored, "seconds": result.seconds,
                "band": [n1, n2], "damping": args.damping}, out / "summary.json")
+    bar.set_postfix_str("figures")
     _figures(law, ratios, curves, out)
+    bar.update()
+    bar.close()
     print(f"{objective.label}: designed {rows[0]['objective']:.5g}; best standard "
           f"{min(rows[1:], key=lambda r: r['objective'])['law']} "
           f"{min(r['objective'] for r in rows[1:]):.5g}; wrote {out}")
