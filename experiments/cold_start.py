@@ -45,6 +45,12 @@ COMMANDS = {
 }
 
 
+SHOWN = {
+    "bare-jax": 'python -c "import jax; jax.numpy.zeros(1).block_until_ready()"',
+    "ct_curves": "python: camjax.ct_curves(standard_laws(), 1000 ratios in [1, 30])",
+}
+
+
 def run_once(argv, root: Path, cache: str) -> float:
     """Wall seconds of one fresh process (raises if it fails)."""
     env = dict(os.environ)
@@ -75,10 +81,12 @@ def main() -> None:
     names = args.only.split(",") if args.only else list(COMMANDS)
     if "bare-jax" not in names:
         names.insert(0, "bare-jax")
-    rows = {}
+    rows, bare = {}, []
     with tempfile.TemporaryDirectory() as scratch:
         for name in names:
             argv = COMMANDS[name]
+            # The bare start again before every command: the load drifts during a run.
+            bare.append(run_once(COMMANDS["bare-jax"], root, str(Path(scratch) / "bare")))
             warm_cache = str(Path(scratch) / f"warm-{name}")
             cold = []
             for i in range(args.repeats):
@@ -88,19 +96,22 @@ def main() -> None:
             rows[name] = {"cold": cold, "warm": warm}
             print(f"{name:<12} cold {statistics.median(cold):6.2f} s  "
                   f"warm {statistics.median(warm):6.2f} s", flush=True)
-    base = statistics.median(rows["bare-jax"]["cold"])
+    base = statistics.median(bare + rows["bare-jax"]["cold"] + rows["bare-jax"]["warm"])
     lines = [
         f"# Cold start ({args.label}): whole-process wall time, median of {args.repeats}",
         "",
         "Shared 2-core machine under load from other jobs: read the ratios to the bare JAX",
-        f"start (`python -c \"{BARE}\"`, {base:.2f} s in this run) rather than the seconds.",
+        f"start (`python -c \"{BARE}\"`, median {base:.2f} s in this run, timed again before",
+        "every command) rather than the seconds.  Cold: an empty compilation cache; warm: the",
+        "cache the first cold run filled (code without a persistent cache: two more cold runs).",
         "",
         "| command | cold s | warm-cache s | cold / bare | warm / bare |",
         "|---|---|---|---|---|",
     ]
     for name, r in rows.items():
         c, w = statistics.median(r["cold"]), statistics.median(r["warm"])
-        shown = " ".join(COMMANDS[name]).replace("-m camjax", "camjax").replace("{out}", "DIR")
+        shown = SHOWN.get(name) or " ".join(COMMANDS[name]).replace("-m camjax", "camjax")
+        shown = shown.replace("{out}", "DIR")
         lines.append(f"| `{shown}` | {c:.2f} | {w:.2f} | {c / base:.1f} | {w / base:.1f} |")
     text = "\n".join(lines) + "\n"
     print(text)
@@ -109,6 +120,7 @@ def main() -> None:
     (out / f"{args.label}.md").write_text(text)
     (out / f"{args.label}.json").write_text(json.dumps(
         {"label": args.label, "root": str(root), "repeats": args.repeats, "bare_s": base,
+         "bare_runs": bare,
          "commands": {k: {**v, "argv": COMMANDS[k]} for k, v in rows.items()}}, indent=1) + "\n")
 
 

@@ -46,14 +46,14 @@ class MotionGrid(NamedTuple):
 
     Attributes:
         nodes: ``(K + 1,)`` node times, from 0 to 1.
-        piece: ``(K,)`` index of the law piece that each interval belongs to (traced when
-            the breakpoints are).
+        piece: ``(K,)`` index of the law piece that each interval belongs to (NumPy for
+            fixed breakpoints, traced when the breakpoints are).
         piece_width: ``(P,)`` interval width used inside each piece.
         forcing: ``(K, 6)`` monomial coefficients of the acceleration in ``sigma``.
     """
 
     nodes: jax.Array
-    piece: jax.Array
+    piece: np.ndarray | jax.Array
     piece_width: jax.Array
     forcing: jax.Array
 
@@ -90,32 +90,27 @@ class MotionGrid(NamedTuple):
         return left, right
 
 
-def _edges(law: AbstractMotionLaw) -> jax.Array:
-    """``0``, the law's breakpoints in order, ``1`` (fixed length for the law's type)."""
-    breakpoints = law.breakpoints()
-    if isinstance(breakpoints, tuple):
-        return jnp.asarray([0.0, *breakpoints, 1.0])
-    inner = jnp.sort(jnp.clip(breakpoints, 0.0, 1.0))
-    return jnp.concatenate([jnp.zeros(1), inner, jnp.ones(1)])
-
-
-def piece_counts(widths: jax.Array, total: int) -> jax.Array:
+def piece_counts(widths, total: int):
     """Interval counts of pieces of ``widths`` (summing to 1) that add up to ``total``.
 
     Every piece of positive width gets at least one interval and the rest in proportion
-    to its width (largest remainders first); zero-width pieces get none.  Works on
-    traced widths: only the total is static.
+    to its width (largest remainders first, ties to the earlier piece); zero-width pieces
+    get none.  NumPy in, NumPy out (fixed breakpoints, no JAX dispatch); JAX arrays work
+    too (traced breakpoints: only the total is static).
     """
+    xp = np if isinstance(widths, np.ndarray) else jnp
     positive = widths > 0
-    spare = total - jnp.sum(positive)
-    share = widths / jnp.sum(widths) * spare
-    base = jnp.floor(share).astype(int)
-    remainder = jnp.where(positive, share - base, -1.0)
-    rank = jnp.argsort(jnp.argsort(-remainder))
-    counts = positive + base + ((rank < spare - jnp.sum(base)) & positive)
+    spare = total - xp.sum(positive)
+    share = widths / xp.sum(widths) * spare
+    base = xp.floor(share).astype(int)
+    remainder = xp.where(positive, share - base, -1.0)
+    order = np.argsort(-remainder, kind="stable") if xp is np else jnp.argsort(-remainder)
+    rank = xp.argsort(order)
+    counts = positive + base + ((rank < spare - xp.sum(base)) & positive)
     # Rounding cannot leave the sum off by more than a piece's share; the widest piece
     # takes up any difference so that the grid's shape holds exactly.
-    return counts.at[jnp.argmax(widths)].add(total - jnp.sum(counts))
+    widest = xp.arange(widths.shape[0]) == xp.argmax(widths)
+    return counts + widest * (total - xp.sum(counts))
 
 
 def motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
@@ -127,17 +122,24 @@ def motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
 
 
 def _motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
-    edges = _edges(law)
-    widths = jnp.diff(edges)
+    breakpoints = law.breakpoints()
+    if isinstance(breakpoints, tuple):  # fixed: the layout in NumPy
+        xp = np
+        edges = np.array([0.0, *breakpoints, 1.0])
+    else:  # traced: the same layout as a computation
+        xp = jnp
+        inner = jnp.sort(jnp.clip(breakpoints, 0.0, 1.0))
+        edges = jnp.concatenate([jnp.zeros(1), inner, jnp.ones(1)])
+    widths = xp.diff(edges)
     total = int(resolution) + widths.shape[0]
     counts = piece_counts(widths, total)
-    stops = jnp.cumsum(counts)
-    interval = jnp.arange(total)
-    piece = jnp.searchsorted(stops, interval, side="right")
+    stops = xp.cumsum(counts)
+    interval = xp.arange(total)
+    piece = xp.searchsorted(stops, interval, side="right")
     step = interval - (stops - counts)[piece]
-    piece_width = widths / jnp.maximum(counts, 1)
+    piece_width = widths / xp.maximum(counts, 1)
     left = edges[piece] + piece_width[piece] * step
-    nodes = jnp.concatenate([left, jnp.ones(1)])
+    nodes = xp.concatenate([left, xp.ones(1)])
     sample_times = left[:, None] + piece_width[piece][:, None] * _GAUSS_POINTS
     forcing = law.a(sample_times) @ jnp.asarray(_TO_MONOMIAL.T)
-    return MotionGrid(nodes, piece, piece_width, forcing)
+    return MotionGrid(jnp.asarray(nodes), piece, jnp.asarray(piece_width), forcing)
