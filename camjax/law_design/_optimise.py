@@ -215,19 +215,25 @@ def design(
                 bar.update(chunk * (len(ps) - i if converged else 1))
                 if converged:
                     break
-    if not np.all(np.isfinite(np.asarray(theta))):
-        raise FloatingPointError("the optimiser produced non-finite coefficients; lower the rate")
-    law = law_of(theta)
-    final = _restore(law, caps)
-    violations = caps.violations(final)
-    if any(v > 0 for v in violations.values()):  # pragma: no cover - _restore guarantees it
-        raise CapError(f"the design breaks its caps: {_describe(violations)}")
-    values = {o.label: o.report(final) for o in objectives}
+        if not np.all(np.isfinite(np.asarray(theta))):
+            raise FloatingPointError("the optimiser produced non-finite coefficients; lower the rate")
+        # What follows the optimiser still takes seconds (fine-grid checks, a possible
+        # repair, the reported values): the bar stays up and says which.
+        bar.set_postfix_str("checking the caps on a fine grid")
+        law = law_of(theta)
+        final = _restore(law, caps)
+        violations = caps.violations(final)
+        if any(v > 0 for v in violations.values()):  # pragma: no cover - _restore guarantees it
+            raise CapError(f"the design breaks its caps: {_describe(violations)}")
+        bar.set_postfix_str("reporting the objectives")
+        values = {o.label: o.report(final) for o in objectives}
+        coefficients = dict(zip(("Cv", "Ca", "Cj"), (float(x) for x in _fine_checks(final)[:3])))
+        bar.set_postfix_str("done")
     return DesignResult(
         law=final,
         objectives=objectives,
         values=values,
-        coefficients=dict(zip(("Cv", "Ca", "Cj"), (float(x) for x in _fine_checks(final)[:3]))),
+        coefficients=coefficients,
         loss_history=np.concatenate(history),
         restored=final is not law,
         seconds=time.perf_counter() - started,
