@@ -3,40 +3,66 @@
 Importing camjax turns on JAX's float64 mode (every accuracy figure in camjax holds in
 float64), unless the environment sets ``JAX_ENABLE_X64=0``: then camjax runs in float32
 and its accuracy is that of float32 (see the README's accuracy notes).
+
+The public names below are imported on first use, so that ``import camjax`` (and the
+command line's ``--help``) does not pay for JAX's import until something needs it.
 """
 
+import importlib
 import os
-
-import jax
+import sys
 
 if os.environ.get("JAX_ENABLE_X64", "").lower() not in ("0", "false"):
-    jax.config.update("jax_enable_x64", True)
+    if "jax" in sys.modules:
+        sys.modules["jax"].config.update("jax_enable_x64", True)
+    else:
+        # JAX reads this when it is first imported (by whichever camjax module needs it).
+        os.environ["JAX_ENABLE_X64"] = "1"
 
-from . import geometry as geometry  # noqa: E402
-from . import laws as laws  # noqa: E402
-from . import models as models  # noqa: E402
-from .errors import RESULTS as RESULTS  # noqa: E402
-from .errors import SolverError as SolverError  # noqa: E402
-from .metrics import TorsionFactorFit as TorsionFactorFit  # noqa: E402
-from .metrics import ca_ct_crossings as ca_ct_crossings  # noqa: E402
-from .metrics import fit_torsion_factor as fit_torsion_factor  # noqa: E402
-from .models import AbstractModel as AbstractModel  # noqa: E402
-from .models import Backlash as Backlash  # noqa: E402
-from .models import CoulombFriction as CoulombFriction  # noqa: E402
-from .models import Metrics as Metrics  # noqa: E402
-from .models import Response as Response  # noqa: E402
-from .models import SpringMass as SpringMass  # noqa: E402
-from .models import SwingingFollower as SwingingFollower  # noqa: E402
-from .models import TwoMass as TwoMass  # noqa: E402
-from .models import natural_frequency as natural_frequency  # noqa: E402
-from .models import period_ratio as period_ratio  # noqa: E402
-from .models import residual_vibration as residual_vibration  # noqa: E402
-from .models import solve as solve  # noqa: E402
-from .models import torsion_factor as torsion_factor  # noqa: E402
-from .motion_design import CapError as CapError  # noqa: E402
-from .motion_design import Caps as Caps  # noqa: E402
-from .motion_design import design as design  # noqa: E402
-from .program import Program as Program  # noqa: E402
-from .sweep import CtCurve as CtCurve  # noqa: E402
-from .sweep import ct_curve as ct_curve  # noqa: E402
-from .sweep import ct_curves as ct_curves  # noqa: E402
+_SUBMODULES = (
+    "checks", "errors", "geometry", "law_design", "laws", "metrics", "models", "plot", "program",
+    "propagation", "solvers", "studies", "sweep",
+)
+_ATTRIBUTES = {
+    "TorsionFactorFit": "metrics",
+    "ca_ct_crossings": "metrics",
+    "fit_torsion_factor": "metrics",
+    "RESULTS": "errors",
+    "SolverError": "errors",
+    "AbstractModel": "models",
+    "Backlash": "models",
+    "CoulombFriction": "models",
+    "SpringMass": "models",
+    "SwingingFollower": "models",
+    "TwoMass": "models",
+    "natural_frequency": "models",
+    "period_ratio": "models",
+    "CapError": "law_design",
+    "Caps": "law_design",
+    "design": "law_design",
+    "Metrics": "models",
+    "Response": "models",
+    "residual_vibration": "models",
+    "solve": "models",
+    "torsion_factor": "models",
+    "Program": "program",
+    "CtCurve": "sweep",
+    "ct_curve": "sweep",
+    "ct_curves": "sweep",
+}
+__all__ = sorted([*_SUBMODULES, *_ATTRIBUTES])
+
+
+def __getattr__(name: str):
+    if name in _ATTRIBUTES:
+        value = getattr(importlib.import_module(f".{_ATTRIBUTES[name]}", __name__), name)
+    elif name in _SUBMODULES:
+        value = importlib.import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module 'camjax' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return __all__

@@ -25,7 +25,7 @@ from design_convex import _affine
 from scipy.optimize import linprog
 
 import camjax
-import camjax.motion_design as D
+import camjax.law_design as D
 from camjax.laws import SCCA, BSplineLaw, standard_laws
 
 CENTRES = (5.0, 8.0)
@@ -76,7 +76,7 @@ def lp_lower_bound(n1, n2, max_jerk, knots=KNOTS, samples=64, directions=32):
     ratios = np.linspace(n1, n2, samples)
     law_of = lambda c: BSplineLaw(c)  # noqa: E731
     (b, e_b), (m, e_m) = (tuple(np.asarray(x) for x in pair) for pair in D.linear_maps(
-        lambda c: D._payload_acceleration(law_of(c), ratios, 0.0), knots))
+        lambda c: D._objectives._payload_acceleration(law_of(c), ratios, 0.0), knots))
     m, b = m.reshape(b.size, knots), b.reshape(-1)
     e_m, e_b = e_m.reshape(e_b.size, knots), e_b.reshape(-1)
     omega = 2 * np.pi * ratios
@@ -88,7 +88,7 @@ def lp_lower_bound(n1, n2, max_jerk, knots=KNOTS, samples=64, directions=32):
             np.concatenate([(rot * q_m).real.reshape(-1, knots), ones(directions * samples)], 1)]
     rhs = [-b, b, -(rot[:, :, 0] * q_b).real.reshape(-1)]
     template = law_of(jnp.zeros(knots))
-    tau = D._dense_tau(template)
+    tau = D._residual._dense_tau(template)
     for order, cap in ((3, max_jerk), (1, None)):
         mm, bb = _affine(law_of, knots, lambda law, k=order: law.evaluate(tau)[k])
         zero = np.zeros((len(mm), 1))

@@ -21,7 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 from scipy.optimize import linprog
 
-import camjax.motion_design as D
+import camjax.law_design as D
 from camjax.laws import BSplineLaw
 
 
@@ -39,7 +39,7 @@ class ConvexProblem:
         law_of = self.law_of
         template = law_of(jnp.zeros(knots))
         nodes, weights = D.quadrature(template, n2)
-        kernel = D._kernel(np.linspace(n1, n2, samples), 0.0, nodes, weights)
+        kernel = D._residual._kernel(np.linspace(n1, n2, samples), 0.0, nodes, weights)
         a_m, a_b = _affine(law_of, knots, lambda law: law.a(jnp.asarray(nodes)))
         z_m, z_b = kernel @ a_m, kernel @ a_b  # complex (samples, knots), (samples,)
         rot = np.exp(-2j * np.pi * np.arange(directions) / directions)[:, None, None]

@@ -22,7 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from design_convex import ConvexProblem  # noqa: E402
 
-import camjax.motion_design as D  # noqa: E402
+import camjax.law_design as D  # noqa: E402
 from camjax.laws import PolynomialLaw, standard_laws  # noqa: E402
 
 BANDS = ((4.0, 8.0), (6.0, 12.0), (8.0, 16.0))

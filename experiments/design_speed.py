@@ -18,7 +18,7 @@ from pathlib import Path
 CASE = """
 import json, time
 started = time.perf_counter()
-import camjax.motion_design as D
+import camjax.law_design as D
 imported = time.perf_counter() - started
 def one(cap):
     r = D.design(D.MaxResidual(6.0, 12.0), caps=D.Caps(cap, 100.0), knots={knots}, progress=False)

@@ -141,7 +141,7 @@ def main() -> None:
     residual_rows, residual_check = residual_gradients()
     ct_rows, ct_check = ct_gradients()
     rows = residual_rows + ct_rows
-    from camjax.cli.bench import format_table
+    from camjax.studies import format_table
 
     columns = ("quantity", "way", "warm_s", "compile_s", "max_abs_error", "max_rel_error")
     text = [

@@ -36,8 +36,8 @@ def fixed_step_map(n, step_counts, methods=("euler", "heun")):
     import jax.numpy as jnp
 
     import camjax
-    from camjax.cli.bench import reference_metrics
     from camjax.models.spring_mass import SpringMassOptions, batch_metrics
+    from camjax.studies import reference_metrics
 
     law = camjax.laws.get("cycloidal")
     ref_ct, _ = reference_metrics(law, n)
@@ -89,7 +89,7 @@ def jump_ts_work(n, law_names=("parabolic", "modified-trapezoid"), rtol=1e-8):
 def float32_errors(n, law_name="modified-trapezoid"):
     """Ct error against n of the float32 runs (from the work-precision float32 worker)."""
     import camjax
-    from camjax.cli.bench import reference_metrics
+    from camjax.studies import reference_metrics
 
     spec = Path(f"/tmp/camjax_atlas_float32_{os.getpid()}.json")
     spec.write_text(json.dumps({"law": law_name, "n": n.tolist()}))
@@ -106,8 +106,8 @@ def high_period_ratio(n, law_name="modified-trapezoid"):
     import jax.numpy as jnp
 
     import camjax
-    from camjax.cli.bench import reference_metrics
     from camjax.models.spring_mass import SpringMassOptions, batch_metrics
+    from camjax.studies import reference_metrics
 
     law = camjax.laws.get(law_name)
     ref_ct, _ = reference_metrics(law, n)
@@ -131,8 +131,8 @@ def default_grid_ranges(range_tops, count, law_names=("harmonic", "modified-trap
     import jax.numpy as jnp
 
     import camjax
-    from camjax.cli.bench import reference_metrics
     from camjax.models.spring_mass import SpringMassOptions, batch_metrics
+    from camjax.studies import reference_metrics
 
     out = {}
     for name in law_names:

@@ -69,7 +69,7 @@ def float32_worker(path: Path) -> None:
 
 def float32_rows(law_name: str, n: np.ndarray, reference) -> list[dict]:
     """Rows of the float32 cases, from a child process (float32 needs a fresh JAX)."""
-    from camjax.cli.bench import locate_errors
+    from camjax.studies import locate_errors
 
     spec = Path(f"/tmp/camjax_float32_{os.getpid()}_{law_name}.json")
     spec.write_text(json.dumps({"law": law_name, "n": n.tolist()}))
@@ -153,7 +153,7 @@ def scipy_metrics(law, n: float, method: str, rtol: float):
 
 def scipy_rows(law, n: np.ndarray, reference, subset: int) -> list[dict]:
     """Rows of the scipy peers, timed on ``subset`` evenly spread period ratios, scaled up."""
-    from camjax.cli.bench import locate_errors
+    from camjax.studies import locate_errors
 
     pick = np.unique(np.linspace(0, n.size - 1, subset).round().astype(int))
     rows = []
@@ -186,7 +186,7 @@ def plot(rows: list[dict], path: Path, title: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from camjax.cli.bench import ACCURACY_GOAL, pareto_front
+    from camjax.studies import ACCURACY_GOAL, pareto_front
 
     laws = list(dict.fromkeys(r["law"] for r in rows))
     fig, axes = plt.subplots(1, len(laws), figsize=(4.2 * len(laws), 4.4), squeeze=False, sharey=True)
@@ -224,7 +224,7 @@ def plot(rows: list[dict], path: Path, title: str) -> None:
 
 def write_outputs(rows: list[dict], summary: dict, out: Path, tag: str, title: str) -> None:
     """``<tag>.csv``, ``.json``, ``.md`` and ``.png`` of the rows under ``out``."""
-    from camjax.cli.bench import format_table
+    from camjax.studies import format_table
 
     columns = list(dict.fromkeys(k for r in rows for k in r))
     with open(out / f"{tag}.csv", "w", newline="") as f:
@@ -252,7 +252,7 @@ NOTE = ("scipy rows: timed on a subset of period ratios and scaled to the batch;
 
 def combine(tags: list[str], out: Path, tag: str) -> None:
     """Merge the rows of earlier runs (``<tag>.json``) into one table, chart and default method."""
-    from camjax.cli.bench import ACCURACY_GOAL, default_method
+    from camjax.studies import ACCURACY_GOAL, default_method
 
     runs = [json.loads((out / f"{t}.json").read_text()) for t in tags]
     rows = [r for run in runs for r in run["rows"]]
@@ -302,7 +302,8 @@ def main() -> None:
         return
 
     import camjax
-    from camjax.cli.bench import (
+    from camjax.models.spring_mass import SpringMassOptions
+    from camjax.studies import (
         ACCURACY_GOAL,
         Case,
         default_method,
@@ -312,7 +313,6 @@ def main() -> None:
         reference_resolution,
         study_cases,
     )
-    from camjax.models.spring_mass import SpringMassOptions
 
     n = np.linspace(1.0, args.n_max, args.n_count)
     cases = [] if args.level == "none" else study_cases(args.level)

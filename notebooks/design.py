@@ -6,11 +6,15 @@
 # law with that Ca), check the caps, save the law and load it back.
 
 # %%
+import matplotlib
+
+matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-import camjax.motion_design as D
-from camjax.laws import get, load, save
+import camjax.law_design as D
+from camjax.laws import get
+from camjax.laws._io import load, save
 
 # %%
 objective = D.MaxResidual(6.0, 12.0, samples=128)

@@ -10,6 +10,12 @@ from camjax import laws
 from camjax.cli import main
 
 
+@pytest.fixture(autouse=True)
+def _no_user_cache(monkeypatch):
+    """The commands here must not write into the user's compilation cache."""
+    monkeypatch.setenv("CAMJAX_CACHE_DIR", "off")
+
+
 def run(capsys, *argv):
     code = main(list(argv))
     out, err = capsys.readouterr()
@@ -61,9 +67,79 @@ def test_ct_writes_tables_and_figures(capsys, tmp_path):
         (("ct", "--n", "2", "--damping", "1.5"), "damping ratio"),
         (("ct", "--n", "2", "--method", "rk99"), "unknown method"),
         (("ct", "--n", "nan"), "finite"),
+        (("ct", "--n", "10:5:6"), "START must be below STOP"),
+        (("ct", "--law", ",", "--n", "2"), "no law name"),
+        (("bench", "--law", "nope"), "unknown law 'nope'"),
+        (("design", "--band", "6:12", "--max-jerk", "31", "--out", "{tmp}"), "Cj >= 32"),
+        (("design", "--band", "6:12", "--max-ca", "6", "--max-jerk", "35", "--out", "{tmp}"),
+         "Cj >= 36"),
     ],
 )
-def test_bad_arguments_exit_2_with_one_line(capsys, argv, message):
-    code, out, err = run(capsys, *argv)
+def test_bad_arguments_exit_2_with_one_line(capsys, tmp_path, argv, message):
+    code, out, err = run(capsys, *(a.replace("{tmp}", str(tmp_path)) for a in argv))
     assert code == 2 and out == ""
     assert message in err and len(err.strip().splitlines()) == 1
+
+
+_HELP_SCRIPT = """
+import sys
+from camjax.cli import _COMMANDS, main
+texts = {}
+for argv in [["--help"]] + [[name, "--help"] for name in _COMMANDS]:
+    try:
+        main(argv)
+    except SystemExit:
+        pass
+assert "jax" not in sys.modules, "printing help imported JAX"
+"""
+
+
+def test_help_imports_no_jax_and_states_defaults():
+    """Every --help runs without importing JAX, with defaults and no reST markup."""
+    import os
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", _HELP_SCRIPT], capture_output=True, text=True,
+                          env={**os.environ, "COLUMNS": "200"}, check=True)
+    text = done.stdout
+    assert "``" not in text
+    assert "optimiser steps (default: 6000)" in text
+    assert "damping ratio zeta in [0, 1) (dimensionless) (default: 0.0)" in text
+    assert "poly:K (repeatable, or comma-separated; default: all standard laws)" in text
+
+
+def test_cli_defaults_agree_with_the_library():
+    from camjax import law_design
+    from camjax.cli import design
+
+    assert design.DEFAULT_STEPS == law_design.DEFAULT_STEPS
+
+
+def test_least_jerk_matches_the_bang_bang_rise():
+    """The bang-bang jerk +-32 (switches at 1/4, 3/4) travels exactly 1; others need more."""
+    from camjax.law_design import MIN_CJ, least_jerk
+
+    # From rest, s(1) = int j (1-t)^2/2, v(1) = int j (1-t), a(1) = int j: exact per piece.
+    pieces = [(0.0, 0.25, MIN_CJ), (0.25, 0.75, -MIN_CJ), (0.75, 1.0, MIN_CJ)]
+    s = sum(j * ((1 - a) ** 3 - (1 - b) ** 3) / 6 for a, b, j in pieces)
+    v = sum(j * ((1 - a) ** 2 - (1 - b) ** 2) / 2 for a, b, j in pieces)
+    acc = sum(j * (b - a) for a, b, j in pieces)
+    assert s == pytest.approx(1.0, abs=1e-14) and v == 0 and acc == 0
+    # With |a| <= A = 6 the trapezoid of ramps A/J travels A (1/2 - A/J) / 2 = 1 at J = 36.
+    assert least_jerk(6.0) == pytest.approx(36.0)
+    assert least_jerk(None) == least_jerk(9.0) == MIN_CJ
+    for law in laws.standard_laws():
+        assert float(law.Cj) > MIN_CJ
+
+
+def test_cache_dir_follows_the_environment(monkeypatch, tmp_path):
+    from camjax.cli._cache import cache_dir
+
+    monkeypatch.setenv("CAMJAX_CACHE_DIR", str(tmp_path))
+    assert cache_dir() == tmp_path
+    for off in ("0", "off", "OFF", ""):
+        monkeypatch.setenv("CAMJAX_CACHE_DIR", off)
+        assert cache_dir() is None
+    monkeypatch.delenv("CAMJAX_CACHE_DIR")
+    assert cache_dir().name == "jax" and "camjax" in str(cache_dir())

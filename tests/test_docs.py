@@ -13,7 +13,7 @@ ROOT = Path(__file__).parents[1]
 API = ROOT / "docs" / "api"
 # Module -> how its public names are found: a package's re-exports, or a module's own
 # top-level definitions.
-MODULES = ["camjax", "camjax.laws", "camjax.models", "camjax.motion_design"]
+MODULES = ["camjax", "camjax.laws", "camjax.models", "camjax.law_design", "camjax.program"]
 
 
 def _resolve(path: str):
@@ -34,8 +34,8 @@ def _documented() -> dict[str, object]:
 
 def _public(module_name: str) -> dict[str, object]:
     module = importlib.import_module(module_name)
-    if hasattr(module, "__path__"):  # a package: what it re-exports
-        names = [n for n in vars(module) if not n.startswith("_")
+    if hasattr(module, "__path__"):  # a package: what it re-exports (lazily: its __all__)
+        names = [n for n in getattr(module, "__all__", vars(module)) if not n.startswith("_")
                  and not isinstance(getattr(module, n), types.ModuleType)]
     else:  # a module: what it defines at top level
         tree = ast.parse(inspect.getsource(module))

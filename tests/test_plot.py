@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from camjax import plot
-from camjax.motion_design import Caps
+from camjax.law_design import Caps
 from camjax.sweep import CtCurve
 
 N = np.linspace(1.0, 30.0, 300)

@@ -1,4 +1,7 @@
-"""Helpers shared by the subcommands: argument parsing and output."""
+"""Helpers shared by the subcommands: argument parsing and output.
+
+Nothing here imports JAX (nor NumPy at import time), so that ``--help`` stays instant.
+"""
 
 from __future__ import annotations
 
@@ -7,11 +10,58 @@ import json
 import math
 from pathlib import Path
 
-import numpy as np
+RANGE_METAVAR = "START:STOP:COUNT|V1,V2,..."
 
 
 class CliError(Exception):
     """A bad argument: reported on one line, exit status 2."""
+
+
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Keeps the descriptions' line breaks and appends each option's default to its help.
+
+    Options whose help already names its default, or whose default is None or False
+    (flags, and values computed at run time, whose help says how), are left as written.
+    """
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if (
+            "default" in text
+            or action.default is None
+            or action.default is False
+            or action.default == argparse.SUPPRESS
+            or not action.option_strings
+        ):
+            return text
+        return f"{text} (default: %(default)s)"
+
+
+def add_law_option(parser: argparse.ArgumentParser, default=None, what: str = "motion law") -> None:
+    """The repeatable ``--law NAME`` of every command (``--law a,b`` also works)."""
+    if default is None:
+        shown = "all standard laws"
+    else:
+        shown = ", ".join(default)
+    parser.add_argument(
+        "--law", action="append", metavar="NAME",
+        help=f"{what}: a name of `camjax laws`, an alias such as modsine, scca:A,B,C or "
+        f"poly:K (repeatable, or comma-separated; default: {shown})",
+    )
+
+
+def law_names_of(args, default=None) -> list[str]:
+    """The ``--law`` names, split at commas; ``default`` (None: every standard law) if none."""
+    given = [name.strip() for item in (args.law or []) for name in item.split(",") if name.strip()]
+    if given:
+        return given
+    if args.law:
+        raise CliError("--law: no law name given")
+    if default is None:
+        from ..laws import names
+
+        return names()
+    return list(default)
 
 
 def parse_float_list(text: str, what: str) -> list[float]:
@@ -27,8 +77,13 @@ def parse_float_list(text: str, what: str) -> list[float]:
     return values
 
 
-def parse_range(text: str, what: str) -> np.ndarray:
-    """``START:STOP:COUNT`` (inclusive linspace) or ``V1,V2,...`` as an array."""
+def parse_range(text: str, what: str):
+    """``START:STOP:COUNT`` (inclusive, ascending linspace) or ``V1,V2,...`` as an array.
+
+    A range runs upward: ``START`` above ``STOP`` is refused (list values to go down).
+    """
+    import numpy as np
+
     if ":" in text:
         parts = text.split(":")
         if len(parts) != 3:
@@ -40,16 +95,22 @@ def parse_range(text: str, what: str) -> np.ndarray:
             raise CliError(f"{what}: COUNT must be an integer, got {parts[2]!r}") from None
         if count < 1:
             raise CliError(f"{what}: COUNT must be at least 1, got {count}")
+        if start > stop or (start == stop and count > 1):
+            raise CliError(f"{what}: START must be below STOP in START:STOP:COUNT, got {text!r} "
+                           "(ranges run upward; give V1,V2,... for another order)")
         return np.linspace(start, stop, count)
     return np.asarray(parse_float_list(text, what))
 
 
 def add_format(parser: argparse.ArgumentParser, choices=("table", "json", "csv")) -> None:
-    parser.add_argument("--format", choices=choices, default=choices[0], help="output format")
+    parser.add_argument("--format", choices=choices, default=choices[0],
+                        help="output format on standard output")
 
 
 def json_ready(value):
     """Nested lists of floats for JSON, with inf and NaN as null."""
+    import numpy as np
+
     if isinstance(value, dict):
         return {k: json_ready(v) for k, v in value.items()}
     if isinstance(value, list | tuple | np.ndarray):

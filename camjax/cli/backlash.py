@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
-import numpy as np
-
-from .. import laws as law_library
-from ..models.backlash import STATUS_NAMES, kinematic_impact_table
-from ._common import CliError, add_format, dump_json, output_dir, parse_float_list
+from ._common import (
+    CliError,
+    add_format,
+    add_law_option,
+    dump_json,
+    law_names_of,
+    output_dir,
+    parse_float_list,
+)
 
 
 def register(subparsers) -> None:
@@ -21,16 +25,11 @@ def register(subparsers) -> None:
             "the driving flank without crossing (null velocity and a status in JSON)."
         ),
     )
-    parser.add_argument(
-        "--law",
-        action="append",
-        metavar="NAME",
-        help="motion law (repeatable; default: all standard laws)",
-    )
-    parser.add_argument("--bk", required=True, help="normalised backlash values V1,V2,... (> 0)")
-    parser.add_argument(
-        "--dn", required=True, help="normalised natural decelerations V1,V2,... (>= 0)"
-    )
+    add_law_option(parser)
+    parser.add_argument("--bk", required=True, metavar="V1,V2,...",
+                        help="backlash over stroke, bk = backlash/h (dimensionless, > 0)")
+    parser.add_argument("--dn", required=True, metavar="V1,V2,...",
+                        help="natural deceleration dn = Dn T^2/h (dimensionless, >= 0)")
     add_format(parser, choices=("table", "json"))
     parser.add_argument("--out", metavar="DIR", help="also write backlash.json into DIR")
     parser.set_defaults(func=run)
@@ -42,6 +41,11 @@ def backlash_report(law_names: list[str], bk: list[float], dn: list[float]) -> d
         raise CliError(f"--bk: backlash must be positive, got {bk}")
     if any(d < 0 for d in dn):
         raise CliError(f"--dn: natural deceleration must be non-negative, got {dn}")
+    import numpy as np
+
+    from .. import laws as law_library
+    from ..models.backlash import STATUS_NAMES, kinematic_impact_table
+
     report = {}
     for name in law_names:
         law = law_library.get(name)
@@ -62,6 +66,8 @@ _SHORT = {"no separation": "-", "no impact": "fall"}
 
 
 def _format_table(report: dict) -> str:
+    import numpy as np
+
     lines = []
     for name, entry in report["laws"].items():
         lines.append(f"{name}: impact velocity v (rows dn, columns bk)")
@@ -81,7 +87,7 @@ def _format_table(report: dict) -> str:
 def run(args) -> int:
     bk = parse_float_list(args.bk, "--bk")
     dn = parse_float_list(args.dn, "--dn")
-    law_names = args.law or law_library.names()
+    law_names = law_names_of(args)
     out = output_dir(args.out)
     report = backlash_report(law_names, bk, dn)
     text = dump_json(report, out / "backlash.json" if out else None)

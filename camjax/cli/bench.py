@@ -1,241 +1,21 @@
 """``camjax bench``: a small work-precision study (time against error of each method).
 
-Every method computes the Ct and residual curves of a law over a batch of period ratios
-in one compiled call (``camjax.propagation.batch_metrics``); its errors are measured against
-the exact path at a high resolution.  The full study, with scipy peers, float32 and the
-charts, is ``experiments/work_precision.py``; it reuses the pieces defined here.
+The study itself is :mod:`camjax.studies`; this module parses and prints.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import time
+from ._common import (
+    RANGE_METAVAR,
+    CliError,
+    add_format,
+    add_law_option,
+    dump_json,
+    law_names_of,
+    parse_range,
+)
 
-import jax
-import jax.numpy as jnp
-import numpy as np
-
-from ..errors import RESULTS
-from ..laws import get as get_law
-from ..models.spring_mass import SpringMassOptions, batch_metrics
-from ..propagation import default_resolution
-from ..solvers import FIXED_STEP_SOLVERS
-from ._common import CliError, add_format, dump_json, parse_range
-
-ACCURACY_GOAL = 1e-6
-"""Largest error of Ct and R (units of Ca) a default method must meet on every law."""
-
-STUDY_LAWS = ("poly4567", "modified-trapezoid", "harmonic", "parabolic")
-
-
-@dataclasses.dataclass(frozen=True)
-class Case:
-    """One method configuration of the study.
-
-    Attributes:
-        label: a short name for tables and charts (``"tsit5 rtol=1e-08"``).
-        family: ``exact``, ``fixed-step``, ``adaptive``, ``adaptive-no-jumps`` or ``implicit``.
-        options: the solve options (resolution, method, tolerances, steps).
-    """
-
-    label: str
-    family: str
-    options: SpringMassOptions
-
-
-def _adaptive(method: str, rtol: float, family: str, use_jump_ts: bool = True) -> Case:
-    suffix = "" if use_jump_ts else " no-jumps"
-    return Case(
-        f"{method} rtol={rtol:.0e}{suffix}",
-        family,
-        SpringMassOptions(method=method, rtol=rtol, atol=rtol * 1e-2, use_jump_ts=use_jump_ts),
-    )
-
-
-LEVELS = ("quick", "medium", "full")
-
-
-def study_cases(level: str = "quick") -> list[Case]:
-    """The method configurations of the study, by size.
-
-    ``quick``: six cases for the CLI and the tests; ``medium``: fifteen, every
-    family at one to four settings (the figures in docs/work-precision.md); ``full``:
-    every solver at every setting of the issue (53 cases; about 7 minutes per law over
-    200 period ratios on 2 loaded cores).
-    """
-    if level not in LEVELS:
-        raise ValueError(f"unknown study level {level!r}; valid levels: {', '.join(LEVELS)}")
-    if level == "quick":
-        return [
-            Case("exact res=256", "exact", SpringMassOptions(resolution=256)),
-            Case("exact default", "exact", SpringMassOptions()),
-            Case("heun steps=4000", "fixed-step", SpringMassOptions(method="heun", steps=4000)),
-            _adaptive("tsit5", 1e-6, "adaptive"),
-            _adaptive("tsit5", 1e-10, "adaptive"),
-            _adaptive("tsit5", 1e-10, "adaptive-no-jumps", use_jump_ts=False),
-        ]
-    if level == "medium":
-        return [
-            *(Case(f"exact res={r}", "exact", SpringMassOptions(resolution=r)) for r in (64, 256)),
-            Case("exact default", "exact", SpringMassOptions()),
-            Case("euler steps=16000", "fixed-step", SpringMassOptions(method="euler", steps=16000)),
-            *(Case(f"heun steps={k}", "fixed-step", SpringMassOptions(method="heun", steps=k)) for k in (2000, 16000)),
-            *(_adaptive("tsit5", rtol, "adaptive") for rtol in (1e-4, 1e-6, 1e-8, 1e-11)),
-            _adaptive("bosh3", 1e-6, "adaptive"),
-            _adaptive("dopri8", 1e-8, "adaptive"),
-            _adaptive("tsit5", 1e-8, "adaptive-no-jumps", use_jump_ts=False),
-            _adaptive("dopri8", 1e-8, "adaptive-no-jumps", use_jump_ts=False),
-            _adaptive("kvaerno5", 1e-6, "implicit"),
-        ]
-    cases = [Case(f"exact res={r}", "exact", SpringMassOptions(resolution=r)) for r in (64, 128, 256, 512, 1024, 2048)]
-    cases.append(Case("exact default", "exact", SpringMassOptions()))
-    for method in FIXED_STEP_SOLVERS:
-        for steps in (1000, 4000, 16000, 64000):
-            cases.append(Case(f"{method} steps={steps}", "fixed-step", SpringMassOptions(method=method, steps=steps)))
-    for method in ("bosh3", "tsit5", "dopri5", "dopri8"):
-        for rtol in (1e-3, 1e-6, 1e-9, 1e-12):
-            cases.append(_adaptive(method, rtol, "adaptive"))
-        for rtol in (1e-6, 1e-9):
-            cases.append(_adaptive(method, rtol, "adaptive-no-jumps", use_jump_ts=False))
-    for method in ("kvaerno3", "kvaerno5"):
-        for rtol in (1e-4, 1e-7, 1e-10):
-            cases.append(_adaptive(method, rtol, "implicit"))
-    return cases
-
-
-def reference_resolution(max_period_ratio: float) -> int:
-    """Grid of the exact reference: four times the default one, and at least 8192."""
-    return max(8192, 4 * default_resolution(max_period_ratio))
-
-
-def reference_metrics(law, period_ratios, max_period_ratio: float | None = None):
-    """Exact-path Ct and R at :func:`reference_resolution` (NumPy arrays)."""
-    n = jnp.asarray(period_ratios, dtype=float)
-    resolution = reference_resolution(float(max_period_ratio or jnp.max(n)))
-    metrics, _, _ = batch_metrics(law, n, 0.0, SpringMassOptions(resolution=resolution).checked(float(jnp.max(n))))
-    return np.asarray(metrics.ct), np.asarray(metrics.residual)
-
-
-def _block(tree):
-    return jax.block_until_ready(tree)
-
-
-def measure(law, period_ratios, case: Case, reference, *, repeats: int = 2) -> dict:
-    """Time and error of one case on one law: a row of the work-precision table.
-
-    ``first_s`` is the first call (tracing, compilation and one run); ``warm_s`` the best
-    of ``repeats`` further calls; ``compile_s`` their difference.  Errors are the max
-    absolute errors of Ct and R (units of Ca) over the period ratios that succeeded;
-    ``failed`` counts the ones whose solver reported a failure (or gave non-finite values).
-    """
-    n = jnp.asarray(period_ratios, dtype=float)
-    options = case.options.checked(float(jnp.max(n)))
-    start = time.perf_counter()
-    metrics, result, steps = _block(batch_metrics(law, n, 0.0, options))
-    first = time.perf_counter() - start
-    warm = np.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        _block(batch_metrics(law, n, 0.0, options))
-        warm = min(warm, time.perf_counter() - start)
-    ct, residual = np.asarray(metrics.ct), np.asarray(metrics.residual)
-    ok = np.asarray(result == RESULTS.successful) & np.isfinite(ct) & np.isfinite(residual)
-    ref_ct, ref_residual = reference
-    steps = np.asarray(steps)
-    where = locate_errors(np.asarray(n), ok, ct - ref_ct, residual - ref_residual)
-    return {
-        "law": law.name,
-        "method": case.label,
-        "family": case.family,
-        "solver": options.method,
-        "n_count": int(n.size),
-        "warm_s": warm,
-        "compile_s": max(first - warm, 0.0),
-        "steps_mean": float(steps.mean()),
-        "steps_max": int(steps.max()),
-        "failed": int((~ok).sum()),
-        "ct_error": float(np.max(np.abs(ct - ref_ct)[ok])) if ok.any() else np.nan,
-        "residual_error": float(np.max(np.abs(residual - ref_residual)[ok])) if ok.any() else np.nan,
-        **where,
-    }
-
-
-def locate_errors(period_ratios, ok, ct_error, residual_error) -> dict:
-    """Where a case is worst: the period ratio of its largest Ct or R error among the ratios
-    that succeeded (``worst_n``) and the smallest period ratio that failed (``failed_n_min``;
-    NaN when none did)."""
-    n, ok = np.asarray(period_ratios, dtype=float), np.asarray(ok, dtype=bool)
-    error = np.maximum(np.abs(np.asarray(ct_error)), np.abs(np.asarray(residual_error)))
-    error = np.where(ok & np.isfinite(error), error, -np.inf)
-    return {
-        "worst_n": float(n[np.argmax(error)]) if ok.any() else np.nan,
-        "failed_n_min": float(n[~ok].min()) if (~ok).any() else np.nan,
-    }
-
-
-def pareto_front(times, errors) -> np.ndarray:
-    """Indices of the points no other point beats in both time and error, by time."""
-    times, errors = np.asarray(times, dtype=float), np.asarray(errors, dtype=float)
-    valid = np.flatnonzero(np.isfinite(times) & np.isfinite(errors))
-    order = valid[np.lexsort((errors[valid], times[valid]))]
-    front, best = [], np.inf
-    for i in order:
-        if errors[i] < best:
-            front.append(i)
-            best = errors[i]
-    return np.asarray(front, dtype=int)
-
-
-def default_method(rows: list[dict], goal: float = ACCURACY_GOAL, laws=None) -> dict | None:
-    """The method with the least total warm time that meets ``goal`` on every law.
-
-    A method qualifies if it was run on every law (``laws``; by default every law in
-    ``rows``), no period ratio failed and both the Ct and the R error are at most
-    ``goal``.  Returns ``{"method", "warm_s"}`` or None.
-    """
-    laws = {row["law"] for row in rows} if laws is None else set(laws)
-    by_method: dict[str, list[dict]] = {}
-    for row in rows:
-        by_method.setdefault(row["method"], []).append(row)
-    qualified = {
-        method: sum(r["warm_s"] for r in group)
-        for method, group in by_method.items()
-        if {r["law"] for r in group} == laws
-        and all(r["failed"] == 0 and max(r["ct_error"], r["residual_error"]) <= goal for r in group)
-    }
-    if not qualified:
-        return None
-    method = min(qualified, key=qualified.get)
-    return {"method": method, "warm_s": qualified[method]}
-
-
-def run_study(law_names, period_ratios, cases, *, repeats: int = 2, progress=None) -> list[dict]:
-    """Rows of :func:`measure` for every law and case."""
-    rows = []
-    for name in law_names:
-        law = get_law(name)
-        reference = reference_metrics(law, period_ratios)
-        for case in cases:
-            rows.append(measure(law, period_ratios, case, reference, repeats=repeats))
-            if progress is not None:
-                progress(rows[-1])
-    return rows
-
-
-COLUMNS = ("law", "method", "warm_s", "compile_s", "steps_mean", "failed", "ct_error", "residual_error")
-
-
-def format_table(rows: list[dict], columns=COLUMNS) -> str:
-    """A markdown table of the rows."""
-
-    def cell(value):
-        if isinstance(value, float):
-            return "nan" if not np.isfinite(value) else f"{value:.3g}"
-        return str(value)
-
-    lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
-    lines += ["| " + " | ".join(cell(row.get(c, "")) for c in columns) + " |" for row in rows]
-    return "\n".join(lines)
+DEFAULT_LAWS = ("poly4567", "modified-trapezoid")
 
 
 def register(subparsers) -> None:
@@ -248,24 +28,26 @@ def register(subparsers) -> None:
             "and this run; the full study is experiments/work_precision.py."
         ),
     )
-    parser.add_argument("--laws", default="poly4567,modified-trapezoid",
-                        help="comma-separated law names (default: %(default)s)")
-    parser.add_argument("--n", default="1:30:200", help="period ratios, START:STOP:COUNT or a list")
-    parser.add_argument("--level", choices=LEVELS, default="quick",
+    add_law_option(parser, default=DEFAULT_LAWS)
+    parser.add_argument("--n", default="1:30:200", metavar=RANGE_METAVAR,
+                        help="period ratios (dimensionless, rise time / natural period)")
+    parser.add_argument("--level", choices=("quick", "medium", "full"), default="quick",
                         help="how many methods and settings (quick: six; full: slow to compile)")
-    parser.add_argument("--repeats", type=int, default=2, help="warm runs timed (the best counts)")
+    parser.add_argument("--repeats", type=int, default=2,
+                        help="warm runs timed; the best counts")
     add_format(parser, ("table", "json"))
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
-    law_names = [x.strip() for x in args.laws.split(",") if x.strip()]
-    if not law_names:
-        raise CliError("--laws: no law given")
+    from ..laws import get as get_law
+    from ..studies import ACCURACY_GOAL, default_method, format_table, run_study, study_cases
+
+    law_names = law_names_of(args, DEFAULT_LAWS)
     for name in law_names:
         get_law(name)  # a ValueError naming the valid laws if unknown
     n = parse_range(args.n, "--n")
-    if np.any(n < 1e-3) or n.size < 1:
+    if (n < 1e-3).any() or n.size < 1:
         raise CliError("--n: period ratios must be positive")
     if args.repeats < 1:
         raise CliError(f"--repeats: must be at least 1, got {args.repeats}")

@@ -6,13 +6,16 @@ import csv
 import io
 import sys
 
-from tqdm import tqdm
-
-from .. import laws, plot
-from ..metrics import ca_ct_crossings, fit_torsion_factor
-from ..solvers import SOLVERS
-from ..sweep import ct_curve
-from ._common import CliError, add_format, dump_json, output_dir, parse_range
+from ._common import (
+    RANGE_METAVAR,
+    CliError,
+    add_format,
+    add_law_option,
+    dump_json,
+    law_names_of,
+    output_dir,
+    parse_range,
+)
 
 DEFAULT_N = "1:30:1000"
 
@@ -25,19 +28,22 @@ def register(sub) -> None:
         "standard law, n from 1 to 30) and report Ct, residual vibration R and Ca*Ct, with "
         "the fitted torsion-factor envelope Ct = p/n^q + r of each law.",
     )
-    parser.add_argument("--law", action="append", metavar="NAME",
-                        help="law name (repeatable; default: all standard laws)")
-    parser.add_argument("--n", default=DEFAULT_N, metavar="START:STOP:COUNT|V1,V2,...",
-                        help=f"period ratios (default {DEFAULT_N})")
-    parser.add_argument("--damping", type=float, default=0.0, help="damping ratio zeta in [0, 1)")
+    add_law_option(parser)
+    parser.add_argument("--n", default=DEFAULT_N, metavar=RANGE_METAVAR,
+                        help="period ratios n = rise time / natural period (dimensionless); "
+                        "a range runs upward")
+    parser.add_argument("--damping", type=float, default=0.0,
+                        help="damping ratio zeta in [0, 1) (dimensionless)")
     parser.add_argument("--dwell", type=float, default=1.0,
-                        help="dwell after the rise, in motion periods (default 1)")
+                        help="dwell after the rise over which Ct looks, in rise durations")
     parser.add_argument("--model", default="spring-mass", metavar="MODEL",
-                        help="spring-mass (default), friction:MU, backlash:BK,DN or two-mass:K,M "
-                        "(the model whose period ratio is swept; --damping applies to it)")
+                        help="the model whose period ratio is swept: spring-mass, friction:MU, "
+                        "backlash:BK,DN or two-mass:K,M (normalised parameters; --damping "
+                        "applies to it)")
     parser.add_argument("--method", default=None,
-                        help=f"solution method (default: the model's own; spring-mass: exact or a "
-                        f"diffrax solver: {', '.join(SOLVERS)})")
+                        help="solution method (default: the model's own; spring-mass: exact, "
+                        "closed-form propagation, or a diffrax solver name such as tsit5; an "
+                        "unknown name lists them)")
     parser.add_argument("--out", metavar="DIR", help="write CSV, JSON, figures and tables here")
     add_format(parser)
     parser.set_defaults(func=run)
@@ -70,6 +76,8 @@ def parse_model(text: str, damping: float):
 
 
 def _fit_or_none(curve):
+    from ..metrics import fit_torsion_factor
+
     try:
         return fit_torsion_factor(curve)
     except ValueError:
@@ -84,6 +92,10 @@ def _table(curves, fits) -> str:
         fit = f"{f.p:7.3f} {f.q:6.3f} {f.r:6.3f}" if f else f"{'-':>7} {'-':>6} {'-':>6}"
         lines.append(f"{name:<20} {c.ca:7.4f} {c.ct.max():7.4f} {c.ca_ct.max():8.4f} "
                      f"{c.residual.max():7.4f} {fit}")
+    lines.append("Ca and Ca*Ct in units of h/T^2 (stroke over rise time squared); Ct and R in "
+                 "units of Ca; maxima over the period ratios given.")
+    lines.append("p, q, r: the fit Ct ~ p/n^q + r of the upper envelope; '-' where it cannot "
+                 "be fitted (too few period ratios or envelope points).")
     return "\n".join(lines)
 
 
@@ -117,6 +129,9 @@ def _json(curves, args, selected) -> dict:
 
 
 def _fit_report(curves, fits) -> str:
+    from .. import plot
+    from ..metrics import ca_ct_crossings
+
     rows = ["| law | Ca | p | q | r | rms error |", "|---|---|---|---|---|---|"]
     for name, f in fits.items():
         rows.append(f"| {name} | {curves[name].ca:.4f} | {f.p:.4f} | {f.q:.4f} | {f.r:.4f} "
@@ -131,7 +146,12 @@ def _fit_report(curves, fits) -> str:
 
 
 def run(args) -> int:
-    names = args.law or laws.names()
+    from tqdm import tqdm
+
+    from .. import laws, plot
+    from ..sweep import ct_curve
+
+    names = law_names_of(args)
     selected = {}
     for name in names:
         law = laws.get(name)

@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
-from .. import plot
 from ._common import CliError, dump_json, output_dir, parse_float_list
+
+DEFAULT_STEPS = 6000
+"""The design's own default (``camjax.law_design.DEFAULT_STEPS``; a test checks they agree)."""
+
 
 
 def register(subparsers) -> None:
@@ -15,29 +20,39 @@ def register(subparsers) -> None:
         description="Optimise a B-spline rise for a period-ratio band under caps; write the "
         "law (JSON, CSV), figures and a comparison with every standard law.",
     )
-    parser.add_argument("--objective", choices=("residual", "ca-ct"), default="residual")
-    where = parser.add_mutually_exclusive_group()
-    where.add_argument("--band", help="period-ratio band N1:N2 (worst case over it)")
-    where.add_argument("--n", type=float, help="a single period ratio")
-    parser.add_argument("--max-ca", type=float, default=None, help="cap on Ca")
-    parser.add_argument("--max-jerk", type=float, default=None, help="cap on Cj")
-    parser.add_argument("--damping", type=float, default=0.0, help="damping ratio zeta")
+    parser.add_argument("--objective", choices=("residual", "ca-ct"), default="residual",
+                        help="what to minimise: residual vibration R (units of Ca) or the peak "
+                        "inertia load Ca*Ct (units of h/T^2), worst case over the band")
+    where = parser.add_mutually_exclusive_group()  # one is required unless --program (checked in run)
+    where.add_argument("--band", metavar="N1:N2",
+                       help="period-ratio band (dimensionless, rise time / natural period)")
+    where.add_argument("--n", type=float, help="a single period ratio (dimensionless)")
+    parser.add_argument("--max-ca", type=float, default=None,
+                        help="cap on Ca, the peak acceleration in units of h/T^2 (>= 4; "
+                        "default: none)")
+    parser.add_argument("--max-jerk", type=float, default=None,
+                        help="cap on Cj, the peak jerk in units of h/T^3 (>= 32, more "
+                        "with --max-ca below 8; "
+                        "default: none)")
+    parser.add_argument("--damping", type=float, default=0.0,
+                        help="damping ratio zeta in [0, 1) (dimensionless)")
     parser.add_argument("--knots", type=int, default=24, help="free B-spline coefficients")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--steps", type=int, default=None,
-                        help="optimiser steps (default: camjax.motion_design.DEFAULT_STEPS)")
-    parser.add_argument("--optimizer", choices=("lbfgs", "adam"), default="lbfgs")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    parser.add_argument("--out", required=True, help="output directory")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the random restarts of the optimiser")
+    parser.add_argument("--steps", type=int, default=DEFAULT_STEPS, help="optimiser steps")
+    parser.add_argument("--optimizer", choices=("lbfgs", "adam"), default="lbfgs",
+                        help="optimisation method")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--program", metavar="FILE", help="design one segment of this cam program "
                         "(with --segment and --rpm; writes DIR/program.toml and the law beside it)")
     parser.add_argument("--segment", type=int, help="segment number (1-based) to design, with --program")
-    parser.add_argument("--rpm", metavar="LO:HI", help="speed range, with --program (maps to the segment's band)")
+    parser.add_argument("--rpm", metavar="LO:HI", help="speed range in rpm, with --program (maps to the segment's band)")
     parser.set_defaults(func=run)
 
 
 def _run_program(args, out) -> int:
-    from ..motion_design import Caps
+    from ..law_design import Caps
     from ..program import Program, design_segment, segment_band, write_program
 
     if args.segment is None or args.rpm is None:
@@ -74,9 +89,11 @@ def _band(text: str) -> tuple[float, float]:
 
 
 def run(args) -> int:
-    from .. import motion_design as D
-    from ..laws import standard_laws
-    from ..laws._io import save
+    from tqdm import tqdm
+
+    from .. import law_design as D
+    from .. import plot
+    from ..laws import save, standard_laws
 
     out = output_dir(args.out)
     if args.program:
@@ -93,7 +110,7 @@ def run(args) -> int:
         objective = (D.MaxCaCt(*band, damping=args.damping) if band
                      else D.CaCt(args.n, damping=args.damping))
     caps = D.Caps(args.max_ca, args.max_jerk)
-    steps = D.DEFAULT_STEPS if args.steps is None else args.steps
+    steps = args.steps
     result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=steps,
                       optimizer=args.optimizer, progress=not args.quiet)
     law = result.law
@@ -106,13 +123,19 @@ def run(args) -> int:
     ratios = np.linspace(n1, n2, D.EVALUATION_SAMPLES)
     laws = [("designed", law)] + [(x.name, x) for x in standard_laws()]
     rows, curves = [], {}
+    # The standard laws share compiled programs by family (SCCA, polynomial), so this
+    # costs a few compilations, not one per law; the bar covers it and the figures.
+    bar = tqdm(total=len(laws) + 1, desc="compare", unit="law", disable=args.quiet,
+               file=sys.stderr)
     for name, each in laws:
+        bar.set_postfix_str(name)
         r = np.asarray(D.residual(each, ratios, args.damping))
         load = D.peak_loads(each, ratios, args.damping)
         curves[name] = (r, load)
         peaks = each.peak_coefficients()
         rows.append({"law": name, "objective": objective.report(each), "Ca": peaks["Ca"],
                      "Cj": peaks["Cj"], "max_R": float(r.max()), "max_CaCt": float(load.max())})
+        bar.update()
     where = ("the objective on 2000 period ratios across the band" if band else
              f"the objective at n = {args.n:g}")
     _write_table(rows, f"{objective.label} ({where}; max R and max Ca*Ct over "
@@ -122,9 +145,12 @@ def run(args) -> int:
                "coefficients": result.coefficients, "knots": args.knots, "seed": args.seed,
                "steps": steps, "repaired": result.restored, "seconds": result.seconds,
                "band": [n1, n2], "damping": args.damping}, out / "summary.json")
+    bar.set_postfix_str("figures")
     title = plot.design_title(objective.label, caps, args.damping)
     plot.save(plot.law_curves([law], title=title), out / "law.png")
     plot.save(plot.design_comparison(ratios, curves, title=title), out / "curves.png")
+    bar.update()
+    bar.close()
     print(f"{objective.label}: designed {rows[0]['objective']:.5g}; best standard "
           f"{min(rows[1:], key=lambda r: r['objective'])['law']} "
           f"{min(r['objective'] for r in rows[1:]):.5g}; wrote {out}")

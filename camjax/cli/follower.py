@@ -10,11 +10,6 @@ from __future__ import annotations
 import argparse
 import math
 
-import numpy as np
-
-from .. import laws
-from ..models import solve
-from ..models.swinging_follower import SwingingFollower, spectral_peaks, spectrum
 from ._common import CliError, add_format, dump_json, output_dir
 
 _TURNS = 3
@@ -24,10 +19,12 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "follower",
         help="flexible swinging roller follower: deflection spectra",
-        description=__doc__,
+        description=__doc__.replace("``", ""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("--law", required=True, help=f"rise and fall law, one of {', '.join(laws.names())}")
+    parser.add_argument("--law", required=True, metavar="NAME",
+                        help="rise and fall law: any name `camjax laws` lists, an alias such as "
+                        "modsine, scca:A,B,C or poly:K")
     parser.add_argument("--omega", type=float, default=320.0, help="cam speed, rad/s (default 320)")
     parser.add_argument("--length", type=float, default=98.0, help="rod length l, mm (default 98)")
     parser.add_argument("--radius", type=float, default=5.0, help="rod section radius, mm (default 5)")
@@ -45,7 +42,10 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def _model(args) -> SwingingFollower:
+def _model(args):
+    from .. import laws
+    from ..models.swinging_follower import SwingingFollower
+
     try:
         law = laws.get(args.law)
     except (KeyError, ValueError) as error:
@@ -67,8 +67,13 @@ def _model(args) -> SwingingFollower:
     )
 
 
-def follower_report(model: SwingingFollower, law_name: str) -> tuple[dict, object]:
-    """The JSON-ready report of one three-turn run, and the response."""
+def follower_report(model, law_name: str) -> tuple[dict, object]:
+    """The JSON-ready report of one three-turn run (a ``SwingingFollower``), and the response."""
+    import numpy as np
+
+    from ..models import solve
+    from ..models.swinging_follower import spectral_peaks, spectrum
+
     response = solve(None, model, turns=_TURNS)
     natural = float(model.fundamental_frequency())
     order = natural / float(model.omega)
@@ -95,6 +100,8 @@ def follower_report(model: SwingingFollower, law_name: str) -> tuple[dict, objec
 
 
 def run(args) -> int:
+    import numpy as np
+
     model = _model(args)
     out = output_dir(args.out)
     report, response = follower_report(model, args.law)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from .. import laws
 from ._common import add_format, dump_json
 
 
@@ -13,6 +12,8 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    from .. import laws
+
     table = {law.name: law.peak_coefficients() for law in laws.standard_laws()}
     if args.format == "json":
         print(dump_json(table))

@@ -60,14 +60,24 @@ class MotionProgram(eqx.Module):
     def displacement(self, theta: ArrayLike) -> jax.Array:
         return self.evaluate(theta)[0]
 
-    def jump_angles(self) -> tuple[float, ...]:
-        """Cam angles in ``[0, 2 pi)`` where the acceleration or jerk may be non-smooth."""
+    def jump_angles(self) -> tuple[float, ...] | jax.Array:
+        """Cam angles in ``[0, 2 pi)`` where the acceleration or jerk may be non-smooth.
+
+        A sorted tuple of floats when both laws' breakpoints are fixed; a sorted array
+        (entries may repeat) when either law's are traced (an SCCA law passed into jit).
+        """
         points = [0.0, self.rise_angle, self.fall_start, self.fall_start + self.fall_angle]
+        traced = []
         for law, start, width in ((self.rise, 0.0, self.rise_angle), (self.fall, self.fall_start, self.fall_angle)):
             bps = law.breakpoints()
             if isinstance(bps, tuple):
                 points += [start + width * b for b in bps]
-        return tuple(sorted({round(p, 15) for p in points if p < 2 * math.pi}))
+            else:
+                traced.append(start + width * jnp.asarray(bps))
+        fixed = tuple(sorted({round(p, 15) for p in points if p < 2 * math.pi}))
+        if not traced:
+            return fixed
+        return jnp.sort(jnp.concatenate([jnp.asarray(fixed), *traced]))
 
 
 class LawBank(AbstractMotionLaw):
@@ -98,11 +108,17 @@ class LawBank(AbstractMotionLaw):
         return tuple(self._pick([e[k] for e in each]) for k in range(4))
 
     def breakpoints(self) -> Breakpoints:
-        points = []
+        """Every banked law's breakpoints: a tuple if all are fixed, else a sorted array."""
+        points, traced = [], []
         for law in self.laws:
             bps = law.breakpoints()
-            points += list(bps) if isinstance(bps, tuple) else []
-        return static_breakpoints(points)
+            if isinstance(bps, tuple):
+                points += list(bps)
+            else:
+                traced.append(jnp.asarray(bps))
+        if not traced:
+            return static_breakpoints(points)
+        return jnp.sort(jnp.concatenate([jnp.asarray(points, dtype=float), *traced]))
 
     @property
     def Cv(self):

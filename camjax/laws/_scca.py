@@ -5,12 +5,15 @@ totals over the whole rise.  The first half of the acceleration runs a quarter-s
 of width ``a/2`` up to the peak ``A``, a constant ``A`` for ``b/2``, a quarter-cosine fall
 of width ``c/2`` back to zero, then zero for ``d/2``; the second half is the point
 reflection ``acc(tau) = -acc(1 - tau)``.  ``A`` follows from ``s(1/2) = 1/2``.
+
+The named members (cycloidal, modified sine, ...) are ``SCCA`` values, not types: their
+fractions are array leaves like any other SCCA's, so every SCCA law has one pytree
+structure and one compiled program serves them all (stacked, or one after another).
 """
 
 from __future__ import annotations
 
 import math
-from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -70,17 +73,58 @@ def _half_rise(tau, a, b, c):
     return tuple(pick(i) for i in range(4)), s_half, v3
 
 
-class AbstractSCCA(AbstractMotionLaw):
-    """Shared implementation of every SCCA law; members fix or free the fractions."""
+def _fraction(value) -> jax.Array:
+    return jnp.asarray(value, dtype=float)
 
-    sine: eqx.AbstractVar[float | jax.Array]
-    constant: eqx.AbstractVar[float | jax.Array]
-    cosine: eqx.AbstractVar[float | jax.Array]
+
+class SCCA(AbstractMotionLaw):
+    """The SCCA law with fractions ``(sine, constant, cosine)``, differentiable leaves.
+
+    ``SCCA(a, b, c)`` takes the sine, constant and cosine fractions of MISSION.md.  Valid
+    fractions are non-negative, finite, with ``0 < a + b + c <= 1``.  The fractions are
+    stored as float arrays whatever is passed, so all SCCA laws share compiled programs.
+    """
+
+    sine: jax.Array = eqx.field(converter=_fraction)
+    constant: jax.Array = eqx.field(converter=_fraction)
+    cosine: jax.Array = eqx.field(converter=_fraction)
+
+    def __check_init__(self):
+        if is_concrete(self.sine, self.constant, self.cosine) and jnp.ndim(self.sine) == 0:
+            a, b, c = (float(x) for x in self.fractions)
+            require(
+                all(math.isfinite(x) for x in (a, b, c)),
+                f"SCCA fractions must be finite, got a={a}, b={b}, c={c}",
+            )
+            require(
+                min(a, b, c) >= 0,
+                f"SCCA fractions must be non-negative, got a={a}, b={b}, c={c}",
+            )
+            require(
+                0 < a + b + c <= 1 + 1e-12,
+                f"SCCA fractions must satisfy 0 < a + b + c <= 1, got a + b + c = {a + b + c}",
+            )
 
     @property
     def fractions(self):
         """``(sine, constant, cosine)``: the fractions a, b, c of MISSION.md."""
         return self.sine, self.constant, self.cosine
+
+    def _concrete_fractions(self) -> tuple[float, float, float] | None:
+        if is_concrete(*self.fractions) and jnp.ndim(self.sine) == 0:
+            return tuple(float(x) for x in self.fractions)
+        return None
+
+    @property
+    def name(self) -> str:
+        """The member's name (``"cycloidal"``, ...) or ``"scca:A,B,C"`` (``"scca"`` if traced)."""
+        fractions = self._concrete_fractions()
+        if fractions is None:
+            return "scca"
+        for member, known in MEMBERS.items():
+            if max(abs(x - y) for x, y in zip(fractions, known)) <= 1e-12:
+                return member
+        return "scca:{:g},{:g},{:g}".format(*fractions)
 
     @property
     def peak_acceleration(self):
@@ -98,10 +142,14 @@ class AbstractSCCA(AbstractMotionLaw):
         return s, amp * v, amp * acc, amp * jerk
 
     def breakpoints(self) -> Breakpoints:
-        a, b, c = self.sine, self.constant, self.cosine
-        half = (a / 2, (a + b) / 2, (a + b + c) / 2)
-        if all(isinstance(x, float | int) for x in (a, b, c)):
+        """Fixed points (a tuple) for concrete fractions, else seven traced points."""
+        fractions = self._concrete_fractions()
+        if fractions is not None:
+            a, b, c = fractions
+            half = (a / 2, (a + b) / 2, (a + b + c) / 2)
             return static_breakpoints([*half, 0.5, *(1 - x for x in half)])
+        a, b, c = self.fractions
+        half = (a / 2, (a + b) / 2, (a + b + c) / 2)
         return jnp.stack([*half, jnp.asarray(0.5), *(1 - x for x in half[::-1])])
 
     @property
@@ -123,83 +171,42 @@ class AbstractSCCA(AbstractMotionLaw):
         return jnp.where(smooth, self.peak_acceleration * _PI / width, jnp.inf)
 
 
-class SCCA(AbstractSCCA):
-    """The general SCCA law with free (differentiable) fractions.
+AbstractSCCA = SCCA
+"""Former base class of the SCCA laws, kept as a name: every SCCA law is an ``SCCA``."""
 
-    ``SCCA(a, b, c)`` takes the sine, constant and cosine fractions of MISSION.md.  Valid
-    fractions are non-negative, finite, with ``0 < a + b + c <= 1``.
-    """
-
-    sine: float | jax.Array
-    constant: float | jax.Array
-    cosine: float | jax.Array
-
-    def __check_init__(self):
-        if is_concrete(self.sine, self.constant, self.cosine):
-            a, b, c = (float(jnp.asarray(x)) for x in self.fractions)
-            require(
-                all(math.isfinite(x) for x in (a, b, c)),
-                f"SCCA fractions must be finite, got a={a}, b={b}, c={c}",
-            )
-            require(
-                min(a, b, c) >= 0,
-                f"SCCA fractions must be non-negative, got a={a}, b={b}, c={c}",
-            )
-            require(
-                0 < a + b + c <= 1 + 1e-12,
-                f"SCCA fractions must satisfy 0 < a + b + c <= 1, got a + b + c = {a + b + c}",
-            )
-
-    @property
-    def name(self) -> str:
-        if is_concrete(self.sine, self.constant, self.cosine):
-            return "scca:{:g},{:g},{:g}".format(*(float(x) for x in (self.sine, self.constant, self.cosine)))
-        return "scca"
+MEMBERS: dict[str, tuple[float, float, float]] = {
+    "cycloidal": (0.5, 0.0, 0.5),
+    "modified-sine": (0.25, 0.0, 0.75),
+    "modified-trapezoid": (0.25, 0.5, 0.25),
+    "harmonic": (0.0, 0.0, 1.0),
+    "parabolic": (0.0, 1.0, 0.0),
+}
+"""Fractions ``(sine, constant, cosine)`` of the named SCCA laws."""
 
 
-class Cycloidal(AbstractSCCA):
+def Cycloidal() -> SCCA:
     """Cycloidal rise, ``s = tau - sin(2 pi tau)/(2 pi)``: SCCA (1/2, 0, 1/2)."""
-
-    sine: ClassVar[float] = 0.5
-    constant: ClassVar[float] = 0.0
-    cosine: ClassVar[float] = 0.5
-    name: ClassVar[str] = "cycloidal"
+    return SCCA(*MEMBERS["cycloidal"])
 
 
-class ModifiedSine(AbstractSCCA):
+def ModifiedSine() -> SCCA:
     """Modified sine: SCCA (1/4, 0, 3/4); Ca = 4 pi^2/(pi + 4)."""
-
-    sine: ClassVar[float] = 0.25
-    constant: ClassVar[float] = 0.0
-    cosine: ClassVar[float] = 0.75
-    name: ClassVar[str] = "modified-sine"
+    return SCCA(*MEMBERS["modified-sine"])
 
 
-class ModifiedTrapezoid(AbstractSCCA):
+def ModifiedTrapezoid() -> SCCA:
     """Modified trapezoid: SCCA (1/4, 1/2, 1/4); Ca = 8 pi/(pi + 2)."""
-
-    sine: ClassVar[float] = 0.25
-    constant: ClassVar[float] = 0.5
-    cosine: ClassVar[float] = 0.25
-    name: ClassVar[str] = "modified-trapezoid"
+    return SCCA(*MEMBERS["modified-trapezoid"])
 
 
-class SimpleHarmonic(AbstractSCCA):
+def SimpleHarmonic() -> SCCA:
     """Simple harmonic motion, ``s = (1 - cos pi tau)/2``: SCCA (0, 0, 1).
 
     Its acceleration steps from 0 to pi^2/2 at the start and end of the rise.
     """
-
-    sine: ClassVar[float] = 0.0
-    constant: ClassVar[float] = 0.0
-    cosine: ClassVar[float] = 1.0
-    name: ClassVar[str] = "harmonic"
+    return SCCA(*MEMBERS["harmonic"])
 
 
-class Parabolic(AbstractSCCA):
+def Parabolic() -> SCCA:
     """Constant acceleration and deceleration (parabolic): SCCA (0, 1, 0); Ca = 4."""
-
-    sine: ClassVar[float] = 0.0
-    constant: ClassVar[float] = 1.0
-    cosine: ClassVar[float] = 0.0
-    name: ClassVar[str] = "parabolic"
+    return SCCA(*MEMBERS["parabolic"])

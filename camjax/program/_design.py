@@ -36,19 +36,19 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     ``objective`` is ``"residual"`` (largest residual vibration over the band) or ``"ca-ct"``
     (largest Ca*Ct); ``design_options`` go to ``camjax.design`` (``knots``, ``steps``, ...).
     """
-    from .. import motion_design
+    from .. import law_design
 
     n1, n2 = segment_band(program, segment, rpm_lo, rpm_hi)
     f = program.follower
     zeta = f.damping_ratio * (f.stiffness / (f.stiffness + f.spring_rate)) ** 0.5
     if objective == "residual":
-        goal = motion_design.MaxResidual(n1, n2, damping=zeta)
+        goal = law_design.MaxResidual(n1, n2, damping=zeta)
     elif objective == "ca-ct":
-        goal = motion_design.MaxCaCt(n1, n2, damping=zeta)
+        goal = law_design.MaxCaCt(n1, n2, damping=zeta)
     else:
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
     seg = program.segments[segment - 1]
-    result = motion_design.design(goal, caps=caps or motion_design.Caps(), initial=seg.law, **design_options)
+    result = law_design.design(goal, caps=caps or law_design.Caps(), initial=seg.law, **design_options)
     segments = list(program.segments)
     segments[segment - 1] = dataclasses.replace(seg, law=result.law)
     return dataclasses.replace(program, segments=tuple(segments)), result

@@ -64,15 +64,16 @@ def propagate(grid: MotionGrid, omega, zeta) -> jax.Array:
     """
     lam = eigenvalue(omega, zeta)
     z = lam * grid.piece_width
-    weights = psi(z)
-    # Pieces are contiguous runs of intervals: one small matrix product per piece.
-    kick = jnp.concatenate(
-        [
-            grid.forcing[start:stop] @ weights[p].real + 1j * (grid.forcing[start:stop] @ weights[p].imag)
-            for p, (start, stop) in enumerate(grid.piece_slices())
-        ]
-    ) * grid.widths
-    factor = jnp.exp(z)[grid.piece]
+    weights = psi(z).reshape(-1)  # (P * 6,): every piece's weights
+    # Each interval's kick uses its own piece's weights.  The piece layout may be traced,
+    # so the selection is a product with the law-only matrix ``piece_forcing`` (one row
+    # per interval, its forcing placed in its piece's columns): under vmap over period
+    # ratios it is one matrix product, not a gather.
+    forcing = grid.piece_forcing()
+    kick = (forcing @ weights.real + 1j * (forcing @ weights.imag)) * grid.widths
+    step = jnp.exp(z)
+    selector = grid.piece_selector()
+    factor = selector @ step.real + 1j * (selector @ step.imag)
     n_intervals = kick.shape[0]
     n_blocks = -(-n_intervals // _BLOCK)
     pad = n_blocks * _BLOCK - n_intervals

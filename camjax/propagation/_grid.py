@@ -1,6 +1,9 @@
 """The sample grid over a rise, with the law's breakpoints as nodes.
 
-Each smooth piece of the law (between breakpoints) is cut into equal intervals.  On every
+Each smooth piece of the law (between breakpoints) is cut into equal intervals, about
+``resolution * width`` of them; the grid always has ``resolution + pieces`` intervals, so
+its shape depends on the law's type alone and laws whose breakpoints are traced (an SCCA
+with free fractions, or several SCCA laws stacked) get the same grid as fixed ones.  On every
 interval the acceleration is replaced by its degree-5 interpolant through six
 Gauss-Legendre points, which never sit on a breakpoint, so one-sided limits at jumps come
 out right.  For polynomial laws of acceleration degree <= 5 the interpolant is exact; for
@@ -43,13 +46,14 @@ class MotionGrid(NamedTuple):
 
     Attributes:
         nodes: ``(K + 1,)`` node times, from 0 to 1.
-        piece: ``(K,)`` NumPy index of the law piece that each interval belongs to.
+        piece: ``(K,)`` index of the law piece that each interval belongs to (NumPy for
+            fixed breakpoints, traced when the breakpoints are).
         piece_width: ``(P,)`` interval width used inside each piece.
         forcing: ``(K, 6)`` monomial coefficients of the acceleration in ``sigma``.
     """
 
     nodes: jax.Array
-    piece: np.ndarray
+    piece: np.ndarray | jax.Array
     piece_width: jax.Array
     forcing: jax.Array
 
@@ -57,10 +61,16 @@ class MotionGrid(NamedTuple):
     def widths(self) -> jax.Array:
         return self.piece_width[self.piece]
 
-    def piece_slices(self) -> list[tuple[int, int]]:
-        """``(start, stop)`` interval indices of each piece (pieces are contiguous)."""
-        stops = np.cumsum(np.bincount(self.piece, minlength=self.piece_width.shape[0]))
-        return list(zip(np.concatenate([[0], stops[:-1]]).tolist(), stops.tolist()))
+    def piece_selector(self) -> jax.Array:
+        """``(K, P)`` one-hot rows: ``selector @ x`` gives each interval its piece's ``x``."""
+        pieces = self.piece_width.shape[0]
+        return (self.piece[:, None] == jnp.arange(pieces)).astype(self.forcing.dtype)
+
+    def piece_forcing(self) -> jax.Array:
+        """``(K, P * 6)``: each interval's forcing in the six columns of its piece, zero
+        elsewhere, so that ``piece_forcing() @ w.reshape(-1)`` applies per-piece weights."""
+        rows = self.piece_selector()[:, :, None] * self.forcing[:, None, :]
+        return rows.reshape(self.forcing.shape[0], -1)
 
     def one_sided(self) -> tuple[jax.Array, jax.Array]:
         """Acceleration, jerk and snap at both ends of every interval.
@@ -80,23 +90,31 @@ class MotionGrid(NamedTuple):
         return left, right
 
 
-def _piece_counts(law: AbstractMotionLaw, resolution: int):
-    """Edges of the law's pieces and a static interval count for each."""
-    breakpoints = law.breakpoints()
-    if isinstance(breakpoints, tuple):
-        edges = np.array([0.0, *breakpoints, 1.0])
-        counts = [max(2, math.ceil(resolution * w)) for w in np.diff(edges)]
-        return jnp.asarray(edges), counts
-    # Traced breakpoints (an SCCA law with free fractions): the widths are unknown when
-    # the grid's shape is fixed, so every piece gets the intervals a piece of half the
-    # rise needs; no SCCA piece is wider, since each lies within one half of the rise.
-    n_pieces = breakpoints.shape[0] + 1
-    edges = jnp.concatenate([jnp.zeros(1), jnp.sort(jnp.clip(breakpoints, 0.0, 1.0)), jnp.ones(1)])
-    return edges, [math.ceil(resolution / 2)] * n_pieces
+def piece_counts(widths, total: int):
+    """Interval counts of pieces of ``widths`` (summing to 1) that add up to ``total``.
+
+    Every piece of positive width gets at least one interval and the rest in proportion
+    to its width (largest remainders first, ties to the earlier piece); zero-width pieces
+    get none.  NumPy in, NumPy out (fixed breakpoints, no JAX dispatch); JAX arrays work
+    too (traced breakpoints: only the total is static).
+    """
+    xp = np if isinstance(widths, np.ndarray) else jnp
+    positive = widths > 0
+    spare = total - xp.sum(positive)
+    share = widths / xp.sum(widths) * spare
+    base = xp.floor(share).astype(int)
+    remainder = xp.where(positive, share - base, -1.0)
+    order = np.argsort(-remainder, kind="stable") if xp is np else jnp.argsort(-remainder)
+    rank = xp.argsort(order)
+    counts = positive + base + ((rank < spare - xp.sum(base)) & positive)
+    # Rounding cannot leave the sum off by more than a piece's share; the widest piece
+    # takes up any difference so that the grid's shape holds exactly.
+    widest = xp.arange(widths.shape[0]) == xp.argmax(widths)
+    return counts + widest * (total - xp.sum(counts))
 
 
 def motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
-    """Grid over the rise with about ``resolution`` intervals per unit tau."""
+    """Grid over the rise with ``resolution`` intervals plus one per law piece."""
     # A law without traced parameters gives a constant grid: compute it now rather than
     # leave it to XLA's constant folder, which takes minutes over the sampled forcing.
     with jax.ensure_compile_time_eval():
@@ -104,12 +122,24 @@ def motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
 
 
 def _motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
-    edges, counts = _piece_counts(law, resolution)
-    piece = np.repeat(np.arange(len(counts)), counts)
-    step = np.concatenate([np.arange(m) for m in counts]).astype(float)
-    piece_width = (edges[1:] - edges[:-1]) / np.asarray(counts, dtype=float)
+    breakpoints = law.breakpoints()
+    if isinstance(breakpoints, tuple):  # fixed: the layout in NumPy
+        xp = np
+        edges = np.array([0.0, *breakpoints, 1.0])
+    else:  # traced: the same layout as a computation
+        xp = jnp
+        inner = jnp.sort(jnp.clip(breakpoints, 0.0, 1.0))
+        edges = jnp.concatenate([jnp.zeros(1), inner, jnp.ones(1)])
+    widths = xp.diff(edges)
+    total = int(resolution) + widths.shape[0]
+    counts = piece_counts(widths, total)
+    stops = xp.cumsum(counts)
+    interval = xp.arange(total)
+    piece = xp.searchsorted(stops, interval, side="right")
+    step = interval - (stops - counts)[piece]
+    piece_width = widths / xp.maximum(counts, 1)
     left = edges[piece] + piece_width[piece] * step
-    nodes = jnp.concatenate([left, jnp.ones(1)])
+    nodes = xp.concatenate([left, xp.ones(1)])
     sample_times = left[:, None] + piece_width[piece][:, None] * _GAUSS_POINTS
     forcing = law.a(sample_times) @ jnp.asarray(_TO_MONOMIAL.T)
-    return MotionGrid(nodes, piece, piece_width, forcing)
+    return MotionGrid(jnp.asarray(nodes), piece, jnp.asarray(piece_width), forcing)

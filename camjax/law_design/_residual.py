@@ -1,0 +1,87 @@
+"""Residual vibration by Gauss-Legendre quadrature over the law's smooth pieces.
+
+``R = w |int_0^1 a(u) exp(lambda (1 - u)) du| / (sqrt(1 - zeta^2) Ca)``: linear in the
+law's acceleration, so one matrix-vector product per batch of period ratios.
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..laws import AbstractMotionLaw
+
+_GAUSS_ORDER = 12
+_MAX_PHASE_PER_PANEL = 2.0  # radians of exp(lambda u) across one quadrature panel
+_DENSE_PER_PIECE = 24  # samples per smooth piece where caps and Ca are checked in training
+
+
+def _piece_edges(law: AbstractMotionLaw) -> np.ndarray:
+    points = law.breakpoints()
+    if not isinstance(points, tuple):
+        raise ValueError(
+            f"law {law.name!r} has traced breakpoints; the quadrature residual needs fixed "
+            "ones (use camjax.residual_vibration instead)"
+        )
+    return np.array([0.0, *points, 1.0])
+
+
+def quadrature(law: AbstractMotionLaw, max_period_ratio: float) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre nodes and weights over ``[0, 1]``, exact to rounding for R up to
+    ``max_period_ratio``: panels never straddle a breakpoint and span at most 2 radians of
+    the vibration (the integrand is a low-degree polynomial times an exponential)."""
+    x, w = np.polynomial.legendre.leggauss(_GAUSS_ORDER)
+    omega = 2 * math.pi * max(float(max_period_ratio), 1e-3)
+    nodes, weights = [], []
+    for lo, hi in zip(*(lambda e: (e[:-1], e[1:]))(_piece_edges(law))):
+        panels = max(1, math.ceil((hi - lo) * omega / _MAX_PHASE_PER_PANEL))
+        cuts = np.linspace(lo, hi, panels + 1)
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            nodes.append(a + (b - a) * (x + 1) / 2)
+            weights.append((b - a) / 2 * w)
+    return np.concatenate(nodes), np.concatenate(weights)
+
+
+def _kernel(period_ratios: np.ndarray, damping: float, nodes, weights):
+    """``K[k, q]`` with ``R_k Ca = |K[k] @ a(nodes)|`` (complex, NumPy)."""
+    omega = 2 * np.pi * np.asarray(period_ratios, dtype=float)[:, None]
+    lam = -damping * omega + 1j * omega * np.sqrt(1.0 - damping**2)
+    return omega / np.sqrt(1.0 - damping**2) * weights * np.exp(lam * (1.0 - nodes))
+
+
+def _residual_components(law, period_ratios, damping: float) -> jax.Array:
+    """``(2, N)`` real and imaginary parts of the residual's complex amplitude (linear in
+    the law; its modulus is ``R * Ca``).  ``period_ratios`` must be concrete."""
+    n = np.atleast_1d(np.asarray(period_ratios, dtype=float))
+    nodes, weights = quadrature(law, n.max())
+    k = _kernel(n, float(damping), nodes, weights)
+    acc = law.a(jnp.asarray(nodes))
+    return jnp.stack([jnp.asarray(k.real) @ acc, jnp.asarray(k.imag) @ acc])
+
+
+def residual_amplitude(law, period_ratios, damping: float = 0.0) -> jax.Array:
+    """``R * Ca`` (residual acceleration amplitude in units of h/T^2) at ``period_ratios``.
+
+    ``period_ratios`` must be concrete (NumPy); the law may be traced.
+    """
+    return _modulus(_residual_components(law, period_ratios, damping))
+
+
+def _modulus(components):
+    return jnp.hypot(components[0], components[1])
+
+
+def _dense_tau(law: AbstractMotionLaw) -> jax.Array:
+    """``_DENSE_PER_PIECE + 1`` samples of every smooth piece (both ends included)."""
+    edges = _piece_edges(law)
+    return jnp.asarray(np.concatenate(
+        [np.linspace(lo, hi, _DENSE_PER_PIECE + 1) for lo, hi in zip(edges[:-1], edges[1:])]))
+
+
+def residual(law, period_ratios, damping: float = 0.0, *, ca=None) -> jax.Array:
+    """Residual vibration R (units of Ca) at ``period_ratios``, by quadrature."""
+    ca = law.Ca if ca is None else ca
+    return residual_amplitude(law, period_ratios, damping) / ca

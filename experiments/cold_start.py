@@ -1,0 +1,128 @@
+"""Time to first answer: each command as a fresh process, cold and with a warm cache.
+
+Every command of the table below runs as a new Python process (what a user waits for),
+``--repeats`` times with an empty compilation cache (cold: a new ``CAMJAX_CACHE_DIR``
+each run) and ``--repeats`` times with a cache the first cold run filled (warm).  The
+bare start of JAX, ``import jax; jax.numpy.zeros(1).block_until_ready()``, is timed in
+the same run, so every median is also printed as a ratio to it (the machine is shared:
+ratios travel better than seconds).  Writes results/cold_start/<label>.md and .json.
+
+    python experiments/cold_start.py [--repeats 3] [--only ct,help] [--root DIR] [--label after]
+
+``--root`` times another checkout (its code is put first on ``PYTHONPATH``).  Code that
+has no persistent cache ignores ``CAMJAX_CACHE_DIR``; its warm runs then equal its cold.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+BARE = "import jax; jax.numpy.zeros(1).block_until_ready()"
+CT_CURVES = (
+    "import numpy as np, camjax; "
+    "camjax.ct_curves(camjax.laws.standard_laws(), np.linspace(1, 30, 1000))"
+)
+
+# name -> argv after the Python executable ({out} is a fresh temporary directory).
+COMMANDS = {
+    "bare-jax": ["-c", BARE],
+    "help": ["-m", "camjax", "--help"],
+    "ct-help": ["-m", "camjax", "ct", "--help"],
+    "design-help": ["-m", "camjax", "design", "--help"],
+    "ct": ["-m", "camjax", "ct", "--out", "{out}"],
+    "ct_curves": ["-c", CT_CURVES],
+    "design": ["-m", "camjax", "design", "--objective", "residual", "--band", "6:12",
+               "--max-ca", "7.5", "--max-jerk", "100", "--out", "{out}"],
+    "follower": ["-m", "camjax", "follower", "--law", "cycloidal"],
+}
+
+
+SHOWN = {
+    "bare-jax": 'python -c "import jax; jax.numpy.zeros(1).block_until_ready()"',
+    "ct_curves": "python: camjax.ct_curves(standard_laws(), 1000 ratios in [1, 30])",
+}
+
+
+def run_once(argv, root: Path, cache: str) -> float:
+    """Wall seconds of one fresh process (raises if it fails)."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(root) + os.pathsep + env.get("PYTHONPATH", "")
+    env["CAMJAX_CACHE_DIR"] = cache
+    env.pop("JAX_COMPILATION_CACHE_DIR", None)
+    env.pop("JAX_LOG_COMPILES", None)
+    with tempfile.TemporaryDirectory() as out:
+        args = [sys.executable, *(a.replace("{out}", out) for a in argv)]
+        start = time.perf_counter()
+        done = subprocess.run(args, env=env, cwd=out, capture_output=True, text=True)
+        wall = time.perf_counter() - start
+    if done.returncode != 0:
+        raise RuntimeError(f"{' '.join(args)} failed:\n{done.stderr[-2000:]}")
+    return wall
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--only", help="comma-separated command names (default: all)")
+    parser.add_argument("--root", default=str(Path(__file__).resolve().parents[1]),
+                        help="checkout whose camjax is timed")
+    parser.add_argument("--label", default="after")
+    parser.add_argument("--out", default="results/cold_start")
+    args = parser.parse_args()
+    root = Path(args.root).resolve()
+    names = args.only.split(",") if args.only else list(COMMANDS)
+    if "bare-jax" not in names:
+        names.insert(0, "bare-jax")
+    rows, bare = {}, []
+    with tempfile.TemporaryDirectory() as scratch:
+        for name in names:
+            argv = COMMANDS[name]
+            # The bare start again before every command: the load drifts during a run.
+            bare.append(run_once(COMMANDS["bare-jax"], root, str(Path(scratch) / "bare")))
+            warm_cache = str(Path(scratch) / f"warm-{name}")
+            cold = []
+            for i in range(args.repeats):
+                cache = warm_cache if i == 0 else tempfile.mkdtemp(dir=scratch)
+                cold.append(run_once(argv, root, cache))
+            warm = [run_once(argv, root, warm_cache) for _ in range(args.repeats)]
+            rows[name] = {"cold": cold, "warm": warm}
+            print(f"{name:<12} cold {statistics.median(cold):6.2f} s  "
+                  f"warm {statistics.median(warm):6.2f} s", flush=True)
+    base = statistics.median(bare + rows["bare-jax"]["cold"] + rows["bare-jax"]["warm"])
+    lines = [
+        f"# Cold start ({args.label}): whole-process wall time, median of {args.repeats}",
+        "",
+        "Shared 2-core machine under load from other jobs: read the ratios to the bare JAX",
+        f"start (`python -c \"{BARE}\"`, median {base:.2f} s in this run, timed again before",
+        "every command) rather than the seconds.  Cold: an empty compilation cache; warm: the",
+        "cache the first cold run filled (code without a persistent cache: two more cold runs).",
+        "",
+        "| command | cold s | warm-cache s | cold / bare | warm / bare |",
+        "|---|---|---|---|---|",
+    ]
+    for name, r in rows.items():
+        c, w = statistics.median(r["cold"]), statistics.median(r["warm"])
+        shown = SHOWN.get(name) or " ".join(COMMANDS[name]).replace("-m camjax", "camjax")
+        shown = shown.replace("{out}", "DIR")
+        lines.append(f"| `{shown}` | {c:.2f} | {w:.2f} | {c / base:.1f} | {w / base:.1f} |")
+    text = "\n".join(lines) + "\n"
+    print(text)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / f"{args.label}.md").write_text(text)
+    (out / f"{args.label}.json").write_text(json.dumps(
+        {"label": args.label, "root": str(root), "repeats": args.repeats, "bare_s": base,
+         "bare_runs": bare,
+         "commands": {k: {**v, "argv": COMMANDS[k]} for k, v in rows.items()}}, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
