@@ -347,10 +347,11 @@ def _scipy_backlash(law, n, bk, dn, zeta, t_end, max_step=2e-4):
     max_step so that a short excursion past a flank is not stepped over), each phase ended
     by a terminal event on its own contact boundary.  Returns ``[(tau, |e'|, flank)]``."""
     w = 2 * np.pi * n
+    accel = jax.jit(lambda t: law.a(t))  # one compiled scalar call per evaluation
 
     def field(t, y, mode):
         e, de = y
-        a = float(law.a(t)) if t <= 1.0 else 0.0
+        a = float(accel(t)) if t <= 1.0 else 0.0
         stretch = e if mode == 0 else (e + bk if mode == 2 else 0.0)
         damping = 2 * zeta * w * de if mode != 1 else 0.0
         return [de, a + dn - w**2 * stretch - damping]

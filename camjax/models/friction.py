@@ -57,6 +57,11 @@ class FrictionOptions(Options):
         rtol, atol: tolerances of the slip phases.
         max_segments: most slip and stick phases in one solve.
         max_steps: step limit of one phase.
+        max_step: largest step of a slip phase, in natural periods ``1/n`` (default 1/64).
+            A slip phase ends where the velocity reverses, an event seen as a sign change
+            between step ends: a reversal and return within one step is not seen.  The
+            invariant check after the solve then reports it (``SolverError``), never a
+            number; a smaller ``max_step`` resolves it.
     """
 
     method: str = "events"
@@ -66,6 +71,7 @@ class FrictionOptions(Options):
     atol: float = 1e-12
     max_segments: int = 256
     max_steps: int = 100_000
+    max_step: float = 1 / 64
 
     def checked(self, max_period_ratio: float) -> FrictionOptions:
         base = super().checked(max_period_ratio)
@@ -173,7 +179,7 @@ class CoulombFriction(AbstractHybridModel):
             sol = model._integrate(
                 law, ts, (jnp.zeros(()), jnp.zeros(())), 0, solver=diffrax.Dopri8(),
                 rtol=options.rtol, atol=options.atol, max_steps=options.max_steps,
-                max_segments=options.max_segments,
+                max_segments=options.max_segments, max_step=options.max_step,
             )
             x, dx = sol.y
             stuck = sol.mode == 0
