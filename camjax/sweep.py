@@ -12,6 +12,7 @@ import numpy as np
 from .laws import AbstractMotionLaw
 from .models._spring_mass import check_damping, check_period_ratios
 from .propagation._response import SolveOptions, batch_metrics, raise_on_failure
+from .sharding import law_batch_metrics, shard_batch
 
 
 class CtCurve(eqx.Module):
@@ -63,6 +64,7 @@ def ct_curve(
     method: str = "exact",
     dwell: float = 1.0,
     resolution: int | None = None,
+    devices=None,
     **solver_options,
 ) -> CtCurve:
     """Ct, residual vibration and peak in motion of ``law`` at every period ratio.
@@ -71,10 +73,12 @@ def ct_curve(
     form propagation, the default) or a diffrax solver name; ``solver_options`` go to
     :class:`camjax.propagation.SolveOptions` (``rtol``, ``atol``, ``steps``, ``max_steps``,
     ``use_jump_ts``).  Raises ``ValueError`` for bad input and ``SolverError`` if the
-    solver fails at any period ratio.
+    solver fails at any period ratio.  The ratios are split over ``devices`` (default:
+    every local device; see :func:`camjax.sharding.shard_batch`).
     """
     n, zeta, options = _options(period_ratios, damping, method, dwell, resolution, solver_options)
-    metrics, result, _ = batch_metrics(law, jnp.asarray(n), zeta, options)
+    metrics, result, _ = shard_batch(batch_metrics, law, jnp.asarray(n), zeta, options,
+                                     batched_argnums=1, devices=devices)
     raise_on_failure(result, (metrics.ct, metrics.residual), n, options.method)
     return _curve(law, n, zeta, options, metrics)
 
@@ -87,12 +91,14 @@ def ct_curves(
     method: str = "exact",
     dwell: float = 1.0,
     resolution: int | None = None,
+    devices=None,
     **solver_options,
 ) -> dict[str, CtCurve]:
     """:func:`ct_curve` for several laws, keyed by name (or by the mapping's keys).
 
     Laws of the same type (for example several ``SCCA`` or ``BSplineLaw`` of one size)
-    are stacked and vmapped together, so a family of laws costs one compiled call.
+    are stacked and mapped together, so a family of laws costs one compiled call; the
+    stack is split over ``devices`` (default: every local device).
     """
     named = dict(laws) if isinstance(laws, Mapping) else {law.name: law for law in laws}
     n, zeta, options = _options(period_ratios, damping, method, dwell, resolution, solver_options)
@@ -103,10 +109,11 @@ def ct_curves(
     for keys in groups.values():
         members = [named[k] for k in keys]
         if len(members) == 1 or not jax.tree.leaves(members[0]):
-            batch = [batch_metrics(m, jnp.asarray(n), zeta, options) for m in members]
+            batch = [shard_batch(batch_metrics, m, jnp.asarray(n), zeta, options,
+                                 batched_argnums=1, devices=devices) for m in members]
         else:
             stacked = jax.tree.map(lambda *x: jnp.stack(x), *members)
-            out = jax.vmap(lambda law: batch_metrics(law, jnp.asarray(n), zeta, options))(stacked)
+            out = law_batch_metrics(stacked, jnp.asarray(n), zeta, options, devices=devices)
             batch = [jax.tree.map(lambda x, i=i: x[i], out) for i in range(len(members))]
         for key, law, (metrics, result, _) in zip(keys, members, batch):
             raise_on_failure(result, (metrics.ct, metrics.residual), n, options.method)
