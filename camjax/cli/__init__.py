@@ -9,7 +9,7 @@ import sys
 from ._common import CliError
 
 # Modules under camjax.cli that define ``register(subparsers)``; each sets ``func``.
-_COMMANDS = ("laws", "ct", "design", "backlash", "follower", "bench")
+_COMMANDS = ("laws", "ct", "design", "backlash", "follower", "bench", "sweep")
 
 
 def build_parser() -> argparse.ArgumentParser:
