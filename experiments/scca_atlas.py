@@ -60,7 +60,8 @@ def run_sweeps(args, work: Path, runs_path: Path) -> None:
              "family": {"scca_step": args.family_step, "scca_face": False}}
     records = json.loads(runs_path.read_text()) if runs_path.exists() else {}
     for damping in args.damping:
-        for grid, laws in grids.items():
+        for grid in args.grids:
+            laws = grids[grid]
             key = f"{grid}-z{damping:g}"
             spec = distributed.spec_from_dict({
                 "output": str(work / key), "damping": [damping],
@@ -240,6 +241,8 @@ def main() -> None:
     parser.add_argument("--family-step", type=float, default=0.05)
     parser.add_argument("--count", type=int, default=1000, help="period ratios in [1, 30]")
     parser.add_argument("--damping", type=float, nargs="+", default=[0.0, 0.05])
+    parser.add_argument("--grids", nargs="+", choices=("face", "family"),
+                        default=["face", "family"], help="which grids to sweep, in order")
     parser.add_argument("--laws-per-chunk", type=int, default=64)
     parser.add_argument("--work", type=Path, help="chunk directory (default: under --out)")
     parser.add_argument("--out", type=Path, default=HERE.parent / "results" / "scca_atlas")
