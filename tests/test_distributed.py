@@ -152,3 +152,14 @@ def test_cli_bad_spec_is_one_line_exit_2(tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 2
     assert done.stderr.startswith("camjax sweep: error:") and done.stderr.count("\n") == 1
+
+
+def test_cli_partial_distributed_arguments_exit_2(tmp_path, capsys):
+    from camjax.cli import main
+
+    path = _spec(tmp_path)
+    assert main(["sweep", str(path), "--coordinator", "127.0.0.1:1"]) == 2
+    assert "go together" in capsys.readouterr().err
+    args = ["--coordinator", "127.0.0.1:1", "--num-processes", "2", "--process-id", "2"]
+    assert main(["sweep", str(path), *args]) == 2
+    assert "--process-id must be in 0..1" in capsys.readouterr().err
