@@ -49,6 +49,8 @@ def resolve_devices(devices=None) -> list:
             raise ValueError("devices must name at least one device, got an empty list")
         if not all(isinstance(d, jax.Device) for d in chosen):
             raise ValueError(f"devices must be jax.Device objects, got {chosen!r}")
+        if any(d.process_index != jax.process_index() for d in chosen):
+            raise ValueError("devices must belong to this process (jax.local_devices())")
         return chosen
     raise ValueError(f"devices must be None, a device count or a list of devices, got {devices!r}")
 
