@@ -141,7 +141,7 @@ def _summarise(n, frac, rows) -> dict:
         for target in MAP_RATIOS + (1.5, 3.0, 15.0, 30.0):
             i = int(np.argmin(np.abs(n - target)))
             picks[f"{n[i]:.3g}"] = {
-                "best": [round(x, 4) for x in frac[best[i]]],
+                "best": [round(float(x), 4) for x in frac[best[i]]],
                 "value": round(float(worst[best[i], i]), 5),
                 **{name: round(float(v[i]), 5) for name, v in named_worst.items()},
             }
@@ -234,6 +234,34 @@ def _plot_maps(path, key, label, frac, worst, n, named) -> None:
     plt.close(fig)
 
 
+def markdown(summary: dict, runs: dict) -> str:
+    """The results as markdown tables (copied into docs/scca-atlas.md)."""
+    lines = ["## Runs", "",
+             "| sweep | laws | ratios | devices | wall (s) | evaluations/s/core | peak GiB | load |",
+             "|---|---|---|---|---|---|---|---|"]
+    for key, r in runs.items():
+        load = r["uptime_after"].split("load average:")[-1].strip()
+        lines.append(f"| {key} | {r['laws']} | {r['period_ratios']} | {r['devices']} | "
+                     f"{r['wall_s']} | {r.get('evaluations_per_s_per_core', '-')} | "
+                     f"{r['peak_memory_gib']} | {load} |")
+    for key, metrics in summary.items():
+        for label, entry in metrics.items():
+            named = [k for k in next(iter(entry["at"].values())) if k not in ("best", "value")]
+            lines += ["", f"## {key}: worst {label} over n +-{BAND:.0%}", "",
+                      f"{entry['distinct_best_laws']} distinct best laws over the range; the "
+                      "best law's band-worst value is below the best named law's by "
+                      f"{entry.get('gain_over_best_named_median', float('nan')):.1%} (median "
+                      f"over n), up to {entry.get('gain_over_best_named_max', float('nan')):.1%}.",
+                      "", "| n | best (a, b, c) | best | " + " | ".join(named) + " |",
+                      "|---" * (3 + len(named)) + "|"]
+            for n, row in sorted(entry["at"].items(), key=lambda kv: float(kv[0])):
+                cells = [f"{row[k]:.4g}" for k in named]
+                best = ", ".join(f"{x:g}" for x in row["best"])
+                lines.append(f"| {n} | ({best}) | {row['value']:.4g} | "
+                             + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small grids for development")
@@ -262,7 +290,11 @@ def main() -> None:
         run_sweeps(args, work, args.out / "runs.json")
     summary = analyse(work, args.out)
     (args.out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
-    print(json.dumps(summary, indent=1))
+    runs_path = args.out / "runs.json"
+    runs = json.loads(runs_path.read_text()) if runs_path.exists() else {}
+    text = markdown(summary, runs)
+    (args.out / "summary.md").write_text(text)
+    print(text)
 
 
 if __name__ == "__main__":
