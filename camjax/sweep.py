@@ -13,6 +13,11 @@ from . import checks
 from .errors import raise_if_failed
 from .laws import AbstractMotionLaw
 from .models import AbstractModel, SpringMass
+from .sharding import shard_batch
+
+STACK_FROM = 8
+"""Laws of one structure are stacked into one mapped call from this many on (fewer are
+called one by one: the compiled program is shared either way, and a stack re-traces)."""
 
 
 class CtCurve(eqx.Module):
@@ -43,6 +48,31 @@ def _sweep(law, template: AbstractModel, period_ratios, options):
     return template._sweep(law, period_ratios, options)
 
 
+@eqx.filter_jit
+def _sweep_stack(laws, template: AbstractModel, period_ratios, options):
+    # One law at a time (lax.map): memory stays that of one law's sweep whatever the stack's
+    # size, and each law keeps its cache-sized ratio chunks (a vmap over laws multiplies the
+    # working set and ran 1.4x slower on CPU).
+    return jax.lax.map(lambda law: template._sweep(law, period_ratios, options), laws)
+
+
+def sweep_metrics(law, period_ratios, template: AbstractModel, options, *, devices=None):
+    """``(Metrics, result)`` of ``law`` at every period ratio, split over ``devices``.
+
+    The low-level form of :func:`ct_curve` (no checks): ``template`` and ``options`` come
+    from :func:`prepare_sweep`.
+    """
+    return shard_batch(_sweep, law, template, jnp.asarray(period_ratios), options,
+                       batched_argnums=2, devices=devices)
+
+
+def sweep_law_stack(laws, period_ratios, template: AbstractModel, options, *, devices=None):
+    """``(Metrics, result)`` of a stack of laws (laws on axis 0 of every leaf), shapes
+    ``(laws, ratios)``; the laws are split over ``devices``."""
+    return shard_batch(_sweep_stack, laws, template, jnp.asarray(period_ratios), options,
+                       batched_argnums=0, devices=devices)
+
+
 def _template(model, damping) -> AbstractModel:
     if model is None:
         return SpringMass(1.0, damping)
@@ -58,7 +88,8 @@ def _template(model, damping) -> AbstractModel:
     return model
 
 
-def _prepare(period_ratios, model, damping, method, dwell, solver_options):
+def prepare_sweep(period_ratios, model=None, damping=0.0, method=None, dwell=1.0, **solver_options):
+    """Checked period ratios, the model template (array leaves) and its static options."""
     n = checks.period_ratios(period_ratios)
     template = _template(model, damping).with_period_ratio(float(n[0])).validated()
     options = template.options(method, dwell, max_period_ratio=float(n.max()), **solver_options)
@@ -95,6 +126,7 @@ def ct_curve(
     damping: float = 0.0,
     method: str | None = None,
     dwell: float = 1.0,
+    devices=None,
     **solver_options,
 ) -> CtCurve:
     """Ct, residual vibration and peak in motion of ``law`` at every period ratio.
@@ -111,14 +143,16 @@ def ct_curve(
         damping: damping ratio of the default SpringMass (give it in ``model`` otherwise).
         method: solution method (default: the model's; for SpringMass ``"exact"``).
         dwell: dwell after the rise, in motion periods.
+        devices: the local devices to split the ratios over (default: every local device;
+            see ``camjax.sharding.shard_batch``); results equal the single-device run.
         solver_options: the model's static options (e.g. ``resolution``, ``rtol``).
 
     Raises:
         ValueError: bad input, named.
         SolverError: the solver failed at any period ratio (the first is named).
     """
-    n, template, options = _prepare(period_ratios, model, damping, method, dwell, solver_options)
-    metrics, result = _sweep(law, template, jnp.asarray(n), options)
+    n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)
+    metrics, result = sweep_metrics(law, n, template, options, devices=devices)
     _check(result, metrics, n, template, options)
     return _curve(law, n, template, options, metrics)
 
@@ -131,15 +165,17 @@ def ct_curves(
     damping: float = 0.0,
     method: str | None = None,
     dwell: float = 1.0,
+    devices=None,
     **solver_options,
 ) -> dict[str, CtCurve]:
     """``ct_curve`` for several laws, keyed by name (or by the mapping's keys).
 
-    Laws of the same type (for example several ``SCCA`` or ``BSplineLaw`` of one size)
-    are stacked and vmapped together, so a family of laws costs one compiled call.
+    Laws of one pytree structure (the five named SCCA laws, any ``SCCA``, or several
+    ``BSplineLaw`` of one size) share one compiled program; a stack of more than a few is
+    mapped in one call, split over ``devices``.
     """
     named = dict(laws) if isinstance(laws, Mapping) else {law.name: law for law in laws}
-    n, template, options = _prepare(period_ratios, model, damping, method, dwell, solver_options)
+    n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)
     groups: dict = {}
     for key, law in named.items():
         groups.setdefault(jax.tree.structure(law), []).append(key)
@@ -147,18 +183,14 @@ def ct_curves(
     ratios = jnp.asarray(n)
     for keys in groups.values():
         members = [named[k] for k in keys]
-        if len(members) == 1 or not jax.tree.leaves(members[0]):
-            batch = [_sweep(m, template, ratios, options) for m in members]
+        if len(members) <= STACK_FROM or not jax.tree.leaves(members[0]):
+            # A few laws: one call each reuses the compiled program of the structure.
+            batch = [sweep_metrics(m, ratios, template, options, devices=devices) for m in members]
         else:
             stacked = jax.tree.map(lambda *x: jnp.stack(x), *members)
-            out = _stacked_sweep(stacked, template, ratios, options)
+            out = sweep_law_stack(stacked, ratios, template, options, devices=devices)
             batch = [jax.tree.map(lambda x, i=i: x[i], out) for i in range(len(members))]
         for key, law, (metrics, result) in zip(keys, members, batch):
             _check(result, metrics, n, template, options)
             curves[key] = _curve(law, n, template, options, metrics)
     return {key: curves[key] for key in named}
-
-
-@eqx.filter_jit
-def _stacked_sweep(stacked_laws, template, period_ratios, options):
-    return jax.vmap(lambda law: template._sweep(law, period_ratios, options))(stacked_laws)

@@ -18,7 +18,7 @@ class _Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
 # Modules under camjax.cli that define ``register(subparsers)``; each sets ``func``.
-_COMMANDS = ("laws", "ct", "design", "backlash", "follower", "bench", "program")
+_COMMANDS = ("laws", "ct", "design", "backlash", "follower", "bench", "program", "sweep")
 
 
 def build_parser() -> argparse.ArgumentParser:

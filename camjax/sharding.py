@@ -1,0 +1,121 @@
+"""Run a batched computation over several local devices, one shard of the batch each.
+
+A sweep (period ratios, or a stack of laws of one pytree structure) is split along axis 0
+over a 1-D device mesh with ``jax.shard_map``, so that every device runs its own adaptive
+``while_loop``\\ s (plain ``jit`` auto-sharding of such loops runs them in lock step and is
+slow, diffrax #407, jax #26586).  The batch is padded to a multiple of the device count
+with copies of its last member (always valid input) and the padding is stripped from the
+result, so callers see exactly the single-device answer.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import equinox as eqx
+import jax
+import numpy as np
+from jax.sharding import Mesh, PartitionSpec
+
+AXIS = "batch"
+"""Name of the mesh axis the batch is split along."""
+
+
+def resolve_devices(devices=None) -> list:
+    """The devices to shard over.
+
+    Args:
+        devices: ``None`` for every local device, a positive int for the first that many
+            local devices, or a sequence of devices.
+
+    Raises:
+        ValueError: for a count that is not positive or exceeds the local devices, or an
+            empty list.
+    """
+    local = jax.local_devices()
+    if devices is None:
+        return local
+    if isinstance(devices, int | np.integer) and not isinstance(devices, bool):
+        if not 1 <= devices <= len(local):
+            raise ValueError(
+                f"devices must be between 1 and the {len(local)} local device(s), got {devices}"
+            )
+        return local[: int(devices)]
+    if isinstance(devices, Sequence) and not isinstance(devices, str):
+        chosen = list(devices)
+        if not chosen:
+            raise ValueError("devices must name at least one device, got an empty list")
+        if not all(isinstance(d, jax.Device) for d in chosen):
+            raise ValueError(f"devices must be jax.Device objects, got {chosen!r}")
+        if any(d.process_index != jax.process_index() for d in chosen):
+            raise ValueError("devices must belong to this process (jax.local_devices())")
+        return chosen
+    raise ValueError(f"devices must be None, a device count or a list of devices, got {devices!r}")
+
+
+def batch_size(tree) -> int:
+    """Length of axis 0 shared by every array leaf of ``tree`` (a ``ValueError`` if not)."""
+    sizes = {np.shape(x)[0] if np.ndim(x) else None for x in jax.tree.leaves(tree)}
+    if len(sizes) != 1 or None in sizes:
+        raise ValueError(f"batched arguments need one common leading axis, got sizes {sizes}")
+    return sizes.pop()
+
+
+def _pad(x, extra: int):
+    if extra == 0:
+        return x
+    tail = jax.numpy.repeat(x[-1:], extra, axis=0)
+    return jax.numpy.concatenate([x, tail], axis=0)
+
+
+@eqx.filter_jit
+def _sharded_call(fn, mesh, args, batched_argnums):
+    """``fn(*args)`` with the ``batched_argnums`` split over ``mesh``, jitted once per shape."""
+    dynamic, static = eqx.partition(args, eqx.is_array)
+    specs = tuple(
+        jax.tree.map(lambda _, i=i: PartitionSpec(AXIS if i in batched_argnums else None), arg)
+        for i, arg in enumerate(dynamic)
+    )
+    leaves, treedef = jax.tree.flatten(dynamic)
+    flat_specs = jax.tree.leaves(specs, is_leaf=lambda x: isinstance(x, PartitionSpec))
+
+    def body(*local):
+        return fn(*eqx.combine(jax.tree.unflatten(treedef, local), static))
+
+    return jax.shard_map(
+        body, mesh=mesh, in_specs=tuple(flat_specs), out_specs=PartitionSpec(AXIS),
+        check_vma=False,
+    )(*leaves)
+
+
+def shard_batch(fn, *args, batched_argnums=(0,), devices=None):
+    """``fn(*args)`` computed with the batch split over ``devices``.
+
+    Args:
+        fn: a jittable function whose every output leaf has the batch on axis 0, for
+            example ``batch_metrics`` or a ``vmap`` of it over stacked laws.  Pass a
+            module-level function (not a fresh lambda) so the compiled program is reused.
+        args: the arguments.  Those at ``batched_argnums`` are pytrees whose every array
+            leaf has the batch on axis 0; every device sees the others whole.  Non-array
+            leaves (options, Python floats) are static.
+        batched_argnums: positions of the batched arguments.
+        devices: see :func:`resolve_devices`.  With one device ``fn`` is called directly.
+
+    Returns:
+        ``fn``'s output for the whole batch, the padding removed.
+    """
+    chosen = resolve_devices(devices)
+    batched_argnums = tuple(sorted({int(i) for i in np.atleast_1d(batched_argnums)}))
+    if len(chosen) == 1:
+        with jax.default_device(chosen[0]):
+            return fn(*args)
+    size = batch_size([args[i] for i in batched_argnums])
+    extra = (-size) % len(chosen)
+    padded = tuple(
+        jax.tree.map(lambda x: _pad(x, extra) if eqx.is_array(x) else x, arg)
+        if i in batched_argnums else arg
+        for i, arg in enumerate(args)
+    )
+    mesh = Mesh(np.asarray(chosen), (AXIS,))
+    out = _sharded_call(fn, mesh, padded, batched_argnums)
+    return jax.tree.map(lambda x: x[:size], out)

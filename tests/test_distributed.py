@@ -1,0 +1,165 @@
+"""Spec-file sweeps: SCCA grids, chunked resumable runs, two processes on one coordinator."""
+
+import os
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from camjax import distributed
+from camjax.laws import SCCA
+from camjax.sweep import ct_curve
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEC = """
+output = "out"
+damping = [0.05]
+laws_per_chunk = 2
+[period_ratio]
+start = 1.0
+stop = 4.0
+count = 5
+[laws]
+scca_step = 0.5
+scca_face = true
+"""  # 6 laws in 3 chunks
+
+
+def _spec(tmp_path) -> Path:
+    path = tmp_path / "spec.toml"
+    path.write_text(SPEC)
+    return path
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    """The sweep run in one go, in one process."""
+    spec = distributed.load_spec(_spec(tmp_path_factory.mktemp("one")))
+    distributed.run_sweep(spec, progress=False)
+    with np.load(distributed.merge(spec)) as merged:
+        return dict(merged)
+
+
+def test_scca_grid_counts_and_fractions():
+    face = distributed.scca_grid(0.01, face=True)
+    assert len(face) == 5151  # (m + 1)(m + 2)/2 with m = 100
+    assert all(abs(sum(map(float, law.fractions)) - 1.0) < 1e-12 for law in face)
+    assert len(distributed.scca_grid(0.05)) == 1770  # C(23, 3) less the all-zero point
+    with pytest.raises(ValueError, match="whole number of steps"):
+        distributed.scca_grid(0.3)
+
+
+@pytest.mark.parametrize("text, words", [
+    ('output = "o"\n[period_ratio]\nvalues = [1.0]\n', "needs \\[laws\\]"),
+    ('[period_ratio]\nvalues = [1.0]\n[laws]\nnames = ["cycloidal"]\n', "output directory"),
+    ('output = "o"\n[laws]\nnames = ["cycloidal"]\n', "period_ratio"),
+    ('output = "o"\n[period_ratio]\nvalues = [-1.0]\n[laws]\nnames = ["cycloidal"]\n',
+     "positive"),
+    ('output = "o"\ndamping = [1.5]\n[period_ratio]\nvalues = [1.0]\n[laws]\n'
+     'names = ["cycloidal"]\n', "damping"),
+    ('output = "o"\nspeed = 3\n', "unknown spec keys"),
+    ('output = "o"\n[period_ratio]\nvalues = [1.0]\n[laws]\nnames = ["nope"]\n', "nope"),
+])
+def test_bad_specs_name_the_problem(tmp_path, text, words):
+    path = tmp_path / "spec.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=words):
+        distributed.load_spec(path)
+
+
+def test_merged_sweep_matches_ct_curve(uninterrupted):
+    names = list(uninterrupted["law"])
+    assert uninterrupted["ct"].shape == (1, 6, 5)
+    curve = ct_curve(SCCA(0.5, 0.0, 0.5), uninterrupted["period_ratio"], damping=0.05)
+    i = names.index("scca:0.5,0,0.5")
+    np.testing.assert_allclose(uninterrupted["ct"][0, i], curve.ct, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(uninterrupted["residual"][0, i], curve.residual, atol=1e-12)
+    assert uninterrupted["ca"][i] == pytest.approx(2 * np.pi)  # cycloidal's Ca
+
+
+def test_resume_recomputes_only_missing_chunks(tmp_path, monkeypatch, uninterrupted):
+    spec = distributed.load_spec(_spec(tmp_path))
+    compute = distributed._compute_chunk
+    calls = []
+
+    def failing(spec, chunk, devices):
+        if len(calls) == 1:
+            raise RuntimeError("deliberate interruption")
+        calls.append(chunk)
+        return compute(spec, chunk, devices)
+
+    monkeypatch.setattr(distributed, "_compute_chunk", failing)
+    with pytest.raises(RuntimeError, match="deliberate"):
+        distributed.run_sweep(spec, progress=False)
+    assert distributed.missing_chunks(spec) == spec.chunks()[1:]
+    assert not list((spec.output / "chunks").glob(".*tmp"))  # nothing half-written left
+    with pytest.raises(ValueError, match="2 of 3 chunks are missing"):
+        distributed.merge(spec)
+
+    monkeypatch.setattr(distributed, "_compute_chunk", compute)
+    done = distributed.run_sweep(spec, progress=False)
+    assert done == spec.chunks()[1:]
+    assert distributed.run_sweep(spec, progress=False) == []  # nothing left to do
+    with np.load(distributed.merge(spec)) as merged:
+        for key in ("ct", "residual", "peak_in_motion", "ca", "period_ratio"):
+            np.testing.assert_array_equal(merged[key], uninterrupted[key])
+
+
+def test_changed_spec_refuses_old_output(tmp_path, uninterrupted):
+    path = _spec(tmp_path)
+    distributed._claim_output(distributed.load_spec(path))
+    path.write_text(SPEC.replace("count = 5", "count = 6"))
+    with pytest.raises(ValueError, match="different sweep"):
+        distributed.run_sweep(distributed.load_spec(path), progress=False)
+
+
+def test_two_processes_merge_to_the_one_process_result(tmp_path, uninterrupted):
+    path = _spec(tmp_path)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_PLATFORMS": "cpu"}
+    env.pop("XLA_FLAGS", None)
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-m", "camjax", "sweep", str(path), "--coordinator",
+             f"127.0.0.1:{port}", "--num-processes", "2", "--process-id", str(i)],
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )
+        for i in range(2)
+    ]
+    try:
+        logs = [p.communicate(timeout=300) for p in procs]
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+    assert [p.returncode for p in procs] == [0, 0], logs
+    with np.load(tmp_path / "out" / "sweep.npz") as merged:
+        for key in ("ct", "residual", "peak_in_motion", "ca"):
+            np.testing.assert_allclose(merged[key], uninterrupted[key], rtol=0, atol=1e-12)
+    assert "wrote" in logs[0][1]
+
+
+def test_cli_bad_spec_is_one_line_exit_2(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_PLATFORMS": "cpu"}
+    bad = tmp_path / "bad.toml"
+    bad.write_text("output = [")
+    done = subprocess.run([sys.executable, "-m", "camjax", "sweep", str(bad)], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    assert done.stderr.startswith("camjax sweep: error:") and done.stderr.count("\n") == 1
+
+
+def test_cli_partial_distributed_arguments_exit_2(tmp_path, capsys):
+    from camjax.cli import main
+
+    path = _spec(tmp_path)
+    assert main(["sweep", str(path), "--coordinator", "127.0.0.1:1"]) == 2
+    assert "go together" in capsys.readouterr().err
+    args = ["--coordinator", "127.0.0.1:1", "--num-processes", "2", "--process-id", "2"]
+    assert main(["sweep", str(path), *args]) == 2
+    assert "--process-id must be in 0..1" in capsys.readouterr().err

@@ -1,0 +1,81 @@
+"""Sharded sweeps equal single-device ones (4 forced host devices, in a subprocess)."""
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import jax
+import numpy as np
+import pytest
+
+from camjax.sharding import batch_size, resolve_devices, shard_batch
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SCRIPT = textwrap.dedent(
+    """
+    import os
+    os.environ["XLA_FLAGS"] = "--xla_force_host_platform_device_count=4"
+    import jax
+    import numpy as np
+    from camjax import laws
+    from camjax.laws import SCCA
+    from camjax.sweep import ct_curve, ct_curves
+
+    assert jax.local_device_count() == 4, jax.devices()
+
+    def worst(a, b):
+        return max(float(np.max(np.abs(getattr(a, k) - getattr(b, k))))
+                   for k in ("ct", "residual", "peak_in_motion"))
+
+    law = laws.get("modified-sine")
+    errors = {}
+    for size in (7, 8):  # does not / does divide by the device count
+        n = np.linspace(1.0, 6.0, size)
+        errors[f"exact-{size}"] = worst(ct_curve(law, n, devices=1), ct_curve(law, n))
+    for size in (3, 4):
+        n = np.linspace(1.5, 4.0, size)
+        one = ct_curve(law, n, method="tsit5", devices=1, rtol=1e-8, atol=1e-10)
+        many = ct_curve(law, n, method="tsit5", devices=4, rtol=1e-8, atol=1e-10)
+        errors[f"tsit5-{size}"] = worst(one, many)
+    family = [SCCA(a, 0.0, 1.0 - a) for a in (0.1, 0.3, 0.5, 0.7, 0.9)]  # 5 laws on 4 devices
+    n = np.linspace(1.0, 6.0, 6)
+    one, many = ct_curves(family, n, devices=1), ct_curves(family, n, devices=4)
+    errors["scca-stack"] = max(worst(one[k], many[k]) for k in one)
+    print("ERRORS", errors)
+    assert all(e <= 1e-12 for e in errors.values()), errors
+    # the sharded stack equals each law alone (not just the same program twice)
+    alone = ct_curve(family[1], n, devices=1)
+    assert worst(alone, many[family[1].name]) <= 1e-12
+    """
+)
+
+
+def test_sharded_sweeps_equal_single_device():
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_PLATFORMS": "cpu"}
+    env.pop("XLA_FLAGS", None)
+    done = subprocess.run([sys.executable, "-c", SCRIPT], env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-4000:]
+    assert "ERRORS" in done.stdout
+
+
+def test_resolve_devices():
+    local = jax.local_devices()
+    assert resolve_devices(None) == local
+    assert resolve_devices(1) == local[:1]
+    assert resolve_devices(local[:1]) == local[:1]
+    for bad, words in ((0, "between 1"), (len(local) + 1, "between 1"), ([], "at least one"),
+                       ("cpu", "device count"), (["cpu"], "jax.Device")):
+        with pytest.raises(ValueError, match=words):
+            resolve_devices(bad)
+
+
+def test_shard_batch_one_device_and_batch_checks():
+    x = np.arange(5.0)
+    np.testing.assert_array_equal(shard_batch(lambda v, k: v * k, x, 3.0, devices=1), 3 * x)
+    assert batch_size({"a": np.zeros((4, 2)), "b": np.ones(4)}) == 4
+    with pytest.raises(ValueError, match="common leading axis"):
+        batch_size({"a": np.zeros(4), "b": np.ones(3)})
