@@ -121,11 +121,12 @@ def design(
             stage has converged.
         sharpness: power-mean exponent of maxima at the first and the last stage; L-BFGS
             stages grow it about fourfold each.
-        penalty, margin: weight of the cap penalty and the fraction by which training aims
-            inside the caps.
-        seed, noise: a run is deterministic; with ``noise > 0`` the seed draws a Gaussian
-            perturbation of that size (in acceleration coordinates) of the starting point,
-            so multi-start is a loop over seeds.
+        penalty: weight of the cap penalty.
+        margin: the fraction by which training aims inside the caps.
+        seed: a run is deterministic; with ``noise > 0`` the seed draws the perturbation
+            of the starting point, so multi-start is a loop over seeds.
+        noise: size of a Gaussian perturbation of the starting point (in acceleration
+            coordinates); 0 starts from ``initial`` itself.
     Raises:
         CapError: the result breaks a cap and cannot be repaired.
     """
