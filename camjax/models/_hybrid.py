@@ -35,7 +35,7 @@ from ..errors import RESULTS
 from ..metrics import refined_peak
 from ._base import AbstractModel
 
-_BISECTIONS = 64
+_BISECTIONS = 64  # halves a bracket of width <= 1 below float64 resolution
 SEARCH_POINTS = 4096
 """Sample points over the whole solve at which closed-form exit functions are screened."""
 
@@ -87,7 +87,7 @@ class EventBisection(optx.AbstractRootFinder):
         return y, aux, {}
 
 
-def _bisect(fn, lo, hi):
+def bisect(fn, lo, hi):
     """Point where ``fn`` turns from ``< 0`` (at ``lo``) to ``>= 0`` (at ``hi``), to 1 ulp."""
 
     def halve(_, bracket):
@@ -129,11 +129,11 @@ def first_exit(g, dg, t0, t_end, curvature, points):
         gi = lambda t: g(t)[i]  # noqa: E731
         dgi = lambda t: dg(t)[i]  # noqa: E731
         has_max = (dgi(lo) > 0) & (dgi(hi) < 0)
-        apex = _bisect(lambda t: -dgi(t), lo, hi)  # g' turns negative
+        apex = bisect(lambda t: -dgi(t), lo, hi)  # g' turns negative
         top = jnp.where(has_max, apex, hi)
         top = jnp.where(has_max & (gi(apex) < 0) & (gi(hi) >= 0), hi, top)
         reaches = gi(top) >= 0
-        root = _bisect(gi, lo, top)
+        root = bisect(gi, lo, top)
         return jnp.where(reaches, root, jnp.inf)
 
     def examine(state):

@@ -42,7 +42,7 @@ from ..errors import RESULTS
 from ..laws import AbstractMotionLaw
 from ..solvers import ADAPTIVE_SOLVERS
 from ._base import Metrics, Options, Response
-from ._hybrid import AbstractHybridModel, sample_times
+from ._hybrid import AbstractHybridModel, bisect, sample_times
 from .spring_mass import residual_amplitude
 
 # Status codes of a kinematic case.
@@ -51,7 +51,6 @@ NO_SEPARATION = 1  # dn above the law's peak deceleration: never leaves the driv
 NO_IMPACT = 2  # leaves, but falls back onto the driving flank before crossing bk
 STATUS_NAMES = {IMPACT: "impact", NO_SEPARATION: "no separation", NO_IMPACT: "no impact"}
 
-_BISECTIONS = 64  # halves a bracket of width <= 1 below float64 resolution
 _FALL_TOL = 1e-12  # a gap below -_FALL_TOL means the payload is back on the driving flank
 
 
@@ -69,18 +68,6 @@ class KinematicImpact(NamedTuple):
     impact_tau: jax.Array
     impact_velocity: jax.Array
     status: jax.Array
-
-
-def _bisect(fn, lo, hi):
-    """Root of ``fn`` in ``[lo, hi]`` with ``fn(lo) < 0 <= fn(hi)``: returns ``hi`` at 1 ulp."""
-
-    def halve(_, bracket):
-        lo, hi = bracket
-        mid = 0.5 * (lo + hi)
-        above = fn(mid) >= 0
-        return jnp.where(above, lo, mid), jnp.where(above, mid, hi)
-
-    return jax.lax.fori_loop(0, _BISECTIONS, halve, (lo, hi))[1]
 
 
 def _first(mask):
@@ -137,7 +124,7 @@ def _kinematic_impact(law, bk, dn, samples):
     k = _first(law_c.a(grid) + dn_c < 0)
     separates = k <= samples
     k = jnp.clip(k, 1, samples)
-    tau_d = _bisect(lambda t: -(law_c.a(t) + dn_c), grid[k - 1], grid[k])
+    tau_d = bisect(lambda t: -(law_c.a(t) + dn_c), grid[k - 1], grid[k])
     # The impact does not depend on tau_d to first order (a + dn = 0 there), so the
     # flight uses the stopped root; the reported time gets its implicit derivative.
     jerk = law.j(tau_d)
@@ -163,7 +150,7 @@ def _kinematic_impact(law, bk, dn, samples):
     first_fall = _first((g < -_FALL_TOL) & (index > 0))
     hits_in_rise = first_cross < first_fall
     i = jnp.clip(first_cross, 1, samples)
-    root = _bisect(lambda t: gap_c(t) - bk_c, taus[i - 1], taus[i])
+    root = bisect(lambda t: gap_c(t) - bk_c, taus[i - 1], taus[i])
     rate = jax.lax.stop_gradient(gap_rate(root))
     tau_rise = root - (gap(root) - bk) / jnp.where(rate > 0, rate, 1.0)  # implicit derivative
     v_rise = gap_rate(tau_rise)
