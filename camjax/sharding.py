@@ -73,7 +73,7 @@ def _sharded_call(fn, mesh, args, batched_argnums):
     """``fn(*args)`` with the ``batched_argnums`` split over ``mesh``, jitted once per shape."""
     dynamic, static = eqx.partition(args, eqx.is_array)
     specs = tuple(
-        jax.tree.map(lambda _, i=i: PartitionSpec(AXIS if i in batched_argnums else None), arg)
+        jax.tree.map(lambda _, i=i: PartitionSpec(AXIS) if i in batched_argnums else PartitionSpec(), arg)
         for i, arg in enumerate(dynamic)
     )
     leaves, treedef = jax.tree.flatten(dynamic)

@@ -35,7 +35,7 @@ fig, ax = plt.subplots(figsize=(9, 4))
 for mu in (0.0, 0.3, 1.0):
     r = camjax.solve(law, CoulombFriction(n, mu), samples=1024)
     ax.plot(r.tau, r.payload_acceleration / law.Ca, lw=1, label=f"mu = {mu}")
-    print(f"mu = {mu}: peak in motion {float(r.peak_in_motion):.4f} Ca, "
+    print(f"mu = {mu}: peak in motion {float(r.metrics.peak_in_motion):.4f} Ca, "
           f"rest offset {float(r.rest_offset):+.2e} (stick band {mu / w**2:.2e}), "
           f"settled {bool(r.settled)}")
 ax.plot(r.tau, law.a(r.tau) / law.Ca, "k--", lw=0.8, label="command")

@@ -74,7 +74,7 @@ def test_merged_sweep_matches_ct_curve(uninterrupted):
     names = list(uninterrupted["law"])
     assert uninterrupted["ct"].shape == (1, 6, 5)
     curve = ct_curve(SCCA(0.5, 0.0, 0.5), uninterrupted["period_ratio"], damping=0.05)
-    i = names.index("scca:0.5,0,0.5")
+    i = names.index(SCCA(0.5, 0.0, 0.5).name)
     np.testing.assert_allclose(uninterrupted["ct"][0, i], curve.ct, rtol=0, atol=1e-12)
     np.testing.assert_allclose(uninterrupted["residual"][0, i], curve.residual, atol=1e-12)
     assert uninterrupted["ca"][i] == pytest.approx(2 * np.pi)  # cycloidal's Ca

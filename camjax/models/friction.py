@@ -177,7 +177,9 @@ class CoulombFriction(AbstractHybridModel):
             stats = {"steps": steps}
         else:
             sol = model._integrate(
-                law, ts, (jnp.zeros(()), jnp.zeros(())), 0, solver=diffrax.Dopri8(),
+                law, ts, (jnp.zeros(()), jnp.zeros(())),
+                jnp.where(model.friction > 0, 0, 1),  # frictionless: no zero-length stick at rest
+                solver=diffrax.Dopri8(),
                 rtol=options.rtol, atol=options.atol, max_steps=options.max_steps,
                 max_segments=options.max_segments, max_step=options.max_step,
             )
