@@ -83,7 +83,7 @@ def _template(model, damping) -> AbstractModel:
             "give the damping in the model (e.g. CoulombFriction(1.0, mu, damping=0.05)), "
             "not as the damping argument, when a model is given"
         )
-    if getattr(model, "carries_laws", False):
+    if model.carries_laws:
         raise TypeError(f"{type(model).__name__} has no period-ratio sweep (it is not an SDOF-family model)")
     return model
 

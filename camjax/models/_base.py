@@ -95,6 +95,9 @@ class AbstractModel(eqx.Module):
     period_ratio: AbstractVar[float | jax.Array]
     methods: ClassVar[tuple[str, ...]]
     options_type: ClassVar[type[Options]]
+    carries_laws: ClassVar[bool] = False
+    """True for a model that holds its own motion laws (``solve(None, model)``) and has no
+    period-ratio sweep."""
 
     @property
     def omega(self):

@@ -52,7 +52,7 @@ def solve(
         )
     if law is not None and not isinstance(law, AbstractMotionLaw):
         raise TypeError(f"law must be a camjax motion law, got {type(law).__name__}")
-    if law is None and not getattr(model, "carries_laws", False):
+    if law is None and not model.carries_laws:
         raise TypeError(f"{type(model).__name__} needs a motion law (law is None)")
     opts = model.options(method, dwell, **options)
     response = _solve(law, model.with_array_leaves(), opts)
