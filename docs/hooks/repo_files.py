@@ -26,7 +26,7 @@ def on_files(files, config):
     site = {"dest_dir": config.site_dir, "use_directory_urls": config.use_directory_urls,
             "inclusion": InclusionLevel.INCLUDED}
     for path in sorted((root / "results").rglob("*")):
-        if path.suffix in FIGURE_SUFFIXES and "tmp" not in path.parts:
+        if path.suffix in FIGURE_SUFFIXES and "tmp" not in path.relative_to(root).parts:
             relative = path.relative_to(root).as_posix()
             files.append(File(f"../{relative}", config.docs_dir, dest_uri=relative, **site))
     for path in sorted((root / "notebooks").glob("*.py")):
