@@ -9,6 +9,8 @@ the rest of camjax.)
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 
 import equinox as eqx
@@ -28,6 +30,26 @@ def require(condition: bool, message: str) -> None:
         raise ValueError(message)
 
 
+_CHECKED_OUTSIDE = contextvars.ContextVar("camjax_checked_outside", default=False)
+
+
+@contextlib.contextmanager
+def checked_outside(flag: bool = True):
+    """Trace without the runtime checks of traced values, because the caller has checked
+    the same values concretely (``camjax.solve`` and the sweeps do).
+
+    A runtime check is a host callback, and JAX's persistent compilation cache does not
+    store programs with host callbacks: dropping checks that cannot fail lets a command's
+    programs load from the cache.  Entry points pass the flag as a static argument of
+    their compiled function, so a program traced with it is never reused without it.
+    """
+    token = _CHECKED_OUTSIDE.set(bool(flag))
+    try:
+        yield
+    finally:
+        _CHECKED_OUTSIDE.reset(token)
+
+
 def ensure(value, predicate, message: str):
     """``value`` unchanged if ``predicate(value)`` holds everywhere; else a clear error.
 
@@ -42,6 +64,8 @@ def ensure(value, predicate, message: str):
         if not np.all(ok):
             bad = np.broadcast_to(array, ok.shape)[~ok].ravel()[0]
             raise ValueError(f"{message}, got {bad:g}")
+        return value
+    if _CHECKED_OUTSIDE.get():
         return value
     return eqx.error_if(value, ~predicate(jnp.asarray(value)), message)
 

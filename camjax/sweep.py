@@ -43,9 +43,15 @@ class CtCurve(eqx.Module):
         return self.ca * self.ct
 
 
+# The sweeps check their period ratios and template concretely (prepare_sweep), so they
+# trace without runtime checks (``checks.checked_outside``): their programs then load
+# from JAX's persistent compilation cache.
+
+
 @eqx.filter_jit
 def _sweep(law, template: AbstractModel, period_ratios, options):
-    return template._sweep(law, period_ratios, options)
+    with checks.checked_outside():
+        return template._sweep(law, period_ratios, options)
 
 
 @eqx.filter_jit
@@ -53,7 +59,8 @@ def _sweep_stack(laws, template: AbstractModel, period_ratios, options):
     # One law at a time (lax.map): memory stays that of one law's sweep whatever the stack's
     # size, and each law keeps its cache-sized ratio chunks (a vmap over laws multiplies the
     # working set and ran 1.4x slower on CPU).
-    return jax.lax.map(lambda law: template._sweep(law, period_ratios, options), laws)
+    with checks.checked_outside():
+        return jax.lax.map(lambda law: template._sweep(law, period_ratios, options), laws)
 
 
 def sweep_metrics(law, period_ratios, template: AbstractModel, options, *, devices=None):

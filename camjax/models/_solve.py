@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import equinox as eqx
 
+from .. import checks
 from ..errors import raise_if_failed
 from ..laws import AbstractMotionLaw
 from ._base import AbstractModel, Response
 
 
 @eqx.filter_jit
-def _solve(law, model: AbstractModel, options) -> Response:
-    return model._response(law, options)
+def _solve(law, model: AbstractModel, options, checked: bool) -> Response:
+    with checks.checked_outside(checked):
+        return model._response(law, options)
 
 
 def solve(
@@ -55,7 +57,8 @@ def solve(
     if law is None and not model.carries_laws:
         raise TypeError(f"{type(model).__name__} needs a motion law (law is None)")
     opts = model.options(method, dwell, **options)
-    response = _solve(law, model.with_array_leaves(), opts)
+    checked = checks.is_concrete(model)  # concrete parameters were checked at construction
+    response = _solve(law, model.with_array_leaves(), opts, checked)
     if throw:
         reached = response.stats.get("reached")
         where = f" (reached tau = {float(reached):.6g})" if reached is not None else ""
