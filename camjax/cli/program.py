@@ -82,7 +82,7 @@ def _csv(report: dict) -> str:
 
 def _write_outputs(out: Path, program, solver, report: dict, rpm, points: int) -> None:
     from ..program import profile, response, write_csv, write_dxf
-    from ..program._figures import save_figures
+    from ..program.figures import save_figures
 
     dump_json(report, out / "summary.json")
     prof = profile(program, points)

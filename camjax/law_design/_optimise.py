@@ -44,10 +44,10 @@ def _acceleration_coordinates(knots: int, degree: int) -> jax.Array:
     more decades).  Optimising in these coordinates makes every direction equally stiff,
     which first-order methods need.
     """
-    from ..laws._spline import _derivative_matrix, _knots
+    from ..laws import BSplineLaw
 
     n_basis = knots + 6
-    second = _derivative_matrix(_knots(n_basis, degree), degree, 2)[:, 3:-3]
+    second = BSplineLaw.derivative_map(n_basis, degree, 2)[:, 3:-3]
     _, singular, vt = np.linalg.svd(second, full_matrices=False)
     return jnp.asarray(vt.T / singular)
 

@@ -146,6 +146,13 @@ class BSplineLaw(AbstractMotionLaw):
     def name(self) -> str:
         return f"bspline:{len(self.coefficients)}"
 
+    @staticmethod
+    def derivative_map(n_basis: int, degree: int, order: int) -> np.ndarray:
+        """Matrix from all ``n_basis`` control points of a degree-``degree`` law (clamped
+        uniform knots) to the control points of its ``order``-th derivative (the linear map
+        a design optimises through)."""
+        return _derivative_matrix(_knots(n_basis, degree), degree, order)
+
     def _derivative(self, tau, order: int) -> jax.Array:
         knots = _knots(self.n_basis, self.degree)
         points = jnp.asarray(_derivative_matrix(knots, self.degree, order)) @ self.control_points
