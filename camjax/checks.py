@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
-import math
 
 import equinox as eqx
 import jax
@@ -96,11 +95,3 @@ def period_ratios(values, *, what: str = "period ratio") -> np.ndarray:
     if np.any(n <= 0):
         raise ValueError(f"{what} must be positive, got {n[n <= 0][0]:g}")
     return n
-
-
-def concrete_float(value, name: str) -> float:
-    """A concrete scalar as a Python float (for static settings), or a ``ValueError``."""
-    require(is_concrete(value) and np.ndim(value) == 0, f"{name} must be a concrete number")
-    x = float(value)
-    require(math.isfinite(x), f"{name} must be finite, got {x}")
-    return x

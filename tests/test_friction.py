@@ -157,6 +157,16 @@ def _stick_slip_reference(command, n, mu, t_end, max_step=np.inf):
     return phases
 
 
+def _reference_positions(phases, tau):
+    """The scipy reference's position at each ``tau``, from the phase that contains it."""
+    starts = np.array([p[0] for p in phases])
+    out = []
+    for t in tau:
+        _, mode, x0, dense = phases[np.searchsorted(starts, t, side="right") - 1]
+        out.append(x0 if mode == 0 else dense(t)[0])
+    return np.asarray(out)
+
+
 def test_stick_starting_near_the_end_of_the_rise_matches_scipy_reference():
     """4-5-6-7 polynomial, n = 5.25, mu = 0.3: a stick phase from tau = 0.928 to 0.944,
     where the transmission force w^2 (s - x) ~ 1088 (s - x) is resolved only to ~1e-11,
@@ -168,11 +178,8 @@ def test_stick_starting_near_the_end_of_the_rise_matches_scipy_reference():
     assert 0.92 < phases[3][0] < 0.93 < 0.94 < phases[4][0] < 0.95
     tau = np.asarray(response.tau)
     starts = np.array([p[0] for p in phases])
-    reference = []
-    for t in tau:
-        start, mode, x0, dense = phases[np.searchsorted(starts, t, side="right") - 1]
-        reference.append(x0 if mode == 0 else dense(t)[0])
-    np.testing.assert_allclose(np.asarray(response.position), reference, rtol=0, atol=2e-9)
+    np.testing.assert_allclose(np.asarray(response.position), _reference_positions(phases, tau),
+                               rtol=0, atol=2e-9)
     assert int(response.stats["segments"]) == len(phases)
     assert bool(response.settled)
     assert float(response.rest_offset) == pytest.approx(phases[-1][2] - 1.0, abs=1e-10)
@@ -194,12 +201,8 @@ def test_a_short_stick_phase_inside_the_rise_is_not_stepped_over():
     assert [p[1] for p in phases] == [0, 1, 0, 1, 0]
     assert phases[3][0] - phases[2][0] < 2e-3
     tau = np.asarray(response.tau)
-    starts = np.array([p[0] for p in phases])
-    reference = []
-    for t in tau:
-        start, mode, x0, dense = phases[np.searchsorted(starts, t, side="right") - 1]
-        reference.append(x0 if mode == 0 else dense(t)[0])
-    np.testing.assert_allclose(np.asarray(response.position), reference, rtol=0, atol=2e-9)
+    np.testing.assert_allclose(np.asarray(response.position), _reference_positions(phases, tau),
+                               rtol=0, atol=2e-9)
     assert int(response.stats["segments"]) == len(phases)
 
 
