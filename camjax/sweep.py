@@ -63,14 +63,15 @@ def _sweep_stack(laws, template: AbstractModel, period_ratios, options):
         return jax.lax.map(lambda law: template._sweep(law, period_ratios, options), laws)
 
 
-def sweep_metrics(law, period_ratios, template: AbstractModel, options, *, devices=None):
+def sweep_metrics(law, period_ratios, template: AbstractModel, options, *, devices=None, like=()):
     """``(Metrics, result)`` of ``law`` at every period ratio, split over ``devices``.
 
     The low-level form of :func:`ct_curve` (no checks): ``template`` and ``options`` come
-    from :func:`prepare_sweep`.
+    from :func:`prepare_sweep`; ``like`` are laws that should share its compiled program
+    (``AbstractModel.sweep_law``).
     """
-    return shard_batch(_sweep, law, template, jnp.asarray(period_ratios), options,
-                       batched_argnums=2, devices=devices)
+    return shard_batch(_sweep, template.sweep_law(law, options, like=like), template,
+                       jnp.asarray(period_ratios), options, batched_argnums=2, devices=devices)
 
 
 def sweep_law_stack(laws, period_ratios, template: AbstractModel, options, *, devices=None):
@@ -192,7 +193,8 @@ def ct_curves(
         members = [named[k] for k in keys]
         if len(members) <= STACK_FROM or not jax.tree.leaves(members[0]):
             # A few laws: one call each reuses the compiled program of the structure.
-            batch = [sweep_metrics(m, ratios, template, options, devices=devices) for m in members]
+            batch = [sweep_metrics(m, ratios, template, options, devices=devices,
+                                   like=named.values()) for m in members]
         else:
             stacked = jax.tree.map(lambda *x: jnp.stack(x), *members)
             out = sweep_law_stack(stacked, ratios, template, options, devices=devices)

@@ -131,6 +131,12 @@ class AbstractModel(eqx.Module):
         """Metrics and result codes over a batch of period ratios (one vmapped program)."""
         return jax.vmap(lambda n: self.with_period_ratio(n)._metrics(law, options))(period_ratios)
 
+    def sweep_law(self, law, options: Options, *, like=()):
+        """The form of a concrete ``law`` that ``_sweep`` takes: the law itself, or (on a
+        path that reads only samples of it) those samples as data, which lets laws of
+        different types share one compiled sweep (with every law in ``like``)."""
+        return law
+
     def with_array_leaves(self) -> "AbstractModel":
         """This model with its numeric leaves as float arrays: traced, so one compilation
         serves every value (Python floats would be static under ``filter_jit``).  A law

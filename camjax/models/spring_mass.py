@@ -31,7 +31,14 @@ from ..checks import require
 from ..errors import RESULTS
 from ..laws import AbstractMotionLaw
 from ..metrics import refined_peak
-from ..propagation import MotionGrid, default_resolution, eigenvalue, motion_grid, propagate
+from ..propagation import (
+    MotionGrid,
+    SampledLaw,
+    default_resolution,
+    eigenvalue,
+    motion_grid,
+    propagate,
+)
 from ..solvers import (
     FIXED_STEP_SOLVERS,
     MAX_FREE_VIBRATION_GROWTH,
@@ -152,6 +159,15 @@ class SpringMass(AbstractModel):
         metrics, result, _ = batch_metrics(law, period_ratios, self.damping, options)
         return metrics, result
 
+    def sweep_law(self, law, options, *, like=()):
+        """On the exact path, the law's grid as data (``SampledLaw``), padded to as many
+        pieces as any law in ``like`` needs: every standard law (and a designed spline
+        beside them) then sweeps in one compiled program."""
+        group = [x for x in (law, *like) if SampledLaw.accepts(x)]
+        if options.method != "exact" or not SampledLaw.accepts(law):
+            return law
+        return SampledLaw.of(law, options.resolution, max(map(SampledLaw.padded_pieces, group)))
+
 
 # --- the two paths ------------------------------------------------------------------
 
@@ -219,8 +235,16 @@ def _mode_at_nodes(law, grid, model: SpringMass, options: SpringMassOptions):
     return de - jnp.conj(eigenvalue(omega, zeta)) * e, result, steps
 
 
+def _grid(law, options: SpringMassOptions) -> MotionGrid:
+    if isinstance(law, SampledLaw):
+        if options.method != "exact":
+            raise ValueError(f"a SampledLaw serves the exact path only, not {options.method!r}")
+        return law.grid
+    return motion_grid(law, options.resolution)
+
+
 def _mode(law, model, options):
-    grid = motion_grid(law, options.resolution)
+    grid = _grid(law, options)
     q, result, steps = _mode_at_nodes(law, grid, model, options)
     return grid, q, result, steps
 
@@ -300,8 +324,9 @@ def batch_metrics(law, period_ratio, damping, options: SpringMassOptions):
     grid nodes, which keeps the working set in cache (twice as fast as one vmap over
     1000 ratios on CPU) and memory bounded.  Returns ``(Metrics, result, steps)``.  The
     low-level engine of ``camjax.ct_curve``: it does not check its inputs (the callers do).
+    ``law`` may be a ``SampledLaw`` (exact path only).
     """
-    grid = motion_grid(law, options.resolution)
+    grid = _grid(law, options)
 
     def one(n):
         model = SpringMass(n, damping)  # checked by the caller (ct_curve checks concretely)

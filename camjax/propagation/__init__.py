@@ -9,5 +9,6 @@ from ._exact import eigenvalue as eigenvalue
 from ._exact import propagate as propagate
 from ._exact import psi as psi
 from ._grid import MotionGrid as MotionGrid
+from ._grid import SampledLaw as SampledLaw
 from ._grid import default_resolution as default_resolution
 from ._grid import motion_grid as motion_grid

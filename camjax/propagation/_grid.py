@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -118,15 +119,21 @@ def motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
     # A law without traced parameters gives a constant grid: compute it now rather than
     # leave it to XLA's constant folder, which takes minutes over the sampled forcing.
     with jax.ensure_compile_time_eval():
-        return _motion_grid(law, resolution)
+        grid, sample_times = _layout(law.breakpoints(), resolution)
+        return grid._replace(forcing=law.a(sample_times) @ jnp.asarray(_TO_MONOMIAL.T))
 
 
-def _motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
-    breakpoints = law.breakpoints()
-    if isinstance(breakpoints, tuple):  # fixed: the layout in NumPy
+def _layout(breakpoints, resolution: int, pieces: int | None = None):
+    """The grid without its forcing (``None``), and the Gauss points to sample it at.
+
+    Fixed breakpoints (a tuple) are laid out in NumPy; ``pieces`` pads them with empty
+    pieces up to that count.  Traced breakpoints give the same layout as a computation.
+    """
+    if isinstance(breakpoints, tuple):
         xp = np
-        edges = np.array([0.0, *breakpoints, 1.0])
-    else:  # traced: the same layout as a computation
+        padding = 0 if pieces is None else pieces - len(breakpoints) - 1
+        edges = np.array([0.0, *breakpoints, *([1.0] * padding), 1.0])
+    else:
         xp = jnp
         inner = jnp.sort(jnp.clip(breakpoints, 0.0, 1.0))
         edges = jnp.concatenate([jnp.zeros(1), inner, jnp.ones(1)])
@@ -141,5 +148,52 @@ def _motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
     left = edges[piece] + piece_width[piece] * step
     nodes = xp.concatenate([left, xp.ones(1)])
     sample_times = left[:, None] + piece_width[piece][:, None] * _GAUSS_POINTS
-    forcing = law.a(sample_times) @ jnp.asarray(_TO_MONOMIAL.T)
-    return MotionGrid(jnp.asarray(nodes), piece, jnp.asarray(piece_width), forcing)
+    return MotionGrid(jnp.asarray(nodes), piece, jnp.asarray(piece_width), None), sample_times
+
+
+PIECE_BLOCK = 8
+"""Sampled laws pad their piece count to a multiple of this (SCCA laws have 8 pieces,
+polynomials 1): laws of every type then share a handful of grid shapes."""
+
+
+class SampledLaw(eqx.Module):
+    """A concrete law as the exact path reads it: its grid as data, and its ``Ca``.
+
+    A law's own grid is built while tracing and baked into each compiled program as
+    constants, so every law type (and every law with fixed breakpoints) compiles its own
+    program.  Sampled first, laws differ only in array values: one compiled program serves
+    all of them (the seven standard laws in one compile instead of three).
+    """
+
+    grid: MotionGrid
+    Ca: jax.Array
+
+    @classmethod
+    def of(cls, law: AbstractMotionLaw, resolution: int, pieces: int | None = None) -> SampledLaw:
+        """Sample ``law`` (concrete, fixed breakpoints) on its grid of ``resolution``,
+        its pieces padded to ``pieces`` (default: ``padded_pieces(law)``)."""
+        breakpoints = law.breakpoints()
+        pieces = pieces or cls.padded_pieces(law)
+        if pieces < len(breakpoints) + 1:
+            raise ValueError(f"{law.name} has {len(breakpoints) + 1} pieces, more than {pieces}")
+        grid, times = _layout(breakpoints, resolution, pieces)
+        forcing, ca = _sample(law, times)  # one small program per law type, not per value
+        grid = grid._replace(piece=jnp.asarray(grid.piece, dtype=jnp.int32), forcing=forcing)
+        return cls(grid, ca)
+
+    @staticmethod
+    def padded_pieces(law: AbstractMotionLaw) -> int:
+        """The law's piece count rounded up to a multiple of ``PIECE_BLOCK``."""
+        return PIECE_BLOCK * -(-(len(law.breakpoints()) + 1) // PIECE_BLOCK)
+
+    @staticmethod
+    def accepts(law) -> bool:
+        """Whether ``law`` can be sampled: a motion law whose breakpoints are fixed."""
+        return isinstance(law, AbstractMotionLaw) and isinstance(law.breakpoints(), tuple)
+
+
+@eqx.filter_jit
+def _sample(law: AbstractMotionLaw, times):
+    """Forcing coefficients at the Gauss points ``times``, and ``Ca``, in one program
+    (evaluated op by op, a law's formulas compile dozens of tiny programs)."""
+    return law.a(times) @ jnp.asarray(_TO_MONOMIAL.T), jnp.asarray(law.Ca, dtype=float)
