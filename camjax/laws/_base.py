@@ -69,6 +69,13 @@ class AbstractMotionLaw(eqx.Module):
     def evaluate(self, tau: ArrayLike) -> LawValues:
         """``(s, v, a, j)`` at ``tau``, with dwells outside ``[0, 1]``."""
         tau = jnp.asarray(tau, dtype=float)
+        if is_concrete(self, tau):
+            # Called eagerly, the formulas would run op by op, and each op compiles its own
+            # small program on first use: one program per law type is far quicker.
+            return _compiled_evaluate(self, tau)
+        return self._evaluate(tau)
+
+    def _evaluate(self, tau: jax.Array) -> LawValues:
         inside = (tau >= 0.0) & (tau <= 1.0)
         s, v, a, j = self._rise(jnp.clip(tau, 0.0, 1.0))
         s = jnp.where(inside, s, jnp.where(tau > 1.0, 1.0, 0.0))
@@ -93,7 +100,18 @@ class AbstractMotionLaw(eqx.Module):
 
     def peak_coefficients(self) -> dict[str, float]:
         """``{"Cv", "Ca", "Cj"}`` as Python floats (``inf`` for an acceleration step)."""
-        return {k: float(getattr(self, k)) for k in ("Cv", "Ca", "Cj")}
+        peaks = _compiled_peaks(self) if is_concrete(self) else (self.Cv, self.Ca, self.Cj)
+        return dict(zip(("Cv", "Ca", "Cj"), map(float, peaks)))
+
+
+@eqx.filter_jit
+def _compiled_evaluate(law: AbstractMotionLaw, tau: jax.Array) -> LawValues:
+    return law._evaluate(tau)
+
+
+@eqx.filter_jit
+def _compiled_peaks(law: AbstractMotionLaw):
+    return jnp.asarray(law.Cv, float), jnp.asarray(law.Ca, float), jnp.asarray(law.Cj, float)
 
 
 def static_breakpoints(points) -> tuple[float, ...]:
