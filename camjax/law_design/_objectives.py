@@ -10,7 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..models.spring_mass import SpringMassOptions, batch_metrics, dwell_peak, mode_gain
+from ..models.spring_mass import dwell_peak, mode_gain
 from ..propagation import default_resolution, motion_grid, propagate
 from ._residual import _modulus, _residual_components, residual
 
@@ -96,7 +96,7 @@ class Residual(AbstractObjective):
         return _modulus(features)[0] / ca
 
     def report(self, law) -> float:
-        return float(residual(law, [self.period_ratio], self.damping)[0])
+        return float(_exact_curve(law, [self.period_ratio], self.damping).residual[0])
 
     def evaluation_ratios(self):
         return np.array([self.period_ratio])
@@ -131,7 +131,7 @@ class MaxResidual(AbstractObjective):
         return np.linspace(self.n1, self.n2, EVALUATION_SAMPLES)
 
     def report(self, law) -> float:
-        return float(jnp.max(residual(law, self.evaluation_ratios(), self.damping)))
+        return float(np.max(_exact_curve(law, self.evaluation_ratios(), self.damping).residual))
 
     @property
     def label(self):
@@ -269,7 +269,13 @@ class MaxCaCt(AbstractObjective):
 
 def peak_loads(law, period_ratios, damping=0.0, dwell=1.0) -> np.ndarray:
     """Ca*Ct at every period ratio from one vmapped exact-path call (NumPy)."""
-    n = np.atleast_1d(np.asarray(period_ratios, dtype=float))
-    options = SpringMassOptions(dwell=dwell).checked(float(n.max()))
-    metrics, _, _ = batch_metrics(law, jnp.asarray(n), float(damping), options)
-    return np.asarray(metrics.ct) * float(law.Ca)
+    return _exact_curve(law, period_ratios, damping, dwell).ca_ct
+
+
+def _exact_curve(law, period_ratios, damping, dwell=1.0):
+    """The exact-path sweep of ``law`` (one compiled program for every law of up to
+    eight pieces, and one for longer splines): what reports and comparisons show."""
+    from ..sweep import ct_curve
+
+    return ct_curve(law, np.atleast_1d(np.asarray(period_ratios, dtype=float)),
+                    damping=damping, dwell=dwell)
