@@ -12,6 +12,7 @@ from camjax import laws
 from camjax.cli import main
 from camjax.program import (
     Follower,
+    MaxPreload,
     Program,
     Segment,
     Solver,
@@ -21,6 +22,7 @@ from camjax.program import (
     jump_speed_rpm,
     profile,
     startup,
+    with_law,
     write_dxf,
 )
 
@@ -345,7 +347,34 @@ def test_swinging_roller_program_geometry():
         Program("swing", program.segments, Follower(**{**FOLLOWER, "kind": "swinging-roller"}))
 
 
+def test_preload_objective_is_the_program_steady_state_and_its_gradient(cam, solver):
+    """The objective's training value is the steady state's required preload (the program's
+    own Solver path, refined between nodes), and its gradient matches finite differences."""
+    import jax
+
+    objective = MaxPreload(cam, 1, 500.0, 700.0)
+    law = laws.BSplineLaw.fit(laws.get("cycloidal"), 8, 5)
+    value = jax.jit(lambda c, p: objective.train(laws.BSplineLaw(c, 5), 1.0, p))
+    speeds = objective.speeds()
+    force = Solver(with_law(cam, 1, law), 500.0).summary(speeds)["min_contact_force_n"]
+    required = np.max(cam.follower.preload_n - force)
+    # p = 1e6 is the max over nodes to 1e-5; refinement between nodes adds 7e-4 (measured).
+    assert float(value(law.coefficients, 1e6)) == pytest.approx(required, rel=2e-3)
+    assert float(value(law.coefficients, 1e6)) <= required + 1e-9
+    direction = np.random.default_rng(0).normal(size=8)
+    gradient = jax.jit(jax.grad(value))(law.coefficients, 64.0)
+    h = 1e-5
+    difference = (value(law.coefficients + h * direction, 64.0) - value(law.coefficients - h * direction, 64.0)) / (2 * h)
+    assert float(gradient @ direction) == pytest.approx(float(difference), rel=1e-6)
+    with pytest.raises(ValueError, match="segment 2 is a dwell"):
+        MaxPreload(cam, 2, 500.0, 700.0)
+    with pytest.raises(ValueError, match="needs a return spring"):
+        MaxPreload(two_cycloids(spring_rate_n_per_mm=None), 1, 500.0, 700.0)
+
+
 def test_design_one_segment_for_a_speed_range(tmp_path, capsys):
+    """``--objective preload`` lowers the largest preload the whole program needs over the
+    range (checked on a finer grid than the design's: the Solver for 250 rpm)."""
     program = Program.load(example_path())
     n1, n2 = camjax.program.segment_band(program, 1, 300.0, 600.0)
     f_n = program.follower.natural_frequency_hz
@@ -353,9 +382,15 @@ def test_design_one_segment_for_a_speed_range(tmp_path, capsys):
     with pytest.raises(ValueError, match="segment 2 is a dwell"):
         camjax.program.segment_band(program, 2, 300.0, 600.0)
     code = main(["design", "--program", str(example_path()), "--segment", "1", "--rpm", "300:600",
-                 "--steps", "20", "--knots", "8", "--quiet", "--out", str(tmp_path)])
+                 "--objective", "preload", "--steps", "200", "--knots", "8", "--quiet", "--out", str(tmp_path)])
     assert code == 0
+    reported = float(capsys.readouterr().out.split("rpm = ")[1].split(";")[0])
     designed = Program.load(tmp_path / "program.toml")
+    speeds = np.linspace(300.0, 600.0, 2000)
+    before, after = (np.max(camjax.program.min_preload_n(Solver(p, 250.0).summary(speeds)["min_contact_force_n"],
+                                                         300.0)) for p in (program, designed))
+    assert after < 0.9 * before  # measured: 138.4 N -> 104 N
+    assert reported == pytest.approx(after, rel=1e-4)
     assert designed.segments[0].law.name.startswith("bspline")
     assert designed.segments[1:] == program.segments[1:] and designed.follower == program.follower
     # A designed law has array leaves: the profile still builds (the lift is a pytree).

@@ -13,6 +13,7 @@ from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
 from ._design import design_segment as design_segment
 from ._design import segment_band as segment_band
+from ._design import with_law as with_law
 from ._design import write_program as write_program
 from ._dynamics import Solver as Solver
 from ._dynamics import startup as startup
@@ -28,3 +29,12 @@ from ._spec import Follower as Follower
 from ._spec import Program as Program
 from ._spec import Segment as Segment
 from ._spec import example_path as example_path
+
+
+def __getattr__(name):
+    # MaxPreload subclasses camjax.law_design's objective, which imports optax: load on use.
+    if name == "MaxPreload":
+        from ._preload import MaxPreload
+
+        return MaxPreload
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
