@@ -288,6 +288,10 @@ BAD = [
     (GOOD.replace("mass_kg = 1.0", "mass_kg = 1.0\nmas_kg = 1"), r"\[follower\]: unknown field\(s\) mas_kg"),
     (GOOD.replace("mass_kg = 1.0\n", ""), r"\[follower\] needs mass_kg"),
     (GOOD.replace("[follower]", "[follower"), "not valid TOML"),
+    (GOOD.replace("preload_n = 100", "preload_n = 100\ngroove_clearance_mm = 0.1"),
+     "follower.groove_clearance_mm: only a form-closed cam"),
+    (GOOD.replace("spring_rate_n_per_mm = 5\npreload_n = 100", "groove_clearance_mm = -0.1"),
+     "follower.groove_clearance_mm must be positive"),
 ]
 
 
@@ -398,3 +402,86 @@ def test_design_one_segment_for_a_speed_range(tmp_path, capsys):
     assert np.abs(np.linalg.norm(prof.pitch, axis=1) - 52.0 - designed.lift(prof.theta_deg)[0]).max() < 1e-9
     assert main(["design", "--program", str(example_path()), "--out", str(tmp_path)]) == 2
     assert "--program needs --segment and --rpm" in capsys.readouterr().err
+
+
+def groove_cam(clearance_mm):
+    """``two_cycloids`` in a groove (no spring), soft enough for a cheap scipy reference."""
+    return two_cycloids(stiffness_n_per_mm=200.0, damping_ratio=0.1, spring_rate_n_per_mm=None, preload_n=0.0,
+                        groove_clearance_mm=clearance_mm)
+
+
+def _scipy_groove(program, rpm, turns):
+    """Strikes ``(time, |relative velocity|, flank)`` of the grooved cam by scipy, in SI:
+    ``m x'' = k s + c (y' - x')`` with the dead-zone stretch ``s = e`` on the inner flank,
+    ``e + g`` on the outer, no force in between (``e = y - x``); DOP853 phase by phase,
+    each ended by a terminal event on its own contact boundary, from rest on the base circle."""
+    f = program.follower
+    m, k, c, g = f.mass_kg, f.stiffness, f.damping, 1e-3 * f.groove_clearance_mm
+    period = 60.0 / rpm
+    rate = 360.0 / period
+
+    def lift(t):
+        y, dy, _ = cycloid_lift(np.array([rate * t]))
+        return 1e-3 * y[0], 1e-3 * dy[0] * rate
+
+    def field(t, z, mode):
+        y, dy = lift(t)
+        force = 0.0 if mode == 1 else k * (y - z[0] + (g if mode == 2 else 0.0)) + c * (dy - z[1])
+        return [z[1], force / m]
+
+    def boundary(offset, direction):
+        event = lambda t, z, mode: lift(t)[0] - z[0] + offset  # noqa: E731
+        event.terminal, event.direction = True, direction
+        return event
+
+    events = {0: [boundary(0.0, -1)], 2: [boundary(g, 1)], 1: [boundary(0.0, 1), boundary(g, -1)]}
+    stops = sorted({(turn + a / 360.0) * period for turn in range(turns) for a in (0, 100, 180, 280)} | {turns * period})
+    t, z, mode, strikes = 0.0, np.zeros(2), 0, []
+    while t < stops[-1] - 1e-14:
+        t_stop = min(x for x in stops if x > t + 1e-14)
+        sol = solve_ivp(field, (t, t_stop), z, args=(mode,), events=events[mode], method="DOP853",
+                        rtol=1e-12, atol=1e-15, max_step=period / 2000)
+        hit = [i for i, te in enumerate(sol.t_events) if te.size]
+        if not hit:
+            t, z = t_stop, sol.y[:, -1]
+            continue
+        t, z = sol.t_events[hit[0]][0], sol.y_events[hit[0]][0]
+        if mode == 1:
+            mode = 0 if hit[0] == 0 else 2
+            strikes.append((t, abs(lift(t)[1] - z[1]), mode))
+        else:
+            mode = 1
+    return strikes
+
+
+@pytest.mark.slow
+def test_groove_clearance_hands_over_to_backlash(tmp_path, capsys):
+    """The grooved cam's strikes against scipy; clearance -> 0 gives the contact-held flank
+    force; the report and the CLI list the strikes."""
+    rpm = 600.0
+    program = groove_cam(0.1)
+    turns = camjax.program.groove_turns(program, [rpm])[0]
+    settle = 7
+    period = 60.0 / rpm
+    reference = [r for r in _scipy_groove(program, rpm, settle) if r[0] >= (settle - 1) * period]
+    assert len(turns.impacts) == len(reference) >= 4
+    for got, (t, speed, flank) in zip(turns.impacts, reference):
+        assert got.angle_deg == pytest.approx(360.0 * (t / period - (settle - 1)), abs=1e-6)
+        assert got.velocity_m_s == pytest.approx(speed, rel=1e-6)
+        assert got.flank == {0: "inner", 2: "outer"}[flank]
+    # A vanishing clearance: the train force is the contact-held one, k e + c e'.
+    solver = Solver(groove_cam(None), rpm)
+    tight = camjax.program.groove_turns(groove_cam(1e-6), [rpm])[0]
+    lam = solver.lam(rpm)
+    q = solver.mode_at(solver.cycle(rpm).q, rpm, tight.theta_deg / 360.0)
+    e = q.imag / lam.imag
+    held = 1e-3 * (solver.train.k * e + solver.train.c * (q.real + lam.real * e) / period)
+    assert np.abs(tight.force_n - held).max() < 1e-5 * np.abs(held).max()  # measured 1e-6
+    report = analyse(program, [rpm])["speeds"][0]
+    assert [i["angle_deg"] for i in report["impacts"]] == pytest.approx([i.angle_deg for i in turns.impacts])
+    assert report["jump"] is False and report["flight"] is None
+    path = tmp_path / "groove.toml"
+    path.write_text(program.to_toml())
+    assert main(["program", str(path), "--rpm", "600"]) == 0
+    lines = [x for x in capsys.readouterr().out.splitlines() if "strikes the" in x]
+    assert len(lines) == len(turns.impacts) and "outer flank at 56.166 deg" in lines[1]

@@ -21,6 +21,9 @@ from ._export import Profile as Profile
 from ._export import profile as profile
 from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
+from ._groove import GrooveTurn as GrooveTurn
+from ._groove import Impact as Impact
+from ._groove import groove_turns as groove_turns
 from ._jump import Flight as Flight
 from ._jump import flight as flight
 from ._jump import jump_speed_rpm as jump_speed_rpm
