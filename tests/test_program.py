@@ -19,6 +19,7 @@ from camjax.program import (
     analyse,
     example_path,
     flight,
+    flights,
     jump_speed_rpm,
     profile,
     startup,
@@ -164,9 +165,13 @@ def test_min_preload_tends_to_the_rigid_closed_form():
     assert gaps[1] < 1e-3
 
 
-def test_flight_and_reimpact_match_a_scipy_event_solve(cam, solver):
+def test_every_flight_of_the_turn_matches_a_scipy_event_solve(cam, solver):
+    """At 900 rpm the roller leaves the cam seven times in the turn after the steady
+    state's first separation; every separation, re-impact, impact velocity and peak force
+    against scipy's event solve of the hybrid system (contact, flight, contact, ...)."""
     rpm = 900.0
-    result = flight(solver, rpm)
+    result = flights(solver, rpm)
+    assert flight(solver, rpm) == result[0]
     tr = solver.train
     period = 60.0 / rpm
     rate = 360.0 / period
@@ -184,14 +189,6 @@ def test_flight_and_reimpact_match_a_scipy_event_solve(cam, solver):
         return tr.preload + tr.k * (y - s[0]) + tr.c * (dy - s[1])
 
     force.terminal, force.direction = True, -1
-    # Start on the steady state where contact surely holds (the base-circle dwell).
-    t0 = 330.0 / rate
-    e_s, de_s = _shooting(cam, rpm, np.array([t0]))
-    y0, dy0 = lift(t0)
-    opts = dict(method="DOP853", rtol=1e-12, atol=1e-15, max_step=period / 2000)
-    a = solve_ivp(contact, (t0, t0 + period), [y0 - e_s[0], dy0 - de_s[0]], events=force, **opts)
-    t_sep = a.t_events[0][0]
-    xs, vs = a.y_events[0][0]
 
     def flying(t, s):
         return [s[1], -(tr.preload + tr.ks * s[0]) / tr.m, -(tr.preload + tr.k * s[2]) / tr.c]
@@ -200,20 +197,37 @@ def test_flight_and_reimpact_match_a_scipy_event_solve(cam, solver):
         return s[0] + s[2] - lift(t)[0]
 
     gap.terminal, gap.direction = True, -1
-    b = solve_ivp(flying, (t_sep, t_sep + period), [xs, vs, lift(t_sep)[0] - xs], events=gap, **opts)
-    t_i = b.t_events[0][0]
-    xi, vi, efi = b.y_events[0][0]
-    impact_velocity = lift(t_i)[1] - (vi - (tr.preload + tr.k * efi) / tr.c)
-    c = solve_ivp(contact, (t_i, t_i + period), [xi, vi], events=force, dense_output=True, **opts)
-    t_end = c.t_events[0][0] if len(c.t_events[0]) else t_i + period
-    tt = np.linspace(t_i, t_end, 400001)
-    states = c.sol(tt)
-    y, dy, _ = cycloid_lift(rate * tt)
-    peak = np.max(tr.preload + tr.k * (1e-3 * y - states[0]) + tr.c * (1e-3 * dy * rate - states[1]))
-    assert result.separation_deg == pytest.approx(np.mod(rate * t_sep, 360), abs=1e-6)
-    assert result.reimpact_deg == pytest.approx(np.mod(rate * t_i, 360), abs=1e-5)
-    assert result.impact_velocity_m_s == pytest.approx(impact_velocity, rel=1e-6)
-    assert result.peak_impact_force_n == pytest.approx(peak, rel=1e-6)
+    # Start on the steady state where contact surely holds (the base-circle dwell).
+    t0 = 330.0 / rate
+    e_s, de_s = _shooting(cam, rpm, np.array([t0]))
+    y0, dy0 = lift(t0)
+    opts = dict(method="DOP853", rtol=1e-12, atol=1e-15, max_step=period / 2000)
+    a = solve_ivp(contact, (t0, t0 + period), [y0 - e_s[0], dy0 - de_s[0]], events=force, **opts)
+    t_sep = a.t_events[0][0]
+    xs, vs = a.y_events[0][0]
+    t_end = t_sep + period
+    reference = []
+    while t_sep < t_end:
+        b = solve_ivp(flying, (t_sep, t_sep + period), [xs, vs, lift(t_sep)[0] - xs], events=gap, **opts)
+        t_i = b.t_events[0][0]
+        xi, vi, efi = b.y_events[0][0]
+        impact_velocity = lift(t_i)[1] - (vi - (tr.preload + tr.k * efi) / tr.c)
+        c = solve_ivp(contact, (t_i, t_i + period), [xi, vi], events=force, dense_output=True, **opts)
+        t_next = c.t_events[0][0] if len(c.t_events[0]) else t_i + period
+        tt = np.linspace(t_i, t_next, 100001)
+        states = c.sol(tt)
+        y, dy, _ = cycloid_lift(rate * tt)
+        peak = np.max(tr.preload + tr.k * (1e-3 * y - states[0]) + tr.c * (1e-3 * dy * rate - states[1]))
+        reference.append((np.mod(rate * t_sep, 360), np.mod(rate * t_i, 360), impact_velocity, peak))
+        if not len(c.t_events[0]):
+            break
+        t_sep, (xs, vs) = t_next, c.y_events[0][0]
+    assert len(result) == len(reference) == 7
+    for got, (separation, reimpact, velocity, peak) in zip(result, reference):
+        assert got.separation_deg == pytest.approx(separation, abs=1e-5)
+        assert got.reimpact_deg == pytest.approx(reimpact, abs=1e-5)
+        assert got.impact_velocity_m_s == pytest.approx(velocity, rel=1e-6)
+        assert got.peak_impact_force_n == pytest.approx(peak, rel=1e-6)
 
 
 def test_jump_speed_is_the_first_loss_of_contact(cam, solver):
@@ -324,6 +338,7 @@ def test_cli_json_and_out_dir(tmp_path, capsys):
     slow, fast = report["speeds"]
     assert slow["jump"] is False and slow["flight"] is None and slow["min_preload_n"] < 300
     assert fast["jump"] is True and fast["flight"]["reimpact_deg"] > fast["flight"]["separation_deg"]
+    assert fast["flights"][0] == fast["flight"] and slow["flights"] is None
     assert fast["min_preload_n"] == pytest.approx(300 - fast["min_contact_force_n"], rel=1e-12)
     assert 300 < report["jump_speed_rpm"] < 900
     assert len(slow["residual_vibration_mm"]) == 2 and len(slow["period_ratios"]) == 2

@@ -57,8 +57,7 @@ def _table(report: dict) -> str:
     for s in report["speeds"]:
         lines.append("".join(f"{_cell(s[key], fmt):>16}" for key, _, fmt in _COLUMNS))
     for s in report["speeds"]:
-        if s["flight"]:
-            f = s["flight"]
+        for f in s["flights"] or []:
             lines.append(
                 f"at {s['rpm']:g} rpm contact is lost at {f['separation_deg']:.3f} deg"
                 + (f", re-impact at {f['reimpact_deg']:.3f} deg, {f['impact_velocity_m_s']:.4g} m/s, "
