@@ -408,7 +408,7 @@ def test_design_one_segment_for_a_speed_range(tmp_path, capsys):
     speeds = np.linspace(300.0, 600.0, 2000)
     before, after = (np.max(camjax.program.min_preload_n(Solver(p, 250.0).summary(speeds)["min_contact_force_n"],
                                                          300.0)) for p in (program, designed))
-    assert after < 0.9 * before  # measured: 138.4 N -> 104 N
+    assert after < 0.9 * before  # measured: 138.4 N -> 114.5 N (105.8 N with 24 knots, 6000 steps)
     assert reported == pytest.approx(after, rel=1e-4)
     assert designed.segments[0].law.name.startswith("bspline")
     assert designed.segments[1:] == program.segments[1:] and designed.follower == program.follower
