@@ -149,6 +149,7 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[Gro
     Needs a form-closed follower with ``groove_clearance_mm``.  One compiled solve serves
     every speed (the model's numbers are traced).
     """
+    from ..errors import SolverError
     from ..models import Backlash, solve
 
     f = program.follower
@@ -165,8 +166,12 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[Gro
     for r in rpm:
         period = 60.0 / float(r)
         model = Backlash(f.natural_frequency_hz * period, f.groove_clearance_mm / h, 0.0, f.damping_ratio)
-        response = solve(law, model.with_array_leaves(), dwell=turns - 1, samples=samples,
-                         max_segments=64 * turns)
+        try:
+            response = solve(law, model.with_array_leaves(), dwell=turns - 1, samples=samples,
+                             max_segments=64 * turns)
+        except SolverError as error:
+            raise ValueError(f"follower.groove_clearance_mm: the backlash solve failed at {float(r):g} rpm "
+                             f"({error})") from None
         out.append(_last_turn(float(r), response, turns, f.mass_kg, 1e-3 * h, period))
     return out
 
