@@ -1,10 +1,12 @@
 """Whole cams: motion programs in physical units, steady state at machine speed, jump, export.
 
 ``Program`` reads and checks a cam (segments over 360 degrees, follower in mm, N, kg);
-``analyse`` reports the periodic steady state, contact force, minimum preload, jump speed
-and flight over a list of speeds; ``response`` gives the histories over one turn at one
-speed; ``profile``, ``write_csv`` and ``write_dxf`` export the cam's shape.  The equations
-are in docs/program.md.
+``analyse`` reports the periodic steady state, contact force, minimum preload, jump speed,
+every flight of a turn (``flights``) and a grooved cam's strikes (``groove_turns``) over a
+list of speeds; ``response`` gives the histories over one turn at one speed; ``profile``,
+``write_csv`` and ``write_dxf`` export the cam's shape; ``design_segment`` designs one
+segment's law (``MaxPreload``: the least preload over a speed range).  The equations are
+in docs/program.md.
 """
 
 from ._analysis import analyse as analyse
