@@ -73,6 +73,8 @@ def test_ct_writes_tables_and_figures(capsys, tmp_path):
         (("design", "--band", "6:12", "--max-jerk", "31", "--out", "{tmp}"), "Cj >= 32"),
         (("design", "--band", "6:12", "--max-ca", "6", "--max-jerk", "35", "--out", "{tmp}"),
          "Cj >= 36"),
+        (("design", "--band", "6:12", "--objective", "preload", "--out", "{tmp}"),
+         "--objective preload needs --program"),
     ],
 )
 def test_bad_arguments_exit_2_with_one_line(capsys, tmp_path, argv, message):

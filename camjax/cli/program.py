@@ -27,7 +27,8 @@ def register(subparsers) -> None:
     parser.add_argument("file", nargs="?", metavar="FILE", help="program TOML file (default: built-in indexer)")
     parser.add_argument("--rpm", default=DEFAULT_RPM, metavar="RPM|V1,V2,...|START:STOP:COUNT",
                         help=f"cam speed(s) in rpm (default {DEFAULT_RPM})")
-    parser.add_argument("--no-flight", action="store_true", help="skip the flight simulation where contact is lost")
+    parser.add_argument("--no-flight", action="store_true", help="skip the flight simulation where contact is lost "
+                        "(and a grooved cam's impacts)")
     parser.add_argument("--points", type=int, default=3600, help="profile points over the turn (default 3600)")
     add_format(parser)
     parser.add_argument("--out", metavar="DIR", help="write profile.csv, profile.dxf, response.csv, "
@@ -56,14 +57,17 @@ def _table(report: dict) -> str:
     for s in report["speeds"]:
         lines.append("".join(f"{_cell(s[key], fmt):>16}" for key, _, fmt in _COLUMNS))
     for s in report["speeds"]:
-        if s["flight"]:
-            f = s["flight"]
+        for f in s["flights"] or []:
             lines.append(
                 f"at {s['rpm']:g} rpm contact is lost at {f['separation_deg']:.3f} deg"
                 + (f", re-impact at {f['reimpact_deg']:.3f} deg, {f['impact_velocity_m_s']:.4g} m/s, "
                    f"peak force {f['peak_impact_force_n']:.5g} N" if f["reimpact_deg"] is not None else
                    ", no re-impact within a turn")
             )
+    for s in report["speeds"]:
+        for i in s.get("impacts") or []:
+            lines.append(f"at {s['rpm']:g} rpm the roller strikes the {i['flank']} flank at {i['angle_deg']:.3f} deg, "
+                         f"{i['velocity_m_s']:.4g} m/s, peak force {i['peak_force_n']:.5g} N")
     speed = report["jump_speed_rpm"]
     if len(report["speeds"]) > 1:
         lines.append("jump speed: " + ("none in the range" if speed is None else f"{speed:.1f} rpm"))

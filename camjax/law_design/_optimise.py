@@ -165,7 +165,8 @@ def design(
     if noise:
         theta0 = noise * jax.random.normal(jax.random.PRNGKey(seed), (knots,))
     scale = np.asarray(jax.jit(raw_values)(theta0, sharpness[0]))
-    weights = np.array([o.weight for o in objectives]) / np.maximum(scale, 1e-300)
+    # |value|: an objective may be signed (a required preload can be negative, a margin).
+    weights = np.array([o.weight for o in objectives]) / np.maximum(np.abs(scale), 1e-300)
 
     def loss(theta, p):
         cap_penalty = caps.penalty_of(linear(theta)[1], margin)

@@ -1,10 +1,12 @@
 """Whole cams: motion programs in physical units, steady state at machine speed, jump, export.
 
 ``Program`` reads and checks a cam (segments over 360 degrees, follower in mm, N, kg);
-``analyse`` reports the periodic steady state, contact force, minimum preload, jump speed
-and flight over a list of speeds; ``response`` gives the histories over one turn at one
-speed; ``profile``, ``write_csv`` and ``write_dxf`` export the cam's shape.  The equations
-are in docs/program.md.
+``analyse`` reports the periodic steady state, contact force, minimum preload, jump speed,
+every flight of a turn (``flights``) and a grooved cam's strikes (``groove_turns``) over a
+list of speeds; ``response`` gives the histories over one turn at one speed; ``profile``,
+``write_csv`` and ``write_dxf`` export the cam's shape; ``design_segment`` designs one
+segment's law (``MaxPreload``: the least preload over a speed range).  The equations are
+in docs/program.md.
 """
 
 from ._analysis import analyse as analyse
@@ -13,6 +15,7 @@ from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
 from ._design import design_segment as design_segment
 from ._design import segment_band as segment_band
+from ._design import with_law as with_law
 from ._design import write_program as write_program
 from ._dynamics import Solver as Solver
 from ._dynamics import startup as startup
@@ -20,11 +23,24 @@ from ._export import Profile as Profile
 from ._export import profile as profile
 from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
+from ._groove import GrooveTurn as GrooveTurn
+from ._groove import Impact as Impact
+from ._groove import groove_turns as groove_turns
 from ._jump import Flight as Flight
 from ._jump import flight as flight
+from ._jump import flights as flights
 from ._jump import jump_speed_rpm as jump_speed_rpm
 from ._jump import min_preload_n as min_preload_n
 from ._spec import Follower as Follower
 from ._spec import Program as Program
 from ._spec import Segment as Segment
 from ._spec import example_path as example_path
+
+
+def __getattr__(name):
+    # MaxPreload subclasses camjax.law_design's objective, which imports optax: load on use.
+    if name == "MaxPreload":
+        from ._preload import MaxPreload
+
+        return MaxPreload
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

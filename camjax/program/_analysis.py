@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ._dynamics import Solver, check_rpm
-from ._jump import flight, jump_speed_rpm, min_preload_n
+from ._groove import groove_turns
+from ._jump import flights, jump_speed_rpm, min_preload_n
 from ._spec import Program
 
 
@@ -28,10 +29,14 @@ def period_ratios(program: Program, rpm) -> np.ndarray:
 def analyse(program: Program, rpm, *, with_flight: bool = True, solver: Solver | None = None) -> dict:
     """The steady-state report at every speed in ``rpm`` (see docs/program.md).
 
-    Every field but ``flight`` is the periodic steady state with contact held (linear);
-    ``flight`` is the event simulation where that says contact is lost.  For a
-    form-closed cam ``min_contact_force_n`` is the signed flank force (negative: the outer
-    wall pushes), ``jump`` is false and ``min_preload_n`` is null.
+    Every field but ``flight``, ``flights`` and ``impacts`` is the periodic steady state
+    with contact held (linear); where that says contact is lost, ``flights`` lists every
+    flight of the turn from the event simulation and ``flight`` is its first (null, both,
+    where contact holds).  For
+    a form-closed cam ``min_contact_force_n`` is the signed flank force (negative: the outer
+    wall pushes), ``jump`` is false and ``min_preload_n`` is null; with a groove clearance
+    ``impacts`` lists the roller's strikes on the flanks in one settled turn (the
+    ``Backlash`` hand-over, ``camjax.program.groove_turns``), else it is null.
     """
     rpm = check_rpm(rpm)
     solver = solver or Solver(program, rpm.min())
@@ -40,9 +45,12 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, solver: Solver |
     preload = min_preload_n(out["min_contact_force_n"], program.follower.preload_n)
     kinematic = kinematic_acceleration_m_s2(program, rpm)
     ratios = period_ratios(program, rpm)
+    grooved = closed and bool(program.follower.groove_clearance_mm) and with_flight
+    turns = groove_turns(program, rpm) if grooved else [None] * rpm.size
     speeds = []
     for i, r in enumerate(rpm):
         jump = bool(out["min_contact_force_n"][i] < 0) and not closed
+        found = [x.as_dict() for x in flights(solver, float(r))] if jump and with_flight else None
         speeds.append({
             "rpm": float(r),
             "max_payload_acceleration_m_s2": float(out["max_payload_acceleration_m_s2"][i]),
@@ -53,7 +61,9 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, solver: Solver |
             "min_preload_n": None if closed else float(preload[i]),
             "residual_vibration_mm": [float(v) for v in out["residual_vibration_mm"][i]],
             "period_ratios": [float(v) for v in ratios[i]],
-            "flight": (flight(solver, float(r)).as_dict() if jump and with_flight else None),
+            "flight": found[0] if found else None,
+            "flights": found,
+            "impacts": None if turns[i] is None else [x.as_dict() for x in turns[i].impacts],
         })
     jump_speed = None
     if not closed and rpm.size > 1 and rpm.max() > rpm.min():

@@ -13,7 +13,14 @@ from pathlib import Path
 from .. import laws
 from ._spec import Program
 
-OBJECTIVES = ("residual", "ca-ct")
+OBJECTIVES = ("residual", "ca-ct", "preload")
+
+
+def with_law(program: Program, segment: int, law) -> Program:
+    """``program`` with segment ``segment``'s (1-based) law replaced."""
+    segments = list(program.segments)
+    segments[segment - 1] = dataclasses.replace(segments[segment - 1], law=law)
+    return dataclasses.replace(program, segments=tuple(segments))
 
 
 def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -> tuple[float, float]:
@@ -33,10 +40,13 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
                    objective: str = "residual", caps=None, **design_options):
     """Design segment ``segment``'s law for the speed range; returns ``(new program, DesignResult)``.
 
-    ``objective`` is ``"residual"`` (largest residual vibration over the band) or ``"ca-ct"``
-    (largest Ca*Ct); ``design_options`` go to ``camjax.design`` (``knots``, ``steps``, ...).
+    ``objective`` is ``"residual"`` (largest residual vibration over the band), ``"ca-ct"``
+    (largest Ca*Ct), both for the segment alone at the oscillator's damping, or
+    ``"preload"`` (largest preload the whole program needs over the speed range,
+    ``MaxPreload``); ``design_options`` go to ``camjax.design`` (``knots``, ``steps``, ...).
     """
     from .. import law_design
+    from ._preload import MaxPreload  # imports optax: only when designing
 
     n1, n2 = segment_band(program, segment, rpm_lo, rpm_hi)
     f = program.follower
@@ -45,13 +55,13 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
         goal = law_design.MaxResidual(n1, n2, damping=zeta)
     elif objective == "ca-ct":
         goal = law_design.MaxCaCt(n1, n2, damping=zeta)
+    elif objective == "preload":
+        goal = MaxPreload(program, segment, float(rpm_lo), float(rpm_hi), damping=zeta)
     else:
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
     seg = program.segments[segment - 1]
     result = law_design.design(goal, caps=caps or law_design.Caps(), initial=seg.law, **design_options)
-    segments = list(program.segments)
-    segments[segment - 1] = dataclasses.replace(seg, law=result.law)
-    return dataclasses.replace(program, segments=tuple(segments)), result
+    return with_law(program, segment, result.law), result
 
 
 def write_program(program: Program, directory) -> Path:

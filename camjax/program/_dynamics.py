@@ -107,6 +107,41 @@ def cycle_grid(program: Program, intervals: int) -> CycleGrid:
     )
 
 
+def with_segment_law(grid: CycleGrid, program: Program, index: int, law) -> CycleGrid:
+    """``grid`` with segment ``index``'s (0-based) samples recomputed from ``law`` in JAX.
+
+    The law may be traced (a design differentiates through it); it must have the same
+    breakpoints as the segment's law the grid was built for, so the nodes stay valid.
+    Every sample is linear in the law's displacement, so the response is affine in it.
+    """
+    seg = program.segments[index]
+    if not seg.moving:
+        raise ValueError(f"segment {index + 1} is a dwell: it has no law to replace")
+    if tuple(law.breakpoints()) != tuple(seg.law.breakpoints()):
+        raise ValueError(f"segment {index + 1}: the new law's breakpoints differ from the grid's")
+    stop = grid.segment_start[index + 1] if index + 1 < len(program.segments) else grid.piece.size
+    rows = slice(int(grid.segment_start[index]), int(stop))
+    s0, f = program.start_deg[index] / 360.0, seg.angle_deg / 360.0
+    y0, lift = program.start_lift_mm[index], seg.lift_mm
+    tau_left = (grid.nodes[rows] - s0) / f
+    h = grid.piece_width[grid.piece[rows]] / f
+    tau_gauss = tau_left[:, None] + h[:, None] * _GAUSS
+    s, v, a, _ = law.evaluate(jnp.asarray(np.concatenate([tau_gauss.ravel(), tau_left])))
+    n_gauss = tau_gauss.size
+    to_monomial = jnp.asarray(_TO_MONOMIAL.T)
+    acceleration = (lift * a[:n_gauss].reshape(tau_gauss.shape) / f**2) @ to_monomial
+    lift_samples = (y0 + lift * s[:n_gauss].reshape(tau_gauss.shape)) @ to_monomial
+    velocity_nodes = jnp.asarray(grid.velocity_nodes).at[rows].set(lift * v[n_gauss:] / f)
+    if index == 0:  # the closing node repeats the first one's velocity (periodic)
+        velocity_nodes = velocity_nodes.at[-1].set(velocity_nodes[0])
+    return grid._replace(
+        acceleration=jnp.asarray(grid.acceleration).at[rows].set(acceleration),
+        lift=jnp.asarray(grid.lift).at[rows].set(lift_samples),
+        lift_nodes=jnp.asarray(grid.lift_nodes).at[rows].set(y0 + lift * s[n_gauss:]),
+        velocity_nodes=velocity_nodes,
+    )
+
+
 @dataclasses.dataclass(frozen=True)
 class _Train:
     """The follower's constants in SI (k, k_s in N/m; c in N s/m)."""

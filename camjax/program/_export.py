@@ -51,12 +51,17 @@ def profile(program: Program, points: int = 3600) -> Profile:
     follower = follower_geometry(program)
     cam = geometry.cam_profile(follower, program.lift_curve(), np.radians(theta_deg))
     cut = geometry.undercut(cam, follower.roller_radius)
+    outer = np.asarray(cam.outer)
+    clearance = program.follower.groove_clearance_mm
+    if clearance:  # the groove's other wall stands the clearance further off the pitch curve
+        pitch = np.asarray(cam.pitch)
+        outer = pitch + (outer - pitch) * (1.0 + clearance / program.follower.roller_radius_mm)
     return Profile(
         theta_deg=theta_deg,
         lift_mm=program.lift(theta_deg)[0],
         pitch=np.asarray(cam.pitch),
         profile=np.asarray(cam.inner),
-        outer=np.asarray(cam.outer),
+        outer=outer,
         pressure_angle_deg=np.degrees(np.asarray(cam.pressure_angle)),
         pitch_radius_of_curvature_mm=np.asarray(cam.pitch_radius_of_curvature),
         profile_radius_of_curvature_mm=np.asarray(cam.inner_radius_of_curvature),

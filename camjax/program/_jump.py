@@ -8,8 +8,9 @@ roller rides at ``r = x + e_f``.  It re-impacts where ``r`` meets the cam lift `
 there contact holds again with ``e = y - x``, ``e' = y' - x'``, and the response is the
 periodic steady state plus the free vibration of the difference.  Every phase is closed
 form (the steady state by exact propagation), so the events are found by bracketing and
-bisection on exact values.  The cycle is taken to be on the contact-held steady state up
-to the first separation (the linear answer is exact until then).
+bisection on exact values.  The turn is taken to be on the contact-held steady state up
+to its first separation (the linear answer is exact until then); from there every flight
+of the following period is simulated (after a re-impact the roller may take off again).
 """
 
 from __future__ import annotations
@@ -76,7 +77,8 @@ def jump_speed_rpm(solver: Solver, rpm_lo: float, rpm_hi: float, tolerance_rpm: 
 
 @dataclasses.dataclass(frozen=True)
 class Flight:
-    """The first loss of contact in a cycle: angles in degrees, velocity in m/s, force in N."""
+    """One loss of contact: separation and re-impact angles (degrees), impact velocity (m/s),
+    peak contact force from the impact to the next separation (N)."""
 
     separation_deg: float
     reimpact_deg: float | None
@@ -115,16 +117,62 @@ class _SteadyState:
         return tr.preload + tr.k * e + tr.c * e_rate
 
 
-def flight(solver: Solver, rpm: float) -> Flight | None:
-    """Separation, flight and re-impact at ``rpm``, or ``None`` where contact holds."""
-    tr = solver.train
+def flights(solver: Solver, rpm: float) -> list[Flight]:
+    """Every flight in one turn at ``rpm`` (empty where contact holds).
+
+    The turn starts at the steady state's first separation (the linear answer is exact
+    until then) and runs for one period: after each re-impact contact holds (steady state
+    plus the free vibration of the difference) until the force reaches zero again, and the
+    follower takes off again; the turn ends one period after the first separation.
+    """
     if solver.program.follower.form_closed:
-        return None
+        return []
     ss = _SteadyState(solver, rpm)
+    if not ss.cycle.min_contact_force_n < 0:
+        return []
+    period = ss.period
+    t_sep = _first_separation(solver, ss)
+    y0, dy0 = ss.lift(t_sep)
+    e0, de0 = ss.deflection(t_sep)
+    state = (float(y0[0] - e0[0]), float(dy0[0] - de0[0]), float(e0[0]))
+    t_end = t_sep + period
+    out = []
+    while t_sep < t_end:
+        t_i, impact = _fly(solver, ss, t_sep, *state)
+        if t_i is None:
+            out.append(Flight(_angle(t_sep, period), None, None, None))
+            break
+        velocity, (x_i, v_i) = impact
+        force_after = _contact_after(ss, t_i, x_i, v_i)
+        # The next separation: first sign change of the force on a fine sample, bisected.
+        samples = np.linspace(0, period, _SAMPLES_PER_INTERVAL * solver.grid.nodes.size)
+        values = force_after(samples)
+        again = np.flatnonzero(values[1:] < 0)
+        stop = again[0] + 1 if again.size else values.size
+        out.append(Flight(_angle(t_sep, period), _angle(t_i, period), velocity,
+                          _peak(force_after, samples, values, stop)))
+        if not again.size:
+            break
+        tau = _first_root(force_after, samples[stop - 1], samples[stop])
+        t_sep = t_i + tau
+        state = _contact_state(ss, t_i, x_i, v_i, tau)
+    return out
+
+
+def flight(solver: Solver, rpm: float) -> Flight | None:
+    """The first flight of the turn at ``rpm`` (``flights``), or ``None`` where contact holds."""
+    found = flights(solver, rpm)
+    return found[0] if found else None
+
+
+def _angle(t: float, period: float) -> float:
+    return float(np.mod(360 * t / period, 360))
+
+
+def _first_separation(solver: Solver, ss: _SteadyState) -> float:
+    """Time of the steady state's first loss of contact after its largest force."""
     T = ss.period
     force = ss.cycle.contact_force_n
-    if not ss.cycle.min_contact_force_n < 0:
-        return None
     s_nodes = solver.grid.nodes
     start = int(np.argmax(force))
     order = (start + np.arange(force.size - 1)) % (force.size - 1)
@@ -133,17 +181,21 @@ def flight(solver: Solver, rpm: float) -> Flight | None:
         dense = np.linspace(0, T, 16 * force.size)
         values = ss.contact_force(dense)
         j_t = dense[int(np.argmin(values))]
-        t_lo = j_t - T / force.size
-        t_sep = _first_root(ss.contact_force, t_lo, j_t)
-    else:
-        prev = (j - 1) % (force.size - 1)
-        t_lo = s_nodes[prev] * T
-        t_hi = s_nodes[j] * T + (T if s_nodes[j] < s_nodes[prev] else 0.0)
-        t_sep = _first_root(ss.contact_force, t_lo, t_hi)
-    y0, dy0 = ss.lift(t_sep)
-    e0, de0 = ss.deflection(t_sep)
-    x0, v0 = y0 - e0, dy0 - de0
-    x0, v0, e0 = float(x0[0]), float(v0[0]), float(e0[0])
+        return _first_root(ss.contact_force, j_t - T / force.size, j_t)
+    prev = (j - 1) % (force.size - 1)
+    t_lo = s_nodes[prev] * T
+    t_hi = s_nodes[j] * T + (T if s_nodes[j] < s_nodes[prev] else 0.0)
+    return _first_root(ss.contact_force, t_lo, t_hi)
+
+
+def _fly(solver: Solver, ss: _SteadyState, t_sep: float, x0: float, v0: float, e0: float):
+    """Flight from separation at ``t_sep`` (payload ``x0``, ``v0``; train ``e0``) to re-impact.
+
+    Returns ``(t_impact, (impact velocity, (x, v) at impact))``, or ``(None, None)`` if the
+    roller does not come back within a turn.
+    """
+    tr = solver.train
+    T = ss.period
     w_f = math.sqrt(tr.ks / tr.m)
     x_eq = -tr.preload / tr.ks
     e_eq = -tr.preload / tr.k
@@ -165,40 +217,62 @@ def flight(solver: Solver, rpm: float) -> Flight | None:
 
     step = T * float(np.min(solver.grid.piece_width)) / 2
     tau = np.arange(1, int(T / step) + 2) * step
-    g = gap(tau)
-    hits = np.flatnonzero(g <= 0)
-    separation_deg = float(np.mod(360 * t_sep / T, 360))
+    hits = np.flatnonzero(gap(tau) <= 0)
     if hits.size == 0:
-        return Flight(separation_deg, None, None, None)
+        return None, None
     i = int(hits[0])
-    tau_i = _first_root(lambda t: gap(t), tau[i - 1] if i else 0.5 * step, tau[i])
+    tau_i = _first_root(gap, tau[i - 1] if i else 0.5 * step, tau[i])
     t_i = t_sep + tau_i
     x_i, v_i = (float(v) for v in payload(tau_i))
-    ef_i, def_i = (float(v[0]) for v in train(np.array([tau_i])))
+    _, def_i = (float(v[0]) for v in train(np.array([tau_i])))
+    dy_i = float(ss.lift(t_i)[1][0])
+    return t_i, (dy_i - (v_i + def_i), (x_i, v_i))  # cam surface velocity relative to the roller
+
+
+def _difference_mode(ss: _SteadyState, t_i: float, x_i: float, v_i: float):
+    """Complex mode of the contact phase's departure from the steady state, from impact."""
     y_i, dy_i = (float(v[0]) for v in ss.lift(t_i))
-    impact_velocity = dy_i - (v_i + def_i)  # cam surface velocity relative to the falling roller
-    # Contact again: steady state plus the free vibration of the difference.
     es, des = (float(v[0]) for v in ss.deflection(t_i))
     u0, du0 = (y_i - x_i) - es, (dy_i - v_i) - des
-    lam = ss.lam / T
-    qu = du0 - np.conj(lam) * u0
+    lam = ss.lam / ss.period
+    return du0 - np.conj(lam) * u0, lam
+
+
+def _contact_after(ss: _SteadyState, t_i: float, x_i: float, v_i: float):
+    """Contact force ``t`` seconds after an impact: steady state plus the free vibration."""
+    tr = ss.solver.train
+    qu, lam = _difference_mode(ss, t_i, x_i, v_i)
 
     def force_after(t):
         z = qu * np.exp(lam * t)
         u = z.imag / lam.imag
         return ss.contact_force(t_i + t) + tr.k * u + tr.c * (z.real + lam.real * u)
 
-    samples = np.linspace(0, T, _SAMPLES_PER_INTERVAL * force.size)
-    values = force_after(samples)
-    again = np.flatnonzero(values[1:] < 0)
-    stop = again[0] + 1 if again.size else values.size
+    return force_after
+
+
+def _contact_state(ss: _SteadyState, t_i: float, x_i: float, v_i: float, tau: float):
+    """``(x, v, e)`` of the contact phase ``tau`` seconds after an impact."""
+    qu, lam = _difference_mode(ss, t_i, x_i, v_i)
+    z = qu * np.exp(lam * tau)
+    u = z.imag / lam.imag
+    du = z.real + lam.real * u
+    t = np.array([t_i + tau])
+    y, dy = (float(v[0]) for v in ss.lift(t))
+    es, des = (float(v[0]) for v in ss.deflection(t))
+    e, de = es + u, des + du
+    return y - e, dy - de, e
+
+
+def _peak(force_after, samples, values, stop: int) -> float:
+    """Largest contact force from the impact to ``samples[stop]``, polished by golden section."""
     k = int(np.argmax(values[:stop]))
     peak = float(values[k])
-    if 0 < k < stop - 1:  # polish by golden-section search on the bracketing samples
+    if 0 < k < stop - 1:
         lo, hi = samples[k - 1], samples[k + 1]
         for _ in range(60):
             a, b = lo + 0.382 * (hi - lo), lo + 0.618 * (hi - lo)
             fa, fb = force_after(np.array([a, b]))
             lo, hi = (a, hi) if fb > fa else (lo, b)
         peak = max(peak, float(force_after(np.array([0.5 * (lo + hi)]))[0]))
-    return Flight(separation_deg, float(np.mod(360 * t_i / T, 360)), float(impact_velocity), peak)
+    return peak

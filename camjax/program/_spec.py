@@ -45,7 +45,8 @@ class Follower:
     """The follower train, referred to the roller (lengths in mm, forces in N).
 
     ``spring_rate_n_per_mm=None`` is a form-closed (grooved) cam: no return spring, no
-    preload, no jump.  For ``kind="swinging-roller"`` the lift is the arc length of the
+    preload, no jump; ``groove_clearance_mm`` (form-closed only) is how much wider than
+    the roller its groove is: the roller then crosses it when the train force changes sign.  For ``kind="swinging-roller"`` the lift is the arc length of the
     roller centre (swing angle times ``arm_mm``) and ``pivot_mm`` is the cam-centre to pivot
     distance.
     """
@@ -61,6 +62,7 @@ class Follower:
     kind: str = "translating-roller"
     arm_mm: float | None = None
     pivot_mm: float | None = None
+    groove_clearance_mm: float | None = None
 
     @property
     def form_closed(self) -> bool:
@@ -113,6 +115,11 @@ def _check_follower(f: Follower) -> None:
         raise ValueError(f"follower.damping_ratio must be in [0, 1), got {zeta:g}")
     if not f.form_closed:
         _positive(f.spring_rate_n_per_mm, "follower.spring_rate_n_per_mm")
+    if f.groove_clearance_mm is not None:
+        if not f.form_closed:
+            raise ValueError("follower.groove_clearance_mm: only a form-closed cam (no "
+                             "spring_rate_n_per_mm) has a groove")
+        _positive(f.groove_clearance_mm, "follower.groove_clearance_mm")
     if _finite(f.preload_n, "follower.preload_n") < 0:
         raise ValueError(f"follower.preload_n must be non-negative, got {f.preload_n:g}")
     offset = _finite(f.offset_mm, "follower.offset_mm")

@@ -1,0 +1,194 @@
+"""A form-closed cam whose groove is wider than the roller: the hand-over to ``Backlash``.
+
+With a groove clearance ``g`` the roller leaves one flank when the train's force changes
+sign and crosses the groove to strike the other.  That is ``camjax.models.Backlash``, the
+SDOF whose transmission spring has a dead zone, driven by the whole turn instead of one
+rise.  The mapping (docs/program.md states it): lengths in units of the program's
+largest lift ``h`` (``s = y / h``, ``bk = g / h``), time in turns (``tau = t / T``,
+``T = 60 / rpm``), so the period ratio is ``n = f_n T`` with ``f_n = sqrt(k / m) / (2 pi)``
+(no return spring), the damping ratio is the follower's, and ``dn = 0`` (nothing but the
+train acts on the payload).  The inner flank (the one that lifts the follower) is the
+driving flank: ``e = y - x > 0`` presses it, ``e < -g`` the outer one.  Back in physical
+units an impact velocity is ``v h / T`` and the train force ``F = m x''`` is
+``m h / T^2`` times the model's normalised payload acceleration.
+
+The periodic state is approached by running ``turns`` turns from rest on the base circle
+(enough for the contact vibration to decay by 1e-9 between impacts); the impacts of the
+last turn are reported.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from ..laws import AbstractMotionLaw
+from ._dynamics import check_rpm
+from ._spec import Program
+
+_SETTLE = math.log(1e9)  # decay of the contact vibration over the turns before the last
+_SAMPLES_PER_PERIOD = 128  # samples per natural period (force peaks sampled: within 0.03%)
+FLANKS = {0: "inner", 2: "outer"}
+
+
+class ProgramTurn(AbstractMotionLaw):
+    """A program's lift over ``turns`` turns, normalised, as the hybrid models' motion law.
+
+    ``s(tau) = y(T tau) / h``, periodic with period 1 (``tau`` in turns).  ``breakpoints``
+    lists the segment ends and the laws' breakpoints over all ``turns`` turns (the hybrid
+    solver's step control lands on them), so unlike a rise they run past 1.  ``Ca`` (and
+    ``Cv``, ``Cj``) are exact: the largest of each segment's ``|lift| C / (h f^k)``.
+    """
+
+    laws: tuple
+    start: tuple = eqx.field(static=True)  # segment start, in turns
+    width: tuple = eqx.field(static=True)  # segment duration, in turns
+    lift: tuple = eqx.field(static=True)  # segment lift / h
+    peaks: tuple = eqx.field(static=True)  # (Cv, Ca, Cj)
+    turns: int = eqx.field(static=True, default=1)
+
+    @classmethod
+    def of(cls, program: Program, stroke_mm: float, turns: int) -> ProgramTurn:
+        moving = program.moving_segments()
+        segs = [program.segments[i] for i in moving]
+        start = tuple(float(program.start_deg[i]) / 360.0 for i in moving)
+        width = tuple(s.angle_deg / 360.0 for s in segs)
+        lift = tuple(s.lift_mm / stroke_mm for s in segs)
+        peaks = tuple(
+            max(abs(h) * float(getattr(s.law, c)) / f**k for s, f, h in zip(segs, width, lift))
+            for k, c in ((1, "Cv"), (2, "Ca"), (3, "Cj"))
+        )
+        return cls(tuple(s.law for s in segs), start, width, lift, peaks, int(turns))
+
+    @property
+    def name(self) -> str:
+        return "program-turn"
+
+    def evaluate(self, tau):
+        u = jnp.mod(jnp.asarray(tau, dtype=float), 1.0)
+        s = v = a = j = jnp.zeros_like(u)
+        for law, s0, f, h in zip(self.laws, self.start, self.width, self.lift):
+            si, vi, ai, ji = law.evaluate((u - s0) / f)
+            s, v, a, j = s + h * si, v + h * vi / f, a + h * ai / f**2, j + h * ji / f**3
+        return s, v, a, j
+
+    def _rise(self, tau):
+        return self.evaluate(tau)
+
+    def breakpoints(self):
+        points = set()
+        for law, s0, f in zip(self.laws, self.start, self.width):
+            inner = [s0 + f * b for b in law.breakpoints()] if isinstance(law.breakpoints(), tuple) else []
+            points.update([s0, s0 + f, *inner])
+        return tuple(sorted(k + p for k in range(self.turns) for p in points if 0 < k + p < self.turns))
+
+    @property
+    def Cv(self):
+        return self.peaks[0]
+
+    @property
+    def Ca(self):
+        return self.peaks[1]
+
+    @property
+    def Cj(self):
+        return self.peaks[2]
+
+
+@dataclasses.dataclass(frozen=True)
+class Impact:
+    """One strike of the roller on a groove flank: angle (deg), velocity (m/s), peak force (N).
+
+    ``peak_force_n`` is the train force of largest magnitude from the strike to the next
+    strike (sampled at 128 per natural period) (signed: positive on the inner flank, negative on the outer).
+    """
+
+    angle_deg: float
+    flank: str
+    velocity_m_s: float
+    peak_force_n: float
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def stroke_mm(program: Program) -> float:
+    """The program's largest lift (mm): the length unit of the hand-over."""
+    return float(max(np.max(np.cumsum([s.lift_mm for s in program.segments])), 1e-300))
+
+
+def settling_turns(program: Program, rpm_max: float) -> int:
+    """Turns from rest after which contact vibration has decayed by 1e-9 at every speed up
+    to ``rpm_max`` (at least 2: the reported turn follows one full turn)."""
+    f = program.follower
+    n = f.natural_frequency_hz * 60.0 / rpm_max
+    return 1 + max(1, math.ceil(_SETTLE / (2 * math.pi * f.damping_ratio * n)))
+
+
+@dataclasses.dataclass(frozen=True)
+class GrooveTurn:
+    """The last simulated turn at one speed: samples of the train force and every impact.
+
+    ``theta_deg`` runs over [0, 360]; ``force_n`` is ``m x''``, the force on the payload
+    (positive: the inner flank pushes; zero while the roller crosses the groove).
+    """
+
+    rpm: float
+    theta_deg: np.ndarray
+    force_n: np.ndarray
+    impacts: list[Impact]
+
+
+def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[GrooveTurn]:
+    """The last of ``turns`` turns from rest (default ``settling_turns``) at every speed.
+
+    Needs a form-closed follower with ``groove_clearance_mm``.  One compiled solve serves
+    every speed (the model's numbers are traced).
+    """
+    from ..errors import SolverError
+    from ..models import Backlash, solve
+
+    f = program.follower
+    if not (f.form_closed and f.groove_clearance_mm):
+        raise ValueError("groove impacts need a form-closed follower with groove_clearance_mm > 0")
+    if not f.damping_ratio > 0:
+        raise ValueError("groove impacts need follower.damping_ratio > 0 (the start-up must settle)")
+    rpm = check_rpm(rpm)
+    turns = settling_turns(program, float(rpm.max())) if turns is None else int(turns)
+    h = stroke_mm(program)
+    law = ProgramTurn.of(program, h, turns)
+    samples = _SAMPLES_PER_PERIOD * math.ceil(f.natural_frequency_hz * 60.0 / float(rpm.min()))
+    out = []
+    for r in rpm:
+        period = 60.0 / float(r)
+        model = Backlash(f.natural_frequency_hz * period, f.groove_clearance_mm / h, 0.0, f.damping_ratio)
+        try:
+            response = solve(law, model.with_array_leaves(), dwell=turns - 1, samples=samples,
+                             max_segments=64 * turns)
+        except SolverError as error:
+            raise ValueError(f"follower.groove_clearance_mm: the backlash solve failed at {float(r):g} rpm "
+                             f"({error})") from None
+        out.append(_last_turn(float(r), response, turns, f.mass_kg, 1e-3 * h, period))
+    return out
+
+
+def _last_turn(rpm, response, turns: int, mass: float, stroke_m: float, period: float) -> GrooveTurn:
+    count = int(response.n_impacts)
+    tau = np.asarray(response.impact_tau)[:count]
+    velocity = np.asarray(response.impact_velocity)[:count]
+    flank = np.asarray(response.impact_flank)[:count]
+    ts = np.asarray(response.tau)
+    force = mass * stroke_m / period**2 * np.asarray(response.payload_acceleration)
+    impacts = []
+    for i in np.flatnonzero(tau >= turns - 1):
+        end = tau[i + 1] if i + 1 < count else ts[-1]
+        window = force[(ts >= tau[i]) & (ts <= end)]
+        peak = float(window[np.argmax(np.abs(window))]) if window.size else math.nan
+        impacts.append(Impact(float(360.0 * (tau[i] - (turns - 1))), FLANKS[int(flank[i])],
+                              float(velocity[i] * stroke_m / period), peak))
+    last = ts >= turns - 1
+    return GrooveTurn(rpm, 360.0 * (ts[last] - (turns - 1)), force[last], impacts)

@@ -1,0 +1,111 @@
+"""The ``preload`` design objective: the largest preload a program needs over a speed range.
+
+Kept apart from ``_design`` because it subclasses ``camjax.law_design``'s objective (which
+imports optax): ``camjax.program`` stays light to import.
+"""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..law_design import EVALUATION_SAMPLES, AbstractObjective
+from ._design import segment_band, with_law
+from ._dynamics import Solver, _cycle, _Train, cycle_grid, resolution, with_segment_law
+from ._jump import min_preload_n
+from ._spec import Program
+
+_SPEEDS_PER_CYCLE = 8  # training speeds per natural-frequency cycle the turn gains across the range
+
+
+def _speeds(program: Program, rpm_lo: float, rpm_hi: float, per_cycle: float) -> np.ndarray:
+    """Speeds evenly spaced in ``1/rpm``, ``per_cycle`` for each natural-frequency cycle that
+    one turn gains across the range (so every period ratio moves by ``1/per_cycle``), 16 at least."""
+    cycles = program.follower.natural_frequency_hz * 60.0 * (1.0 / rpm_lo - 1.0 / rpm_hi)
+    count = max(16, math.ceil(per_cycle * cycles) + 1)
+    return np.sort(1.0 / np.linspace(1.0 / rpm_hi, 1.0 / rpm_lo, count))
+
+
+def _smooth_max(values, p):
+    """``min + (mean (values - min)^p)^(1/p)``: a smooth ``max(values)``, exact as ``p`` grows.
+
+    The shift keeps the power mean's arguments non-negative; it is differentiated (the
+    power mean of shifted values is not shift-invariant).  The scale ``span`` is not
+    (the power mean is homogeneous, so it cancels).
+    """
+    low = jnp.min(values)
+    span = jax.lax.stop_gradient(jnp.max(values) - low) + 1e-300
+    return low + span * jnp.mean(((values - low) / span) ** p) ** (1.0 / p)
+
+
+class MaxPreload(AbstractObjective):
+    """Largest preload the program needs over ``[rpm_lo, rpm_hi]`` with segment ``segment``'s law.
+
+    The required preload at a speed is ``max over the turn of -(k e + c e')`` of the whole
+    program's periodic steady state (vibration carried in from the other segments counts),
+    in N.  Training takes the signed value (it may be negative: contact margin) at the grid
+    nodes of ``_speeds`` (8 per natural-frequency cycle gained across the range) and
+    smooths the maximum over speeds and nodes by a power mean of the values shifted to
+    ``[0, 1]``.  The report is ``max(0, .)`` by the program's own steady-state path
+    (``Solver``, extrema refined between nodes) on ``EVALUATION_SAMPLES`` speeds.
+    """
+
+    program: Program = eqx.field(static=True)
+    segment: int = eqx.field(static=True)
+    rpm_lo: float = eqx.field(static=True)
+    rpm_hi: float = eqx.field(static=True)
+    weight: float = eqx.field(static=True, default=1.0)
+    damping: float = eqx.field(static=True, default=0.0)
+
+    def __check_init__(self):
+        segment_band(self.program, self.segment, self.rpm_lo, self.rpm_hi)
+        if self.program.follower.form_closed:
+            raise ValueError("the preload objective needs a return spring (a force-closed cam)")
+        if not self.program.follower.damping_ratio > 0:
+            raise ValueError("the preload objective needs follower.damping_ratio > 0 (a periodic steady state)")
+
+    def speeds(self) -> np.ndarray:
+        """Speeds (rpm) at which training evaluates the required preload."""
+        return _speeds(self.program, self.rpm_lo, self.rpm_hi, _SPEEDS_PER_CYCLE)
+
+    def evaluation_speeds(self) -> np.ndarray:
+        return np.sort(1.0 / np.linspace(1.0 / self.rpm_hi, 1.0 / self.rpm_lo, EVALUATION_SAMPLES))
+
+    def features(self, law):
+        """``k e + c e'`` (N) at every grid node and training speed: affine in the law."""
+        # The grid's layout depends only on the law's breakpoints: build it from a copy of
+        # the law with zero leaves, then fill the segment's samples from the (traced) law.
+        # (Evaluated eagerly even under a trace: the placeholder's leaves are concrete.)
+        placeholder = jax.tree.map(lambda x: np.zeros(np.shape(x)), law)
+        program = with_law(self.program, self.segment, placeholder)
+        with jax.ensure_compile_time_eval():
+            grid = cycle_grid(program, resolution(program, self.rpm_lo))
+        grid = with_segment_law(grid, program, self.segment - 1, law)
+        train = _Train.of(program)
+        force = jax.vmap(lambda rpm: _cycle(grid, train, rpm).contact_force_n)(jnp.asarray(self.speeds()))
+        return force - train.preload
+
+    def value(self, features, ca, sharpness):
+        return _smooth_max(-features.ravel(), sharpness)
+
+    def required_preload(self, law) -> np.ndarray:
+        """Required preload (N) at every evaluation speed, by ``Solver`` on the program with ``law``."""
+        program = with_law(self.program, self.segment, law)
+        force = Solver(program, self.rpm_lo).summary(self.evaluation_speeds())["min_contact_force_n"]
+        return min_preload_n(force, program.follower.preload_n)
+
+    def report(self, law) -> float:
+        return float(np.max(self.required_preload(law)))
+
+    def evaluation_ratios(self) -> np.ndarray:
+        f_n = self.program.follower.natural_frequency_hz
+        angle = self.program.segments[self.segment - 1].angle_deg
+        return np.sort(f_n * angle / 360.0 * 60.0 / self.evaluation_speeds())
+
+    @property
+    def label(self):
+        return f"max preload (N) over [{self.rpm_lo:g}, {self.rpm_hi:g}] rpm"
