@@ -138,28 +138,38 @@ def fit_torsion_factor(curve, *, q_range: tuple[float, float] = (0.05, 6.0)) -> 
             "Ct = p/n^q + r (at least three crests are needed)"
         )
 
+    u = 1 / c
+
     def solve(q):
-        basis = n**-q / c
-        p, r = np.linalg.lstsq(np.stack([basis, 1 / c], axis=1), np.ones_like(c), rcond=None)[0]
-        if r < 1.0:
-            r = 1.0
-            p = float(basis @ (1 - r / c) / (basis @ basis))
-        return p, r, float(np.sqrt(np.mean(((p * n**-q + r) / c - 1) ** 2)))
+        """``(p, r, rms)`` for every exponent in ``q`` (1-D): the 2x2 normal equations of
+        the weighted least squares, with ``r`` clamped to 1 where it falls below."""
+        basis = n ** -q[:, None] * u  # (Q, m)
+        bb, bu, uu = (basis * basis).sum(1), basis @ u, u @ u
+        b1, u1 = basis.sum(1), u.sum()
+        det = bb * uu - bu**2
+        p = (b1 * uu - bu * u1) / det
+        r = (bb * u1 - bu * b1) / det
+        clamp = r < 1.0
+        r = np.where(clamp, 1.0, r)
+        p = np.where(clamp, (b1 - bu) / bb, p)
+        rms = np.sqrt(np.mean((p[:, None] * basis + r[:, None] * u - 1) ** 2, axis=1))
+        return p, r, rms
 
     grid = np.linspace(*q_range, 400)
-    errors = [solve(q)[2] for q in grid]
+    errors = solve(grid)[2]
     i = int(np.argmin(errors))
     lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
     ratio = (math.sqrt(5) - 1) / 2
     for _ in range(60):
         x1, x2 = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
-        if solve(x1)[2] <= solve(x2)[2]:
+        e1, e2 = solve(np.array([x1, x2]))[2]
+        if e1 <= e2:
             hi = x2
         else:
             lo = x1
     q = 0.5 * (lo + hi)
-    p, r, rms = solve(q)
-    return TorsionFactorFit(float(p), float(q), float(r), rms, n, c)
+    p, r, rms = (float(x[0]) for x in solve(np.array([q])))
+    return TorsionFactorFit(p, float(q), r, rms, n, c)
 
 
 def ca_ct_crossings(curve_a, curve_b, *, envelope: bool = True) -> list[float]:
