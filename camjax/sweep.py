@@ -178,9 +178,11 @@ def ct_curves(
 ) -> dict[str, CtCurve]:
     """``ct_curve`` for several laws, keyed by name (or by the mapping's keys).
 
-    Laws of one pytree structure (the five named SCCA laws, any ``SCCA``, or several
-    ``BSplineLaw`` of one size) share one compiled program; a stack of more than a few is
-    mapped in one call, split over ``devices``.
+    On the exact path every law with fixed breakpoints is swept from its samples
+    (``camjax.propagation.SampledLaw``, padded to the piece count of the longest law
+    given), so laws of any type share one compiled program; elsewhere laws of one pytree
+    structure (any ``SCCA``, or ``BSplineLaw`` of one size) do.  A stack of more than a
+    few laws of one structure is mapped in one call, split over ``devices``.
     """
     named = dict(laws) if isinstance(laws, Mapping) else {law.name: law for law in laws}
     n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)

@@ -146,6 +146,22 @@ def test_batch_equals_python_loop_and_jit_equals_eager():
     assert float(traced) == pytest.approx(float(eager), rel=1e-9)
 
 
+def test_laws_of_every_type_share_one_compiled_sweep():
+    """The exact sweep reads a law's samples (SampledLaw, pieces padded): the seven standard
+    laws are one program, and the padding leaves every number as the law's own grid gives."""
+    n = np.array([2.5, 7.3])
+    standard = laws.standard_laws()
+    camjax.ct_curves(standard[:1], n)
+    compiled = camjax.sweep._sweep._cached._cache_size()
+    curves = camjax.ct_curves(standard, n)
+    assert camjax.sweep._sweep._cached._cache_size() == compiled
+    for law in (standard[0], standard[-1]):  # an SCCA law (8 pieces) and a polynomial (1)
+        for k, x in enumerate(n):
+            own = camjax.solve(law, camjax.SpringMass(x), resolution=512).metrics
+            assert curves[law.name].ct[k] == pytest.approx(float(own.ct), rel=1e-9)
+            assert curves[law.name].residual[k] == pytest.approx(float(own.residual), rel=1e-9, abs=1e-13)
+
+
 def _central(f, x, h):
     return (f(x + h) - f(x - h)) / (2 * h)
 
