@@ -12,6 +12,7 @@ import numpy as np
 
 from ..models.spring_mass import SpringMassOptions, batch_metrics, dwell_peak, mode_gain
 from ..propagation import default_resolution, motion_grid, propagate
+from ..sharding import shard_batch
 from ._residual import _modulus, _residual_components, residual
 
 EVALUATION_SAMPLES = 2000
@@ -267,9 +268,14 @@ class MaxCaCt(AbstractObjective):
         return f"max Ca*Ct over [{self.n1:g}, {self.n2:g}]"
 
 
-def peak_loads(law, period_ratios, damping=0.0, dwell=1.0) -> np.ndarray:
-    """Ca*Ct at every period ratio from one vmapped exact-path call (NumPy)."""
+def peak_loads(law, period_ratios, damping=0.0, dwell=1.0, *, devices=None) -> np.ndarray:
+    """Ca*Ct at every period ratio from one vmapped exact-path call (NumPy).
+
+    The ratios (a band's evaluation grid) are split over ``devices`` (default: every
+    local device; ``camjax.sharding.shard_batch``), with results equal to one device's.
+    """
     n = np.atleast_1d(np.asarray(period_ratios, dtype=float))
     options = SpringMassOptions(dwell=dwell).checked(float(n.max()))
-    metrics, _, _ = batch_metrics(law, jnp.asarray(n), float(damping), options)
+    metrics, _, _ = shard_batch(batch_metrics, law, jnp.asarray(n), float(damping), options,
+                                batched_argnums=1, devices=devices)
     return np.asarray(metrics.ct) * float(law.Ca)
