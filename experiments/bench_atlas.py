@@ -57,7 +57,7 @@ def main() -> None:
 
     from camjax import ct_curve, distributed
     from camjax.laws import SCCA
-    from camjax.models.spring_mass import SpringMassOptions, batch_metrics
+    from camjax.models.spring_mass import CHUNK_NODES, SpringMassOptions, batch_metrics
     from camjax.propagation import motion_grid, propagate
     from camjax.sweep import prepare_sweep, resolution_bands, sweep_banded, sweep_law_stack
 
@@ -75,8 +75,11 @@ def main() -> None:
 
         @jax.jit
         def propagation_only(law, n, resolution=resolution):
+            # in chunks of ratios as batch_metrics runs them (the same working set)
             grid = motion_grid(law, resolution)
-            return jax.vmap(lambda m: propagate(grid, 2 * jnp.pi * m, 0.0)[-1])(n)
+            rows = -(-n.size // max(1, CHUNK_NODES // grid.nodes.shape[0]))
+            n = jnp.pad(n, (0, (-n.size) % rows), mode="edge").reshape(rows, -1)
+            return jax.lax.map(jax.vmap(lambda m: propagate(grid, 2 * jnp.pi * m, 0.0)[-1]), n)
 
         grid_s = cpu_time(lambda r=resolution: grid_of(law, r), args.repeats)
         prop_s = cpu_time(lambda f=propagation_only: f(law, n), args.repeats)
