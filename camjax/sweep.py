@@ -93,8 +93,9 @@ def resolution_bands(period_ratios, options, *, phase_step: float = TARGET_PHASE
     the error bound of the default grid, and a sweep over [1, 30] does about 60% of the
     work.  Each band is one compiled program (its grid size is static).
 
-    Returns ``[(indices into period_ratios, options of the band)]``; options without a
-    ``resolution`` (other methods' models) give one band of every ratio.
+    Returns ``[(indices into period_ratios, options of the band)]``: each band's options
+    are ``options`` with its own resolution (whatever ``options`` held); options of
+    another method (no grid) give one band of every ratio.
     """
     n = np.asarray(period_ratios, dtype=float)
     if getattr(options, "method", None) != "exact" or getattr(options, "resolution", None) is None:
@@ -111,10 +112,18 @@ def sweep_banded(sweep, laws, period_ratios, template: AbstractModel, options, *
                  phase_step: float = TARGET_PHASE_STEP):
     """``sweep`` (:func:`sweep_metrics` or :func:`sweep_law_stack`) run band by band of
     :func:`resolution_bands`, each band at its own grid, reassembled along the ratio axis
-    (the last) in the order of ``period_ratios``."""
+    (the last) in the order of ``period_ratios``.
+
+    Only the ``SpringMass`` template is banded (its grid needs depend on ``n`` alone); any
+    other model runs as one band with ``options`` unchanged.
+    """
     n = np.asarray(period_ratios, dtype=float)
+    if type(template) is SpringMass:
+        bands = resolution_bands(n, options, phase_step=phase_step)
+    else:
+        bands = [(np.arange(n.size), options)]
     parts = [(chosen, sweep(laws, jnp.asarray(n[chosen]), template, band_options, devices=devices))
-             for chosen, band_options in resolution_bands(n, options, phase_step=phase_step)]
+             for chosen, band_options in bands]
     if len(parts) == 1:
         return parts[0][1]
     order = np.argsort(np.concatenate([chosen for chosen, _ in parts]), kind="stable")
