@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Mapping
 
 import equinox as eqx
@@ -13,6 +14,7 @@ from . import checks
 from .errors import raise_if_failed
 from .laws import AbstractMotionLaw
 from .models import AbstractModel, SpringMass
+from .propagation import TARGET_PHASE_STEP, default_resolution
 from .sharding import shard_batch
 
 STACK_FROM = 8
@@ -79,6 +81,55 @@ def sweep_law_stack(laws, period_ratios, template: AbstractModel, options, *, de
     ``(laws, ratios)``; the laws are split over ``devices``."""
     return shard_batch(_sweep_stack, laws, template, jnp.asarray(period_ratios), options,
                        batched_argnums=0, devices=devices)
+
+
+def resolution_bands(period_ratios, options, *, phase_step: float = TARGET_PHASE_STEP
+                     ) -> list[tuple[np.ndarray, object]]:
+    """Groups of the period ratios that each get the default grid of their own largest.
+
+    The exact path's grid is sized by the largest period ratio of a call
+    (``default_resolution``: the same phase step ``w h`` at every ratio would need fewer
+    intervals at small ratios).  Ratios whose own default resolution is the same form one
+    band, solved with that resolution: every ratio then meets the default phase step,
+    the error bound of the default grid, and a sweep over [1, 30] does about 60% of the
+    work.  Each band is one compiled program (its grid size is static).
+
+    Returns ``[(indices into period_ratios, options of the band)]``: each band's options
+    are ``options`` with its own resolution (whatever ``options`` held); options of
+    another method (no grid) give one band of every ratio.
+    """
+    n = np.asarray(period_ratios, dtype=float)
+    if getattr(options, "method", None) != "exact" or getattr(options, "resolution", None) is None:
+        return [(np.arange(n.size), options)]
+    needed = np.asarray([default_resolution(x, phase_step) for x in n])
+    bands = []
+    for resolution in np.unique(needed):
+        chosen = np.flatnonzero(needed == resolution)
+        bands.append((chosen, dataclasses.replace(options, resolution=int(resolution))))
+    return bands
+
+
+def sweep_banded(sweep, laws, period_ratios, template: AbstractModel, options, *, devices=None,
+                 phase_step: float = TARGET_PHASE_STEP):
+    """``sweep`` (:func:`sweep_metrics` or :func:`sweep_law_stack`) run band by band of
+    :func:`resolution_bands`, each band at its own grid, reassembled along the ratio axis
+    (the last) in the order of ``period_ratios``.
+
+    Only the ``SpringMass`` template is banded (its grid needs depend on ``n`` alone); any
+    other model runs as one band with ``options`` unchanged.
+    """
+    n = np.asarray(period_ratios, dtype=float)
+    if type(template) is SpringMass:
+        bands = resolution_bands(n, options, phase_step=phase_step)
+    else:
+        bands = [(np.arange(n.size), options)]
+    parts = [(chosen, sweep(laws, jnp.asarray(n[chosen]), template, band_options, devices=devices))
+             for chosen, band_options in bands]
+    if len(parts) == 1:
+        return parts[0][1]
+    order = np.argsort(np.concatenate([chosen for chosen, _ in parts]), kind="stable")
+    return jax.tree.map(lambda *x: jnp.concatenate(x, axis=-1)[..., order],
+                        *(out for _, out in parts))
 
 
 def _template(model, damping) -> AbstractModel:

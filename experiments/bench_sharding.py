@@ -4,8 +4,10 @@ A stack of traced SCCA laws against period ratios in [1, 30] (``camjax.sweep.swe
 atlas's path) and one law against many ratios (``ct_curve``'s path) are timed on 1, 2 and
 4 devices of the same process; the figure of merit is the throughput per device over the
 single-device throughput (1.0 = perfect scaling).  Forced host devices share the
-machine's cores, so a ratio near 1 needs at least as many free cores as devices: the
-figures say how many cores there were and what the load was.
+machine's cores, so a ratio near 1 needs at least as many free cores as devices: on
+c cores k devices get at most c / k each (``per_device_bound``; 0.5 for 4 devices on the
+2-core machine, which therefore cannot show scaling beyond 2 devices); the figures say
+how many cores there were and what the load was.
 
     python experiments/bench_sharding.py                # writes results/sharding/bench.json
     python experiments/bench_sharding.py --laws 16 --count 500
@@ -65,7 +67,12 @@ def main() -> None:
         "one-law": (args.ratios,
                     lambda k: sweep_metrics(law, n_many, template, options, devices=k)),
     }
-    report = {"cores": os.cpu_count(), "devices": jax.local_device_count(), "cases": {}}
+    report = {"cores": os.cpu_count(), "devices": jax.local_device_count(),
+              "load_before": [round(x, 2) for x in os.getloadavg()], "cases": {},
+              # forced host devices share the cores: k devices on c cores give each at
+              # most c / k of a core, so the per-device ratio cannot pass this
+              "per_device_bound": {k: round(min(1.0, os.cpu_count() / k), 3)
+                                   for k in args.devices}}
     for name, (evaluations, run) in cases.items():
         rows = {}
         for k in args.devices:
@@ -76,7 +83,9 @@ def main() -> None:
         for k, row in rows.items():
             row["per_device_over_single"] = round(row["evaluations_per_s"] / k / base, 3)
             print(f"{name:11s} devices={k}: {row['evaluations_per_s']:10.0f} evaluations/s, "
-                  f"per device {row['per_device_over_single']:.3f} x single", flush=True)
+                  f"per device {row['per_device_over_single']:.3f} x single "
+                  f"(at most {report['per_device_bound'][k]:.2f} on {os.cpu_count()} cores)",
+                  flush=True)
         report["cases"][name] = {"evaluations": evaluations, "runs": rows}
     report["uptime"] = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
     print(report["uptime"])

@@ -67,8 +67,10 @@ def run_sweeps(args, work: Path, runs_path: Path) -> None:
             spec = distributed.spec_from_dict({
                 "output": str(work / key), "damping": [damping],
                 "laws_per_chunk": args.laws_per_chunk, "laws": laws,
+                "phase_step": args.phase_step,
                 "period_ratio": {"start": 1.0, "stop": 30.0, "count": args.count},
             })
+            load_before = os.getloadavg()
             start, cpu = time.perf_counter(), time.process_time()
             done = distributed.run_sweep(spec, progress=True)
             wall, cpu = time.perf_counter() - start, time.process_time() - cpu
@@ -79,6 +81,9 @@ def run_sweeps(args, work: Path, runs_path: Path) -> None:
             record = {
                 "laws": len(spec.laws), "period_ratios": int(spec.period_ratio.size),
                 "damping": damping, "devices": jax.local_device_count(), "cores": cores,
+                "phase_step": spec.phase_step,
+                "compilation_cache": bool(jax.config.jax_compilation_cache_dir),
+                "load_before": [round(x, 2) for x in load_before],
                 "chunks_computed": len(done), "evaluations": evaluations,
                 "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
                 "peak_memory_gib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -97,8 +102,15 @@ def run_sweeps(args, work: Path, runs_path: Path) -> None:
 
 
 def _fractions(names) -> np.ndarray:
-    """``(laws, 3)`` fractions from names ``scca:a,b,c``."""
-    return np.asarray([[float(x) for x in name.split(":")[1].split(",")] for name in names])
+    """``(laws, 3)`` fractions from names ``scca:a,b,c`` or a named member's (``cycloidal``)."""
+    from camjax import laws as lawlib
+
+    def fractions(name):
+        if ":" in name:
+            return [float(x) for x in name.split(":")[1].split(",")]
+        return [float(x) for x in lawlib.get(name).fractions]
+
+    return np.asarray([fractions(name) for name in names])
 
 
 def analyse(work: Path, out: Path) -> dict:
@@ -277,6 +289,11 @@ def main() -> None:
     parser.add_argument("--grids", nargs="+", choices=("face", "family"),
                         default=["face", "family"], help="which grids to sweep, in order")
     parser.add_argument("--laws-per-chunk", type=int, default=64)
+    parser.add_argument("--phase-step", type=float, default=0.8,
+                        help="largest w h of the exact path's grid (0.5: ct_curve's; 0.8 "
+                        "stays within 1e-8 of it, see docs/scca-atlas.md)")
+    parser.add_argument("--no-cache", action="store_true",
+                        help="do not use camjax's persistent compilation cache (a cold run)")
     parser.add_argument("--work", type=Path, help="chunk directory (default: under --out)")
     parser.add_argument("--out", type=Path, default=HERE.parent / "results" / "scca_atlas")
     parser.add_argument("--analyse-only", action="store_true",
@@ -286,6 +303,10 @@ def main() -> None:
     args = parser.parse_args()
     flag = f"--xla_force_host_platform_device_count={args.devices}"
     os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {flag}".strip()
+    if not args.no_cache:
+        from camjax.cli import enable_compilation_cache
+
+        enable_compilation_cache()
     if args.quick:
         args.face_step, args.family_step, args.count = 0.1, 0.25, 100
         args.out = args.out.with_name("scca_atlas_quick")

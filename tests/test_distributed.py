@@ -6,12 +6,20 @@ import subprocess
 import sys
 from pathlib import Path
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from camjax import distributed
 from camjax.laws import SCCA
-from camjax.sweep import ct_curve
+from camjax.sweep import (
+    ct_curve,
+    prepare_sweep,
+    resolution_bands,
+    sweep_banded,
+    sweep_law_stack,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = """
@@ -62,12 +70,43 @@ def test_scca_grid_counts_and_fractions():
      'names = ["cycloidal"]\n', "damping"),
     ('output = "o"\nspeed = 3\n', "unknown spec keys"),
     ('output = "o"\n[period_ratio]\nvalues = [1.0]\n[laws]\nnames = ["nope"]\n', "nope"),
+    ('output = "o"\nphase_step = 0\n[period_ratio]\nvalues = [1.0]\n[laws]\n'
+     'names = ["cycloidal"]\n', "phase_step"),
 ])
 def test_bad_specs_name_the_problem(tmp_path, text, words):
     path = tmp_path / "spec.toml"
     path.write_text(text)
     with pytest.raises(ValueError, match=words):
         distributed.load_spec(path)
+
+
+@pytest.mark.parametrize("step, resolutions", [(0.5, [128, 192, 256, 320, 384]),
+                                                (0.8, [128, 192, 256])])
+def test_resolution_bands_meet_the_phase_step(step, resolutions):
+    n, _, options = prepare_sweep(np.linspace(1.0, 30.0, 1000))
+    bands = resolution_bands(n, options, phase_step=step)
+    assert [o.resolution for _, o in bands] == resolutions
+    chosen = np.concatenate([c for c, _ in bands])
+    np.testing.assert_array_equal(np.sort(chosen), np.arange(n.size))  # each ratio once
+    for c, o in bands:  # w h <= step at every ratio, and the next smaller grid would not do
+        assert np.all(2 * np.pi * n[c] / o.resolution <= step)
+        assert o.resolution == 128 or np.any(2 * np.pi * n[c] / (o.resolution - 64) > step)
+    _, _, tsit5 = prepare_sweep(n, method="tsit5")
+    assert len(resolution_bands(n, tsit5)) == 1  # grids of the exact path only
+
+
+@pytest.mark.slow
+def test_banded_sweep_within_tolerance_of_ct_curve():
+    laws = [SCCA(0.5, 0.0, 0.5), SCCA(0.99, 0.0, 0.01), SCCA(0.0, 1.0, 0.0)]
+    n, template, options = prepare_sweep(np.linspace(1.0, 30.0, 60))
+    stack = jax.tree.map(lambda *x: jnp.stack(x), *laws)
+    for step, tolerance in ((0.5, 1e-9), (0.8, 1e-8)):
+        metrics, _ = sweep_banded(sweep_law_stack, stack, n, template, options,
+                                  phase_step=step)
+        for i, law in enumerate(laws):
+            curve = ct_curve(law, n)
+            np.testing.assert_allclose(metrics.ct[i], curve.ct, rtol=tolerance)
+            np.testing.assert_allclose(metrics.residual[i], curve.residual, atol=1e-11)
 
 
 def test_merged_sweep_matches_ct_curve(uninterrupted):

@@ -1,4 +1,5 @@
-"""Sharded sweeps equal single-device ones (4 forced host devices, in a subprocess)."""
+"""Sharded sweeps equal single-device ones (4 forced host devices, in a subprocess): Ct
+curves, law stacks, the design's band evaluation and the program speed sweep."""
 
 import os
 import subprocess
@@ -22,6 +23,8 @@ SCRIPT = textwrap.dedent(
     import numpy as np
     from camjax import laws
     from camjax.laws import SCCA
+    from camjax.law_design import peak_loads
+    from camjax.program import Follower, Program, Segment, Solver
     from camjax.sweep import ct_curve, ct_curves
 
     assert jax.local_device_count() == 4, jax.devices()
@@ -32,9 +35,11 @@ SCRIPT = textwrap.dedent(
 
     law = laws.get("modified-sine")
     errors = {}
+    curves = {}
     for size in (7, 8):  # does not / does divide by the device count
         n = np.linspace(1.0, 6.0, size)
-        errors[f"exact-{size}"] = worst(ct_curve(law, n, devices=1), ct_curve(law, n))
+        curves[size] = ct_curve(law, n, devices=1)
+        errors[f"exact-{size}"] = worst(curves[size], ct_curve(law, n))
     for size in (3, 4):
         n = np.linspace(1.5, 4.0, size)
         one = ct_curve(law, n, method="tsit5", devices=1, rtol=1e-8, atol=1e-10)
@@ -44,6 +49,21 @@ SCRIPT = textwrap.dedent(
     n = np.linspace(1.0, 6.0, 6)
     one, many = ct_curves(family, n, devices=1), ct_curves(family, n, devices=4)
     errors["scca-stack"] = max(worst(one[k], many[k]) for k in one)
+    # the design's band evaluation (Ca*Ct over a band: 7 ratios on 4 devices) against the
+    # single-device curve (the same exact path through ct_curve)
+    loads = peak_loads(law, curves[7].period_ratio, devices=4)
+    errors["peak-loads"] = float(np.max(np.abs(loads - curves[7].ca_ct) / curves[7].ca_ct))
+    # the program speed sweep: 70 speeds on 4 devices (18 each, padded)
+    cam = Program("two-cycloids", (Segment(100, 20.0, law), Segment(80),
+                                   Segment(100, -20.0, law), Segment(80)),
+                  Follower(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0,
+                           damping_ratio=0.05, spring_rate_n_per_mm=10.0, preload_n=300.0,
+                           base_radius_mm=40.0, roller_radius_mm=12.0))
+    solo, split = Solver(cam, 300.0, devices=1), Solver(cam, 300.0)
+    assert len(split.devices) == 4
+    rpm = np.linspace(300.0, 900.0, 70)
+    a, b = solo.summary(rpm), split.summary(rpm)
+    errors["program"] = max(float(np.max(np.abs(a[k] - b[k]) / np.abs(a[k]).max())) for k in a)
     print("ERRORS", errors)
     assert all(e <= 1e-12 for e in errors.values()), errors
     # the sharded stack equals each law alone (not just the same program twice)

@@ -267,15 +267,19 @@ class MaxCaCt(AbstractObjective):
         return f"max Ca*Ct over [{self.n1:g}, {self.n2:g}]"
 
 
-def peak_loads(law, period_ratios, damping=0.0, dwell=1.0) -> np.ndarray:
-    """Ca*Ct at every period ratio from one vmapped exact-path call (NumPy)."""
-    return _exact_curve(law, period_ratios, damping, dwell).ca_ct
+def peak_loads(law, period_ratios, damping=0.0, dwell=1.0, *, devices=None) -> np.ndarray:
+    """Ca*Ct at every period ratio from one vmapped exact-path call (NumPy).
+
+    The ratios (a band's evaluation grid) are split over ``devices`` (default: every
+    local device; ``camjax.sharding.shard_batch``), with results equal to one device's.
+    """
+    return _exact_curve(law, period_ratios, damping, dwell, devices=devices).ca_ct
 
 
-def _exact_curve(law, period_ratios, damping, dwell=1.0):
+def _exact_curve(law, period_ratios, damping, dwell=1.0, *, devices=None):
     """The exact-path sweep of ``law`` (one compiled program for every law of up to
     eight pieces, and one for longer splines): what reports and comparisons show."""
     from ..sweep import ct_curve
 
     return ct_curve(law, np.atleast_1d(np.asarray(period_ratios, dtype=float)),
-                    damping=damping, dwell=dwell)
+                    damping=damping, dwell=dwell, devices=devices)

@@ -26,20 +26,22 @@ def period_ratios(program: Program, rpm) -> np.ndarray:
     return f_n * 60.0 / rpm[:, None] * fractions[None, :]
 
 
-def analyse(program: Program, rpm, *, with_flight: bool = True, solver: Solver | None = None) -> dict:
+def analyse(program: Program, rpm, *, with_flight: bool = True, solver: Solver | None = None,
+            devices=None) -> dict:
     """The steady-state report at every speed in ``rpm`` (see docs/program.md).
 
     Every field but ``flight``, ``flights`` and ``impacts`` is the periodic steady state
     with contact held (linear); where that says contact is lost, ``flights`` lists every
     flight of the turn from the event simulation and ``flight`` is its first (null, both,
-    where contact holds).  For
-    a form-closed cam ``min_contact_force_n`` is the signed flank force (negative: the outer
-    wall pushes), ``jump`` is false and ``min_preload_n`` is null; with a groove clearance
-    ``impacts`` lists the roller's strikes on the flanks in one settled turn (the
-    ``Backlash`` hand-over, ``camjax.program.groove_turns``), else it is null.
+    where contact holds).  For a form-closed cam ``min_contact_force_n`` is the signed
+    flank force (negative: the outer wall pushes), ``jump`` is false and ``min_preload_n``
+    is null; with a groove clearance ``impacts`` lists the roller's strikes on the flanks
+    in one settled turn (the ``Backlash`` hand-over, ``camjax.program.groove_turns``), else
+    it is null.  The speeds are split over ``devices`` (``Solver``) when no ``solver`` is
+    given.
     """
     rpm = check_rpm(rpm)
-    solver = solver or Solver(program, rpm.min())
+    solver = solver or Solver(program, rpm.min(), devices=devices)
     out = solver.summary(rpm)
     closed = program.follower.form_closed
     preload = min_preload_n(out["min_contact_force_n"], program.follower.preload_n)

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..metrics import refined_peak
 from ..propagation import MotionGrid, eigenvalue, propagate, psi
+from ..sharding import resolve_devices, shard_batch
 from ._spec import Program
 
 _DEGREE = 5
@@ -244,16 +245,18 @@ class Solver:
     Build once per program and slowest speed (which fixes the grid); every call over any
     batch of speeds is one compiled call, vmapped over chunks of speeds whose grids hold
     about ``_CHUNK_NODES`` nodes in all (a chunk's width is padded to a multiple of 16, so
-    that few shapes compile).
+    that few shapes compile).  The speeds are split over ``devices`` (default: every local
+    device; see ``camjax.sharding.shard_batch``), with results equal to one device's.
     """
 
-    def __init__(self, program: Program, rpm_min: float):
+    def __init__(self, program: Program, rpm_min: float, *, devices=None):
         if not program.follower.damping_ratio > 0:
             raise ValueError("the periodic steady state needs follower.damping_ratio > 0 "
                              "(without damping the start-up never settles)")
         self.program = program
         self.train = _Train.of(program)
         self.rpm_min = float(rpm_min)
+        self.devices = resolve_devices(devices)
         self.grid = cycle_grid(program, resolution(program, rpm_min))
         # Chunks of speeds small enough to keep the working set bounded (as batch_metrics).
         self.chunk = max(1, _CHUNK_NODES // self.grid.nodes.size)
@@ -270,11 +273,16 @@ class Solver:
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(f"rpm {rpm.min():g} below the solver's slowest speed {self.rpm_min:g}")
         size = rpm.size
-        chunks = -(-size // self.chunk)
-        width = 16 * -(-size // (16 * chunks))
-        padded = np.pad(rpm, (0, chunks * width - size), mode="edge").reshape(chunks, width)
-        accel, fmin, fmax, residual = (np.asarray(x).reshape(chunks * width, *x.shape[2:])[:size]
-                                       for x in self._batch(jnp.asarray(padded)))
+        # A device per 16 speeds at most: a short batch (a bisection step) stays on one.
+        devices = self.devices[: max(1, min(len(self.devices), size // 16))]
+        per_device = -(-size // len(devices))
+        chunks = -(-per_device // self.chunk)  # per device
+        width = 16 * -(-per_device // (16 * chunks))
+        rows = len(devices) * chunks
+        padded = np.pad(rpm, (0, rows * width - size), mode="edge").reshape(rows, width)
+        out = shard_batch(self._batch, jnp.asarray(padded), devices=devices)
+        accel, fmin, fmax, residual = (np.asarray(x).reshape(rows * width, *x.shape[2:])[:size]
+                                       for x in out)
         if not np.all(np.isfinite(fmin)) or not np.all(np.isfinite(accel)):
             raise ValueError("non-finite response: check the follower's numbers")
         return {"rpm": rpm, "max_payload_acceleration_m_s2": accel, "min_contact_force_n": fmin,

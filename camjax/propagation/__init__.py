@@ -8,6 +8,7 @@ over a ``MotionGrid`` (degree-5 interpolant of the forcing on each interval).
 from ._exact import eigenvalue as eigenvalue
 from ._exact import propagate as propagate
 from ._exact import psi as psi
+from ._grid import TARGET_PHASE_STEP as TARGET_PHASE_STEP
 from ._grid import MotionGrid as MotionGrid
 from ._grid import SampledLaw as SampledLaw
 from ._grid import default_resolution as default_resolution

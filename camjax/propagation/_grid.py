@@ -31,14 +31,14 @@ TARGET_PHASE_STEP = 0.5
 """Largest ``w * h`` (radians of vibration per interval) the default resolution allows."""
 
 
-def default_resolution(max_period_ratio: float) -> int:
-    """Intervals per unit of tau that keep ``w h <= TARGET_PHASE_STEP`` (a multiple of 64).
+def default_resolution(max_period_ratio: float, phase_step: float = TARGET_PHASE_STEP) -> int:
+    """Intervals per unit of tau that keep ``w h <= phase_step`` (a multiple of 64).
 
-    The step bounds the peak-refinement error near ``(w h)^8 / 1e7`` (4e-10 relative);
-    node values are exact at any resolution.  Rounding to multiples of 64 limits
-    recompilation across nearby requests.
+    The step bounds the peak-refinement error near ``(w h)^8 / 1e7`` (4e-10 relative at
+    the default 0.5); node values are exact at any resolution.  Rounding to multiples of
+    64 limits recompilation across nearby requests.
     """
-    needed = 2 * math.pi * max_period_ratio / TARGET_PHASE_STEP
+    needed = 2 * math.pi * max_period_ratio / phase_step
     return max(128, 64 * math.ceil(needed / 64))
 
 
