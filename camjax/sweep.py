@@ -162,7 +162,7 @@ def _curve(law, n, template, options, metrics) -> CtCurve:
         ct=np.asarray(metrics.ct),
         residual=np.asarray(metrics.residual),
         peak_in_motion=np.asarray(metrics.peak_in_motion),
-        ca=float(law.Ca),
+        ca=law.peak_coefficients()["Ca"],  # one compiled call (eagerly, Ca runs op by op)
         name=law.name,
         damping=float(damping),
         method=options.method,
