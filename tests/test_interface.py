@@ -102,28 +102,33 @@ def test_a_period_ratio_too_large_for_memory_is_refused_before_any_work():
         camjax.ct_curve(LAW, [1e6])
 
 
-def test_every_sdof_family_model_goes_through_solve_and_ct_curve_alike():
+@pytest.mark.parametrize(
+    "template, tol",
+    [
+        (CoulombFriction(1.0, 0.0, 0.05), 1e-7),
+        (Backlash(1.0, 0.5, 20.0, 0.05), 1e-7),  # dn holds it on the flank
+        (TwoMass(1.0, 1.0, 0.0), None),  # m = 0: a rigid camshaft
+    ],
+    ids=["friction", "backlash", "two-mass"],
+)
+def test_every_sdof_family_model_goes_through_solve_and_ct_curve_alike(template, tol):
     """One call shape for every model; the sweep equals the solves one by one, and with the
     extra physics switched off every model gives the SDOF's numbers."""
     ns = [3.3, 6.4]
-    sdof = camjax.ct_curve(LAW, ns, damping=0.05)
-    for template, options, tol in [
-        (CoulombFriction(1.0, 0.0, 0.05), dict(samples=256), 1e-7),
-        (Backlash(1.0, 0.5, 20.0, 0.05), dict(samples=256), 1e-7),  # dn holds it on the flank
-        (TwoMass(1.0, 1.0, 0.0), dict(samples=256), None),  # m = 0: a rigid camshaft
-    ]:
-        curve = camjax.ct_curve(LAW, ns, model=template, **options)
-        assert curve.model == type(template).__name__
-        for k, n in enumerate(ns):
-            one = camjax.solve(LAW, template.with_period_ratio(n), **options)
-            assert isinstance(one, camjax.Response)
-            assert float(one.metrics.ct) == pytest.approx(curve.ct[k], rel=1e-8)
-            assert float(one.metrics.residual) == pytest.approx(curve.residual[k], rel=1e-8)
-            assert one.payload_acceleration.shape == one.tau.shape
-        if tol is not None:  # damped like the SDOF
-            np.testing.assert_allclose(curve.ct, sdof.ct, rtol=tol)
-            np.testing.assert_allclose(curve.residual, sdof.residual, rtol=tol)
-            np.testing.assert_allclose(curve.peak_in_motion, sdof.peak_in_motion, rtol=tol)
+    options = dict(samples=256)
+    curve = camjax.ct_curve(LAW, ns, model=template, **options)
+    assert curve.model == type(template).__name__
+    for k, n in enumerate(ns):
+        one = camjax.solve(LAW, template.with_period_ratio(n), **options)
+        assert isinstance(one, camjax.Response)
+        assert float(one.metrics.ct) == pytest.approx(curve.ct[k], rel=1e-8)
+        assert float(one.metrics.residual) == pytest.approx(curve.residual[k], rel=1e-8)
+        assert one.payload_acceleration.shape == one.tau.shape
+    if tol is not None:  # damped like the SDOF
+        sdof = camjax.ct_curve(LAW, ns, damping=0.05)
+        np.testing.assert_allclose(curve.ct, sdof.ct, rtol=tol)
+        np.testing.assert_allclose(curve.residual, sdof.residual, rtol=tol)
+        np.testing.assert_allclose(curve.peak_in_motion, sdof.peak_in_motion, rtol=tol)
 
 
 def test_throw_false_returns_the_result_code():
