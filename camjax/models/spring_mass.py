@@ -163,9 +163,9 @@ class SpringMass(AbstractModel):
         """On the exact path, the law's grid as data (``SampledLaw``), padded to as many
         pieces as any law in ``like`` needs: every standard law (and a designed spline
         beside them) then sweeps in one compiled program."""
-        group = [x for x in (law, *like) if SampledLaw.accepts(x)]
         if options.method != "exact" or not SampledLaw.accepts(law):
             return law
+        group = [x for x in (law, *like) if SampledLaw.accepts(x)]
         return SampledLaw.of(law, options.resolution, max(map(SampledLaw.padded_pieces, group)))
 
 

@@ -42,6 +42,16 @@ def _first_root(f, lo: float, hi: float) -> float:
     return 0.5 * (lo + hi)
 
 
+def scan_speeds(program, rpm_lo: float, rpm_hi: float, per_cycle: float) -> np.ndarray:
+    """Speeds (rpm, ascending) evenly spaced in ``1/rpm`` over ``[rpm_lo, rpm_hi]``:
+    ``per_cycle`` for each natural-frequency cycle that one turn gains or loses across the
+    range (every period ratio of the program moves by ``1/per_cycle`` between
+    neighbours), 16 at least."""
+    cycles = program.follower.natural_frequency_hz * 60 * (1 / rpm_lo - 1 / rpm_hi)
+    count = max(16, math.ceil(per_cycle * cycles) + 1)
+    return np.sort(1.0 / np.linspace(1 / rpm_hi, 1 / rpm_lo, count))
+
+
 def jump_speed_rpm(solver: Solver, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1):
     """Lowest speed in ``[rpm_lo, rpm_hi]`` at which the contact force goes negative, or ``None``.
 
@@ -52,9 +62,7 @@ def jump_speed_rpm(solver: Solver, rpm_lo: float, rpm_hi: float, tolerance_rpm: 
     """
     if solver.program.follower.form_closed:
         return None
-    f_n = solver.program.follower.natural_frequency_hz
-    count = max(16, math.ceil(16 * f_n * 60 * (1 / rpm_lo - 1 / rpm_hi)) + 1)
-    rpm = np.sort(1.0 / np.linspace(1 / rpm_hi, 1 / rpm_lo, count))
+    rpm = scan_speeds(solver.program, rpm_lo, rpm_hi, 16)
     rpm[0], rpm[-1] = rpm_lo, rpm_hi
     force = solver.summary(rpm)["min_contact_force_n"]
     if not np.any(force < 0):

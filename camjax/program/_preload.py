@@ -6,8 +6,6 @@ imports optax): ``camjax.program`` stays light to import.
 
 from __future__ import annotations
 
-import math
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -16,18 +14,10 @@ import numpy as np
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
 from ._design import segment_band, with_law
 from ._dynamics import Solver, _cycle, _Train, cycle_grid, resolution, with_segment_law
-from ._jump import min_preload_n
+from ._jump import min_preload_n, scan_speeds
 from ._spec import Program
 
 _SPEEDS_PER_CYCLE = 8  # training speeds per natural-frequency cycle the turn gains across the range
-
-
-def _speeds(program: Program, rpm_lo: float, rpm_hi: float, per_cycle: float) -> np.ndarray:
-    """Speeds evenly spaced in ``1/rpm``, ``per_cycle`` for each natural-frequency cycle that
-    one turn gains across the range (so every period ratio moves by ``1/per_cycle``), 16 at least."""
-    cycles = program.follower.natural_frequency_hz * 60.0 * (1.0 / rpm_lo - 1.0 / rpm_hi)
-    count = max(16, math.ceil(per_cycle * cycles) + 1)
-    return np.sort(1.0 / np.linspace(1.0 / rpm_hi, 1.0 / rpm_lo, count))
 
 
 def _smooth_max(values, p):
@@ -48,7 +38,7 @@ class MaxPreload(AbstractObjective):
     The required preload at a speed is ``max over the turn of -(k e + c e')`` of the whole
     program's periodic steady state (vibration carried in from the other segments counts),
     in N.  Training takes the signed value (it may be negative: contact margin) at the grid
-    nodes of ``_speeds`` (8 per natural-frequency cycle gained across the range) and
+    nodes of ``speeds`` (8 per natural-frequency cycle gained across the range) and
     smooths the maximum over speeds and nodes by a power mean of the values shifted to
     ``[0, 1]``.  The report is ``max(0, .)`` by the program's own steady-state path
     (``Solver``, extrema refined between nodes) on ``EVALUATION_SAMPLES`` speeds.
@@ -70,7 +60,7 @@ class MaxPreload(AbstractObjective):
 
     def speeds(self) -> np.ndarray:
         """Speeds (rpm) at which training evaluates the required preload."""
-        return _speeds(self.program, self.rpm_lo, self.rpm_hi, _SPEEDS_PER_CYCLE)
+        return scan_speeds(self.program, self.rpm_lo, self.rpm_hi, _SPEEDS_PER_CYCLE)
 
     def evaluation_speeds(self) -> np.ndarray:
         return np.sort(1.0 / np.linspace(1.0 / self.rpm_hi, 1.0 / self.rpm_lo, EVALUATION_SAMPLES))
