@@ -207,3 +207,21 @@ def test_cli_json_report(tmp_path, capsys):
     assert max(amplitudes) == amplitudes[1]
     assert max(p["amplitude_mm"] for p in report["axial_peaks"]) < 0.1 * max(amplitudes)
     assert report["max_constraint_error"] < 1e-10
+
+
+@pytest.mark.slow  # 10 s of compiling; the energy balance test covers the same path by default
+def test_accelerations_through_the_hoisted_jets_equal_the_laws_own_derivatives():
+    # accelerations() evaluates the program once, as cubic jets about the primal cam angles, and
+    # differentiates those; the equations of motion need derivatives up to third order only, so
+    # this must equal differentiating the laws' piecewise formulas directly, mid-rise and
+    # mid-return, deflected and moving.
+    model = SwingingFollower(modes=2, axial_modes=1, gravity=9.81).with_array_leaves()
+    keys = jax.random.split(jax.random.PRNGKey(3), 2)
+    q = 1e-4 * jax.random.normal(keys[0], (model.size,))
+    qdot = 1e-1 * jax.random.normal(keys[1], (model.size,))
+    accelerations = eqx.filter_jit(lambda m, q, qdot, t, jets: m.accelerations(q, qdot, t, jets))
+    for angle in (0.3 * math.pi, 1.2 * math.pi):
+        t = angle / model.omega
+        direct = accelerations(model, q, qdot, t, (model.program, model.program))
+        for got, want in zip(accelerations(model, q, qdot, t, None), direct):
+            np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-10 * float(jnp.max(jnp.abs(want))))

@@ -69,13 +69,18 @@ def _model(args):
 
 def follower_report(model, law_name: str) -> tuple[dict, object]:
     """The JSON-ready report of one three-turn run (a ``SwingingFollower``), and the response."""
+    from concurrent.futures import ThreadPoolExecutor
+
     import numpy as np
 
     from ..models import solve
     from ..models.swinging_follower import spectral_peaks, spectrum
 
-    response = solve(None, model, turns=_TURNS)
-    natural = float(model.fundamental_frequency())
+    # The natural frequency's program compiles on the second core while the solve compiles.
+    with ThreadPoolExecutor(1) as pool:
+        fundamental = pool.submit(model.fundamental_frequency)
+        response = solve(None, model, turns=_TURNS)
+        natural = float(fundamental.result())
     order = natural / float(model.omega)
     report = {
         "law": law_name,

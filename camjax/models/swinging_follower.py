@@ -40,24 +40,41 @@ def _default_law():
     return Cycloidal()
 
 
-class _ProgramJet(eqx.Module):
-    """The motion program through its third-order Taylor jet about each evaluation point.
+class _TaylorJet(eqx.Module):
+    """The motion program's cubic Taylor expansion about one cam angle ``centre``.
 
     Value and first three theta-derivatives are the program's own (the laws' closed-form
-    derivatives); the equations of motion need no higher ones.  Automatic differentiation then
-    runs through a cubic rather than through the laws' piecewise formulas, which keeps the
-    traced graph and the compile time down (trace about 3x shorter, also for a ``LawBank``).
+    derivatives); the equations of motion need no higher ones.  Automatic differentiation
+    then runs through a cubic rather than through the laws' piecewise formulas."""
+
+    centre: jax.Array
+    coefficients: tuple
+
+    @classmethod
+    def about(cls, program: MotionProgram, theta) -> _TaylorJet:
+        centre = jax.lax.stop_gradient(jnp.asarray(theta, dtype=float))
+        return cls(centre, tuple(program.evaluate(centre)))
+
+    def evaluate(self, theta):
+        y0, y1, y2, y3 = self.coefficients
+        e = theta - self.centre
+        return y0 + e * (y1 + e * (y2 / 2 + e * y3 / 6)), y1 + e * (y2 + e * y3 / 2), y2 + e * y3, y3
+
+    def displacement(self, theta):
+        return self.evaluate(theta)[0]
+
+
+class _ProgramJet(eqx.Module):
+    """The motion program through its Taylor jet about each evaluation point itself.
+
+    This keeps the traced graph short wherever the model is evaluated at arbitrary points.
     Gradients with respect to the laws', the program's and the model's leaves are unaffected
     (checked against differentiating through the program: 1e-14)."""
 
     program: MotionProgram
 
     def evaluate(self, theta):
-        theta = jnp.asarray(theta, dtype=float)
-        centre = jax.lax.stop_gradient(theta)
-        y0, y1, y2, y3 = self.program.evaluate(centre)
-        e = theta - centre
-        return y0 + e * (y1 + e * (y2 / 2 + e * y3 / 6)), y1 + e * (y2 + e * y3 / 2), y2 + e * y3, y3
+        return _TaylorJet.about(self.program, theta).evaluate(theta)
 
     def displacement(self, theta):
         return self.evaluate(theta)[0]
@@ -270,34 +287,51 @@ class SwingingFollower(AbstractModel):
         nodes, weights = np.polynomial.legendre.leggauss(_QUADRATURE_POINTS)
         return (nodes + 1) * self.length / 2, weights * self.length / 2
 
-    def _swing(self, t):
+    def expansions(self, q, t) -> tuple[_TaylorJet, _TaylorJet]:
+        """The program's jets about the rod frame's cam angle and the contact point's, at ``(q, t)``.
+
+        ``accelerations`` evaluates the program once for both and hands the jets to the
+        Lagrangian and the constraint, so that the laws' formulas are traced twice per
+        vector field rather than once per nested derivative (half the compile time)."""
+        theta = self.omega * t
+        return _TaylorJet.about(self.program, theta), _TaylorJet.about(self.program, theta + self._split(q)[2])
+
+    def _jets(self, jets):
+        return (self._jet, self._jet) if jets is None else jets
+
+    def _swing(self, t, jet=None):
         """Rod frame angle psi(t) and its rate, from the rigid follower motion."""
-        y, dy, _, _ = self._jet.evaluate(self.omega * t)
+        y, dy, _, _ = (self._jet if jet is None else jet).evaluate(self.omega * t)
         return self.follower.arm_angle(y), -self.omega * dy
 
     def _split(self, q):
         na, n = self.n_axial, self.modes
         return q[:na], q[na : na + n], q[-1]
 
-    def roller_centre(self, q, t):
+    def roller_centre(self, q, t, jet=None):
         """Roller centre in the fixed frame for coordinates ``q`` at time ``t``."""
         a, b, _ = self._split(q)
-        psi, _ = self._swing(t)
+        psi, _ = self._swing(t, jet)
         axis, across = jnp.stack([jnp.cos(psi), jnp.sin(psi)]), jnp.stack([-jnp.sin(psi), jnp.cos(psi)])
         pivot = jnp.stack([self.pivot_distance, 0.0 * psi])
         return pivot + (self.length + a[0]) * axis + b[0] * across
 
-    def constraint(self, q, t):
-        """Roller centre minus its pitch-curve point, in the cam frame (m); zero in the groove."""
+    def constraint(self, q, t, jets=None):
+        """Roller centre minus its pitch-curve point, in the cam frame (m); zero in the groove.
+
+        ``jets``: the program's ``expansions`` at the primal ``(q, t)``, or ``None``."""
+        swing, contact = self._jets(jets)
         _, _, delta = self._split(q)
         theta = self.omega * t
-        return geometry._rot(-theta, self.roller_centre(q, t)) - geometry.pitch_point(self.follower, self._jet, theta + delta)
+        return geometry._rot(-theta, self.roller_centre(q, t, swing)) - geometry.pitch_point(self.follower, contact, theta + delta)
 
     # ---- energies -----------------------------------------------------------------------
-    def lagrangian(self, q, qdot, t):
+    def lagrangian(self, q, qdot, t, jets=None):
+        """``T - V`` (J); ``jets``: the program's ``expansions`` at the primal ``(q, t)``, or ``None``."""
+        swing, contact = self._jets(jets)
         a, b, delta = self._split(q)
         adot, bdot, ddelta = self._split(qdot)
-        psi, psidot = self._swing(t)
+        psi, psidot = self._swing(t, swing)
         x, w = self._quadrature()
         phi, dphi, ddphi = self.shapes(x)
         phi_a, dphi_a, _ = self.shapes(x, self.n_axial)
@@ -310,7 +344,7 @@ class SwingingFollower(AbstractModel):
         end_along, end_across = adot[0] - b[0] * psidot, bdot[0] + (self.length + a[0]) * psidot
         theta_c = self.omega * t + delta
         pitch_speed = jnp.linalg.norm(
-            jax.jvp(lambda s: geometry.pitch_point(self.follower, self._jet, s), (theta_c,), (jnp.ones_like(theta_c),))[1]
+            jax.jvp(lambda s: geometry.pitch_point(self.follower, contact, s), (theta_c,), (jnp.ones_like(theta_c),))[1]
         )
         spin = self.omega - pitch_speed * (self.omega + ddelta) / self.roller_radius
         t_roller = 0.5 * self.roller_mass * (end_along**2 + end_across**2) + 0.5 * self.roller_inertia * spin**2
@@ -322,21 +356,27 @@ class SwingingFollower(AbstractModel):
         potential = self.gravity * (rho * area * jnp.sum(w * height) + self.roller_mass * end_height)
         return t_rod + t_roller - strain - potential
 
-    def _mass_and_force(self, q, qdot, t):
+    def _mass_and_force(self, q, qdot, t, jets=None):
         """``M(q, t)`` and ``dL/dq - d/dt(dL/dqdot)|_{qddot=0}`` by automatic differentiation."""
-        momentum = lambda q_, qd_, t_: jax.grad(self.lagrangian, argnums=1)(q_, qd_, t_)  # noqa: E731
+        lagrangian = lambda q_, qd_, t_: self.lagrangian(q_, qd_, t_, jets)  # noqa: E731
+        momentum = jax.grad(lagrangian, argnums=1)
         mass = jax.jacfwd(momentum, argnums=1)(q, qdot, t)
         _, momentum_rate = jax.jvp(momentum, (q, qdot, t), (qdot, jnp.zeros_like(qdot), jnp.ones_like(t)))
-        return mass, jax.grad(self.lagrangian)(q, qdot, t) - momentum_rate
+        return mass, jax.grad(lagrangian)(q, qdot, t) - momentum_rate
 
-    def accelerations(self, q, qdot, t):
-        """``(qddot, lambda)`` from the stabilised augmented system."""
-        mass, force = self._mass_and_force(q, qdot, t)
-        jac = jax.jacfwd(self.constraint)(q, t)
-        velocity = lambda q_, t_: jax.jvp(self.constraint, (q_, t_), (qdot, jnp.ones_like(t_)))[1]  # noqa: E731
+    def accelerations(self, q, qdot, t, jets=None):
+        """``(qddot, lambda)`` from the stabilised augmented system.
+
+        ``jets``: what the motion program is evaluated through (default: its ``expansions``
+        at ``(q, t)``; ``(program, program)`` differentiates the laws' formulas directly)."""
+        jets = self.expansions(q, t) if jets is None else jets
+        constraint = lambda q_, t_: self.constraint(q_, t_, jets)  # noqa: E731
+        mass, force = self._mass_and_force(q, qdot, t, jets)
+        jac = jax.jacfwd(constraint)(q, t)
+        velocity = lambda q_, t_: jax.jvp(constraint, (q_, t_), (qdot, jnp.ones_like(t_)))[1]  # noqa: E731
         phi_dot, phi_ddot_free = jax.jvp(velocity, (q, t), (qdot, jnp.ones_like(t)))
         beta = self.baumgarte
-        rhs_c = -phi_ddot_free - 2 * beta * phi_dot - beta**2 * self.constraint(q, t)
+        rhs_c = -phi_ddot_free - 2 * beta * phi_dot - beta**2 * constraint(q, t)
         n = self.size
         system = jnp.block([[mass, jac.T], [jac, jnp.zeros((2, 2))]])
         solution = jnp.linalg.solve(system, jnp.concatenate([force, rhs_c]))
@@ -374,10 +414,11 @@ class SwingingFollower(AbstractModel):
 def _natural_frequencies(model, cam_angle):
     t = cam_angle / model.omega
     zero = jnp.zeros(model.size)
-    mass, _ = model._mass_and_force(zero, zero, t)
-    stiffness = -jax.hessian(model.lagrangian)(zero, zero, t)
+    jets = model.expansions(zero, t)
+    mass, _ = model._mass_and_force(zero, zero, t, jets)
+    stiffness = -jax.hessian(lambda q, qdot: model.lagrangian(q, qdot, t, jets))(zero, zero)
     # Motions that keep the roller in the groove: the null space of the constraint Jacobian.
-    _, _, vt = jnp.linalg.svd(jax.jacfwd(model.constraint)(zero, t))
+    _, _, vt = jnp.linalg.svd(jax.jacfwd(model.constraint)(zero, t, jets))
     basis = vt[2:].T
     chol = jnp.linalg.cholesky(basis.T @ mass @ basis)
     reduced = jax.scipy.linalg.solve_triangular(chol, basis.T @ stiffness @ basis, lower=True)
@@ -390,6 +431,7 @@ def _natural_frequencies(model, cam_angle):
 _RATE_SCALE = 1e4
 
 
+@jax.jit  # traced once: diffrax evaluates the vector field in several places
 def _vector_field(t, state, model):
     q, rate = state
     qdot = rate * _RATE_SCALE
