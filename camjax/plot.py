@@ -70,8 +70,13 @@ def residual_curves(curves: dict, *, ncols: int = 2) -> plt.Figure:
     names = list(curves)
     ncols = min(ncols, len(names))
     nrows = math.ceil(len(names) / ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(5 * ncols, 1.9 * nrows + 1.0),
-                             sharex=True, sharey=True, layout="constrained", squeeze=False)
+    width, height = 5 * ncols, 1.9 * nrows + 1.0
+    fig, axes = plt.subplots(nrows, ncols, figsize=(width, height), sharex=True, sharey=True,
+                             squeeze=False)
+    # Fixed margins (inches) rather than a layout engine: constrained layout redrew the
+    # panels' log ticks several times and took half of this figure's time.
+    fig.subplots_adjust(left=0.8 / width, right=1 - 0.15 / width, bottom=0.55 / height,
+                        top=1 - 0.75 / height, wspace=0.06, hspace=0.32)
     worst = np.max([np.maximum(c.residual, R_FLOOR) for c in curves.values()], axis=0) \
         if _same_ratios(curves) else None
     for i, (ax, name) in enumerate(zip(axes.flat, names)):
@@ -87,7 +92,9 @@ def residual_curves(curves: dict, *, ncols: int = 2) -> plt.Figure:
         ax.set_visible(False)
     for ax in axes[:, 0]:
         ax.set_ylabel("R (units of Ca)")
-    for ax in axes[-1]:
+    for column in range(ncols):  # the lowest panel of each column carries the n axis
+        ax = axes[(len(names) - 1 - column) // ncols, column]
+        ax.xaxis.set_tick_params(labelbottom=True)
         ax.set_xlabel(PERIOD_RATIO_LABEL if ncols == 1 else "period ratio n = T f")
     note = "; grey: the largest R of any law" if worst is not None and len(names) > 1 else ""
     fig.suptitle("Residual vibration in the dwell, units of Ca\n"
