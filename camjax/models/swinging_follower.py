@@ -389,14 +389,17 @@ class SwingingFollower(AbstractModel):
         ``dh/dt = energy_supply(q, qdot, t)`` holds along every motion of the model; in a dwell
         the groove is a circle about the cam centre, the supply vanishes and ``h`` is conserved.
         """
-        return qdot @ jax.grad(self.lagrangian, argnums=1)(q, qdot, t) - self.lagrangian(q, qdot, t)
+        jets = self.expansions(q, t)
+        lagrangian = lambda q_, qd_, t_: self.lagrangian(q_, qd_, t_, jets)  # noqa: E731
+        return qdot @ jax.grad(lagrangian, argnums=1)(q, qdot, t) - lagrangian(q, qdot, t)
 
     def energy_supply(self, q, qdot, t):
         """``dh/dt = -dL/dt|_(q, qdot) - lambda . (dPhi/dq qdot)`` (W): the power that the prescribed
         swing of the rod frame and the turning groove feed into the energy function."""
-        explicit = jax.grad(self.lagrangian, argnums=2)(q, qdot, t)
-        _, multipliers = self.accelerations(q, qdot, t)
-        return -explicit - multipliers @ (jax.jacfwd(self.constraint)(q, t) @ qdot)
+        jets = self.expansions(q, t)
+        explicit = jax.grad(lambda t_: self.lagrangian(q, qdot, t_, jets))(t)
+        _, multipliers = self.accelerations(q, qdot, t, jets)
+        return -explicit - multipliers @ (jax.jacfwd(self.constraint)(q, t, jets) @ qdot)
 
     def natural_frequencies(self, cam_angle=1.75 * math.pi):
         """Frequencies (rad/s, ascending) of the constrained rod linearised at rest at ``cam_angle``.
