@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import importlib
 import io
 import sys
 
@@ -146,10 +147,16 @@ def _fit_report(curves, fits) -> str:
 
 
 def run(args) -> int:
+    import threading
+
     from tqdm import tqdm
 
-    from .. import laws, plot
+    from .. import laws
     from ..sweep import ct_curve
+
+    # matplotlib imports (half a second) while the sweep compiles, which releases the GIL.
+    importer = threading.Thread(target=importlib.import_module, args=("camjax.plot",))
+    importer.start()
 
     names = law_names_of(args)
     selected = {}
@@ -164,6 +171,9 @@ def run(args) -> int:
                           disable=not sys.stderr.isatty()):
         curves[name] = ct_curve(law, n, model=model, method=args.method, dwell=args.dwell)
     fits = {k: f for k, f in ((k, _fit_or_none(c)) for k, c in curves.items()) if f}
+    importer.join()
+    from .. import plot
+
     if out is not None:
         (out / "ct.csv").write_text(_csv(curves))
         dump_json(_json(curves, args, selected), out / "ct.json")
