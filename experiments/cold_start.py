@@ -7,9 +7,11 @@ bare start of JAX, ``import jax; jax.numpy.zeros(1).block_until_ready()``, is ti
 the same run, so every median is also printed as a ratio to it (the machine is shared:
 ratios travel better than seconds).  Writes results/cold_start/<label>.md and .json.
 
-    python experiments/cold_start.py [--repeats 3] [--only ct,help] [--root DIR] [--label after]
+    python experiments/cold_start.py [--repeats 3] [--only ct,help] [--root DIR]
+                                     [--baseline DIR] [--label after]
 
-``--root`` times another checkout (its code is put first on ``PYTHONPATH``).  Code that
+``--root`` times another checkout (its code is put first on ``PYTHONPATH``); ``--baseline``
+times a second one in turn with it, run by run, and adds the ratios of the two.  Code that
 has no persistent cache ignores ``CAMJAX_CACHE_DIR``; its warm runs then equal its cold.
 """
 
@@ -68,35 +70,51 @@ def run_once(argv, root: Path, cache: str) -> float:
     return wall
 
 
+def time_command(argv, roots: dict, repeats: int, scratch: str) -> dict:
+    """Cold and warm runs of one command for every root, the roots taking turns run by run
+    (so that a drift of the machine's speed falls on all of them alike)."""
+    times = {label: {"cold": [], "warm": []} for label in roots}
+    warm_cache = {label: tempfile.mkdtemp(dir=scratch) for label in roots}
+    for i in range(repeats):
+        for label, root in roots.items():
+            cache = warm_cache[label] if i == 0 else tempfile.mkdtemp(dir=scratch)
+            times[label]["cold"].append(run_once(argv, root, cache))
+    for _ in range(repeats):
+        for label, root in roots.items():
+            times[label]["warm"].append(run_once(argv, root, warm_cache[label]))
+    return times
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--only", help="comma-separated command names (default: all)")
     parser.add_argument("--root", default=str(Path(__file__).resolve().parents[1]),
                         help="checkout whose camjax is timed")
+    parser.add_argument("--baseline", help="another checkout, timed in turn with --root")
     parser.add_argument("--label", default="after")
     parser.add_argument("--out", default="results/cold_start")
     args = parser.parse_args()
-    root = Path(args.root).resolve()
+    roots = {"now": Path(args.root).resolve()}
+    if args.baseline:
+        roots["baseline"] = Path(args.baseline).resolve()
     names = args.only.split(",") if args.only else list(COMMANDS)
     if "bare-jax" not in names:
         names.insert(0, "bare-jax")
     rows, bare = {}, []
     with tempfile.TemporaryDirectory() as scratch:
         for name in names:
-            argv = COMMANDS[name]
             # The bare start again before every command: the load drifts during a run.
-            bare.append(run_once(COMMANDS["bare-jax"], root, str(Path(scratch) / "bare")))
-            warm_cache = str(Path(scratch) / f"warm-{name}")
-            cold = []
-            for i in range(args.repeats):
-                cache = warm_cache if i == 0 else tempfile.mkdtemp(dir=scratch)
-                cold.append(run_once(argv, root, cache))
-            warm = [run_once(argv, root, warm_cache) for _ in range(args.repeats)]
-            rows[name] = {"cold": cold, "warm": warm}
-            print(f"{name:<12} cold {statistics.median(cold):6.2f} s  "
-                  f"warm {statistics.median(warm):6.2f} s", flush=True)
-    base = statistics.median(bare + rows["bare-jax"]["cold"] + rows["bare-jax"]["warm"])
+            bare.append(run_once(COMMANDS["bare-jax"], roots["now"], str(Path(scratch) / "bare")))
+            rows[name] = time_command(COMMANDS[name], roots, args.repeats, scratch)
+            print(name, "  ".join(f"{label}: cold {statistics.median(t['cold']):6.2f} s, warm "
+                                  f"{statistics.median(t['warm']):6.2f} s"
+                                  for label, t in rows[name].items()), flush=True)
+    base = statistics.median(bare + rows["bare-jax"]["now"]["cold"] + rows["bare-jax"]["now"]["warm"])
+    compared = "baseline" in roots
+    header = "| command | cold s | warm-cache s | cold / bare | warm / bare |"
+    if compared:
+        header += " baseline cold s | baseline warm s | cold now / baseline | warm now / baseline |"
     lines = [
         f"# Cold start ({args.label}): whole-process wall time, median of {args.repeats}",
         "",
@@ -104,23 +122,28 @@ def main() -> None:
         f"start (`python -c \"{BARE}\"`, median {base:.2f} s in this run, timed again before",
         "every command) rather than the seconds.  Cold: an empty compilation cache; warm: the",
         "cache the first cold run filled (code without a persistent cache: two more cold runs).",
+        *([f"Baseline: `{roots['baseline']}`, run in turn with this checkout."] if compared else []),
         "",
-        "| command | cold s | warm-cache s | cold / bare | warm / bare |",
-        "|---|---|---|---|---|",
+        header,
+        "|" + "---|" * (header.count("|") - 1),
     ]
     for name, r in rows.items():
-        c, w = statistics.median(r["cold"]), statistics.median(r["warm"])
+        c, w = (statistics.median(r["now"][k]) for k in ("cold", "warm"))
         shown = SHOWN.get(name) or " ".join(COMMANDS[name]).replace("-m camjax", "camjax")
         shown = shown.replace("{out}", "DIR")
-        lines.append(f"| `{shown}` | {c:.2f} | {w:.2f} | {c / base:.1f} | {w / base:.1f} |")
+        line = f"| `{shown}` | {c:.2f} | {w:.2f} | {c / base:.1f} | {w / base:.1f} |"
+        if compared:
+            bc, bw = (statistics.median(r["baseline"][k]) for k in ("cold", "warm"))
+            line += f" {bc:.2f} | {bw:.2f} | {c / bc:.2f} | {w / bw:.2f} |"
+        lines.append(line)
     text = "\n".join(lines) + "\n"
     print(text)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / f"{args.label}.md").write_text(text)
     (out / f"{args.label}.json").write_text(json.dumps(
-        {"label": args.label, "root": str(root), "repeats": args.repeats, "bare_s": base,
-         "bare_runs": bare,
+        {"label": args.label, "roots": {k: str(v) for k, v in roots.items()},
+         "repeats": args.repeats, "bare_s": base, "bare_runs": bare,
          "commands": {k: {**v, "argv": COMMANDS[k]} for k, v in rows.items()}}, indent=1) + "\n")
 
 
