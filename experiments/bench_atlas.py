@@ -8,7 +8,7 @@ Three parts, all in one process (so the ratios between them survive a shared mac
    against 1000 ratios, warm, in CPU seconds.
 2. **Throughput** of one atlas chunk (64 laws of the face x 1000 ratios in [1, 30]) through
    the stacked path: on one grid sized by the largest ratio (the atlas before banding),
-   banded at the default phase step 0.5, and banded at 0.8 (the atlas's setting), each
+   banded at the default phase step 0.5, at 0.8, and at 1.0 (the atlas's setting), each
    as (law, n) evaluations per CPU second and as a ratio to the first.
 3. **Accuracy** of the banded sweeps against ``ct_curve`` at its default grid on a sample
    of laws (20 random face laws and 10 extreme ones), undamped and at zeta = 0.05: the
@@ -103,6 +103,8 @@ def main() -> None:
                                            devices=1, phase_step=0.5),
         "banded 0.8": lambda: sweep_banded(sweep_law_stack, stack, n, template, options,
                                            devices=1, phase_step=0.8),
+        "banded 1.0": lambda: sweep_banded(sweep_law_stack, stack, n, template, options,
+                                           devices=1, phase_step=1.0),
     }
     throughput = {}
     for name, run in runs.items():
@@ -115,8 +117,8 @@ def main() -> None:
     base = throughput["one grid (before)"]["evaluations_per_cpu_s"]
     for name, row in throughput.items():
         row["over_before"] = round(row["evaluations_per_cpu_s"] / base, 2)
-        row["bands"] = ([len(resolution_bands(n, options, phase_step=0.5 if "0.5" in name else 0.8))]
-                        if "banded" in name else [1])[0]
+        step = float(name.split()[-1]) if "banded" in name else None
+        row["bands"] = len(resolution_bands(n, options, phase_step=step)) if step else 1
         print(f"{name}: {row}", flush=True)
     report["chunk_64_laws_x_1000"] = throughput
 

@@ -289,9 +289,9 @@ def main() -> None:
     parser.add_argument("--grids", nargs="+", choices=("face", "family"),
                         default=["face", "family"], help="which grids to sweep, in order")
     parser.add_argument("--laws-per-chunk", type=int, default=64)
-    parser.add_argument("--phase-step", type=float, default=0.8,
-                        help="largest w h of the exact path's grid (0.5: ct_curve's; 0.8 "
-                        "stays within 1e-8 of it, see docs/scca-atlas.md)")
+    parser.add_argument("--phase-step", type=float, default=1.0,
+                        help="largest w h of the exact path's grid (0.5: ct_curve's; 1.0 "
+                        "stays within 5e-8 of it in Ct, see docs/scca-atlas.md)")
     parser.add_argument("--no-cache", action="store_true",
                         help="do not use camjax's persistent compilation cache (a cold run)")
     parser.add_argument("--work", type=Path, help="chunk directory (default: under --out)")
