@@ -74,9 +74,12 @@ def follower_report(model, law_name: str) -> tuple[dict, object]:
     import numpy as np
 
     from ..models import solve
+    from ..models._solve import trace_solve
     from ..models.swinging_follower import spectral_peaks, spectrum
 
-    # The natural frequency's program compiles on the second core while the solve compiles.
+    # The solve is traced first (Python holds the GIL); its compile then releases the GIL,
+    # and the natural frequency's program is traced and compiled beside it on a thread.
+    trace_solve(None, model, turns=_TURNS)
     with ThreadPoolExecutor(1) as pool:
         fundamental = pool.submit(model.fundamental_frequency)
         response = solve(None, model, turns=_TURNS)

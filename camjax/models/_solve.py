@@ -47,6 +47,21 @@ def solve(
         ValueError: a bad parameter or option, named.
         SolverError: the solution failed (with ``throw=True``).
     """
+    opts, arguments = _arguments(law, model, dwell, method, options)
+    response = _solve(*arguments)
+    if throw:
+        reached = response.stats.get("reached")
+        where = f" (reached tau = {float(reached):.6g})" if reached is not None else ""
+        raise_if_failed(
+            response.result,
+            lambda i: f"{opts.method} solve of {model.describe()}{where}",
+            *([response.payload_acceleration] if response.payload_acceleration is not None else []),
+        )
+    return response
+
+
+def _arguments(law, model, dwell, method, options):
+    """``solve``'s checked options, and the arguments of its compiled program."""
     if not isinstance(model, AbstractModel):
         raise TypeError(
             "model must be a camjax model (SpringMass, CoulombFriction, Backlash, TwoMass, "
@@ -58,13 +73,16 @@ def solve(
         raise TypeError(f"{type(model).__name__} needs a motion law (law is None)")
     opts = model.options(method, dwell, **options)
     checked = checks.is_concrete(model)  # concrete parameters were checked at construction
-    response = _solve(law, model.with_array_leaves(), opts, checked)
-    if throw:
-        reached = response.stats.get("reached")
-        where = f" (reached tau = {float(reached):.6g})" if reached is not None else ""
-        raise_if_failed(
-            response.result,
-            lambda i: f"{opts.method} solve of {model.describe()}{where}",
-            *([response.payload_acceleration] if response.payload_acceleration is not None else []),
-        )
-    return response
+    return opts, (law, model.with_array_leaves(), opts, checked)
+
+
+def trace_solve(law, model: AbstractModel, *, dwell: float = 1.0, method: str | None = None,
+                **options) -> None:
+    """Trace and lower the program ``solve`` would compile for these arguments, without
+    compiling or running it.
+
+    JAX keeps both, so a later ``solve`` with arguments of the same structure goes straight
+    to XLA's compile, which releases the GIL: a caller can trace first and then run the
+    solve beside other Python work on a second thread (``camjax follower`` does).
+    """
+    _solve.lower(*_arguments(law, model, dwell, method, options)[1])
