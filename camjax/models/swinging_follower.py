@@ -309,7 +309,9 @@ class SwingingFollower(AbstractModel):
         return q[:na], q[na : na + n], q[-1]
 
     def roller_centre(self, q, t, jet=None):
-        """Roller centre in the fixed frame for coordinates ``q`` at time ``t``."""
+        """Roller centre in the fixed frame for coordinates ``q`` at time ``t``.
+
+        ``jet``: the rod frame's jet from ``expansions`` at the primal ``(q, t)``, or ``None``."""
         a, b, _ = self._split(q)
         psi, _ = self._swing(t, jet)
         axis, across = jnp.stack([jnp.cos(psi), jnp.sin(psi)]), jnp.stack([-jnp.sin(psi), jnp.cos(psi)])
