@@ -154,9 +154,11 @@ def run(args) -> int:
     from .. import laws
     from ..sweep import ct_curve
 
-    # matplotlib imports (half a second) while the sweep compiles, which releases the GIL.
+    # The figures' matplotlib imports (half a second) while the sweep compiles, which
+    # releases the GIL.
     importer = threading.Thread(target=importlib.import_module, args=("camjax.plot",))
-    importer.start()
+    if args.out:
+        importer.start()
 
     names = law_names_of(args)
     selected = {}
@@ -171,10 +173,10 @@ def run(args) -> int:
                           disable=not sys.stderr.isatty()):
         curves[name] = ct_curve(law, n, model=model, method=args.method, dwell=args.dwell)
     fits = {k: f for k, f in ((k, _fit_or_none(c)) for k, c in curves.items()) if f}
-    importer.join()
-    from .. import plot
-
     if out is not None:
+        importer.join()
+        from .. import plot
+
         (out / "ct.csv").write_text(_csv(curves))
         dump_json(_json(curves, args, selected), out / "ct.json")
         (out / "torsion_factor_fit.md").write_text(_fit_report(curves, fits))
