@@ -137,3 +137,23 @@ def output_dir(text: str | None) -> Path | None:
         raise CliError(f"--out: {text!r} exists and is not a directory")
     path.mkdir(parents=True, exist_ok=True)
     return path
+
+
+def import_aside(module: str):
+    """Start importing ``module`` on a thread; return a function that waits and returns it.
+
+    XLA releases the GIL while it compiles, so a slow import (matplotlib: half a second)
+    runs during a command's first compile instead of before or after it.  An import that
+    fails raises, as usual, when the returned function is called.
+    """
+    import importlib
+    import threading
+
+    thread = threading.Thread(target=importlib.import_module, args=(module,))
+    thread.start()
+
+    def finish():
+        thread.join()
+        return importlib.import_module(module)
+
+    return finish

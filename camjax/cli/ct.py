@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import importlib
 import io
 import sys
 
@@ -13,6 +12,7 @@ from ._common import (
     add_format,
     add_law_option,
     dump_json,
+    import_aside,
     law_names_of,
     output_dir,
     parse_range,
@@ -147,18 +147,12 @@ def _fit_report(curves, fits) -> str:
 
 
 def run(args) -> int:
-    import threading
-
     from tqdm import tqdm
 
     from .. import laws
     from ..sweep import ct_curve
 
-    # The figures' matplotlib imports (half a second) while the sweep compiles, which
-    # releases the GIL.
-    importer = threading.Thread(target=importlib.import_module, args=("camjax.plot",))
-    if args.out:
-        importer.start()
+    plotting = import_aside("camjax.plot") if args.out else None  # imports while the sweep compiles
 
     names = law_names_of(args)
     selected = {}
@@ -174,9 +168,7 @@ def run(args) -> int:
         curves[name] = ct_curve(law, n, model=model, method=args.method, dwell=args.dwell)
     fits = {k: f for k, f in ((k, _fit_or_none(c)) for k, c in curves.items()) if f}
     if out is not None:
-        importer.join()
-        from .. import plot
-
+        plot = plotting()
         (out / "ct.csv").write_text(_csv(curves))
         dump_json(_json(curves, args, selected), out / "ct.json")
         (out / "torsion_factor_fit.md").write_text(_fit_report(curves, fits))

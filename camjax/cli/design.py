@@ -6,7 +6,7 @@ import sys
 
 import numpy as np
 
-from ._common import CliError, dump_json, output_dir, parse_float_list
+from ._common import CliError, dump_json, import_aside, output_dir, parse_float_list
 
 DEFAULT_STEPS = 6000
 """The design's own default (``camjax.law_design.DEFAULT_STEPS``; a test checks they agree)."""
@@ -91,8 +91,8 @@ def _band(text: str) -> tuple[float, float]:
 def run(args) -> int:
     from tqdm import tqdm
 
+    plotting = import_aside("camjax.plot")  # imports while the design compiles
     from .. import law_design as D
-    from .. import plot
     from ..laws import save, standard_laws
     from ..sweep import ct_curves
 
@@ -153,6 +153,7 @@ def run(args) -> int:
                "steps": steps, "repaired": result.restored, "seconds": result.seconds,
                "band": [n1, n2], "damping": args.damping}, out / "summary.json")
     bar.set_postfix_str("figures")
+    plot = plotting()
     title = plot.design_title(objective.label, caps, args.damping)
     plot.save(plot.law_curves([law], title=title), out / "law.png")
     plot.save(plot.design_comparison(ratios, curves, title=title), out / "curves.png")
