@@ -73,8 +73,7 @@ def follower_report(model, law_name: str) -> tuple[dict, object]:
 
     import numpy as np
 
-    from ..models import solve
-    from ..models._solve import trace_solve
+    from ..models import solve, trace_solve
     from ..models.swinging_follower import spectral_peaks, spectrum
 
     # The solve is traced first (Python holds the GIL); its compile then releases the GIL,

@@ -11,6 +11,7 @@ from ._base import Metrics as Metrics
 from ._base import Options as Options
 from ._base import Response as Response
 from ._solve import solve as solve
+from ._solve import trace_solve as trace_solve
 from .backlash import Backlash as Backlash
 from .backlash import BacklashOptions as BacklashOptions
 from .backlash import BacklashResponse as BacklashResponse
