@@ -115,16 +115,12 @@ def sweep_banded(sweep, laws, period_ratios, template: AbstractModel, options, *
     :func:`resolution_bands`, each band at its own grid, reassembled along the ratio axis
     (the last) in the order of ``period_ratios``.
 
-    Only the ``SpringMass`` template is banded (its grid needs depend on ``n`` alone); any
-    other model runs as one band with ``options`` unchanged.
+    Only options with an exact-path grid are banded (``SpringMass``'s, whose grid needs
+    depend on ``n`` alone); any other model's run as one band, unchanged.
     """
     n = np.asarray(period_ratios, dtype=float)
-    if type(template) is SpringMass:
-        bands = resolution_bands(n, options, phase_step=phase_step)
-    else:
-        bands = [(np.arange(n.size), options)]
     parts = [(chosen, sweep(laws, jnp.asarray(n[chosen]), template, band_options, devices=devices))
-             for chosen, band_options in bands]
+             for chosen, band_options in resolution_bands(n, options, phase_step=phase_step)]
     if len(parts) == 1:
         return parts[0][1]
     order = np.argsort(np.concatenate([chosen for chosen, _ in parts]), kind="stable")
