@@ -42,14 +42,18 @@ def _first_root(f, lo: float, hi: float) -> float:
     return 0.5 * (lo + hi)
 
 
-def scan_speeds(program, rpm_lo: float, rpm_hi: float, per_cycle: float) -> np.ndarray:
-    """Speeds (rpm, ascending) evenly spaced in ``1/rpm`` over ``[rpm_lo, rpm_hi]``:
-    ``per_cycle`` for each natural-frequency cycle that one turn gains or loses across the
-    range (every period ratio of the program moves by ``1/per_cycle`` between
-    neighbours), 16 at least."""
-    cycles = program.follower.natural_frequency_hz * 60 * (1 / rpm_lo - 1 / rpm_hi)
-    count = max(16, math.ceil(per_cycle * cycles) + 1)
+def even_periods(rpm_lo: float, rpm_hi: float, count: int) -> np.ndarray:
+    """``count`` speeds (rpm, ascending) over ``[rpm_lo, rpm_hi]``, evenly spaced in the
+    period ``1/rpm`` (so every period ratio of a program moves by the same step)."""
     return np.sort(1.0 / np.linspace(1 / rpm_hi, 1 / rpm_lo, count))
+
+
+def scan_speeds(program, rpm_lo: float, rpm_hi: float, per_cycle: float) -> np.ndarray:
+    """``even_periods`` speeds: ``per_cycle`` for each natural-frequency cycle that one
+    turn gains or loses across the range (every period ratio of the program moves by
+    ``1/per_cycle`` between neighbours), 16 at least."""
+    cycles = program.follower.natural_frequency_hz * 60 * (1 / rpm_lo - 1 / rpm_hi)
+    return even_periods(rpm_lo, rpm_hi, max(16, math.ceil(per_cycle * cycles) + 1))
 
 
 def jump_speed_rpm(solver: Solver, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1):
@@ -144,6 +148,9 @@ def flights(solver: Solver, rpm: float) -> list[Flight]:
     e0, de0 = ss.deflection(t_sep)
     state = (float(y0[0] - e0[0]), float(dy0[0] - de0[0]), float(e0[0]))
     t_end = t_sep + period
+    # After each impact the next separation is the force's first sign change on this fine
+    # sample of the following period, then bisected.
+    samples = np.linspace(0, period, _SAMPLES_PER_INTERVAL * solver.grid.nodes.size)
     out = []
     while t_sep < t_end:
         t_i, impact = _fly(solver, ss, t_sep, *state)
@@ -152,8 +159,6 @@ def flights(solver: Solver, rpm: float) -> list[Flight]:
             break
         velocity, (x_i, v_i) = impact
         force_after = _contact_after(ss, t_i, x_i, v_i)
-        # The next separation: first sign change of the force on a fine sample, bisected.
-        samples = np.linspace(0, period, _SAMPLES_PER_INTERVAL * solver.grid.nodes.size)
         values = force_after(samples)
         again = np.flatnonzero(values[1:] < 0)
         stop = again[0] + 1 if again.size else values.size

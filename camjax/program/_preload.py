@@ -14,7 +14,7 @@ import numpy as np
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
 from ._design import segment_band, with_law
 from ._dynamics import Solver, _cycle, _Train, cycle_grid, resolution, with_segment_law
-from ._jump import min_preload_n, scan_speeds
+from ._jump import even_periods, min_preload_n, scan_speeds
 from ._spec import Program
 
 _SPEEDS_PER_CYCLE = 8  # training speeds per natural-frequency cycle the turn gains across the range
@@ -63,7 +63,7 @@ class MaxPreload(AbstractObjective):
         return scan_speeds(self.program, self.rpm_lo, self.rpm_hi, _SPEEDS_PER_CYCLE)
 
     def evaluation_speeds(self) -> np.ndarray:
-        return np.sort(1.0 / np.linspace(1.0 / self.rpm_hi, 1.0 / self.rpm_lo, EVALUATION_SAMPLES))
+        return even_periods(self.rpm_lo, self.rpm_hi, EVALUATION_SAMPLES)
 
     def features(self, law):
         """``k e + c e'`` (N) at every grid node and training speed: affine in the law."""
