@@ -174,3 +174,22 @@ def test_cli_refuses_a_huge_period_ratio_and_a_bad_model_before_any_work(capsys)
     assert "takes 2 parameter(s)" in capsys.readouterr().err
     assert main(["ct", "--n", "5", "--model", "friction:-1"]) == 2
     assert "friction must be >= 0" in capsys.readouterr().err
+
+
+def test_only_models_that_ask_compile_their_solve_with_other_xla_options():
+    """``solve`` and ``trace_solve`` pick one jitted program per model class: XLA's defaults
+    for every SDOF-family model, the follower's own CPU options for the follower (its
+    spectra under them are checked by the follower's tests)."""
+    from camjax.models import _solve
+    from camjax.models.swinging_follower import SwingingFollower
+
+    for model in (SpringMass(period_ratio=2.0), CoulombFriction(period_ratio=2.0, friction=0.1),
+                  Backlash(period_ratio=2.0, backlash=0.02), TwoMass(period_ratio=2.0,
+                  stiffness_ratio=1.0, inertia_ratio=1.0)):
+        assert _solve._program(model) is _solve._solve
+    follower = _solve._program(SwingingFollower())
+    expected = _solve._solve if jax.default_backend() != "cpu" else \
+        _solve._compiled((("xla_cpu_use_fusion_emitters", False),))
+    assert follower is expected
+    if jax.default_backend() == "cpu":
+        assert follower is not _solve._solve

@@ -98,6 +98,8 @@ class AbstractModel(eqx.Module):
     carries_laws: ClassVar[bool] = False
     """True for a model that holds its own motion laws (``solve(None, model)``) and has no
     period-ratio sweep."""
+    cpu_compiler_options: ClassVar[tuple[tuple[str, object], ...]] = ()
+    """XLA options for compiling this model's ``solve`` on CPU (none: XLA's defaults)."""
 
     @property
     def omega(self):

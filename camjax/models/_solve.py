@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import functools
+
 import equinox as eqx
+import jax
 
 from .. import checks
 from ..errors import raise_if_failed
@@ -10,10 +13,24 @@ from ..laws import AbstractMotionLaw
 from ._base import AbstractModel, Response
 
 
-@eqx.filter_jit
-def _solve(law, model: AbstractModel, options, checked: bool) -> Response:
+def _response(law, model: AbstractModel, options, checked: bool) -> Response:
     with checks.checked_outside(checked):
         return model._response(law, options)
+
+
+@functools.cache
+def _compiled(compiler_options: tuple) -> eqx.Module:
+    """The jitted solve, compiled with these XLA options (one wrapper per option set)."""
+    return eqx.filter_jit(_response, compiler_options=dict(compiler_options) or None)
+
+
+_solve = _compiled(())
+
+
+def _program(model: AbstractModel):
+    """The jitted solve for ``model``: its ``cpu_compiler_options`` apply on CPU only."""
+    options = type(model).cpu_compiler_options
+    return _compiled(options) if options and jax.default_backend() == "cpu" else _solve
 
 
 def solve(
@@ -48,7 +65,7 @@ def solve(
         SolverError: the solution failed (with ``throw=True``).
     """
     opts, arguments = _arguments(law, model, dwell, method, options)
-    response = _solve(*arguments)
+    response = _program(model)(*arguments)
     if throw:
         reached = response.stats.get("reached")
         where = f" (reached tau = {float(reached):.6g})" if reached is not None else ""
@@ -85,4 +102,4 @@ def trace_solve(law, model: AbstractModel, *, dwell: float = 1.0, method: str | 
     to XLA's compile, which releases the GIL: a caller can trace first and then run the
     solve beside other Python work on a second thread (``camjax follower`` does).
     """
-    _solve.lower(*_arguments(law, model, dwell, method, options)[1])
+    _program(model).lower(*_arguments(law, model, dwell, method, options)[1])
