@@ -188,11 +188,11 @@ class SwingingFollower(AbstractModel):
     methods: ClassVar[tuple[str, ...]] = ("dopri8", "tsit5", "dopri5")
     options_type: ClassVar[type[Options]] = FollowerOptions
     carries_laws: ClassVar[bool] = True
-    # XLA's classic CPU fusion emitters compile the solve (a large vector field inside
-    # diffrax's loop) in 3.4-3.9 s instead of 4.9-5.4 s, and run it as fast.
+    """``camjax.solve(None, follower)`` uses the model's own rise and fall laws."""
     cpu_compiler_options: ClassVar[tuple[tuple[str, object], ...]] = (
         ("xla_cpu_use_fusion_emitters", False),)
-    """``camjax.solve(None, follower)`` uses the model's own rise and fall laws."""
+    """XLA's classic CPU fusion emitters: they compile the solve (a large vector field inside
+    diffrax's loop) in 3.4-3.9 s instead of 4.9-5.4 s, and run it as fast."""
 
     @property
     def period_ratio(self):
