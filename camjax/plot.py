@@ -14,7 +14,7 @@ import math
 
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.ticker import NullLocator
+from matplotlib.ticker import FuncFormatter, NullLocator
 
 from .metrics import fit_torsion_factor
 
@@ -32,6 +32,27 @@ def _conditions(curves: dict, dwell: float | None) -> str:
     if dwell is not None:
         text += f"; dwell of {dwell:g} motion period{'s' if dwell != 1 else ''} after the rise"
     return text
+
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "\u207b\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079")
+
+
+def _decade_label(value: float, _position=None) -> str:
+    """``10⁻³`` in plain Unicode: matplotlib's own log labels are mathtext, whose parser
+    took a quarter of a second to build in every process that drew one."""
+    if not value > 0:
+        return ""
+    exponent = math.log10(value)
+    if abs(exponent - round(exponent)) > 1e-9:
+        return f"{value:g}"
+    return "10" + str(round(exponent)).translate(_SUPERSCRIPT)
+
+
+def _log_y(ax) -> None:
+    """A log y axis labelled at decades only (minor log ticks halve the drawing speed)."""
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(FuncFormatter(_decade_label))
+    ax.yaxis.set_minor_locator(NullLocator())
 
 
 def _curve_figure(title: str, subtitle: str, ylabel: str, figsize=(10, 5), legend_width=1.8):
@@ -98,7 +119,7 @@ def residual_curves(curves: dict, *, ncols: int = 2) -> plt.Figure:
             ax.semilogy(c.period_ratio, worst, color="0.8", lw=0.8)
         ax.semilogy(c.period_ratio, np.maximum(c.residual, R_FLOOR), color=f"C{i % 10}", lw=1.0)
         ax.set_ylim(1e-4, None)
-        ax.yaxis.set_minor_locator(NullLocator())  # decades suffice; minor log ticks halve the drawing speed
+        _log_y(ax)
         ax.set_title(name, fontsize=9, loc="left")
         ax.grid(True, alpha=0.3)
     for ax in axes.flat[len(names):]:
@@ -234,6 +255,7 @@ def design_comparison(period_ratios, curves: dict, *, title: str) -> plt.Figure:
         style = dict(lw=2.2, color="k") if name == "designed" else dict(lw=1, color=f"C{i % 10}")
         ax_r.semilogy(period_ratios, np.maximum(r, R_FLOOR), label=name, **style)
         ax_c.plot(period_ratios, load, **style)
+    _log_y(ax_r)
     ax_r.set(xlabel="period ratio n = T f", ylabel="residual R (units of Ca)",
              title="residual vibration in the dwell")
     ax_c.set(xlabel="period ratio n = T f", ylabel="Ca*Ct (units of h/T^2)",
