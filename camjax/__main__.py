@@ -1,7 +1,5 @@
 """``python -m camjax``: the ``camjax`` command."""
 
-import sys
+from .cli import command
 
-from .cli import main
-
-sys.exit(main())
+command()

@@ -145,3 +145,29 @@ def test_cache_dir_follows_the_environment(monkeypatch, tmp_path):
         assert cache_dir() is None
     monkeypatch.delenv("CAMJAX_CACHE_DIR")
     assert cache_dir().name == "jax" and "camjax" in str(cache_dir())
+
+
+def test_the_executable_ends_early_without_losing_output_or_exit_status(capsys, tmp_path):
+    """``python -m camjax`` skips interpreter shutdown (camjax.cli.command): its output, files
+    and exit status must equal those of ``main`` run in this process."""
+    import os
+    import subprocess
+    import sys
+
+    argv = ["ct", "--law", "cycloidal", "--n", "2,3.5", "--format", "json"]
+    env = {**os.environ, "CAMJAX_CACHE_DIR": "off"}
+    done = subprocess.run([sys.executable, "-m", "camjax", *argv, "--out", str(tmp_path)],
+                          capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr
+    code, out, _ = run(capsys, *argv)
+    assert code == 0 and json.loads(done.stdout) == json.loads(out)
+    assert done.stderr.startswith(f"wrote {tmp_path}/")
+    rows = (tmp_path / "ct.csv").read_text().splitlines()
+    assert len(rows) == 3 and rows[1].startswith("cycloidal,2,")
+    for figure in ("ct_curves.png", "residual_curves.png"):
+        data = (tmp_path / figure).read_bytes()  # a whole PNG ends with its IEND chunk
+        assert data.startswith(b"\x89PNG") and data.endswith(b"IEND\xaeB`\x82")
+    for argv, status in ((["ct", "--n", "0,1"], 2), (["ct", "--bogus"], 2), (["--help"], 0)):
+        done = subprocess.run([sys.executable, "-m", "camjax", *argv], capture_output=True,
+                              text=True, env=env, timeout=300)
+        assert done.returncode == status, (argv, done.stderr)
