@@ -1,13 +1,17 @@
 """Errors and result codes (floor 1: nothing here imports the rest of camjax).
 
-Every solution path returns a ``result`` code of ``RESULTS`` (diffrax's codes plus
-camjax's own); ``camjax.solve`` and the sweeps turn a failure into
-``SolverError`` unless asked for the code with ``throw=False``.
+Every solution path returns a ``result`` code of ``RESULTS``; ``camjax.solve`` and the
+sweeps turn a failure into ``SolverError`` unless asked for the code with ``throw=False``.
+The codes are camjax's own, so that the exact paths never import diffrax (a third of a
+second of every command's start); a diffrax solve's code is converted by name
+(``promote``).
 """
 
 from __future__ import annotations
 
-import diffrax
+import functools
+
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -17,9 +21,33 @@ class SolverError(RuntimeError):
     """A solution path failed (step limit, non-finite values, a broken invariant): no result."""
 
 
-class RESULTS(diffrax.RESULTS):  # type: ignore[misc]
-    """Result codes: diffrax's (``successful``, ``max_steps_reached``, ...) and camjax's."""
+class RESULTS(eqx.Enumeration):
+    """Result codes of every solution path.
 
+    The codes a diffrax solve can return keep diffrax's names (``max_steps_reached``,
+    ``dt_min_reached``, ...); the last three are camjax's own checks of a response.
+    """
+
+    successful = ""
+    max_steps_reached = (
+        "the maximum number of solver steps was reached: raise max_steps, or loosen rtol/atol"
+    )
+    singular = "a linear solve inside the implicit solver returned non-finite values"
+    breakdown = "an iterative linear solve inside the solver broke down"
+    stagnation = "an iterative linear solve inside the solver stagnated"
+    conlim = "a linear system inside the solver is too ill-conditioned to solve"
+    nonfinite_input = "a linear solve inside the solver was given non-finite values"
+    nonlinear_max_steps_reached = (
+        "the maximum number of steps in the implicit solver's nonlinear (Newton) iteration "
+        "was reached"
+    )
+    nonlinear_divergence = "the implicit solver's nonlinear (Newton) iteration diverged"
+    nonfinite = "non-finite values (inf or NaN) appeared in the solution"
+    dt_min_reached = "the solver's step fell to its minimum size"
+    event_occurred = "the solve stopped at an event"
+    max_steps_rejected = "the solver rejected too many steps in a row"
+    internal_error = "diffrax reported an internal error (a bug in diffrax)"
+    solver_failed = "the diffrax solve failed with a result code camjax does not know"
     unstable_fixed_step = (
         "the fixed-step solver's numerical free vibration grew past its stability limit "
         "(w*dt too large): take more steps, or use an adaptive solver or the exact path"
@@ -34,9 +62,24 @@ class RESULTS(diffrax.RESULTS):  # type: ignore[misc]
     )
 
 
+@functools.cache
+def _by_name(enumeration) -> np.ndarray:
+    """Our index of each of ``enumeration``'s codes, matched by name (unknown names:
+    ``solver_failed``)."""
+    table = np.empty(len(enumeration), dtype=np.int32)
+    for name, item in enumeration._name_to_item.items():
+        ours = RESULTS._name_to_item.get(name, RESULTS.solver_failed)
+        table[int(item._value)] = int(ours._value)
+    return table
+
+
 def promote(result) -> RESULTS:
-    """A diffrax or optimistix result code as a camjax ``RESULTS`` code."""
-    return RESULTS.promote(result) if not isinstance(result, RESULTS) else result
+    """A result code as a camjax ``RESULTS`` code: diffrax's (or optimistix's) by name."""
+    if isinstance(result, RESULTS):
+        return result
+    with jax.ensure_compile_time_eval():
+        value = jnp.asarray(_by_name(result._enumeration))[result._value]
+    return type(RESULTS.successful)(value, RESULTS)
 
 
 def first_failure(result) -> int | None:

@@ -1,31 +1,40 @@
 """The diffrax solvers camjax offers, by name (floor 1: nothing here imports camjax).
 
-Fixed-step explicit solvers carry their stability polynomial, which lets a solution path
-refuse a step count at which the method's numerical free vibration grows
-(``free_vibration_growth``); adaptive solvers bound it by error control.
+The tables name diffrax's classes rather than hold them, so that importing camjax's exact
+paths does not import diffrax; ``solver(name)`` makes one.  Fixed-step explicit solvers
+carry their stability polynomial, which lets a solution path refuse a step count at which
+the method's numerical free vibration grows (``free_vibration_growth``); adaptive solvers
+bound it by error control.
 """
 
 from __future__ import annotations
 
-import diffrax
 import jax.numpy as jnp
 
 FIXED_STEP_SOLVERS = {
-    "euler": diffrax.Euler,
-    "heun": diffrax.Heun,
-    "midpoint": diffrax.Midpoint,
-    "ralston": diffrax.Ralston,
+    "euler": "Euler",
+    "heun": "Heun",
+    "midpoint": "Midpoint",
+    "ralston": "Ralston",
 }
 ADAPTIVE_SOLVERS = {
-    "bosh3": diffrax.Bosh3,
-    "tsit5": diffrax.Tsit5,
-    "dopri5": diffrax.Dopri5,
-    "dopri8": diffrax.Dopri8,
-    "kvaerno3": diffrax.Kvaerno3,
-    "kvaerno4": diffrax.Kvaerno4,
-    "kvaerno5": diffrax.Kvaerno5,
+    "bosh3": "Bosh3",
+    "tsit5": "Tsit5",
+    "dopri5": "Dopri5",
+    "dopri8": "Dopri8",
+    "kvaerno3": "Kvaerno3",
+    "kvaerno4": "Kvaerno4",
+    "kvaerno5": "Kvaerno5",
 }
 SOLVERS = {**FIXED_STEP_SOLVERS, **ADAPTIVE_SOLVERS}
+"""camjax's name of each solver -> the name of its diffrax class."""
+
+
+def solver(name: str):
+    """A new diffrax solver of ``SOLVERS`` by camjax's name (``"tsit5"``, ``"heun"``, ...)."""
+    import diffrax
+
+    return getattr(diffrax, SOLVERS[check_method(name, SOLVERS)])()
 
 # Stability polynomials R(z) (coefficients of z^0, z^1, ...): one step maps y to R(h J) y.
 STABILITY_POLYNOMIALS = {

@@ -139,6 +139,36 @@ def test_throw_false_returns_the_result_code():
         camjax.solve(LAW, SpringMass(6.4), method="tsit5", max_steps=4)
 
 
+def test_diffrax_codes_become_the_camjax_codes_of_the_same_name():
+    """camjax's RESULTS is its own enumeration (the exact path never imports diffrax):
+    every code diffrax has maps by name, batched and under jit, none to the fallback."""
+    import diffrax
+
+    from camjax.errors import promote
+
+    names = list(diffrax.RESULTS._name_to_item)
+    assert set(names) <= set(camjax.RESULTS._name_to_item) - {"solver_failed"}
+    theirs = jax.tree.map(lambda *x: jnp.stack(x), *(getattr(diffrax.RESULTS, n) for n in names))
+    ours = jax.jit(promote)(theirs)
+    for i, name in enumerate(names):
+        one = jax.tree.map(lambda x, i=i: x[i], ours)
+        assert bool(one == getattr(camjax.RESULTS, name)), name
+    assert promote(camjax.RESULTS.nonfinite) is camjax.RESULTS.nonfinite
+
+
+def test_the_exact_path_imports_no_diffrax():
+    """diffrax's import is a third of a second of every command's start: ``ct_curve`` and
+    ``solve`` on the SDOF's exact path must not pay it (the diffrax models are lazy)."""
+    code = ("import sys, camjax; from camjax.cli import ct; "
+            "camjax.ct_curve(camjax.laws.get('cycloidal'), [2.0, 3.0]); "
+            "camjax.solve(camjax.laws.get('poly345'), camjax.SpringMass(4.0)); "
+            "ct.parse_model('spring-mass', 0.0); "
+            "assert not {'diffrax', 'optimistix', 'lineax'} & set(sys.modules), 'imported'; "
+            "camjax.models.Backlash; assert 'diffrax' in sys.modules")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+
+
 def test_no_recompile_for_new_parameter_values():
     """Model parameters are traced leaves: one compilation serves every value."""
     camjax.solve(LAW, SpringMass(5.0, 0.01))

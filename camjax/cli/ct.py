@@ -52,7 +52,7 @@ def register(sub) -> None:
 
 def parse_model(text: str, damping: float):
     """The model template named by ``--model`` (its period ratio is swept)."""
-    from ..models import Backlash, CoulombFriction, SpringMass, TwoMass
+    from .. import models  # only the model named is imported (the others import diffrax)
 
     name, _, values = str(text).strip().lower().partition(":")
     try:
@@ -66,14 +66,14 @@ def parse_model(text: str, damping: float):
     if len(numbers) != expected[name]:
         raise CliError(f"--model {name} takes {expected[name]} parameter(s), got {len(numbers)}")
     if name == "spring-mass":
-        return SpringMass(1.0, damping)
+        return models.SpringMass(1.0, damping)
     if name == "friction":
-        return CoulombFriction(1.0, numbers[0], damping)
+        return models.CoulombFriction(1.0, numbers[0], damping)
     if name == "backlash":
-        return Backlash(1.0, numbers[0], numbers[1], damping)
+        return models.Backlash(1.0, numbers[0], numbers[1], damping)
     if damping:
         raise CliError("--model two-mass has no damping ratio (leave --damping at 0)")
-    return TwoMass(1.0, numbers[0], numbers[1])
+    return models.TwoMass(1.0, numbers[0], numbers[1])
 
 
 def _fit_or_none(curve):

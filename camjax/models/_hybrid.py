@@ -31,7 +31,7 @@ import jax
 import jax.numpy as jnp
 import optimistix as optx
 
-from ..errors import RESULTS
+from ..errors import RESULTS, promote
 from ..metrics import refined_peak
 from ._base import AbstractModel
 
@@ -245,7 +245,7 @@ class AbstractHybridModel(AbstractModel):
             saved, end = sol.ys
             ended = sol.result == diffrax.RESULTS.event_occurred
             ok = (sol.result == diffrax.RESULTS.successful) | ended
-            result = RESULTS.where(ok, RESULTS.successful, RESULTS.promote(sol.result))
+            result = RESULTS.where(ok, RESULTS.successful, promote(sol.result))
             t1 = sol.ts[1][0]
             steps = jnp.asarray(sol.stats["num_steps"], dtype=int)
             return t1, jax.tree.map(lambda x: x[0], end), saved, ended, result, steps

@@ -40,7 +40,7 @@ from .. import checks
 from ..checks import is_concrete, require
 from ..errors import RESULTS
 from ..laws import AbstractMotionLaw
-from ..solvers import ADAPTIVE_SOLVERS
+from ..solvers import solver
 from ._base import Metrics, Options, Response
 from ._hybrid import AbstractHybridModel, bisect, sample_times
 from .spring_mass import residual_amplitude
@@ -422,7 +422,7 @@ class Backlash(AbstractHybridModel):
         rest = model.natural_deceleration / model.omega**2  # at rest on the driving flank
         sol = model._integrate(
             law, ts, (rest, jnp.zeros(())), DRIVING_FLANK,
-            solver=ADAPTIVE_SOLVERS[options.method](), rtol=options.rtol, atol=options.atol,
+            solver=solver(options.method), rtol=options.rtol, atol=options.atol,
             max_steps=options.max_steps, max_segments=options.max_segments, max_step=options.max_step,
         )
         e, de = sol.y

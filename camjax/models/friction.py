@@ -37,7 +37,7 @@ import jax.numpy as jnp
 
 from .. import checks
 from ..checks import require
-from ..errors import RESULTS
+from ..errors import RESULTS, promote
 from ._base import Metrics, Options, Response
 from ._hybrid import AbstractHybridModel, sample_times
 from .spring_mass import residual_amplitude
@@ -268,7 +268,7 @@ def _regularised(law, model, ts, options):
         max_steps=options.max_steps,
         throw=False,
     )
-    return sol.ys, RESULTS.promote(sol.result), jnp.asarray(sol.stats["num_steps"], dtype=int)
+    return sol.ys, promote(sol.result), jnp.asarray(sol.stats["num_steps"], dtype=int)
 
 
 class FreeVibration(eqx.Module):

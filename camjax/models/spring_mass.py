@@ -21,14 +21,13 @@ import dataclasses
 import math
 from typing import ClassVar
 
-import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 
 from .. import checks
 from ..checks import require
-from ..errors import RESULTS
+from ..errors import RESULTS, promote
 from ..laws import AbstractMotionLaw
 from ..metrics import refined_peak
 from ..propagation import (
@@ -44,6 +43,7 @@ from ..solvers import (
     MAX_FREE_VIBRATION_GROWTH,
     SOLVERS,
     free_vibration_growth,
+    solver,
 )
 from ._base import AbstractModel, Metrics, Options, Response
 
@@ -184,20 +184,24 @@ def vector_field(t, y, args):
     return de, law.a(t) - omega**2 * e - 2 * zeta * omega * de
 
 
-def sdof_term() -> diffrax.ODETerm:
-    """The diffrax term of the SDOF deflection equation (``vector_field``), for custom
-    ``diffrax.diffeqsolve`` calls (other controllers, adjoints, saved statistics)::
+def sdof_term():
+    """The diffrax term (``diffrax.ODETerm``) of the SDOF deflection equation
+    (``vector_field``), for custom ``diffrax.diffeqsolve`` calls (other controllers,
+    adjoints, saved statistics)::
 
         diffrax.diffeqsolve(sdof_term(), diffrax.Tsit5(), 0.0, 1.0, None,
                             (jnp.zeros(()), jnp.zeros(())), args=(law, 2 * jnp.pi * n, zeta))
     """
+    import diffrax  # here, not at the top: the exact path never needs it
+
     return diffrax.ODETerm(vector_field)
 
 
 def _integrate(law, grid: MotionGrid, omega, zeta, options: SpringMassOptions):
     """Deflection ``(e, e')`` at the grid nodes by diffrax, the result code and step count."""
+    import diffrax
+
     method = options.method
-    solver = SOLVERS[method]()
     steps = options.steps or grid.piece.size
     if method in FIXED_STEP_SOLVERS:
         controller, dt0 = diffrax.ConstantStepSize(), 1.0 / steps
@@ -207,7 +211,7 @@ def _integrate(law, grid: MotionGrid, omega, zeta, options: SpringMassOptions):
         if jumps is not None and jumps.size:
             controller = diffrax.ClipStepSizeController(controller, jump_ts=jumps)
     solution = diffrax.diffeqsolve(
-        sdof_term(), solver, t0=0.0, t1=1.0, dt0=dt0, y0=(jnp.zeros(()), jnp.zeros(())),
+        sdof_term(), solver(method), t0=0.0, t1=1.0, dt0=dt0, y0=(jnp.zeros(()), jnp.zeros(())),
         args=(law, omega, zeta), saveat=diffrax.SaveAt(ts=grid.nodes),
         stepsize_controller=controller, max_steps=options.max_steps, throw=False,
     )
@@ -215,7 +219,7 @@ def _integrate(law, grid: MotionGrid, omega, zeta, options: SpringMassOptions):
     mode = jnp.abs(de - jnp.conj(eigenvalue(omega, zeta)) * e)
     within_bound = jnp.all(mode <= _BOUND_MARGIN * law.Ca)  # False for NaN too
     stable = free_vibration_growth(method, omega, zeta, steps) <= MAX_FREE_VIBRATION_GROWTH
-    result = RESULTS.promote(solution.result)
+    result = promote(solution.result)
     ok = result == RESULTS.successful
     result = RESULTS.where(ok & ~stable, RESULTS.unstable_fixed_step, result)
     result = RESULTS.where(ok & stable & ~within_bound, RESULTS.invariant_violated, result)

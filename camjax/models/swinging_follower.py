@@ -29,7 +29,7 @@ import numpy as np
 
 from .. import checks, geometry
 from ..checks import is_concrete, require
-from ..errors import RESULTS
+from ..errors import RESULTS, promote
 from ..laws import AbstractMotionLaw, Cycloidal, MotionProgram
 from ._base import AbstractModel, Options, Response
 
@@ -481,7 +481,7 @@ def _simulate(model, options: FollowerOptions) -> FollowerResponse:
         tau=ts * model.omega / model.program.rise_angle,
         payload_acceleration=None,
         metrics=None,
-        result=RESULTS.promote(solution.result),
+        result=promote(solution.result),
         stats={"steps": solution.stats["num_steps"]},
         t=ts,
         cam_angle=model.omega * ts,

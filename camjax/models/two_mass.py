@@ -31,7 +31,7 @@ import jax.numpy as jnp
 
 from .. import checks
 from ..checks import require
-from ..errors import RESULTS
+from ..errors import promote
 from ..metrics import refined_peak
 from ._base import AbstractModel, Metrics, Options, Response
 from ._hybrid import sample_times
@@ -123,7 +123,7 @@ class TwoMass(AbstractModel):
             tau=ts,
             payload_acceleration=acc,
             metrics=Metrics(peak / law.Ca, residual / law.Ca, in_motion / law.Ca),
-            result=RESULTS.promote(sol.result),
+            result=promote(sol.result),
             stats={"steps": jnp.asarray(sol.stats["num_steps"])},
             twist=phi,
             twist_rate=dphi,
