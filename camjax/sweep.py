@@ -221,17 +221,21 @@ def ct_curves(
     method: str | None = None,
     dwell: float = 1.0,
     devices=None,
+    like: Iterable[AbstractMotionLaw] = (),
     **solver_options,
 ) -> dict[str, CtCurve]:
     """``ct_curve`` for several laws, keyed by name (or by the mapping's keys).
 
     On the exact path every law with fixed breakpoints is swept from its samples
     (``camjax.propagation.SampledLaw``, padded to the piece count of the longest law
-    given), so laws of any type share one compiled program; elsewhere laws of one pytree
-    structure (any ``SCCA``, or ``BSplineLaw`` of one size) do.  A stack of more than a
-    few laws of one structure is mapped in one call, split over ``devices``.
+    given, in ``laws`` or ``like``), so laws of any type share one compiled program;
+    elsewhere laws of one pytree structure (any ``SCCA``, or ``BSplineLaw`` of one size)
+    do.  A stack of more than a few laws of one structure is mapped in one call, split over
+    ``devices``.  ``like`` (not swept) lets a later call share the program: a spline of the
+    size being designed, say.
     """
     named = dict(laws) if isinstance(laws, Mapping) else {law.name: law for law in laws}
+    like = [*named.values(), *like]
     n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)
     groups: dict = {}
     for key, law in named.items():
@@ -243,7 +247,7 @@ def ct_curves(
         if len(members) <= STACK_FROM or not jax.tree.leaves(members[0]):
             # A few laws: one call each reuses the compiled program of the structure.
             batch = [sweep_metrics(m, ratios, template, options, devices=devices,
-                                   like=named.values()) for m in members]
+                                   like=like) for m in members]
         else:
             stacked = jax.tree.map(lambda *x: jnp.stack(x), *members)
             out = sweep_law_stack(stacked, ratios, template, options, devices=devices)

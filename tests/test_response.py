@@ -162,6 +162,24 @@ def test_laws_of_every_type_share_one_compiled_sweep():
             assert curves[law.name].residual[k] == pytest.approx(float(own.residual), rel=1e-9, abs=1e-13)
 
 
+def test_ct_curves_like_pads_for_a_law_swept_later():
+    """``like`` pads the standard laws to a spline's piece count: the spline swept later
+    (as the design command does) reuses their program, and every number equals the one
+    swept with them."""
+    n = np.array([3.1, 8.7])
+    spline = laws.BSplineLaw.fit(laws.get("cycloidal"), 20)
+    standard = {law.name: law for law in laws.standard_laws()[:3]}
+    apart = camjax.ct_curves(standard, n, like=[laws.BSplineLaw(np.zeros(20))])
+    assert set(apart) == set(standard)  # like is not swept
+    compiled = camjax.sweep._sweep._cached._cache_size()
+    later = camjax.ct_curve(spline, n)
+    assert camjax.sweep._sweep._cached._cache_size() == compiled
+    together = camjax.ct_curves({**standard, "spline": spline}, n)
+    for name, curve in {**apart, "spline": later}.items():
+        np.testing.assert_array_equal(curve.ct, together[name].ct)
+        np.testing.assert_array_equal(curve.residual, together[name].residual)
+
+
 def _central(f, x, h):
     return (f(x + h) - f(x - h)) / (2 * h)
 

@@ -88,13 +88,27 @@ def _band(text: str) -> tuple[float, float]:
     return n1, n2
 
 
+def _standard_laws_compared(ratios, damping: float, knots: int) -> dict:
+    """``(law, CtCurve, peak coefficients)`` of every standard law over ``ratios``, swept by
+    the program that will sweep the designed spline of ``knots`` coefficients."""
+    from ..laws import BSplineLaw, standard_laws
+    from ..sweep import ct_curves
+
+    laws = {law.name: law for law in standard_laws()}
+    designed_size = BSplineLaw(np.zeros(knots))  # the designed law's pieces, any values
+    curves = ct_curves(laws, ratios, damping=damping, like=[designed_size])
+    return {name: (law, curves[name], law.peak_coefficients()) for name, law in laws.items()}
+
+
 def run(args) -> int:
+    from concurrent.futures import ThreadPoolExecutor
+
     from tqdm import tqdm
 
     plotting = import_aside("camjax.plot")  # imports while the design compiles
     from .. import law_design as D
-    from ..laws import save, standard_laws
-    from ..sweep import ct_curves
+    from ..laws import save
+    from ..sweep import ct_curve
 
     out = output_dir(args.out)
     if args.program:
@@ -114,35 +128,43 @@ def run(args) -> int:
                      else D.CaCt(args.n, damping=args.damping))
     caps = D.Caps(args.max_ca, args.max_jerk)
     steps = args.steps
-    result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=steps,
-                      optimizer=args.optimizer, progress=not args.quiet)
-    law = result.law
-    save(law, out / "law.json")
-    tau = np.linspace(0.0, 1.0, 10001)
-    columns = np.stack([tau, *(np.asarray(x) for x in law.evaluate(tau))], axis=1)
-    np.savetxt(out / "law.csv", columns, delimiter=",", header="tau,s,v,a,j", comments="",
-               fmt="%.17g")
     n1, n2 = band if band else (0.8 * args.n, 1.2 * args.n)
     ratios = np.linspace(n1, n2, D.EVALUATION_SAMPLES)
-    laws = {"designed": law, **{x.name: x for x in standard_laws()}}
+    # The standard laws' side of the comparison does not depend on the design: it is
+    # traced, compiled and run on a thread beside the design (XLA releases the GIL while it
+    # compiles and runs, so the two compiles share the machine's cores).
+    with ThreadPoolExecutor(1) as pool:
+        standard = pool.submit(_standard_laws_compared, ratios, args.damping, args.knots)
+        result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=steps,
+                          optimizer=args.optimizer, progress=not args.quiet)
+        law = result.law
+        save(law, out / "law.json")
+        tau = np.linspace(0.0, 1.0, 10001)
+        columns = np.stack([tau, *(np.asarray(x) for x in law.evaluate(tau))], axis=1)
+        np.savetxt(out / "law.csv", columns, delimiter=",", header="tau,s,v,a,j", comments="",
+                   fmt="%.17g")
+        # Every law is sampled on the exact path's grid, so the designed spline and the
+        # standard laws share one compiled sweep.  The bar covers the rest of the command.
+        bar = tqdm(total=3, desc="compare", unit="step", disable=args.quiet, file=sys.stderr)
+        bar.set_postfix_str("designed law")
+        sweeps = {"designed": ct_curve(law, ratios, damping=args.damping)}
+        # The design already refined its own peaks (one compiled call fewer).
+        peaks = {"designed": result.coefficients}
+        laws = {"designed": law}
+        bar.update()
+        bar.set_postfix_str("standard laws")
+        for name, (each, curve, coefficients) in standard.result().items():
+            laws[name], sweeps[name], peaks[name] = each, curve, coefficients
+        bar.update()
     rows, curves = [], {}
-    # Every law is sampled on the exact path's grid, so the designed spline and the
-    # standard laws share one compiled sweep; the bar covers it and the figures.
-    bar = tqdm(total=len(laws) + 1, desc="compare", unit="law", disable=args.quiet,
-               file=sys.stderr)
-    sweeps = ct_curves(laws, ratios, damping=args.damping)
     for name, each in laws.items():
-        bar.set_postfix_str(name)
         r, load = sweeps[name].residual, sweeps[name].ca_ct
         curves[name] = (r, load)
-        # The design already refined its own peaks (one compiled call fewer).
-        peaks = result.coefficients if each is law else each.peak_coefficients()
         # A band objective's report is the maximum over these same ratios.
         value = (float(r.max()) if isinstance(objective, D.MaxResidual) else
                  float(load.max()) if isinstance(objective, D.MaxCaCt) else objective.report(each))
-        rows.append({"law": name, "objective": value, "Ca": peaks["Ca"],
-                     "Cj": peaks["Cj"], "max_R": float(r.max()), "max_CaCt": float(load.max())})
-        bar.update()
+        rows.append({"law": name, "objective": value, "Ca": peaks[name]["Ca"],
+                     "Cj": peaks[name]["Cj"], "max_R": float(r.max()), "max_CaCt": float(load.max())})
     where = ("the objective on 2000 period ratios across the band" if band else
              f"the objective at n = {args.n:g}")
     _write_table(rows, f"{objective.label} ({where}; max R and max Ca*Ct over "
