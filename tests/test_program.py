@@ -500,3 +500,25 @@ def test_groove_clearance_hands_over_to_backlash(tmp_path, capsys):
     assert main(["program", str(path), "--rpm", "600"]) == 0
     lines = [x for x in capsys.readouterr().out.splitlines() if "strikes the" in x]
     assert len(lines) == len(turns.impacts) and "outer flank at 56.166 deg" in lines[1]
+
+
+def test_strikes_closer_than_a_sample_get_the_next_samples_force():
+    """A chattering roller strikes twice between two samples: its first strike's peak force
+    is the force at the next sample (was NaN: no sample lay between the strikes)."""
+    from types import SimpleNamespace
+
+    from camjax.program._groove import _last_turn
+
+    ts = np.linspace(0.0, 2.0, 201)  # samples 0.01 apart
+    acceleration = np.sin(7.0 * ts)
+    strikes = np.array([1.1003, 1.1007, 1.5003])
+    response = SimpleNamespace(n_impacts=3, impact_tau=strikes, impact_velocity=np.ones(3),
+                               impact_flank=np.zeros(3, int), tau=ts,
+                               payload_acceleration=acceleration)
+    turn = _last_turn(600.0, response, 2, mass=1.0, stroke_m=1.0, period=1.0)
+    peaks = [impact.peak_force_n for impact in turn.impacts]
+    assert peaks[0] == acceleration[111]  # the first sample after 1.1003
+    inside = acceleration[111:151]  # from 1.1007 to 1.5003
+    assert peaks[1] == inside[np.argmax(np.abs(inside))]
+    rest = acceleration[151:]
+    assert peaks[2] == rest[np.argmax(np.abs(rest))]

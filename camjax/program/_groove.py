@@ -104,7 +104,9 @@ class Impact:
     """One strike of the roller on a groove flank: angle (deg), velocity (m/s), peak force (N).
 
     ``peak_force_n`` is the train force of largest magnitude from the strike to the next
-    strike (sampled at 128 per natural period) (signed: positive on the inner flank, negative on the outer).
+    strike (sampled at 128 per natural period; signed: positive on the inner flank,
+    negative on the outer).  Strikes closer together than one sample (a chattering roller)
+    get the force at the first sample after the strike.
     """
 
     angle_deg: float
@@ -186,8 +188,9 @@ def _last_turn(rpm, response, turns: int, mass: float, stroke_m: float, period: 
     impacts = []
     for i in np.flatnonzero(tau >= turns - 1):
         end = tau[i + 1] if i + 1 < count else ts[-1]
-        window = force[(ts >= tau[i]) & (ts <= end)]
-        peak = float(window[np.argmax(np.abs(window))]) if window.size else math.nan
+        first = min(int(np.searchsorted(ts, tau[i])), ts.size - 1)
+        window = force[first:max(int(np.searchsorted(ts, end, side="right")), first + 1)]
+        peak = float(window[np.argmax(np.abs(window))])
         impacts.append(Impact(float(360.0 * (tau[i] - (turns - 1))), FLANKS[int(flank[i])],
                               float(velocity[i] * stroke_m / period), peak))
     last = ts >= turns - 1
