@@ -130,8 +130,20 @@ class AbstractModel(eqx.Module):
         return response.metrics, response.result
 
     def _sweep(self, law, period_ratios: jax.Array, options: Options):
-        """Metrics and result codes over a batch of period ratios (one vmapped program)."""
-        return jax.vmap(lambda n: self.with_period_ratio(n)._metrics(law, options))(period_ratios)
+        """Metrics and result codes over a batch of period ratios, in one program: vmapped,
+        or solved one ratio after another where ``_sweeps_in_turn`` says so."""
+        def one(n):
+            return self.with_period_ratio(n)._metrics(law, options)
+
+        if self._sweeps_in_turn(options):
+            return jax.lax.map(one, period_ratios)
+        return jax.vmap(one)(period_ratios)
+
+    def _sweeps_in_turn(self, options: Options) -> bool:
+        """Whether a sweep solves its ratios one after another (``lax.map``) rather than in
+        lockstep (``vmap``): right for solutions whose loops run a different number of
+        times per ratio, where lockstep runs every ratio for the longest."""
+        return False
 
     def sweep_law(self, law, options: Options, *, like=()):
         """The form of a concrete ``law`` that ``_sweep`` takes: the law itself, or (on a

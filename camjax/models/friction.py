@@ -162,6 +162,11 @@ class CoulombFriction(AbstractHybridModel):
 
     # --- solution ---
 
+    def _sweeps_in_turn(self, options) -> bool:
+        """The event path in turn (see ``AbstractHybridModel``); the regularised one is one
+        stiff solve per ratio, faster vmapped (16 ratios: 0.56 s against 1.47 s warm)."""
+        return options.method == "events"
+
     def _response(self, law, options) -> FrictionResponse:
         model = self.validated()
         ts = sample_times(options.samples, options.dwell)
