@@ -72,6 +72,9 @@ def command() -> None:
         code = stop.code
         status["code"] = code if isinstance(code, int) else (0 if code is None else 1)
         raise
+    except KeyboardInterrupt:
+        status["code"] = 130  # as a shell reports a process ended by Ctrl-C
+        raise
     sys.exit(status["code"])
 
 
