@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import argparse
 import functools
-import time
 
 import jax
 import numpy as np
+from bench_sharding import best_time  # a script beside this one
 
 import camjax
 from camjax.checks import checked_outside
@@ -44,15 +44,6 @@ def program(form: str, options):
     return sweep
 
 
-def best(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        jax.block_until_ready(fn())
-        times.append(time.perf_counter() - start)
-    return min(times)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=16, help="period ratios in [2, 20]")
@@ -66,8 +57,8 @@ def main() -> None:
         seconds, ct = {}, {}
         for form in ("lockstep", "in turn"):
             call = functools.partial(program(form, options), law, template, jax.numpy.asarray(n))
-            ct[form] = np.asarray(call()[0].ct)  # compile
-            seconds[form] = best(call, args.repeats)
+            ct[form] = np.asarray(call()[0].ct)
+            seconds[form] = best_time(call, args.repeats)
         np.testing.assert_allclose(ct["in turn"], ct["lockstep"], rtol=1e-9)
         picked = "in turn" if template._sweeps_in_turn(options) else "lockstep"
         print(f"{name:<24} {seconds['lockstep']:9.3f} {seconds['in turn']:9.3f} "
