@@ -73,7 +73,7 @@ def command() -> None:
         status["code"] = code if isinstance(code, int) else (0 if code is None else 1)
         raise
     except KeyboardInterrupt:
-        status["code"] = 130  # as a shell reports a process ended by Ctrl-C
+        status["code"], status["interrupted"] = 130, True
         raise
     sys.exit(status["code"])
 
@@ -86,4 +86,9 @@ def _end_process(status: dict) -> None:
             stream.flush()
         except (OSError, ValueError):  # a closed pipe (camjax ... | head): output was lost
             code = code or 1
+    if status.get("interrupted"):  # end by SIGINT, as Python does, so a shell loop stops too
+        import signal
+
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGINT)
     os._exit(code)
