@@ -31,6 +31,7 @@ from .. import checks, geometry
 from ..checks import is_concrete, require
 from ..errors import RESULTS, promote
 from ..laws import AbstractMotionLaw, Cycloidal, MotionProgram
+from ..solvers import solver
 from ._base import AbstractModel, Options, Response
 
 _QUADRATURE_POINTS = 24
@@ -447,9 +448,6 @@ def _vector_field(t, state, model):
     return qdot, model.accelerations(q, qdot, t)[0] / _RATE_SCALE
 
 
-SOLVERS = {"tsit5": diffrax.Tsit5, "dopri5": diffrax.Dopri5, "dopri8": diffrax.Dopri8}
-
-
 def _simulate(model, options: FollowerOptions) -> FollowerResponse:
     turns, samples_per_turn = options.turns, options.samples_per_turn
     period = 2 * math.pi / model.omega
@@ -459,7 +457,7 @@ def _simulate(model, options: FollowerOptions) -> FollowerResponse:
     zero = jnp.zeros(model.size)
     solution = diffrax.diffeqsolve(
         diffrax.ODETerm(_vector_field),
-        SOLVERS[options.method](),
+        solver(options.method),
         t0=0.0,
         t1=turns * period,
         dt0=period * 1e-4,

@@ -33,6 +33,7 @@ from .. import checks
 from ..checks import require
 from ..errors import promote
 from ..metrics import refined_peak
+from ..solvers import solver
 from ._base import AbstractModel, Metrics, Options, Response
 from ._hybrid import sample_times
 
@@ -95,7 +96,7 @@ class TwoMass(AbstractModel):
         w = model.omega
         sol = diffrax.diffeqsolve(
             diffrax.ODETerm(_vector_field),
-            {"dopri8": diffrax.Dopri8, "kvaerno5": diffrax.Kvaerno5}[options.method](),
+            solver(options.method),
             t0=0.0,
             t1=ts[-1],
             dt0=None,
