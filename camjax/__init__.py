@@ -21,7 +21,7 @@ if os.environ.get("JAX_ENABLE_X64", "").lower() not in ("0", "false"):
 
 _SUBMODULES = (
     "checks", "errors", "geometry", "law_design", "laws", "metrics", "models", "plot", "program",
-    "propagation", "solvers", "studies", "sweep",
+    "sdof", "solvers", "studies", "sweep",
 )
 _ATTRIBUTES = {
     "TorsionFactorFit": "metrics",

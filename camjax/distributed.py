@@ -54,7 +54,7 @@ from pathlib import Path
 import numpy as np
 
 from .laws import SCCA, AbstractMotionLaw, get
-from .propagation import TARGET_PHASE_STEP
+from .sdof import TARGET_PHASE_STEP
 
 METRICS = ("ct", "residual", "peak_in_motion")
 _KEYS = {"output", "method", "damping", "laws_per_chunk", "dwell", "period_ratio", "laws",

@@ -20,7 +20,7 @@ import jax.numpy as jnp
 
 from ._custom_types import ArrayLike
 from .checks import is_concrete, require
-from .laws import MotionProgram
+from .laws import RiseDwellFall
 
 
 def _rot(angle, vector):
@@ -116,7 +116,7 @@ class CamProfile(NamedTuple):
     outer_radius_of_curvature: jax.Array
 
 
-def pitch_point(follower: AbstractRollerFollower, program: MotionProgram, theta) -> jax.Array:
+def pitch_point(follower: AbstractRollerFollower, program: RiseDwellFall, theta) -> jax.Array:
     """Roller centre in the cam frame at one cam angle (scalar ``theta``)."""
     return _rot(-theta, follower.roller_centre(program.displacement(theta)))
 
@@ -147,7 +147,7 @@ def _profile_at(follower, program, theta, roller_radius):
     )
 
 
-def cam_profile(follower: AbstractRollerFollower, program: MotionProgram, theta: ArrayLike) -> CamProfile:
+def cam_profile(follower: AbstractRollerFollower, program: RiseDwellFall, theta: ArrayLike) -> CamProfile:
     """Pitch curve, both groove flanks, pressure angle and radii of curvature at ``theta``."""
     return _cam_profile(follower, program, jnp.atleast_1d(jnp.asarray(theta, dtype=float)))
 

@@ -1,7 +1,7 @@
 """A small work-precision study: time against error of each solution method.
 
 Every method computes the Ct and residual curves of a law over a batch of period ratios
-in one compiled call (``camjax.propagation.batch_metrics``); its errors are measured against
+in one compiled call (``camjax.models.batch_metrics``); its errors are measured against
 the exact path at a high resolution.  The full study, with scipy peers, float32 and the
 charts, is ``experiments/work_precision.py``; ``camjax bench`` runs the quick one.
 """
@@ -17,8 +17,8 @@ import numpy as np
 
 from .errors import RESULTS
 from .laws import get as get_law
-from .models.spring_mass import SpringMassOptions, batch_metrics
-from .propagation import default_resolution
+from .models import SpringMassOptions, batch_metrics
+from .sdof import default_resolution
 from .solvers import FIXED_STEP_SOLVERS
 
 ACCURACY_GOAL = 1e-6

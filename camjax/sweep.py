@@ -14,7 +14,7 @@ from . import checks
 from .errors import raise_if_failed
 from .laws import AbstractMotionLaw
 from .models import AbstractModel, SpringMass
-from .propagation import TARGET_PHASE_STEP, default_resolution
+from .sdof import TARGET_PHASE_STEP, default_resolution
 from .sharding import shard_batch
 
 STACK_FROM = 8
@@ -227,7 +227,7 @@ def ct_curves(
     """``ct_curve`` for several laws, keyed by name (or by the mapping's keys).
 
     On the exact path every law with fixed breakpoints is swept from its samples
-    (``camjax.propagation.SampledLaw``, padded to the piece count of the longest law
+    (``camjax.sdof.SampledLaw``, padded to the piece count of the longest law
     given, in ``laws`` or ``like``), so laws of any type share one compiled program;
     elsewhere laws of one pytree structure (any ``SCCA``, or ``BSplineLaw`` of one size)
     do.  A stack of more than a few laws of one structure is mapped in one call, split over

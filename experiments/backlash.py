@@ -76,7 +76,7 @@ def kinematic_charts(summary: list[str]) -> None:
     plt.close(fig)
     with open(OUT / "impact_velocity.csv", "w", newline="") as f:
         csv.writer(f).writerows([["law", "dn", "bk", "impact_velocity"], *rows])
-    from camjax.cli._common import dump_json
+    from camjax.cli import dump_json
 
     dump_json({"laws": tables}, OUT / "impact_velocity.json")
     summary.append("## Kinematic impact velocity at bk = 0.01 (rows: law, columns: dn)\n")

@@ -57,8 +57,8 @@ def main() -> None:
 
     from camjax import ct_curve, distributed
     from camjax.laws import SCCA
-    from camjax.models.spring_mass import CHUNK_NODES, SpringMassOptions, batch_metrics
-    from camjax.propagation import motion_grid, propagate
+    from camjax.models import SpringMassOptions, batch_metrics
+    from camjax.sdof import CHUNK_NODES, motion_grid, propagate
     from camjax.sweep import prepare_sweep, resolution_bands, sweep_banded, sweep_law_stack
 
     report = {"cores": os.cpu_count(), "load_before": [round(x, 2) for x in os.getloadavg()]}

@@ -23,7 +23,7 @@ import numpy as np
 from work_precision import scipy_metrics
 
 from camjax import laws
-from camjax.models.spring_mass import SpringMassOptions, batch_metrics
+from camjax.models import SpringMassOptions, batch_metrics
 
 
 def timed(fn, repeats=5):

@@ -26,7 +26,8 @@ import numpy as np
 
 import camjax
 from camjax.laws import SCCA
-from camjax.models.spring_mass import response_metrics, sdof_term
+from camjax.models import response_metrics
+from camjax.sdof import sdof_term
 
 FRACTIONS = jnp.array([0.2, 0.4, 0.3])  # an SCCA with a zero-acceleration share d = 0.1
 PERIOD_RATIOS = jnp.array([2.3, 4.7, 7.7, 11.1, 15.1])

@@ -36,7 +36,7 @@ def fixed_step_map(n, step_counts, methods=("euler", "heun")):
     import jax.numpy as jnp
 
     import camjax
-    from camjax.models.spring_mass import SpringMassOptions, batch_metrics
+    from camjax.models import SpringMassOptions, batch_metrics
     from camjax.studies import reference_metrics
 
     law = camjax.laws.get("cycloidal")
@@ -61,7 +61,7 @@ def jump_ts_work(n, law_names=("parabolic", "modified-trapezoid"), rtol=1e-8):
     import jax.numpy as jnp
 
     import camjax
-    from camjax.models.spring_mass import sdof_term
+    from camjax.sdof import sdof_term
 
     out = {}
     for name in law_names:
@@ -106,7 +106,7 @@ def high_period_ratio(n, law_name="modified-trapezoid"):
     import jax.numpy as jnp
 
     import camjax
-    from camjax.models.spring_mass import SpringMassOptions, batch_metrics
+    from camjax.models import SpringMassOptions, batch_metrics
     from camjax.studies import reference_metrics
 
     law = camjax.laws.get(law_name)
@@ -131,7 +131,7 @@ def default_grid_ranges(range_tops, count, law_names=("harmonic", "modified-trap
     import jax.numpy as jnp
 
     import camjax
-    from camjax.models.spring_mass import SpringMassOptions, batch_metrics
+    from camjax.models import SpringMassOptions, batch_metrics
     from camjax.studies import reference_metrics
 
     out = {}

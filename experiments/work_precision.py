@@ -43,7 +43,7 @@ def float32_worker(path: Path) -> None:
     import jax.numpy as jnp
 
     import camjax
-    from camjax.models.spring_mass import SpringMassOptions, batch_metrics
+    from camjax.models import SpringMassOptions, batch_metrics
 
     spec = json.loads(path.read_text())
     n = jnp.asarray(spec["n"], dtype=jnp.float32)
@@ -302,7 +302,7 @@ def main() -> None:
         return
 
     import camjax
-    from camjax.models.spring_mass import SpringMassOptions
+    from camjax.models import SpringMassOptions
     from camjax.studies import (
         ACCURACY_GOAL,
         Case,

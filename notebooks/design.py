@@ -13,8 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import camjax.law_design as D
-from camjax.laws import get
-from camjax.laws._io import load, save
+from camjax.laws import get, load, save
 
 # %%
 objective = D.MaxResidual(6.0, 12.0, samples=128)

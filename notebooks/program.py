@@ -26,8 +26,8 @@ print(f"natural frequency {cam.follower.natural_frequency_hz:.1f} Hz")
 
 # %%
 rpm = 600.0
-solver = cp.Solver(cam, 300.0)  # the grid is fixed by the slowest speed we will ask for
-history = cp.response(cam, rpm, solver=solver)
+steady = cp.SteadyState(cam, 300.0)  # the grid is fixed by the slowest speed we will ask for
+history = cp.response(cam, rpm, steady=steady)
 fig, (a, b) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
 a.plot(history["theta_deg"], history["kinematic_acceleration_m_s2"], label="cam y''")
 a.plot(history["theta_deg"], history["payload_acceleration_m_s2"], label="payload x''")
@@ -43,7 +43,7 @@ plt.show()
 # ## The start-up from rest settles onto the steady state
 
 # %%
-s, accel, force = cp.startup(cam, rpm, 3, solver=solver)
+s, accel, force = cp.startup(cam, rpm, 3, steady=steady)
 steady = np.tile(history["contact_force_n"][:-1], 3)
 print("largest difference in each turn (N):",
       [f"{np.abs(d).max():.2e}" for d in np.split(force - steady, 3)])
@@ -53,16 +53,16 @@ print("largest difference in each turn (N):",
 # One vmapped, compiled call covers the whole sweep.
 
 # %%
-report = cp.analyse(cam, np.linspace(300, 900, 31), solver=solver, with_flight=False)
-speeds = [r["rpm"] for r in report["speeds"]]
-plt.plot(speeds, [r["min_preload_n"] for r in report["speeds"]], marker=".")
+report = cp.analyse(cam, np.linspace(300, 900, 31), steady=steady, with_flight=False)
+speeds = [r.rpm for r in report.speeds]
+plt.plot(speeds, [r.min_preload_n for r in report.speeds], marker=".")
 plt.axhline(cam.follower.preload_n, ls="--", color="C1", label="preload")
-plt.axvline(report["jump_speed_rpm"], color="k", lw=0.8, label="jump speed")
+plt.axvline(report.jump_speed_rpm, color="k", lw=0.8, label="jump speed")
 plt.xlabel("rpm")
 plt.ylabel("minimum preload (N)")
 plt.legend()
 plt.show()
-print(f"jump speed {report['jump_speed_rpm']:.1f} rpm")
+print(f"jump speed {report.jump_speed_rpm:.1f} rpm")
 
 # %% [markdown]
 # ## Past the jump speed: flight and re-impact
@@ -70,7 +70,7 @@ print(f"jump speed {report['jump_speed_rpm']:.1f} rpm")
 # re-impact the roller may take off again.
 
 # %%
-for each in cp.flights(solver, 900.0):
+for each in cp.flights(steady, 900.0):
     print(each)
 
 # %% [markdown]
@@ -81,7 +81,7 @@ for each in cp.flights(solver, 900.0):
 # %%
 designed, result = cp.design_segment(cam, 1, 300.0, 600.0, objective="preload", knots=8, steps=200,
                                      progress=False)
-before = max(r["min_preload_n"] for r in report["speeds"] if r["rpm"] <= 600)  # the sweep above
+before = max(r.min_preload_n for r in report.speeds if r.rpm <= 600)  # the sweep above
 print(f"largest preload needed over 300-600 rpm: {before:.1f} N with the cycloidal rise, "
       f"{result.values[result.objectives[0].label]:.1f} N designed")
 

@@ -12,8 +12,8 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 import camjax
+from camjax.cli import CliError
 from camjax.cli import backlash as backlash_cli
-from camjax.cli._common import CliError
 from camjax.models import backlash as bl
 
 

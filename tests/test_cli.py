@@ -136,7 +136,7 @@ def test_least_jerk_matches_the_bang_bang_rise():
 
 
 def test_cache_dir_follows_the_environment(monkeypatch, tmp_path):
-    from camjax.cli._cache import cache_dir
+    from camjax.cli import cache_dir
 
     monkeypatch.setenv("CAMJAX_CACHE_DIR", str(tmp_path))
     assert cache_dir() == tmp_path

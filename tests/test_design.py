@@ -10,8 +10,7 @@ import pytest
 
 import camjax
 import camjax.law_design as D
-from camjax.laws import BSplineLaw, get
-from camjax.laws._io import load
+from camjax.laws import BSplineLaw, get, load
 
 START = BSplineLaw.fit(get("cycloidal"), 10)
 

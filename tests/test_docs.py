@@ -13,7 +13,7 @@ ROOT = Path(__file__).parents[1]
 API = ROOT / "docs" / "api"
 # Module -> how its public names are found: a package's re-exports, or a module's own
 # top-level definitions.
-MODULES = ["camjax", "camjax.laws", "camjax.models", "camjax.law_design", "camjax.program"]
+MODULES = ["camjax", "camjax.laws", "camjax.models", "camjax.law_design", "camjax.program", "camjax.sdof"]
 
 
 def _resolve(path: str):

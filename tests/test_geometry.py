@@ -8,15 +8,14 @@ import numpy as np
 import pytest
 
 from camjax import geometry
-from camjax.laws import Cycloidal, ModifiedSine, PolynomialLaw
-from camjax.laws._program import LawBank, MotionProgram
+from camjax.laws import Cycloidal, LawBank, ModifiedSine, PolynomialLaw, RiseDwellFall
 
 THETA = jnp.linspace(0.0, 2 * math.pi, 721)[:-1]
 
 
 def test_program_segments_and_derivatives():
     lift = 0.3
-    program = MotionProgram(Cycloidal(), ModifiedSine(), lift)
+    program = RiseDwellFall(Cycloidal(), ModifiedSine(), lift)
     y, dy, d2y, _ = program.evaluate(THETA)
     beta = math.pi / 2
     # Closed-form cycloidal rise and the dwells / mirrored fall.
@@ -36,7 +35,7 @@ def test_program_segments_and_derivatives():
 
 def test_program_rejects_overlong_segments():
     with pytest.raises(ValueError, match="exceeds a turn"):
-        MotionProgram(Cycloidal(), Cycloidal(), 1.0, rise_angle=3.0, dwell_angle=3.0, fall_angle=1.0)
+        RiseDwellFall(Cycloidal(), Cycloidal(), 1.0, rise_angle=3.0, dwell_angle=3.0, fall_angle=1.0)
 
 
 def test_law_bank_matches_each_law():
@@ -57,7 +56,7 @@ def test_law_bank_matches_each_law():
     [geometry.SwingingRollerFollower(), geometry.TranslatingRollerFollower(offset=0.01)],
 )
 def test_zero_lift_gives_circle_cam(follower):
-    program = MotionProgram(Cycloidal(), Cycloidal(), 0.0)
+    program = RiseDwellFall(Cycloidal(), Cycloidal(), 0.0)
     prof = geometry.cam_profile(follower, program, THETA)
     rp, rr = follower.pitch_radius, follower.roller_radius
     np.testing.assert_allclose(jnp.linalg.norm(prof.pitch, axis=1), rp, rtol=1e-12)
@@ -71,7 +70,7 @@ def test_zero_lift_gives_circle_cam(follower):
 @pytest.mark.parametrize("offset", [0.0, 0.012, -0.008])
 def test_translating_pressure_angle_closed_form(offset):
     follower = geometry.TranslatingRollerFollower(offset=offset, roller_radius=0.01, base_radius=0.04)
-    program = MotionProgram(PolynomialLaw(3), Cycloidal(), 0.02)
+    program = RiseDwellFall(PolynomialLaw(3), Cycloidal(), 0.02)
     prof = geometry.cam_profile(follower, program, THETA)
     s, ds, _, _ = program.evaluate(THETA)
     s0 = math.sqrt(follower.pitch_radius**2 - offset**2)
@@ -82,7 +81,7 @@ def test_translating_pressure_angle_closed_form(offset):
 
 def test_flanks_are_envelopes_of_roller_circles():
     follower = geometry.SwingingRollerFollower()
-    program = MotionProgram(Cycloidal(), Cycloidal(), math.pi / 18)
+    program = RiseDwellFall(Cycloidal(), Cycloidal(), math.pi / 18)
     prof = geometry.cam_profile(follower, program, THETA)
     rr = follower.roller_radius
     # Each flank point is r_r from its roller centre, and the joining line is normal to the pitch curve.
@@ -100,7 +99,7 @@ def test_flanks_are_envelopes_of_roller_circles():
 def test_swinging_pressure_angle_against_instant_centre():
     # Independent route: the roller centre's velocity relative to the cam is tangent to the pitch curve.
     follower = geometry.SwingingRollerFollower()
-    program = MotionProgram(Cycloidal(), Cycloidal(), math.pi / 12)
+    program = RiseDwellFall(Cycloidal(), Cycloidal(), math.pi / 12)
     theta = jnp.asarray(0.6)
     y, dy, _, _ = program.evaluate(theta)
     e = follower.roller_centre(y)
@@ -116,11 +115,11 @@ def test_swinging_pressure_angle_against_instant_centre():
 
 def test_undercut_detected_for_large_roller():
     follower = geometry.TranslatingRollerFollower(roller_radius=0.03, base_radius=0.01)
-    program = MotionProgram(Cycloidal(), Cycloidal(), 0.03, rise_angle=0.5, dwell_angle=0.5, fall_angle=0.5)
+    program = RiseDwellFall(Cycloidal(), Cycloidal(), 0.03, rise_angle=0.5, dwell_angle=0.5, fall_angle=0.5)
     prof = geometry.cam_profile(follower, program, THETA)
     flags = geometry.undercut(prof, follower.roller_radius)
     assert bool(jnp.any(flags.inner))
-    ok = geometry.undercut(geometry.cam_profile(geometry.TranslatingRollerFollower(), MotionProgram(Cycloidal(), Cycloidal(), 0.01), THETA), 0.01)
+    ok = geometry.undercut(geometry.cam_profile(geometry.TranslatingRollerFollower(), RiseDwellFall(Cycloidal(), Cycloidal(), 0.01), THETA), 0.01)
     assert not bool(jnp.any(ok.inner)) and not bool(jnp.any(ok.outer))
 
 
@@ -130,7 +129,7 @@ def test_geometry_rejects_impossible_linkage():
 
 
 def test_pressure_angle_gradient_matches_finite_difference():
-    program = MotionProgram(Cycloidal(), Cycloidal(), math.pi / 18)
+    program = RiseDwellFall(Cycloidal(), Cycloidal(), math.pi / 18)
 
     @jax.jit
     def peak(d):

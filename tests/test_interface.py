@@ -178,7 +178,7 @@ def test_no_recompile_for_new_parameter_values():
     assert camjax.models._solve._solve._cached._cache_size() == before
 
 
-MODULES = ["camjax.models", "camjax.propagation", "camjax.sweep", "camjax.laws", "camjax.errors"]
+MODULES = ["camjax.models", "camjax.sdof", "camjax.sweep", "camjax.laws", "camjax.errors"]
 
 
 @pytest.mark.parametrize("order", list(itertools.permutations(MODULES, 3))[::7])

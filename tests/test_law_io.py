@@ -5,8 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from camjax.laws import BSplineLaw, get, names
-from camjax.laws._io import from_dict, load, save, to_dict
+from camjax.laws import BSplineLaw, from_dict, get, load, names, save, to_dict
 
 TAU = np.linspace(-0.1, 1.1, 10001)
 

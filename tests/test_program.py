@@ -15,7 +15,7 @@ from camjax.program import (
     MaxPreload,
     Program,
     Segment,
-    Solver,
+    SteadyState,
     analyse,
     example_path,
     flight,
@@ -60,7 +60,7 @@ def cam():
 
 @pytest.fixture(scope="module")
 def solver(cam):
-    return Solver(cam, 300.0)
+    return SteadyState(cam, 300.0)
 
 
 def test_example_loads_and_matches_the_constructor():
@@ -83,21 +83,21 @@ def test_one_rise_and_dwell_reproduces_ct_curve():
     rpm = 60.0 * follower.natural_frequency_hz * (10 / 360) / n
     reference = camjax.ct_curve(law, np.array([n]), damping=0.05)
     scale = 1e-3 * 10.0 * float(law.Ca) / (60.0 / rpm * 10 / 360) ** 2  # h Ca / t_r^2 in m/s^2
-    report = analyse(program, [rpm], with_flight=False)["speeds"][0]
-    assert report["max_payload_acceleration_m_s2"] / scale == pytest.approx(float(reference.ct[0]), rel=1e-6)
-    assert report["max_kinematic_acceleration_m_s2"] == pytest.approx(scale, rel=1e-12)
-    assert report["period_ratios"] == pytest.approx([n, n], rel=1e-12)
+    report = analyse(program, [rpm], with_flight=False).speeds[0]
+    assert report.max_payload_acceleration_m_s2 / scale == pytest.approx(float(reference.ct[0]), rel=1e-6)
+    assert report.max_kinematic_acceleration_m_s2 == pytest.approx(scale, rel=1e-12)
+    assert report.period_ratios == pytest.approx([n, n], rel=1e-12)
     # Residual vibration after the rise: its acceleration amplitude w^2 A is R Ca h / t_r^2.
     omega = 2 * np.pi * follower.natural_frequency_hz
-    residual = omega**2 * 1e-3 * report["residual_vibration_mm"][0] / scale
+    residual = omega**2 * 1e-3 * report.residual_vibration_mm[0] / scale
     assert residual == pytest.approx(float(reference.residual[0]), rel=1e-6)
-    assert report["jump"] is False and report["min_preload_n"] is None
+    assert report.jump is False and report.min_preload_n is None
 
 
 def test_start_up_converges_to_the_periodic_steady_state(cam, solver):
     rpm = 600.0
     steady = solver.cycle(rpm)
-    s, accel, force = startup(cam, rpm, 12, solver=solver)
+    s, accel, force = startup(cam, rpm, 12, steady=solver)
     nodes = solver.grid.nodes.size - 1
     first = np.abs(force[:nodes] - steady.contact_force_n[:-1]).max()
     last = np.abs(force[-nodes:] - steady.contact_force_n[:-1]).max()
@@ -156,7 +156,7 @@ def test_min_preload_tends_to_the_rigid_closed_form():
     gaps = []
     for k in (1e5, 4e5):
         program = two_cycloids(stiffness_n_per_mm=k, damping_ratio=0.2)
-        preload = analyse(program, [rpm], with_flight=False)["speeds"][0]["min_preload_n"]
+        preload = analyse(program, [rpm], with_flight=False).speeds[0].min_preload_n
         gaps.append(abs(preload - rigid) / rigid)
     assert rigid > 50
     # The quasi-static deflection m y'' / k makes the gap fall as 1/k (measured: 2.4e-2,
@@ -232,14 +232,14 @@ def test_every_flight_of_the_turn_matches_a_scipy_event_solve(cam, solver):
 
 def test_jump_speed_is_the_first_loss_of_contact(cam, solver):
     speed = jump_speed_rpm(solver, 300.0, 1200.0)
-    below, above = solver.summary([speed - 0.1, speed + 0.1])["min_contact_force_n"]
+    below, above = solver.summary([speed - 0.1, speed + 0.1]).min_contact_force_n
     assert below >= 0 > above
     # Contact holds everywhere below it: a dense check of the scan.
-    assert np.all(solver.summary(np.linspace(300.0, speed - 0.1, 500))["min_contact_force_n"] >= 0)
+    assert np.all(solver.summary(np.linspace(300.0, speed - 0.1, 500)).min_contact_force_n >= 0)
     # And a one-speed call agrees with the sweep (one compiled, vmapped call).
     sweep = solver.summary([400.0, 700.0, 1000.0])
     one = solver.cycle(700.0)
-    assert sweep["min_contact_force_n"][1] == pytest.approx(float(one.min_contact_force_n), rel=1e-12)
+    assert sweep.min_contact_force_n[1] == pytest.approx(float(one.min_contact_force_n), rel=1e-12)
 
 
 def test_dxf_reads_back_with_the_profile_at_roller_radius(cam, tmp_path):
@@ -368,14 +368,14 @@ def test_swinging_roller_program_geometry():
 
 def test_preload_objective_is_the_program_steady_state_and_its_gradient(cam, solver):
     """The objective's training value is the steady state's required preload (the program's
-    own Solver path, refined between nodes), and its gradient matches finite differences."""
+    own SteadyState path, refined between nodes), and its gradient matches finite differences."""
     import jax
 
     objective = MaxPreload(cam, 1, 500.0, 700.0)
     law = laws.BSplineLaw.fit(laws.get("cycloidal"), 8, 5)
     value = jax.jit(lambda c, p: objective.train(laws.BSplineLaw(c, 5), 1.0, p))
     speeds = objective.speeds()
-    force = Solver(with_law(cam, 1, law), 500.0).summary(speeds)["min_contact_force_n"]
+    force = SteadyState(with_law(cam, 1, law), 500.0).summary(speeds).min_contact_force_n
     required = np.max(cam.follower.preload_n - force)
     # p = 1e6 is the max over nodes to 1e-5; refinement between nodes adds 7e-4 (measured).
     assert float(value(law.coefficients, 1e6)) == pytest.approx(required, rel=2e-3)
@@ -393,7 +393,7 @@ def test_preload_objective_is_the_program_steady_state_and_its_gradient(cam, sol
 
 def test_design_one_segment_for_a_speed_range(tmp_path, capsys):
     """``--objective preload`` lowers the largest preload the whole program needs over the
-    range (checked on a finer grid than the design's: the Solver for 250 rpm)."""
+    range (checked on a finer grid than the design's: the SteadyState for 250 rpm)."""
     program = Program.load(example_path())
     n1, n2 = camjax.program.segment_band(program, 1, 300.0, 600.0)
     f_n = program.follower.natural_frequency_hz
@@ -406,7 +406,7 @@ def test_design_one_segment_for_a_speed_range(tmp_path, capsys):
     reported = float(capsys.readouterr().out.split("rpm = ")[1].split(";")[0])
     designed = Program.load(tmp_path / "program.toml")
     speeds = np.linspace(300.0, 600.0, 2000)
-    before, after = (np.max(camjax.program.min_preload_n(Solver(p, 250.0).summary(speeds)["min_contact_force_n"],
+    before, after = (np.max(camjax.program.min_preload_n(SteadyState(p, 250.0).summary(speeds).min_contact_force_n,
                                                          300.0)) for p in (program, designed))
     assert after < 0.9 * before  # measured: 138.4 N -> 114.5 N (105.8 N with 24 knots, 6000 steps)
     assert reported == pytest.approx(after, rel=1e-4)
@@ -485,16 +485,16 @@ def test_groove_clearance_hands_over_to_backlash(tmp_path, capsys):
         assert got.velocity_m_s == pytest.approx(speed, rel=1e-6)
         assert got.flank == {0: "inner", 2: "outer"}[flank]
     # A vanishing clearance: the train force is the contact-held one, k e + c e'.
-    solver = Solver(groove_cam(None), rpm)
+    solver = SteadyState(groove_cam(None), rpm)
     tight = camjax.program.groove_turns(groove_cam(1e-6), [rpm])[0]
     lam = solver.lam(rpm)
     q = solver.mode_at(solver.cycle(rpm).q, rpm, tight.theta_deg / 360.0)
     e = q.imag / lam.imag
     held = 1e-3 * (solver.train.k * e + solver.train.c * (q.real + lam.real * e) / period)
     assert np.abs(tight.force_n - held).max() < 1e-5 * np.abs(held).max()  # measured 1e-6
-    report = analyse(program, [rpm])["speeds"][0]
-    assert [i["angle_deg"] for i in report["impacts"]] == pytest.approx([i.angle_deg for i in turns.impacts])
-    assert report["jump"] is False and report["flight"] is None
+    report = analyse(program, [rpm]).speeds[0]
+    assert [i.angle_deg for i in report.impacts] == pytest.approx([i.angle_deg for i in turns.impacts])
+    assert report.jump is False and report.flight is None
     path = tmp_path / "groove.toml"
     path.write_text(program.to_toml())
     assert main(["program", str(path), "--rpm", "600"]) == 0
@@ -507,7 +507,7 @@ def test_strikes_closer_than_a_sample_get_the_next_samples_force():
     is the force at the next sample (was NaN: no sample lay between the strikes)."""
     from types import SimpleNamespace
 
-    from camjax.program._groove import _last_turn
+    from camjax.program import GrooveTurn
 
     ts = np.linspace(0.0, 2.0, 201)  # samples 0.01 apart
     acceleration = np.sin(7.0 * ts)
@@ -515,7 +515,7 @@ def test_strikes_closer_than_a_sample_get_the_next_samples_force():
     response = SimpleNamespace(n_impacts=3, impact_tau=strikes, impact_velocity=np.ones(3),
                                impact_flank=np.zeros(3, int), tau=ts,
                                payload_acceleration=acceleration)
-    turn = _last_turn(600.0, response, 2, mass=1.0, stroke_m=1.0, period=1.0)
+    turn = GrooveTurn.from_response(600.0, response, 2, mass=1.0, stroke_m=1.0, period=1.0)
     peaks = [impact.peak_force_n for impact in turn.impacts]
     assert peaks[0] == acceleration[111]  # the first sample after 1.1003
     inside = acceleration[111:151]  # from 1.1007 to 1.5003

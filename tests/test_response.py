@@ -10,7 +10,7 @@ from scipy.integrate import solve_ivp
 
 import camjax
 from camjax import laws
-from camjax.models.spring_mass import response_metrics
+from camjax.models import response_metrics
 
 
 def cycloidal_residual(n):
@@ -277,7 +277,7 @@ def test_psi_matches_its_integral_on_both_branches():
     """``psi_m(z) = int_0^1 exp(z (1 - s)) s^m ds`` by Gauss-Legendre (8 panels of 40
     points: converged for |z| <= 11), for z inside the series' radius, across it and
     beyond (the recurrence), complex and real."""
-    from camjax.propagation import psi
+    from camjax.sdof import psi
 
     x, w = np.polynomial.legendre.leggauss(40)
     s = ((np.arange(8)[:, None] + (x + 1) / 2) / 8).ravel()

@@ -24,7 +24,7 @@ SCRIPT = textwrap.dedent(
     from camjax import laws
     from camjax.laws import SCCA
     from camjax.law_design import peak_loads
-    from camjax.program import Follower, Program, Segment, Solver
+    from camjax.program import Follower, Program, Segment, SteadyState
     from camjax.sweep import ct_curve, ct_curves
 
     assert jax.local_device_count() == 4, jax.devices()
@@ -62,11 +62,11 @@ SCRIPT = textwrap.dedent(
                   Follower(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0,
                            damping_ratio=0.05, spring_rate_n_per_mm=10.0, preload_n=300.0,
                            base_radius_mm=40.0, roller_radius_mm=12.0))
-    solo, split = Solver(cam, 300.0, devices=1), Solver(cam, 300.0)
+    solo, split = SteadyState(cam, 300.0, devices=1), SteadyState(cam, 300.0)
     assert len(split.devices) == 4
     rpm = np.linspace(300.0, 900.0, 70)
     a, b = solo.summary(rpm), split.summary(rpm)
-    errors["program"] = max(float(np.max(np.abs(a[k] - b[k]) / np.abs(a[k]).max())) for k in a)
+    errors["program"] = max(float(np.max(np.abs(x - y) / np.abs(x).max())) for x, y in zip(a, b))
     print("ERRORS", errors)
     assert all(e <= 1e-12 for e in errors.values()), errors
     # the sharded stack equals each law alone (not just the same program twice)

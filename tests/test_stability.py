@@ -10,7 +10,8 @@ import pytest
 import camjax  # noqa: F401  (float64)
 from camjax import studies
 from camjax.cli import bench
-from camjax.models.spring_mass import SpringMassOptions, batch_metrics, response_metrics, sdof_term
+from camjax.models import SpringMassOptions, batch_metrics, response_metrics
+from camjax.sdof import sdof_term
 from camjax.solvers import MAX_FREE_VIBRATION_GROWTH, free_vibration_growth, solver
 
 CYCLOIDAL = camjax.laws.get("cycloidal")
@@ -37,7 +38,7 @@ def test_free_vibration_growth_matches_the_method_on_the_free_oscillator(method)
 
 
 def test_public_sdof_term_gives_the_cycloidal_residual():
-    """``camjax.models.spring_mass.sdof_term`` is the equation the diffrax path integrates."""
+    """``camjax.sdof.sdof_term`` is the equation the diffrax path integrates."""
     n = 2.5
     omega = 2 * np.pi * n
     solution = diffrax.diffeqsolve(

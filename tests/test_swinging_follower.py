@@ -179,8 +179,7 @@ def test_bad_parameters_raise(kwargs, message):
 def _cli(argv):
     import argparse
 
-    from camjax.cli import follower
-    from camjax.cli._common import CliError
+    from camjax.cli import CliError, follower
 
     parser = argparse.ArgumentParser(prog="camjax")
     follower.register(parser.add_subparsers(dest="command"))

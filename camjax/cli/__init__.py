@@ -9,8 +9,11 @@ import importlib
 import os
 import sys
 
+from ._cache import cache_dir as cache_dir
 from ._cache import enable_compilation_cache
-from ._common import CliError, HelpFormatter
+from ._common import CliError as CliError
+from ._common import HelpFormatter
+from ._common import dump_json as dump_json
 
 
 class _Parser(argparse.ArgumentParser):

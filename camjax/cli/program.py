@@ -84,7 +84,7 @@ def _csv(report: dict) -> str:
     return buffer.getvalue().rstrip()
 
 
-def _write_outputs(out: Path, program, solver, report: dict, rpm, points: int) -> None:
+def _write_outputs(out: Path, program, steady, report: dict, rpm, points: int) -> None:
     from ..program import profile, response, write_csv, write_dxf
     from ..program.figures import save_figures
 
@@ -92,7 +92,7 @@ def _write_outputs(out: Path, program, solver, report: dict, rpm, points: int) -
     prof = profile(program, points)
     write_csv(prof, out / "profile.csv", outer=program.follower.form_closed)
     write_dxf(prof, out / "profile.dxf", outer=program.follower.form_closed)
-    histories = [(float(r), response(program, float(r), solver=solver)) for r in list(rpm)[:10]]
+    histories = [(float(r), response(program, float(r), steady=steady)) for r in list(rpm)[:10]]
     with (out / "response.csv").open("w", newline="") as handle:
         writer = csv.writer(handle)
         keys = list(histories[0][1])
@@ -104,7 +104,7 @@ def _write_outputs(out: Path, program, solver, report: dict, rpm, points: int) -
 
 
 def run(args) -> int:
-    from ..program import Program, Solver, analyse, example_path
+    from ..program import Program, SteadyState, analyse, example_path
 
     rpm = parse_range(args.rpm, "--rpm")
     if not all(r > 0 for r in rpm):
@@ -114,10 +114,10 @@ def run(args) -> int:
     path = Path(args.file) if args.file else example_path()
     program = Program.load(path)
     out = output_dir(args.out)
-    solver = Solver(program, float(min(rpm)))
-    report = analyse(program, rpm, with_flight=not args.no_flight, solver=solver)
+    steady = SteadyState(program, float(min(rpm)))
+    report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady).as_dict()
     if out is not None:
-        _write_outputs(out, program, solver, report, rpm, args.points)
+        _write_outputs(out, program, steady, report, rpm, args.points)
     if args.format == "json":
         print(dump_json(report))
     elif args.format == "csv":

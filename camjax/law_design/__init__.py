@@ -12,7 +12,7 @@ How the pieces fit:
   ``w |int a exp(-i w u) du| / Ca``), integrated by Gauss-Legendre on every smooth piece of
   the law: one matrix-vector product per batch of period ratios, so thousands of n cost
   little.  Ca*Ct needs the whole response: the payload acceleration by exact propagation
-  (``camjax.propagation.propagate``) on a fine grid, and the dwell's peak in closed form.
+  (``camjax.sdof.propagate``) on a fine grid, and the dwell's peak in closed form.
 - Every quantity an objective or a cap needs (the residual's Fourier integral, the payload
   acceleration on a fine grid, the law's a, j, v on a dense grid) is linear in the spline
   coefficients, because the law is and the SDOF model is linear.  A design computes these

@@ -10,8 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..models.spring_mass import dwell_peak, mode_gain
-from ..propagation import default_resolution, motion_grid, propagate
+from ..sdof import default_resolution, dwell_peak, mode_gain, motion_grid, propagate
 from ._residual import _modulus, _residual_components, residual
 
 EVALUATION_SAMPLES = 2000

@@ -1,14 +1,16 @@
 """Motion laws: normalised rises ``s(tau)`` with exact derivatives and coefficients."""
 
 from ._base import AbstractMotionLaw as AbstractMotionLaw
+from ._io import from_dict as from_dict
 from ._io import load as load
 from ._io import save as save
+from ._io import to_dict as to_dict
 from ._polynomial import PolynomialLaw as PolynomialLaw
-from ._program import LawBank as LawBank
-from ._program import MotionProgram as MotionProgram
 from ._registry import get as get
 from ._registry import names as names
 from ._registry import standard_laws as standard_laws
+from ._rise_dwell_fall import LawBank as LawBank
+from ._rise_dwell_fall import RiseDwellFall as RiseDwellFall
 from ._scca import SCCA as SCCA
 from ._scca import AbstractSCCA as AbstractSCCA
 from ._scca import Cycloidal as Cycloidal

@@ -20,9 +20,11 @@ from ._solve import trace_solve as trace_solve
 from .spring_mass import SpringMass as SpringMass
 from .spring_mass import SpringMassOptions as SpringMassOptions
 from .spring_mass import SpringMassResponse as SpringMassResponse
+from .spring_mass import batch_metrics as batch_metrics
 from .spring_mass import natural_frequency as natural_frequency
 from .spring_mass import period_ratio as period_ratio
 from .spring_mass import residual_vibration as residual_vibration
+from .spring_mass import response_metrics as response_metrics
 from .spring_mass import torsion_factor as torsion_factor
 
 _LAZY = {
@@ -50,7 +52,7 @@ _LAZY = {
 __all__ = sorted([
     "AbstractModel", "Metrics", "Options", "Response", "solve", "trace_solve", "SpringMass",
     "SpringMassOptions", "SpringMassResponse", "natural_frequency", "period_ratio",
-    "residual_vibration", "torsion_factor", *_LAZY,
+    "residual_vibration", "torsion_factor", "batch_metrics", "response_metrics", *_LAZY,
 ])
 
 

@@ -40,10 +40,10 @@ from .. import checks
 from ..checks import is_concrete, require
 from ..errors import RESULTS
 from ..laws import AbstractMotionLaw
+from ..sdof import residual_amplitude
 from ..solvers import solver
 from ._base import Metrics, Options, Response
 from ._hybrid import AbstractHybridModel, bisect, sample_times
-from .spring_mass import residual_amplitude
 
 # Status codes of a kinematic case.
 IMPACT = 0  # strikes the other flank

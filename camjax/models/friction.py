@@ -38,9 +38,9 @@ import jax.numpy as jnp
 from .. import checks
 from ..checks import require
 from ..errors import RESULTS, promote
+from ..sdof import residual_amplitude
 from ._base import Metrics, Options, Response
 from ._hybrid import AbstractHybridModel, sample_times
-from .spring_mass import residual_amplitude
 
 
 @dataclasses.dataclass(frozen=True)

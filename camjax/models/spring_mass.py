@@ -6,7 +6,7 @@ integrates the deflection ``e = s - x`` of the transmission, which obeys
 
 - ``method="exact"`` (default) propagates the complex mode ``q = e' - conj(lambda) e``
   in closed form over a grid with the law's breakpoints as nodes
-  (``camjax.propagation``); peaks are refined between nodes, the dwell follows in
+  (``camjax.sdof``, the one engine of every linear path); peaks are refined between nodes, the dwell follows in
   closed form.
 - any diffrax solver name (``"tsit5"``, ``"dopri8"``, ``"kvaerno5"``, ``"heun"``, ...)
   integrates the same equation, with ``jump_ts`` at the law's breakpoints, and is checked:
@@ -27,30 +27,25 @@ import jax.numpy as jnp
 
 from .. import checks
 from ..checks import require
-from ..errors import RESULTS, promote
+from ..errors import RESULTS
 from ..laws import AbstractMotionLaw
-from ..metrics import refined_peak
-from ..propagation import (
+from ..sdof import (
+    MAX_GRID_INTERVALS,
     MotionGrid,
     SampledLaw,
+    chunked_map,
     default_resolution,
+    dwell_peak,
     eigenvalue,
+    integrate,
+    mode_gain,
     motion_grid,
+    peak_in_motion,
     propagate,
+    residual_of_mode,
 )
-from ..solvers import (
-    FIXED_STEP_SOLVERS,
-    MAX_FREE_VIBRATION_GROWTH,
-    SOLVERS,
-    free_vibration_growth,
-    solver,
-)
+from ..solvers import SOLVERS
 from ._base import AbstractModel, Metrics, Options, Response
-
-MAX_GRID_INTERVALS = 2**20
-"""Largest exact-path grid per period ratio (about 83,000 at the default phase step):
-a larger request is refused before any work, with the size it would need."""
-_BOUND_MARGIN = 1.01
 
 
 @dataclasses.dataclass(frozen=True)
@@ -172,73 +167,6 @@ class SpringMass(AbstractModel):
 # --- the two paths ------------------------------------------------------------------
 
 
-def vector_field(t, y, args):
-    """Right-hand side of the SDOF deflection equation, in diffrax's ``(t, y, args)`` form.
-
-    ``y = (e, e')``; ``args = (law, omega, zeta)`` with ``omega = 2 pi n``.  Returns
-    ``(e', e'')`` with ``e'' = a(t) - omega^2 e - 2 zeta omega e'``.  Parameters travel in
-    ``args`` (not a closure), so vmap and grad see them.
-    """
-    law, omega, zeta = args
-    e, de = y
-    return de, law.a(t) - omega**2 * e - 2 * zeta * omega * de
-
-
-def sdof_term():
-    """The diffrax term (``diffrax.ODETerm``) of the SDOF deflection equation
-    (``vector_field``), for custom ``diffrax.diffeqsolve`` calls (other controllers,
-    adjoints, saved statistics)::
-
-        diffrax.diffeqsolve(sdof_term(), diffrax.Tsit5(), 0.0, 1.0, None,
-                            (jnp.zeros(()), jnp.zeros(())), args=(law, 2 * jnp.pi * n, zeta))
-    """
-    import diffrax  # here, not at the top: the exact path never needs it
-
-    return diffrax.ODETerm(vector_field)
-
-
-def _integrate(law, grid: MotionGrid, omega, zeta, options: SpringMassOptions):
-    """Deflection ``(e, e')`` at the grid nodes by diffrax, the result code and step count."""
-    import diffrax
-
-    method = options.method
-    steps = options.steps or grid.piece.size
-    if method in FIXED_STEP_SOLVERS:
-        controller, dt0 = diffrax.ConstantStepSize(), 1.0 / steps
-    else:
-        controller, dt0 = diffrax.PIDController(rtol=options.rtol, atol=options.atol), None
-        jumps = jnp.asarray(law.breakpoints(), dtype=float) if options.use_jump_ts else None
-        if jumps is not None and jumps.size:
-            controller = diffrax.ClipStepSizeController(controller, jump_ts=jumps)
-    solution = diffrax.diffeqsolve(
-        sdof_term(), solver(method), t0=0.0, t1=1.0, dt0=dt0, y0=(jnp.zeros(()), jnp.zeros(())),
-        args=(law, omega, zeta), saveat=diffrax.SaveAt(ts=grid.nodes),
-        stepsize_controller=controller, max_steps=options.max_steps, throw=False,
-    )
-    e, de = solution.ys
-    mode = jnp.abs(de - jnp.conj(eigenvalue(omega, zeta)) * e)
-    within_bound = jnp.all(mode <= _BOUND_MARGIN * law.Ca)  # False for NaN too
-    stable = free_vibration_growth(method, omega, zeta, steps) <= MAX_FREE_VIBRATION_GROWTH
-    result = promote(solution.result)
-    ok = result == RESULTS.successful
-    result = RESULTS.where(ok & ~stable, RESULTS.unstable_fixed_step, result)
-    result = RESULTS.where(ok & stable & ~within_bound, RESULTS.invariant_violated, result)
-    accepted = ok & stable & within_bound
-    e, de = (jnp.where(accepted, x, jnp.nan) for x in (e, de))
-    return e, de, result, solution.stats["num_steps"]
-
-
-def _mode_at_nodes(law, grid, model: SpringMass, options: SpringMassOptions):
-    """Complex mode at the nodes, result code and steps taken."""
-    omega, zeta = model.omega, model.damping
-    if options.method == "exact":
-        q = propagate(grid, omega, zeta)
-        ok = jnp.all(jnp.isfinite(q))
-        return q, RESULTS.where(ok, RESULTS.successful, RESULTS.nonfinite), grid.piece.size
-    e, de, result, steps = _integrate(law, grid, omega, zeta, options)
-    return de - jnp.conj(eigenvalue(omega, zeta)) * e, result, steps
-
-
 def _grid(law, options: SpringMassOptions) -> MotionGrid:
     if isinstance(law, SampledLaw):
         if options.method != "exact":
@@ -247,66 +175,30 @@ def _grid(law, options: SpringMassOptions) -> MotionGrid:
     return motion_grid(law, options.resolution)
 
 
+def _mode_at_nodes(law, grid, model: SpringMass, options: SpringMassOptions):
+    """Complex mode at the nodes, result code and steps taken, by the engine's exact step
+    or its diffrax path."""
+    omega, zeta = model.omega, model.damping
+    if options.method == "exact":
+        q = propagate(grid, omega, zeta)
+        ok = jnp.all(jnp.isfinite(q))
+        return q, RESULTS.where(ok, RESULTS.successful, RESULTS.nonfinite), grid.piece.size
+    return integrate(law, grid, omega, zeta, method=options.method, steps=options.steps,
+                     rtol=options.rtol, atol=options.atol, max_steps=options.max_steps,
+                     use_jump_ts=options.use_jump_ts)
+
+
 def _mode(law, model, options):
     grid = _grid(law, options)
     q, result, steps = _mode_at_nodes(law, grid, model, options)
     return grid, q, result, steps
 
 
-# --- metrics --------------------------------------------------------------------------
-
-
-def mode_gain(omega, zeta):
-    """``K`` with ``x'' = Re(K q)`` (payload acceleration from the complex mode)."""
-    damped = omega * jnp.sqrt(1.0 - zeta**2)
-    return 2 * zeta * omega - 1j * omega**2 * (1 - 2 * zeta**2) / damped
-
-
-def dwell_peak(q_end, omega, zeta, dwell: float):
-    """Max |x''| over the free vibration of the dwell, in closed form.
-
-    ``x''(t) = Re(K q_end exp(lambda t))``; its extrema shrink by ``exp(-zeta w pi/w_d)``
-    each half period, so the maximum is at ``t = 0`` or at the first extremum (or the
-    dwell's end if that comes first).
-    """
-    lam = eigenvalue(omega, zeta)
-    amplitude = mode_gain(omega, zeta) * q_end
-    first = jnp.mod(jnp.pi / 2 - jnp.angle(amplitude * lam), jnp.pi) / jnp.imag(lam)
-    t = jnp.minimum(first, dwell)
-    return jnp.maximum(jnp.abs(jnp.real(amplitude)), jnp.abs(jnp.real(amplitude * jnp.exp(lam * t))))
-
-
-def residual_amplitude(e, de, omega, zeta):
-    """``w^2`` times the amplitude of the free vibration started by ``(e, e')``: the
-    residual vibration (units of h/T^2) of a dwell that starts in that state."""
-    q = de - jnp.conj(eigenvalue(omega, zeta)) * e
-    return omega * jnp.abs(q) / jnp.sqrt(1.0 - zeta**2)
-
-
-def _peak_in_motion(q, grid: MotionGrid, omega, zeta):
-    """Max |x''| over the rise: ``x'' = Re(K q)`` sampled at the nodes, then refined.
-
-    The refinement needs the next three derivatives at the ends of every interval,
-    ``Re(K (lambda^k q + lambda^(k-1) a + ...))`` with one-sided ``a``, jerk and snap.
-    """
-    lam = eigenvalue(omega, zeta)
-    gain = mode_gain(omega, zeta)
-
-    def at(q_end, forcing):
-        d1 = lam * q_end + forcing[:, 0]
-        d2 = lam * d1 + forcing[:, 1]
-        d3 = lam * d2 + forcing[:, 2]
-        return jnp.real(gain * jnp.stack([d1, d2, d3], axis=1))
-
-    left, right = grid.one_sided()
-    return refined_peak(jnp.real(gain * q), grid.widths, at(q[:-1], left), at(q[1:], right))
-
-
 def _metrics(q, grid, model: SpringMass, ca, dwell: float) -> Metrics:
     omega, zeta = model.omega, model.damping
-    in_motion = _peak_in_motion(q, grid, omega, zeta)
+    in_motion = peak_in_motion(q, grid, omega, zeta)
     in_dwell = dwell_peak(q[-1], omega, zeta, dwell)
-    residual = omega * jnp.abs(q[-1]) / jnp.sqrt(1.0 - zeta**2)
+    residual = residual_of_mode(q[-1], omega, zeta)
     return Metrics(jnp.maximum(in_motion, in_dwell) / ca, residual / ca, in_motion / ca)
 
 
@@ -315,18 +207,12 @@ def response_metrics(law: AbstractMotionLaw, model: SpringMass, options: SpringM
     return model._metrics(law, options)[0]
 
 
-CHUNK_NODES = 65536
-"""Grid nodes (ratios x nodes per ratio) that ``batch_metrics`` vmaps over at once."""
-
-
 @eqx.filter_jit
 def batch_metrics(law, period_ratio, damping, options: SpringMassOptions):
     """Metrics over a batch of period ratios from one compiled, vmapped call.
 
     The grid and the sampled forcing depend on the law alone, so they are built once and
-    shared across the batch.  The batch runs in vmapped chunks of about ``CHUNK_NODES``
-    grid nodes, which keeps the working set in cache (twice as fast as one vmap over
-    1000 ratios on CPU) and memory bounded.  Returns ``(Metrics, result, steps)``.  The
+    shared across the batch, which runs through the engine's ``chunked_map``.  Returns ``(Metrics, result, steps)``.  The
     low-level engine of ``camjax.ct_curve``: it does not check its inputs (the callers do).
     ``law`` may be a ``SampledLaw`` (exact path only).
     """
@@ -337,11 +223,7 @@ def batch_metrics(law, period_ratio, damping, options: SpringMassOptions):
         q, result, steps = _mode_at_nodes(law, grid, model, options)
         return _metrics(q, grid, model, law.Ca, options.dwell), result, steps
 
-    size = period_ratio.shape[0]
-    chunks = -(-size // max(1, CHUNK_NODES // grid.nodes.shape[0]))
-    padded = jnp.pad(period_ratio, (0, (-size) % chunks), mode="edge")  # equal chunks: one body
-    out = jax.lax.map(jax.vmap(one), padded.reshape(chunks, -1))
-    return jax.tree.map(lambda x: x.reshape(-1, *x.shape[2:])[:size], out)
+    return chunked_map(one, period_ratio, grid.nodes.shape[0])
 
 
 def torsion_factor(law, period_ratio, damping=0.0, *, dwell=1.0, resolution=1024):

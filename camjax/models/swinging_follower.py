@@ -30,7 +30,7 @@ import numpy as np
 from .. import checks, geometry
 from ..checks import is_concrete, require
 from ..errors import RESULTS, promote
-from ..laws import AbstractMotionLaw, Cycloidal, MotionProgram
+from ..laws import AbstractMotionLaw, Cycloidal, RiseDwellFall
 from ..solvers import solver
 from ._base import AbstractModel, Options, Response
 
@@ -52,7 +52,7 @@ class _TaylorJet(eqx.Module):
     coefficients: tuple
 
     @classmethod
-    def about(cls, program: MotionProgram, theta) -> _TaylorJet:
+    def about(cls, program: RiseDwellFall, theta) -> _TaylorJet:
         centre = jax.lax.stop_gradient(jnp.asarray(theta, dtype=float))
         return cls(centre, tuple(program.evaluate(centre)))
 
@@ -72,7 +72,7 @@ class _ProgramJet(eqx.Module):
     Gradients with respect to the laws', the program's and the model's leaves are unaffected
     (checked against differentiating through the program: 1e-14)."""
 
-    program: MotionProgram
+    program: RiseDwellFall
 
     def evaluate(self, theta):
         return _TaylorJet.about(self.program, theta).evaluate(theta)
@@ -258,8 +258,8 @@ class SwingingFollower(AbstractModel):
         )
 
     @property
-    def program(self) -> MotionProgram:
-        return MotionProgram(self.rise, self.fall, self.total_swing)
+    def program(self) -> RiseDwellFall:
+        return RiseDwellFall(self.rise, self.fall, self.total_swing)
 
     @property
     def _jet(self) -> _ProgramJet:

@@ -9,15 +9,17 @@ segment's law (``MaxPreload``: the least preload over a speed range).  The equat
 in docs/program.md.
 """
 
+from ._analysis import Report as Report
+from ._analysis import SpeedReport as SpeedReport
 from ._analysis import analyse as analyse
 from ._analysis import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s2
 from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
 from ._design import design_segment as design_segment
-from ._design import segment_band as segment_band
-from ._design import with_law as with_law
 from ._design import write_program as write_program
-from ._dynamics import Solver as Solver
+from ._dynamics import Cycle as Cycle
+from ._dynamics import SpeedSummary as SpeedSummary
+from ._dynamics import SteadyState as SteadyState
 from ._dynamics import startup as startup
 from ._export import Profile as Profile
 from ._export import profile as profile
@@ -25,6 +27,7 @@ from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
 from ._groove import GrooveTurn as GrooveTurn
 from ._groove import Impact as Impact
+from ._groove import TurnLaw as TurnLaw
 from ._groove import groove_turns as groove_turns
 from ._jump import Flight as Flight
 from ._jump import flight as flight
@@ -35,6 +38,8 @@ from ._spec import Follower as Follower
 from ._spec import Program as Program
 from ._spec import Segment as Segment
 from ._spec import example_path as example_path
+from ._spec import segment_band as segment_band
+from ._spec import with_law as with_law
 
 
 def __getattr__(name):

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
-from ._dynamics import Solver, check_rpm
-from ._groove import groove_turns
-from ._jump import flights, jump_speed_rpm, min_preload_n
+from ._dynamics import SteadyState, check_rpm
+from ._groove import Impact, groove_turns
+from ._jump import Flight, flights, jump_speed_rpm, min_preload_n
 from ._spec import Program
 
 
@@ -26,66 +28,124 @@ def period_ratios(program: Program, rpm) -> np.ndarray:
     return f_n * 60.0 / rpm[:, None] * fractions[None, :]
 
 
-def analyse(program: Program, rpm, *, with_flight: bool = True, solver: Solver | None = None,
-            devices=None) -> dict:
+@dataclasses.dataclass(frozen=True)
+class SpeedReport:
+    """The periodic steady state of a program at one speed (SI units; see ``analyse``).
+
+    Attributes:
+        rpm: the cam's speed.
+        max_payload_acceleration_m_s2, max_kinematic_acceleration_m_s2: peak ``|x''|`` of
+            the payload (refined between nodes) and ``|y''|`` of the cam.
+        min_contact_force_n, max_contact_force_n: extremes of the contact force over the
+            turn (for a form-closed cam the signed flank force).
+        jump: whether the contact force goes negative (a spring-loaded cam only).
+        min_preload_n: the preload that just keeps contact (``None`` when form-closed).
+        residual_vibration_mm: amplitude of the free vibration at the start of each dwell.
+        period_ratios: each moving segment's duration times the natural frequency.
+        flights: every flight of the turn where contact is lost (``None`` where it holds).
+        impacts: a grooved cam's strikes on its flanks in a settled turn (else ``None``).
+    """
+
+    rpm: float
+    max_payload_acceleration_m_s2: float
+    max_kinematic_acceleration_m_s2: float
+    min_contact_force_n: float
+    max_contact_force_n: float
+    jump: bool
+    min_preload_n: float | None
+    residual_vibration_mm: tuple[float, ...]
+    period_ratios: tuple[float, ...]
+    flights: tuple[Flight, ...] | None = None
+    impacts: tuple[Impact, ...] | None = None
+
+    @property
+    def flight(self) -> Flight | None:
+        """The first flight of the turn, or ``None``."""
+        return self.flights[0] if self.flights else None
+
+    def as_dict(self) -> dict:
+        """Plain types for JSON, with ``flight`` (the first flight) beside ``flights``."""
+        flights = None if self.flights is None else [x.as_dict() for x in self.flights]
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        out.update(residual_vibration_mm=list(self.residual_vibration_mm),
+                   period_ratios=list(self.period_ratios), flight=flights[0] if flights else None,
+                   flights=flights,
+                   impacts=None if self.impacts is None else [x.as_dict() for x in self.impacts])
+        return out
+
+
+@dataclasses.dataclass(frozen=True)
+class Report:
+    """A program's report over a list of speeds: one ``SpeedReport`` each, and the jump
+    speed (the lowest speed in the range at which contact is lost; ``None`` if none)."""
+
+    program: str
+    speeds: tuple[SpeedReport, ...]
+    jump_speed_rpm: float | None
+
+    def as_dict(self) -> dict:
+        return {"program": self.program, "speeds": [s.as_dict() for s in self.speeds],
+                "jump_speed_rpm": self.jump_speed_rpm}
+
+
+def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadyState | None = None,
+            devices=None) -> Report:
     """The steady-state report at every speed in ``rpm`` (see docs/program.md).
 
-    Every field but ``flight``, ``flights`` and ``impacts`` is the periodic steady state
-    with contact held (linear); where that says contact is lost, ``flights`` lists every
-    flight of the turn from the event simulation and ``flight`` is its first (null, both,
-    where contact holds).  For a form-closed cam ``min_contact_force_n`` is the signed
-    flank force (negative: the outer wall pushes), ``jump`` is false and ``min_preload_n``
-    is null; with a groove clearance ``impacts`` lists the roller's strikes on the flanks
-    in one settled turn (the ``Backlash`` hand-over, ``camjax.program.groove_turns``), else
-    it is null.  The speeds are split over ``devices`` (``Solver``) when no ``solver`` is
-    given.
+    Every field but ``flights`` and ``impacts`` is the periodic steady state with contact
+    held (linear); where that says contact is lost, ``flights`` lists every flight of the
+    turn from the event simulation (``None`` where contact holds).  For a form-closed cam
+    ``min_contact_force_n`` is the signed flank force (negative: the outer wall pushes),
+    ``jump`` is false and ``min_preload_n`` is ``None``; with a groove clearance
+    ``impacts`` lists the roller's strikes on the flanks in one settled turn (the
+    ``Backlash`` hand-over, ``camjax.program.groove_turns``).  The speeds are split over
+    ``devices`` (``SteadyState``) when no ``steady`` is given.
     """
     rpm = check_rpm(rpm)
-    solver = solver or Solver(program, rpm.min(), devices=devices)
-    out = solver.summary(rpm)
+    steady = steady or SteadyState(program, rpm.min(), devices=devices)
+    out = steady.summary_checked(rpm)
     closed = program.follower.form_closed
-    preload = min_preload_n(out["min_contact_force_n"], program.follower.preload_n)
+    preload = min_preload_n(out.min_contact_force_n, program.follower.preload_n)
     kinematic = kinematic_acceleration_m_s2(program, rpm)
     ratios = period_ratios(program, rpm)
     grooved = closed and bool(program.follower.groove_clearance_mm) and with_flight
     turns = groove_turns(program, rpm) if grooved else [None] * rpm.size
     speeds = []
     for i, r in enumerate(rpm):
-        jump = bool(out["min_contact_force_n"][i] < 0) and not closed
-        found = [x.as_dict() for x in flights(solver, float(r))] if jump and with_flight else None
-        speeds.append({
-            "rpm": float(r),
-            "max_payload_acceleration_m_s2": float(out["max_payload_acceleration_m_s2"][i]),
-            "max_kinematic_acceleration_m_s2": float(kinematic[i]),
-            "min_contact_force_n": float(out["min_contact_force_n"][i]),
-            "max_contact_force_n": float(out["max_contact_force_n"][i]),
-            "jump": jump,
-            "min_preload_n": None if closed else float(preload[i]),
-            "residual_vibration_mm": [float(v) for v in out["residual_vibration_mm"][i]],
-            "period_ratios": [float(v) for v in ratios[i]],
-            "flight": found[0] if found else None,
-            "flights": found,
-            "impacts": None if turns[i] is None else [x.as_dict() for x in turns[i].impacts],
-        })
+        jump = bool(out.min_contact_force_n[i] < 0) and not closed
+        found = tuple(flights(steady, float(r))) if jump and with_flight else None
+        speeds.append(SpeedReport(
+            rpm=float(r),
+            max_payload_acceleration_m_s2=float(out.max_payload_acceleration_m_s2[i]),
+            max_kinematic_acceleration_m_s2=float(kinematic[i]),
+            min_contact_force_n=float(out.min_contact_force_n[i]),
+            max_contact_force_n=float(out.max_contact_force_n[i]),
+            jump=jump,
+            min_preload_n=None if closed else float(preload[i]),
+            residual_vibration_mm=tuple(float(v) for v in out.residual_vibration_mm[i]),
+            period_ratios=tuple(float(v) for v in ratios[i]),
+            flights=found,
+            impacts=None if turns[i] is None else tuple(turns[i].impacts),
+        ))
     jump_speed = None
     if not closed and rpm.size > 1 and rpm.max() > rpm.min():
-        jump_speed = jump_speed_rpm(solver, float(rpm.min()), float(rpm.max()))
-    return {"program": program.name, "speeds": speeds, "jump_speed_rpm": jump_speed}
+        jump_speed = jump_speed_rpm(steady, float(rpm.min()), float(rpm.max()))
+    return Report(program.name, tuple(speeds), jump_speed)
 
 
-def response(program: Program, rpm: float, *, solver: Solver | None = None) -> dict[str, np.ndarray]:
+def response(program: Program, rpm: float, *, steady: SteadyState | None = None) -> dict[str, np.ndarray]:
     """Steady state over one turn at ``rpm``, at the grid nodes (law breakpoints included).
 
     Keys: ``theta_deg``, ``lift_mm``, ``payload_displacement_mm``, ``kinematic_acceleration_m_s2``
     (``y''``), ``payload_acceleration_m_s2`` (``x''``), ``contact_force_n``.
     """
     rpm = float(check_rpm(rpm)[0])
-    solver = solver or Solver(program, rpm)
-    cycle = solver.cycle(rpm)
-    g = solver.grid
+    steady = steady or SteadyState(program, rpm)
+    cycle = steady.cycle(rpm)
+    g = steady.grid
     theta = 360.0 * g.nodes
     y, _, ddy = program.lift(theta)
-    deflection = np.imag(cycle.q) / float(np.imag(solver.lam(rpm)))
+    deflection = np.imag(cycle.q) / float(np.imag(steady.lam(rpm)))
     return {
         "theta_deg": theta,
         "lift_mm": y,

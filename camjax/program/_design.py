@@ -7,33 +7,12 @@ with the oscillator's damping ratio ``zeta sqrt(k / (k + k_s))``.
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 from .. import laws
-from ._spec import Program
+from ._spec import Program, segment_band, with_law
 
 OBJECTIVES = ("residual", "ca-ct", "preload")
-
-
-def with_law(program: Program, segment: int, law) -> Program:
-    """``program`` with segment ``segment``'s (1-based) law replaced."""
-    segments = list(program.segments)
-    segments[segment - 1] = dataclasses.replace(segments[segment - 1], law=law)
-    return dataclasses.replace(program, segments=tuple(segments))
-
-
-def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -> tuple[float, float]:
-    """Period-ratio band ``(n1, n2)`` of segment ``segment`` (1-based) over the speed range."""
-    if not 0 < rpm_lo < rpm_hi:
-        raise ValueError(f"need 0 < rpm_lo < rpm_hi, got {rpm_lo:g}, {rpm_hi:g}")
-    if not 1 <= segment <= len(program.segments):
-        raise ValueError(f"segment must be 1..{len(program.segments)}, got {segment}")
-    seg = program.segments[segment - 1]
-    if not seg.moving:
-        raise ValueError(f"segment {segment} is a dwell: nothing to design")
-    ratio = program.follower.natural_frequency_hz * seg.angle_deg / 360.0 * 60.0
-    return ratio / rpm_hi, ratio / rpm_lo
 
 
 def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float, *,

@@ -35,7 +35,7 @@ _SAMPLES_PER_PERIOD = 128  # samples per natural period (force peaks sampled: wi
 FLANKS = {0: "inner", 2: "outer"}
 
 
-class ProgramTurn(AbstractMotionLaw):
+class TurnLaw(AbstractMotionLaw):
     """A program's lift over ``turns`` turns, normalised, as the hybrid models' motion law.
 
     ``s(tau) = y(T tau) / h``, periodic with period 1 (``tau`` in turns).  ``breakpoints``
@@ -52,7 +52,7 @@ class ProgramTurn(AbstractMotionLaw):
     turns: int = eqx.field(static=True, default=1)
 
     @classmethod
-    def of(cls, program: Program, stroke_mm: float, turns: int) -> ProgramTurn:
+    def of(cls, program: Program, stroke_mm: float, turns: int) -> TurnLaw:
         moving = program.moving_segments()
         segs = [program.segments[i] for i in moving]
         start = tuple(float(program.start_deg[i]) / 360.0 for i in moving)
@@ -144,6 +144,28 @@ class GrooveTurn:
     force_n: np.ndarray
     impacts: list[Impact]
 
+    @classmethod
+    def from_response(cls, rpm, response, turns: int, mass: float, stroke_m: float,
+                      period: float) -> GrooveTurn:
+        """The last of ``turns`` turns of a ``Backlash`` response (``camjax.solve``) in
+        physical units: ``mass`` in kg, ``stroke_m`` the length unit, ``period`` in s."""
+        count = int(response.n_impacts)
+        tau = np.asarray(response.impact_tau)[:count]
+        velocity = np.asarray(response.impact_velocity)[:count]
+        flank = np.asarray(response.impact_flank)[:count]
+        ts = np.asarray(response.tau)
+        force = mass * stroke_m / period**2 * np.asarray(response.payload_acceleration)
+        impacts = []
+        for i in np.flatnonzero(tau >= turns - 1):
+            end = tau[i + 1] if i + 1 < count else ts[-1]
+            first = min(int(np.searchsorted(ts, tau[i])), ts.size - 1)
+            window = force[first:max(int(np.searchsorted(ts, end, side="right")), first + 1)]
+            peak = float(window[np.argmax(np.abs(window))])
+            impacts.append(Impact(float(360.0 * (tau[i] - (turns - 1))), FLANKS[int(flank[i])],
+                                  float(velocity[i] * stroke_m / period), peak))
+        last = ts >= turns - 1
+        return cls(rpm, 360.0 * (ts[last] - (turns - 1)), force[last], impacts)
+
 
 def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[GrooveTurn]:
     """The last of ``turns`` turns from rest (default ``settling_turns``) at every speed.
@@ -151,7 +173,6 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[Gro
     Needs a form-closed follower with ``groove_clearance_mm``.  One compiled solve serves
     every speed (the model's numbers are traced).
     """
-    from ..errors import SolverError
     from ..models import Backlash, solve
 
     f = program.follower
@@ -162,36 +183,13 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[Gro
     rpm = check_rpm(rpm)
     turns = settling_turns(program, float(rpm.max())) if turns is None else int(turns)
     h = stroke_mm(program)
-    law = ProgramTurn.of(program, h, turns)
+    law = TurnLaw.of(program, h, turns)
     samples = _SAMPLES_PER_PERIOD * math.ceil(f.natural_frequency_hz * 60.0 / float(rpm.min()))
     out = []
     for r in rpm:
         period = 60.0 / float(r)
         model = Backlash(f.natural_frequency_hz * period, f.groove_clearance_mm / h, 0.0, f.damping_ratio)
-        try:
-            response = solve(law, model.with_array_leaves(), dwell=turns - 1, samples=samples,
-                             max_segments=64 * turns)
-        except SolverError as error:
-            raise ValueError(f"follower.groove_clearance_mm: the backlash solve failed at {float(r):g} rpm "
-                             f"({error})") from None
-        out.append(_last_turn(float(r), response, turns, f.mass_kg, 1e-3 * h, period))
+        response = solve(law, model.with_array_leaves(), dwell=turns - 1, samples=samples,
+                         max_segments=64 * turns)  # a failure is a SolverError naming the model
+        out.append(GrooveTurn.from_response(float(r), response, turns, f.mass_kg, 1e-3 * h, period))
     return out
-
-
-def _last_turn(rpm, response, turns: int, mass: float, stroke_m: float, period: float) -> GrooveTurn:
-    count = int(response.n_impacts)
-    tau = np.asarray(response.impact_tau)[:count]
-    velocity = np.asarray(response.impact_velocity)[:count]
-    flank = np.asarray(response.impact_flank)[:count]
-    ts = np.asarray(response.tau)
-    force = mass * stroke_m / period**2 * np.asarray(response.payload_acceleration)
-    impacts = []
-    for i in np.flatnonzero(tau >= turns - 1):
-        end = tau[i + 1] if i + 1 < count else ts[-1]
-        first = min(int(np.searchsorted(ts, tau[i])), ts.size - 1)
-        window = force[first:max(int(np.searchsorted(ts, end, side="right")), first + 1)]
-        peak = float(window[np.argmax(np.abs(window))])
-        impacts.append(Impact(float(360.0 * (tau[i] - (turns - 1))), FLANKS[int(flank[i])],
-                              float(velocity[i] * stroke_m / period), peak))
-    last = ts >= turns - 1
-    return GrooveTurn(rpm, 360.0 * (ts[last] - (turns - 1)), force[last], impacts)

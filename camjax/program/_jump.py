@@ -20,8 +20,8 @@ import math
 
 import numpy as np
 
-from ..propagation import eigenvalue
-from ._dynamics import Solver
+from ..sdof import eigenvalue
+from ._dynamics import SteadyState
 
 _BISECTIONS = 4  # rounds of 64-way subdivision: a bracket shrinks by 65^4, ~2e7
 _SAMPLES_PER_INTERVAL = 8
@@ -56,7 +56,7 @@ def scan_speeds(program, rpm_lo: float, rpm_hi: float, per_cycle: float) -> np.n
     return even_periods(rpm_lo, rpm_hi, max(16, math.ceil(per_cycle * cycles) + 1))
 
 
-def jump_speed_rpm(solver: Solver, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1):
+def jump_speed_rpm(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1):
     """Lowest speed in ``[rpm_lo, rpm_hi]`` at which the contact force goes negative, or ``None``.
 
     The scan samples evenly in ``1/rpm`` with 16 samples per natural-frequency cycle
@@ -64,11 +64,11 @@ def jump_speed_rpm(solver: Solver, rpm_lo: float, rpm_hi: float, tolerance_rpm: 
     program moves by 1/16 between samples), then bisects the first crossing to
     ``tolerance_rpm``.
     """
-    if solver.program.follower.form_closed:
+    if steady.program.follower.form_closed:
         return None
-    rpm = scan_speeds(solver.program, rpm_lo, rpm_hi, 16)
+    rpm = scan_speeds(steady.program, rpm_lo, rpm_hi, 16)
     rpm[0], rpm[-1] = rpm_lo, rpm_hi
-    force = solver.summary(rpm)["min_contact_force_n"]
+    force = steady.summary(rpm).min_contact_force_n
     if not np.any(force < 0):
         return None
     i = int(np.argmax(force < 0))
@@ -77,7 +77,7 @@ def jump_speed_rpm(solver: Solver, rpm_lo: float, rpm_hi: float, tolerance_rpm: 
     lo, hi = rpm[i - 1], rpm[i]
     while hi - lo > tolerance_rpm:
         trial = np.linspace(lo, hi, 18)[1:-1]
-        f = solver.summary(trial)["min_contact_force_n"]
+        f = steady.summary(trial).min_contact_force_n
         below = np.flatnonzero(f < 0)
         if below.size:
             hi = trial[below[0]]
@@ -104,32 +104,32 @@ class Flight:
 class _SteadyState:
     """Exact contact-held steady state at one speed, in SI, at any time ``t`` (seconds)."""
 
-    def __init__(self, solver: Solver, rpm: float):
-        self.solver, self.rpm = solver, rpm
+    def __init__(self, steady: SteadyState, rpm: float):
+        self.steady, self.rpm = steady, rpm
         self.period = 60.0 / rpm
-        train = solver.train
+        train = steady.train
         self.lam = complex(eigenvalue(train.omega * self.period, train.zeta))
-        self.cycle = solver.cycle(rpm)
+        self.cycle = steady.cycle(rpm)
 
     def lift(self, t):
         """Cam lift (m) and its rate (m/s) at times ``t``."""
-        y, dy, _ = self.solver.program.lift(360.0 * np.atleast_1d(t) / self.period)
+        y, dy, _ = self.steady.program.lift(360.0 * np.atleast_1d(t) / self.period)
         return 1e-3 * y, 1e-3 * dy * 360.0 / self.period
 
     def deflection(self, t):
         """``e`` (m) and ``e'`` (m/s) of the steady state at times ``t``."""
-        q = self.solver.mode_at(self.cycle.q, self.rpm, np.atleast_1d(t) / self.period)
+        q = self.steady.mode_at(self.cycle.q, self.rpm, np.atleast_1d(t) / self.period)
         e = q.imag / self.lam.imag
         e_rate = (q.real + self.lam.real * e) / self.period
         return 1e-3 * e, 1e-3 * e_rate
 
     def contact_force(self, t):
-        tr = self.solver.train
+        tr = self.steady.train
         e, e_rate = self.deflection(t)
         return tr.preload + tr.k * e + tr.c * e_rate
 
 
-def flights(solver: Solver, rpm: float) -> list[Flight]:
+def flights(steady: SteadyState, rpm: float) -> list[Flight]:
     """Every flight in one turn at ``rpm`` (empty where contact holds).
 
     The turn starts at the steady state's first separation (the linear answer is exact
@@ -137,23 +137,23 @@ def flights(solver: Solver, rpm: float) -> list[Flight]:
     plus the free vibration of the difference) until the force reaches zero again, and the
     follower takes off again; the turn ends one period after the first separation.
     """
-    if solver.program.follower.form_closed:
+    if steady.program.follower.form_closed:
         return []
-    ss = _SteadyState(solver, rpm)
+    ss = _SteadyState(steady, rpm)
     if not ss.cycle.min_contact_force_n < 0:
         return []
     period = ss.period
-    t_sep = _first_separation(solver, ss)
+    t_sep = _first_separation(steady, ss)
     y0, dy0 = ss.lift(t_sep)
     e0, de0 = ss.deflection(t_sep)
     state = (float(y0[0] - e0[0]), float(dy0[0] - de0[0]), float(e0[0]))
     t_end = t_sep + period
     # After each impact the next separation is the force's first sign change on this fine
     # sample of the following period, then bisected.
-    samples = np.linspace(0, period, _SAMPLES_PER_INTERVAL * solver.grid.nodes.size)
+    samples = np.linspace(0, period, _SAMPLES_PER_INTERVAL * steady.grid.nodes.size)
     out = []
     while t_sep < t_end:
-        t_i, impact = _fly(solver, ss, t_sep, *state)
+        t_i, impact = _fly(steady, ss, t_sep, *state)
         if t_i is None:
             out.append(Flight(_angle(t_sep, period), None, None, None))
             break
@@ -172,9 +172,9 @@ def flights(solver: Solver, rpm: float) -> list[Flight]:
     return out
 
 
-def flight(solver: Solver, rpm: float) -> Flight | None:
+def flight(steady: SteadyState, rpm: float) -> Flight | None:
     """The first flight of the turn at ``rpm`` (``flights``), or ``None`` where contact holds."""
-    found = flights(solver, rpm)
+    found = flights(steady, rpm)
     return found[0] if found else None
 
 
@@ -182,11 +182,11 @@ def _angle(t: float, period: float) -> float:
     return float(np.mod(360 * t / period, 360))
 
 
-def _first_separation(solver: Solver, ss: _SteadyState) -> float:
+def _first_separation(steady: SteadyState, ss: _SteadyState) -> float:
     """Time of the steady state's first loss of contact after its largest force."""
     T = ss.period
     force = ss.cycle.contact_force_n
-    s_nodes = solver.grid.nodes
+    s_nodes = steady.grid.nodes
     start = int(np.argmax(force))
     order = (start + np.arange(force.size - 1)) % (force.size - 1)
     j = order[int(np.argmax(force[order] < 0))]
@@ -201,13 +201,13 @@ def _first_separation(solver: Solver, ss: _SteadyState) -> float:
     return _first_root(ss.contact_force, t_lo, t_hi)
 
 
-def _fly(solver: Solver, ss: _SteadyState, t_sep: float, x0: float, v0: float, e0: float):
+def _fly(steady: SteadyState, ss: _SteadyState, t_sep: float, x0: float, v0: float, e0: float):
     """Flight from separation at ``t_sep`` (payload ``x0``, ``v0``; train ``e0``) to re-impact.
 
     Returns ``(t_impact, (impact velocity, (x, v) at impact))``, or ``(None, None)`` if the
     roller does not come back within a turn.
     """
-    tr = solver.train
+    tr = steady.train
     T = ss.period
     w_f = math.sqrt(tr.ks / tr.m)
     x_eq = -tr.preload / tr.ks
@@ -228,7 +228,7 @@ def _fly(solver: Solver, ss: _SteadyState, t_sep: float, x0: float, v0: float, e
         ef, _ = train(tau)
         return x + ef - ss.lift(t_sep + tau)[0]
 
-    step = T * float(np.min(solver.grid.piece_width)) / 2
+    step = T * float(np.min(steady.grid.piece_width)) / 2
     tau = np.arange(1, int(T / step) + 2) * step
     hits = np.flatnonzero(gap(tau) <= 0)
     if hits.size == 0:
@@ -253,7 +253,7 @@ def _difference_mode(ss: _SteadyState, t_i: float, x_i: float, v_i: float):
 
 def _contact_after(ss: _SteadyState, t_i: float, x_i: float, v_i: float):
     """Contact force ``t`` seconds after an impact: steady state plus the free vibration."""
-    tr = ss.solver.train
+    tr = ss.steady.train
     qu, lam = _difference_mode(ss, t_i, x_i, v_i)
 
     def force_after(t):

@@ -12,10 +12,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
-from ._design import segment_band, with_law
-from ._dynamics import Solver, _cycle, _Train, cycle_grid, resolution, with_segment_law
+from ._dynamics import SteadyState, Train, _cycle, cycle_grid, resolution, with_segment_law
 from ._jump import even_periods, min_preload_n, scan_speeds
-from ._spec import Program
+from ._spec import Program, segment_band, with_law
 
 _SPEEDS_PER_CYCLE = 8  # training speeds per natural-frequency cycle the turn gains across the range
 
@@ -41,7 +40,7 @@ class MaxPreload(AbstractObjective):
     nodes of ``speeds`` (8 per natural-frequency cycle gained across the range) and
     smooths the maximum over speeds and nodes by a power mean of the values shifted to
     ``[0, 1]``.  The report is ``max(0, .)`` by the program's own steady-state path
-    (``Solver``, extrema refined between nodes) on ``EVALUATION_SAMPLES`` speeds.
+    (``SteadyState``, extrema refined between nodes) on ``EVALUATION_SAMPLES`` speeds.
     """
 
     program: Program = eqx.field(static=True)
@@ -75,7 +74,7 @@ class MaxPreload(AbstractObjective):
         with jax.ensure_compile_time_eval():
             grid = cycle_grid(program, resolution(program, self.rpm_lo))
         grid = with_segment_law(grid, program, self.segment - 1, law)
-        train = _Train.of(program)
+        train = Train.of(program)
         force = jax.vmap(lambda rpm: _cycle(grid, train, rpm).contact_force_n)(jnp.asarray(self.speeds()))
         return force - train.preload
 
@@ -83,9 +82,9 @@ class MaxPreload(AbstractObjective):
         return _smooth_max(-features.ravel(), sharpness)
 
     def required_preload(self, law) -> np.ndarray:
-        """Required preload (N) at every evaluation speed, by ``Solver`` on the program with ``law``."""
+        """Required preload (N) at every evaluation speed, by ``SteadyState`` on the program with ``law``."""
         program = with_law(self.program, self.segment, law)
-        force = Solver(program, self.rpm_lo).summary(self.evaluation_speeds())["min_contact_force_n"]
+        force = SteadyState(program, self.rpm_lo).summary(self.evaluation_speeds()).min_contact_force_n
         return min_preload_n(force, program.follower.preload_n)
 
     def report(self, law) -> float:

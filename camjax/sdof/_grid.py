@@ -1,6 +1,11 @@
-"""The sample grid over a rise, with the law's breakpoints as nodes.
+"""The sample grid of a piecewise-smooth forcing over an interval: a rise, or a whole turn.
 
-Each smooth piece of the law (between breakpoints) is cut into equal intervals, about
+``piecewise_grid`` lays out any pieces (edges and interval counts) with one set of
+constants (the interpolant's degree, its Gauss points, the map to monomial coefficients);
+``motion_grid`` and ``SampledLaw`` lay out a law's rise on it, and the program's turn
+(``camjax.program``) lays out its segments on it.
+
+Over a rise, each smooth piece of the law (between breakpoints) is cut into equal intervals, about
 ``resolution * width`` of them; the grid always has ``resolution + pieces`` intervals, so
 its shape depends on the law's type alone and laws whose breakpoints are traced (an SCCA
 with free fractions, or several SCCA laws stacked) get the same grid as fixed ones.  On every
@@ -23,9 +28,21 @@ import numpy as np
 from ..laws import AbstractMotionLaw
 
 INTERPOLATION_DEGREE = 5
-_GAUSS_POINTS = (np.polynomial.legendre.leggauss(INTERPOLATION_DEGREE + 1)[0] + 1) / 2
-# Maps the acceleration at the Gauss points to monomial coefficients in sigma = local/width.
-_TO_MONOMIAL = np.linalg.inv(np.vander(_GAUSS_POINTS, INTERPOLATION_DEGREE + 1, increasing=True))
+GAUSS_POINTS = (np.polynomial.legendre.leggauss(INTERPOLATION_DEGREE + 1)[0] + 1) / 2
+"""Where each interval samples its forcing, as fractions of the interval (never an end)."""
+_TO_MONOMIAL = np.linalg.inv(np.vander(GAUSS_POINTS, INTERPOLATION_DEGREE + 1, increasing=True))
+
+MAX_GRID_INTERVALS = 2**20
+"""Largest exact-path grid (intervals per rise, or per turn of a program): a larger
+request is refused before any work, with what to change."""
+
+
+def to_monomial(samples):
+    """Monomial coefficients in ``sigma`` (``(..., 6)``) of the interpolant through samples
+    at ``GAUSS_POINTS`` (``(..., 6)``); NumPy in, NumPy out, else JAX."""
+    if isinstance(samples, np.ndarray):
+        return samples @ _TO_MONOMIAL.T
+    return samples @ jnp.asarray(_TO_MONOMIAL.T)
 
 TARGET_PHASE_STEP = 0.5
 """Largest ``w * h`` (radians of vibration per interval) the default resolution allows."""
@@ -120,7 +137,7 @@ def motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
     # leave it to XLA's constant folder, which takes minutes over the sampled forcing.
     with jax.ensure_compile_time_eval():
         grid, sample_times = _layout(law.breakpoints(), resolution)
-        return grid._replace(forcing=law.a(sample_times) @ jnp.asarray(_TO_MONOMIAL.T))
+        return grid._replace(forcing=to_monomial(law.a(sample_times)))
 
 
 def _layout(breakpoints, resolution: int, pieces: int | None = None):
@@ -139,15 +156,30 @@ def _layout(breakpoints, resolution: int, pieces: int | None = None):
         edges = jnp.concatenate([jnp.zeros(1), inner, jnp.ones(1)])
     widths = xp.diff(edges)
     total = int(resolution) + widths.shape[0]
-    counts = piece_counts(widths, total)
+    return piecewise_grid(edges, piece_counts(widths, total), total)
+
+
+def piecewise_grid(edges, counts, total: int | None = None):
+    """The grid (forcing ``None``) of pieces ``edges[p]..edges[p + 1]``, each cut into
+    ``counts[p]`` equal intervals, and the times ``(K, 6)`` at which to sample the forcing
+    (``to_monomial`` of the samples is the grid's forcing).
+
+    NumPy edges and counts give a NumPy layout (no JAX dispatch); JAX arrays (traced
+    breakpoints) give the same layout as a computation: then ``total``, the sum of the
+    counts, must be given (it fixes the grid's shape).
+    """
+    xp = np if isinstance(edges, np.ndarray) and isinstance(counts, np.ndarray) else jnp
+    widths = xp.diff(edges)
+    if total is None:
+        total = int(np.sum(counts))
     stops = xp.cumsum(counts)
     interval = xp.arange(total)
     piece = xp.searchsorted(stops, interval, side="right")
     step = interval - (stops - counts)[piece]
     piece_width = widths / xp.maximum(counts, 1)
     left = edges[piece] + piece_width[piece] * step
-    nodes = xp.concatenate([left, xp.ones(1)])
-    sample_times = left[:, None] + piece_width[piece][:, None] * _GAUSS_POINTS
+    nodes = xp.concatenate([left, edges[-1:]])
+    sample_times = left[:, None] + piece_width[piece][:, None] * GAUSS_POINTS
     return MotionGrid(jnp.asarray(nodes), piece, jnp.asarray(piece_width), None), sample_times
 
 
@@ -196,4 +228,4 @@ class SampledLaw(eqx.Module):
 def _sample(law: AbstractMotionLaw, times):
     """Forcing coefficients at the Gauss points ``times``, and ``Ca``, in one program
     (evaluated op by op, a law's formulas compile dozens of tiny programs)."""
-    return law.a(times) @ jnp.asarray(_TO_MONOMIAL.T), jnp.asarray(law.Ca, dtype=float)
+    return to_monomial(law.a(times)), jnp.asarray(law.Ca, dtype=float)

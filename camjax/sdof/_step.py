@@ -57,8 +57,9 @@ def eigenvalue(omega, zeta):
 _BLOCK = 32
 
 
-def propagate(grid: MotionGrid, omega, zeta) -> jax.Array:
-    """Complex mode ``q`` at every node of ``grid``, starting from rest.
+def propagate(grid: MotionGrid, omega, zeta, q0=None) -> jax.Array:
+    """Complex mode ``q`` at every node of ``grid``, starting from rest (or from ``q0``
+    at the first node).
 
     The recurrence ``q_(k+1) = E_k q_k + F_k`` runs in blocks of 32 intervals: inside a
     block, ``q = G cumsum(F / G)`` with ``G`` the running product of the step factors
@@ -88,7 +89,39 @@ def propagate(grid: MotionGrid, omega, zeta) -> jax.Array:
         block_growth, block_end = block
         return block_growth * q + block_end, q
 
-    q0 = jnp.zeros((), kick.dtype)
+    start, q0 = q0, jnp.zeros((), kick.dtype)
     _, q_start = jax.lax.scan(carry, q0, (growth[:, -1], inside[:, -1]))
     q = (inside + q_start[:, None] * growth).reshape(-1)[:n_intervals]
-    return jnp.concatenate([q0[None], q])
+    q = jnp.concatenate([q0[None], q])
+    if start is not None:  # the free vibration from the start, exactly
+        q = q + start * jnp.exp(lam * (grid.nodes - grid.nodes[0]))
+    return q
+
+
+def periodic_propagate(grid: MotionGrid, omega, zeta) -> jax.Array:
+    """Complex mode at every node of the periodic steady state of a forcing that repeats
+    with the grid's span (a cam's turn): the start is the fixed point of the span's map
+    ``q(end) = E q(start) + F``, ``q0 = F / (1 - E)``, exactly (needs ``zeta > 0``)."""
+    from_rest = propagate(grid, omega, zeta)
+    span = grid.nodes[-1] - grid.nodes[0]
+    q0 = from_rest[-1] / (1.0 - jnp.exp(eigenvalue(omega, zeta) * span))
+    return from_rest + q0 * jnp.exp(eigenvalue(omega, zeta) * (grid.nodes - grid.nodes[0]))
+
+
+def mode_between(grid: MotionGrid, q_nodes, lam, t) -> np.ndarray:
+    """The complex mode at any times ``t`` inside the grid's span, exactly, from its node
+    values: the step of ``propagate`` over the part of an interval up to ``t``.
+
+    NumPy on the host (root finding on exact values calls it many times with few points);
+    ``lam`` is the eigenvalue in the grid's time unit (``eigenvalue(omega, zeta)``).
+    """
+    t = np.atleast_1d(np.asarray(t, dtype=float))
+    nodes = np.asarray(grid.nodes)
+    piece = np.asarray(grid.piece)
+    k = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, piece.size - 1)
+    delta = t - nodes[k]
+    h = np.asarray(grid.piece_width)[piece[k]]
+    weights = np.asarray(psi(jnp.asarray(lam * delta)))
+    powers = (delta / h)[:, None] ** np.arange(INTERPOLATION_DEGREE + 1)
+    kick = delta * np.sum(np.asarray(grid.forcing)[k] * powers * weights, axis=1)
+    return np.exp(lam * delta) * np.asarray(q_nodes)[k] + kick

@@ -20,7 +20,7 @@ from ._base import AbstractMotionLaw, is_concrete, require, static_breakpoints
 _QUARTER = math.pi / 2
 
 
-class MotionProgram(eqx.Module):
+class RiseDwellFall(eqx.Module):
     """Rise over ``rise_angle``, dwell, fall over ``fall_angle``, dwell to ``2 pi``.
 
     ``lift`` is the total rise in the follower's unit (radians of swing for a swinging

@@ -1,0 +1,49 @@
+"""The one engine of the linear single-degree-of-freedom response, on every linear path.
+
+The SDOF ``e'' + 2 zeta w e' + w^2 e = a(t)`` (``e`` the transmission's deflection, ``a``
+a piecewise-smooth forcing) is one complex mode ``q = e' - conj(lambda) e`` with
+``q' = lambda q + a``.  This package solves it once for everyone: the normalised rise of
+``camjax.SpringMass`` and its sweeps (``camjax.ct_curve``), the design objectives, the
+studies, and a cam program's turn at machine speed (``camjax.program``):
+
+- the grid of any piecewise forcing over an interval (``piecewise_grid``; a law's rise:
+  ``motion_grid``, ``SampledLaw``), with its degree-5 interpolant on every interval;
+- the exact step over the grid from rest or a given state (``propagate``), the periodic
+  steady state (``periodic_propagate``) and the exact state between nodes
+  (``mode_between``);
+- outputs ``Re(G q)`` and their refined peaks (``peak_in_motion``, ``refined_extremes``),
+  the dwell's peak and the residual vibration;
+- the same equation through diffrax (``integrate``, ``sdof_term``);
+- one chunked vmap for batches (``chunked_map``).
+"""
+
+from ._batch import CHUNK_NODES as CHUNK_NODES
+from ._batch import chunked_map as chunked_map
+from ._grid import GAUSS_POINTS as GAUSS_POINTS
+from ._grid import INTERPOLATION_DEGREE as INTERPOLATION_DEGREE
+from ._grid import MAX_GRID_INTERVALS as MAX_GRID_INTERVALS
+from ._grid import TARGET_PHASE_STEP as TARGET_PHASE_STEP
+from ._grid import MotionGrid as MotionGrid
+from ._grid import SampledLaw as SampledLaw
+from ._grid import default_resolution as default_resolution
+from ._grid import motion_grid as motion_grid
+from ._grid import piecewise_grid as piecewise_grid
+from ._grid import to_monomial as to_monomial
+from ._ode import integrate as integrate
+from ._ode import sdof_term as sdof_term
+from ._ode import vector_field as vector_field
+from ._peaks import deflection_gains as deflection_gains
+from ._peaks import dwell_peak as dwell_peak
+from ._peaks import gain_derivatives as gain_derivatives
+from ._peaks import mode_gain as mode_gain
+from ._peaks import output_jets as output_jets
+from ._peaks import peak_in_motion as peak_in_motion
+from ._peaks import refined_extremes as refined_extremes
+from ._peaks import refined_max as refined_max
+from ._peaks import residual_amplitude as residual_amplitude
+from ._peaks import residual_of_mode as residual_of_mode
+from ._step import eigenvalue as eigenvalue
+from ._step import mode_between as mode_between
+from ._step import periodic_propagate as periodic_propagate
+from ._step import propagate as propagate
+from ._step import psi as psi
