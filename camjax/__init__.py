@@ -20,7 +20,7 @@ if os.environ.get("JAX_ENABLE_X64", "").lower() not in ("0", "false"):
         os.environ["JAX_ENABLE_X64"] = "1"
 
 _SUBMODULES = (
-    "checks", "errors", "geometry", "law_design", "laws", "metrics", "models", "plot", "program",
+    "checks", "errors", "geometry", "law_design", "laws", "metrics", "models", "plot", "program", "registry",
     "sdof", "solvers", "studies", "sweep",
 )
 _ATTRIBUTES = {

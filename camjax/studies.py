@@ -9,7 +9,9 @@ charts, is ``experiments/work_precision.py``; ``camjax bench`` runs the quick on
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -40,6 +42,86 @@ class Case:
     label: str
     family: str
     options: SpringMassOptions
+
+
+class Timing(NamedTuple):
+    """What ``timed`` measured: the value of the first call, its seconds (tracing,
+    compilation and one run) and the best of the warm calls."""
+
+    value: object
+    first_s: float
+    best_s: float
+
+
+def timed(fn, repeats: int = 5, *, clock=time.perf_counter) -> Timing:
+    """Time ``fn()`` (returning JAX arrays, waited for): the first call, then the best of
+    ``repeats`` warm calls; ``clock=time.process_time`` measures CPU time instead.  The
+    one timing loop of the benchmarks and experiments."""
+    start = clock()
+    value = jax.block_until_ready(fn())
+    first = clock() - start
+    best = math.inf
+    for _ in range(repeats):
+        start = clock()
+        jax.block_until_ready(fn())
+        best = min(best, clock() - start)
+    return Timing(value, first, best)
+
+
+_COMPILED = {}
+
+
+def _compiled_acceleration(law):
+    """The law's acceleration as a compiled scalar function (what a scipy user would call)."""
+    if law.name not in _COMPILED:
+        _COMPILED[law.name] = jax.jit(law.a)
+    return _COMPILED[law.name]
+
+
+def scipy_reference(law, n: float, method: str, rtol: float):
+    """Ct, R and function evaluations of scipy's ``solve_ivp`` (undamped SDOF).
+
+    Integrates the deflection ``e'' = a - w^2 e``; the payload acceleration is ``w^2 e``
+    in the rise, and the dwell's free vibration has amplitude ``w |e' + i w e|`` at
+    ``tau = 1``.  The in-motion peak is the max of the dense output sampled at 64 points
+    per vibration period, polished by a bounded scalar search around every sampled crest
+    within the sampling loss of the largest.
+    """
+    from scipy.integrate import solve_ivp
+    from scipy.optimize import minimize_scalar
+
+    accel = _compiled_acceleration(law)
+    omega = 2 * np.pi * n
+    jumps = [float(t) for t in np.asarray(law.breakpoints())]
+    edges = [0.0, *jumps, 1.0]
+
+    def field(t, y):
+        return [y[1], float(accel(t)) - omega**2 * y[0]]
+
+    y, nfev, pieces = [0.0, 0.0], 0, []
+    for t0, t1 in zip(edges[:-1], edges[1:]):  # restart at jumps, as jump_ts does
+        sol = solve_ivp(field, (t0, t1), y, method=method, rtol=rtol, atol=rtol * 1e-2, dense_output=True)
+        if sol.status != 0:
+            raise RuntimeError(f"scipy {method} failed at n={n}: {sol.message}")
+        y, nfev = sol.y[:, -1], nfev + sol.nfev
+        pieces.append((t0, t1, sol.sol))
+    peak = 0.0
+    for t0, t1, dense in pieces:
+        t = np.linspace(t0, t1, max(16, int(64 * n * (t1 - t0))))
+        values = np.abs(omega**2 * dense(t)[0])
+        peak = max(peak, values.max())
+        # Polish every sampled crest that the sampling loss (up to 1 - cos(w h / 2)) could
+        # lift above the largest sample, not only the largest one.
+        loss = 1 - np.cos(omega * (t[1] - t[0]) / 2)
+        padded = np.concatenate([[-np.inf], values, [-np.inf]])
+        crests = (values >= padded[:-2]) & (values >= padded[2:]) & (values >= values.max() * (1 - 2 * loss))
+        for k in np.flatnonzero(crests):
+            lo, hi = t[max(k - 1, 0)], t[min(k + 1, t.size - 1)]
+            polished = minimize_scalar(lambda s, dense=dense: -abs(omega**2 * dense(s)[0]), bounds=(lo, hi),
+                                       method="bounded", options={"xatol": 1e-12})
+            peak = max(peak, -polished.fun)
+    residual = omega * abs(complex(y[1], omega * y[0]))
+    return max(peak, residual) / law.Ca, residual / law.Ca, nfev
 
 
 def _adaptive(method: str, rtol: float, family: str, use_jump_ts: bool = True) -> Case:
@@ -115,10 +197,6 @@ def reference_metrics(law, period_ratios, max_period_ratio: float | None = None)
     return np.asarray(metrics.ct), np.asarray(metrics.residual)
 
 
-def _block(tree):
-    return jax.block_until_ready(tree)
-
-
 def measure(law, period_ratios, case: Case, reference, *, repeats: int = 2) -> dict:
     """Time and error of one case on one law: a row of the work-precision table.
 
@@ -129,14 +207,7 @@ def measure(law, period_ratios, case: Case, reference, *, repeats: int = 2) -> d
     """
     n = jnp.asarray(period_ratios, dtype=float)
     options = case.options.checked(float(jnp.max(n)))
-    start = time.perf_counter()
-    metrics, result, steps = _block(batch_metrics(law, n, 0.0, options))
-    first = time.perf_counter() - start
-    warm = np.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        _block(batch_metrics(law, n, 0.0, options))
-        warm = min(warm, time.perf_counter() - start)
+    (metrics, result, steps), first, warm = timed(lambda: batch_metrics(law, n, 0.0, options), repeats)
     ct, residual = np.asarray(metrics.ct), np.asarray(metrics.residual)
     ok = np.asarray(result == RESULTS.successful) & np.isfinite(ct) & np.isfinite(residual)
     ref_ct, ref_residual = reference

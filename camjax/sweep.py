@@ -13,7 +13,7 @@ import numpy as np
 from . import checks
 from .errors import raise_if_failed
 from .laws import AbstractMotionLaw
-from .models import AbstractModel, SpringMass
+from .models import AbstractMachineModel, AbstractModel, SpringMass
 from .sdof import TARGET_PHASE_STEP, default_resolution
 from .sharding import shard_batch
 
@@ -138,7 +138,7 @@ def _template(model, damping) -> AbstractModel:
             "give the damping in the model (e.g. CoulombFriction(1.0, mu, damping=0.05)), "
             "not as the damping argument, when a model is given"
         )
-    if model.carries_laws:
+    if isinstance(model, AbstractMachineModel):
         raise TypeError(f"{type(model).__name__} has no period-ratio sweep (it is not an SDOF-family model)")
     return model
 

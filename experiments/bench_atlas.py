@@ -31,19 +31,6 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 
 
-def cpu_time(fn, repeats: int) -> float:
-    """Best CPU time of ``fn()`` (compiled first), seconds."""
-    import jax
-
-    jax.block_until_ready(fn())
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.process_time()
-        jax.block_until_ready(fn())
-        best = min(best, time.process_time() - start)
-    return best
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
@@ -59,6 +46,7 @@ def main() -> None:
     from camjax.laws import SCCA
     from camjax.models import SpringMassOptions, batch_metrics
     from camjax.sdof import CHUNK_NODES, motion_grid, propagate
+    from camjax.studies import timed
     from camjax.sweep import prepare_sweep, resolution_bands, sweep_banded, sweep_law_stack
 
     report = {"cores": os.cpu_count(), "load_before": [round(x, 2) for x in os.getloadavg()]}
@@ -81,9 +69,9 @@ def main() -> None:
             n = jnp.pad(n, (0, (-n.size) % rows), mode="edge").reshape(rows, -1)
             return jax.lax.map(jax.vmap(lambda m: propagate(grid, 2 * jnp.pi * m, 0.0)[-1]), n)
 
-        grid_s = cpu_time(lambda r=resolution: grid_of(law, r), args.repeats)
-        prop_s = cpu_time(lambda f=propagation_only: f(law, n), args.repeats)
-        full_s = cpu_time(lambda o=options: batch_metrics(law, n, 0.0, o), args.repeats)
+        grid_s = timed(lambda r=resolution: grid_of(law, r), args.repeats, clock=time.process_time).best_s
+        prop_s = timed(lambda f=propagation_only: f(law, n), args.repeats, clock=time.process_time).best_s
+        full_s = timed(lambda o=options: batch_metrics(law, n, 0.0, o), args.repeats, clock=time.process_time).best_s
         row = {"intervals": resolution + 8, "grid_per_law_us": round(1e6 * grid_s, 1),
                "propagation_per_eval_us": round(1e6 * prop_s / n.size, 3),
                "evaluation_per_eval_us": round(1e6 * full_s / n.size, 3)}
@@ -111,7 +99,7 @@ def main() -> None:
         start = time.perf_counter()
         jax.block_until_ready(run())
         first = time.perf_counter() - start
-        seconds = cpu_time(run, max(2, args.repeats // 2))
+        seconds = timed(run, max(2, args.repeats // 2), clock=time.process_time).best_s
         throughput[name] = {"first_call_s": round(first, 2), "cpu_s": round(seconds, 3),
                             "evaluations_per_cpu_s": round(len(chunk) * n.size / seconds)}
     base = throughput["one grid (before)"]["evaluations_per_cpu_s"]

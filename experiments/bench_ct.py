@@ -13,30 +13,15 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import time
 from pathlib import Path
 
-import jax
 import jax.numpy as jnp
 import numpy as np
-from work_precision import scipy_metrics
 
 from camjax import laws
 from camjax.models import SpringMassOptions, batch_metrics
-
-
-def timed(fn, repeats=5):
-    """(first-call seconds, best warm seconds) of a function returning JAX arrays."""
-    start = time.perf_counter()
-    jax.block_until_ready(fn())
-    first = time.perf_counter() - start
-    best = math.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        jax.block_until_ready(fn())
-        best = min(best, time.perf_counter() - start)
-    return first, best
+from camjax.studies import scipy_reference, timed
 
 
 def main() -> None:
@@ -53,13 +38,13 @@ def main() -> None:
         ref_opts = SpringMassOptions(resolution=4 * exact_opts.resolution).checked(30.0)
         ode_opts = SpringMassOptions(method="tsit5", rtol=1e-10, atol=1e-12).checked(30.0)
         ref = batch_metrics(law, nj, 0.0, ref_opts)[0]
-        exact_first, exact_warm = timed(lambda law=law, o=exact_opts: batch_metrics(law, nj, 0.0, o))
-        ode_first, ode_warm = timed(lambda law=law, o=ode_opts: batch_metrics(law, nj, 0.0, o), repeats=2)
+        _, exact_first, exact_warm = timed(lambda law=law, o=exact_opts: batch_metrics(law, nj, 0.0, o))
+        _, ode_first, ode_warm = timed(lambda law=law, o=ode_opts: batch_metrics(law, nj, 0.0, o), repeats=2)
         exact = batch_metrics(law, nj, 0.0, exact_opts)[0]
         ode = batch_metrics(law, nj, 0.0, ode_opts)[0]
         subset = np.linspace(0, n.size - 1, args.scipy_subset).astype(int)
         start = time.perf_counter()
-        sp = np.array([scipy_metrics(law, n[i], "DOP853", 1e-10)[:2] for i in subset])
+        sp = np.array([scipy_reference(law, n[i], "DOP853", 1e-10)[:2] for i in subset])
         scipy_time = (time.perf_counter() - start) * n.size / subset.size
 
         def err(m, idx=slice(None), ref=ref):

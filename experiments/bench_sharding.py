@@ -19,22 +19,9 @@ import argparse
 import json
 import os
 import subprocess
-import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-
-
-def best_time(fn, repeats: int) -> float:
-    import jax
-
-    jax.block_until_ready(fn())  # compile
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        jax.block_until_ready(fn())
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def main() -> None:
@@ -53,6 +40,7 @@ def main() -> None:
     import jax.numpy as jnp
 
     from camjax import distributed, laws
+    from camjax.studies import timed
     from camjax.sweep import prepare_sweep, sweep_law_stack, sweep_metrics
 
     _, template, options = prepare_sweep([30.0])
@@ -76,7 +64,7 @@ def main() -> None:
     for name, (evaluations, run) in cases.items():
         rows = {}
         for k in args.devices:
-            seconds = best_time(lambda k=k, run=run: run(k), args.repeats)
+            seconds = timed(lambda k=k, run=run: run(k), args.repeats).best_s
             rows[k] = {"seconds": round(seconds, 4),
                        "evaluations_per_s": round(evaluations / seconds, 1)}
         base = rows[args.devices[0]]["evaluations_per_s"] / args.devices[0]

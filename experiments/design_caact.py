@@ -21,7 +21,6 @@ from pathlib import Path
 
 import jax.numpy as jnp
 import numpy as np
-from design_convex import _affine
 from scipy.optimize import linprog
 
 import camjax
@@ -88,9 +87,9 @@ def lp_lower_bound(n1, n2, max_jerk, knots=KNOTS, samples=64, directions=32):
             np.concatenate([(rot * q_m).real.reshape(-1, knots), ones(directions * samples)], 1)]
     rhs = [-b, b, -(rot[:, :, 0] * q_b).real.reshape(-1)]
     template = law_of(jnp.zeros(knots))
-    tau = D._residual._dense_tau(template)
+    tau = D.dense_tau(template)
     for order, cap in ((3, max_jerk), (1, None)):
-        mm, bb = _affine(law_of, knots, lambda law, k=order: law.evaluate(tau)[k])
+        mm, bb = D.affine_map(law_of, knots, lambda law, k=order: law.evaluate(tau)[k])
         zero = np.zeros((len(mm), 1))
         if cap is not None:
             rows += [np.concatenate([mm, zero], 1), np.concatenate([-mm, zero], 1)]

@@ -20,7 +20,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from design_convex import ConvexProblem  # noqa: E402
 
 import camjax.law_design as D  # noqa: E402
 from camjax.laws import PolynomialLaw, standard_laws  # noqa: E402
@@ -33,7 +32,7 @@ KNOTS = 24
 
 def front(n1, n2, caps=CA_CAPS, knots=KNOTS, max_jerk=MAX_JERK):
     """Designed max R and the LP bound at each Ca cap, plus the reference laws."""
-    problem = ConvexProblem(n1, n2, knots)
+    problem = D.ConvexBound(n1, n2, knots)
     rows = []
     for ca in caps:
         bound, _ = problem.lower_bound(ca, max_jerk)

@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from pathlib import Path
 
 import diffrax
@@ -28,6 +27,7 @@ import camjax
 from camjax.laws import SCCA
 from camjax.models import response_metrics
 from camjax.sdof import sdof_term
+from camjax.studies import timed
 
 FRACTIONS = jnp.array([0.2, 0.4, 0.3])  # an SCCA with a zero-acceleration share d = 0.1
 PERIOD_RATIOS = jnp.array([2.3, 4.7, 7.7, 11.1, 15.1])
@@ -69,19 +69,6 @@ def central_difference(f, x, h):
     return jnp.stack([(f(x + s) - f(x - s)) / (2 * h) for s in steps]).reshape(x.shape)
 
 
-def timed(fn, *args, repeats=3):
-    """(value, compile-and-first-run minus warm seconds, best warm seconds)."""
-    start = time.perf_counter()
-    value = jax.block_until_ready(fn(*args))
-    first = time.perf_counter() - start
-    warm = np.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        jax.block_until_ready(fn(*args))
-        warm = min(warm, time.perf_counter() - start)
-    return np.asarray(value), max(first - warm, 0.0), warm
-
-
 def residual_gradients():
     """Rows for d(R)/d(fractions) over PERIOD_RATIOS."""
     batch = lambda g: jax.jit(jax.vmap(g, in_axes=(None, 0)))  # noqa: E731
@@ -103,7 +90,8 @@ def residual_gradients():
     rows = []
     for label, fn in ways.items():
         try:
-            value, compile_s, warm = timed(fn, FRACTIONS, PERIOD_RATIOS)
+            value, first, warm = timed(lambda fn=fn: fn(FRACTIONS, PERIOD_RATIOS), 3)
+            value, compile_s = np.asarray(value), max(first - warm, 0.0)
         except Exception as error:  # a way that cannot differentiate this solve is a finding
             rows.append({"quantity": "dR/d(a,b,c)", "way": f"{label} (fails: {str(error).splitlines()[0]})",
                          "warm_s": np.nan, "compile_s": np.nan, "max_abs_error": np.nan, "max_rel_error": np.nan})
@@ -126,7 +114,8 @@ def ct_gradients():
     check = jax.vmap(lambda n: (exact_ct(n + 1e-5, 8192) - exact_ct(n - 1e-5, 8192)) / 2e-5)(PERIOD_RATIOS)
     rows = []
     for label, fn in ways.items():
-        value, compile_s, warm = timed(fn, PERIOD_RATIOS)
+        value, first, warm = timed(lambda fn=fn: fn(PERIOD_RATIOS), 3)
+        value, compile_s = np.asarray(value), max(first - warm, 0.0)
         rows.append({"quantity": "dCt/dn", "way": label, "warm_s": warm, "compile_s": compile_s,
                      "max_abs_error": float(np.max(np.abs(value - reference))),
                      "max_rel_error": float(np.max(np.abs(value - reference)) / np.max(np.abs(reference)))})

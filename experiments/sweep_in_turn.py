@@ -16,11 +16,11 @@ import functools
 
 import jax
 import numpy as np
-from bench_sharding import best_time  # a script beside this one
 
 import camjax
 from camjax.checks import checked_outside
 from camjax.models import Backlash, CoulombFriction, TwoMass
+from camjax.studies import timed
 from camjax.sweep import prepare_sweep
 
 CASES = {
@@ -58,7 +58,7 @@ def main() -> None:
         for form in ("lockstep", "in turn"):
             call = functools.partial(program(form, options), law, template, jax.numpy.asarray(n))
             ct[form] = np.asarray(call()[0].ct)
-            seconds[form] = best_time(call, args.repeats)
+            seconds[form] = timed(call, args.repeats).best_s
         np.testing.assert_allclose(ct["in turn"], ct["lockstep"], rtol=1e-9)
         picked = "in turn" if template._sweeps_in_turn(options) else "lockstep"
         print(f"{name:<24} {seconds['lockstep']:9.3f} {seconds['in turn']:9.3f} "

@@ -93,73 +93,15 @@ def float32_rows(law_name: str, n: np.ndarray, reference) -> list[dict]:
     return rows
 
 
-_COMPILED = {}
-
-
-def _compiled_acceleration(law):
-    """The law's acceleration as a compiled scalar function (what a scipy user would call)."""
-    import jax
-
-    if law.name not in _COMPILED:
-        _COMPILED[law.name] = jax.jit(law.a)
-    return _COMPILED[law.name]
-
-
-def scipy_metrics(law, n: float, method: str, rtol: float):
-    """Ct, R and function evaluations of scipy's ``solve_ivp`` (undamped SDOF).
-
-    Integrates the deflection ``e'' = a - w^2 e``; the payload acceleration is ``w^2 e``
-    in the rise, and the dwell's free vibration has amplitude ``w |e' + i w e|`` at
-    ``tau = 1``.  The in-motion peak is the max of the dense output sampled at 64 points
-    per vibration period, polished by a bounded scalar search around every sampled crest
-    within the sampling loss of the largest.
-    """
-    from scipy.integrate import solve_ivp
-    from scipy.optimize import minimize_scalar
-
-    accel = _compiled_acceleration(law)
-    omega = 2 * np.pi * n
-    jumps = [float(t) for t in np.asarray(law.breakpoints())]
-    edges = [0.0, *jumps, 1.0]
-
-    def field(t, y):
-        return [y[1], float(accel(t)) - omega**2 * y[0]]
-
-    y, nfev, pieces = [0.0, 0.0], 0, []
-    for t0, t1 in zip(edges[:-1], edges[1:]):  # restart at jumps, as jump_ts does
-        sol = solve_ivp(field, (t0, t1), y, method=method, rtol=rtol, atol=rtol * 1e-2, dense_output=True)
-        if sol.status != 0:
-            raise RuntimeError(f"scipy {method} failed at n={n}: {sol.message}")
-        y, nfev = sol.y[:, -1], nfev + sol.nfev
-        pieces.append((t0, t1, sol.sol))
-    peak = 0.0
-    for t0, t1, dense in pieces:
-        t = np.linspace(t0, t1, max(16, int(64 * n * (t1 - t0))))
-        values = np.abs(omega**2 * dense(t)[0])
-        peak = max(peak, values.max())
-        # Polish every sampled crest that the sampling loss (up to 1 - cos(w h / 2)) could
-        # lift above the largest sample, not only the largest one.
-        loss = 1 - np.cos(omega * (t[1] - t[0]) / 2)
-        padded = np.concatenate([[-np.inf], values, [-np.inf]])
-        crests = (values >= padded[:-2]) & (values >= padded[2:]) & (values >= values.max() * (1 - 2 * loss))
-        for k in np.flatnonzero(crests):
-            lo, hi = t[max(k - 1, 0)], t[min(k + 1, t.size - 1)]
-            polished = minimize_scalar(lambda s, dense=dense: -abs(omega**2 * dense(s)[0]), bounds=(lo, hi),
-                                       method="bounded", options={"xatol": 1e-12})
-            peak = max(peak, -polished.fun)
-    residual = omega * abs(complex(y[1], omega * y[0]))
-    return max(peak, residual) / law.Ca, residual / law.Ca, nfev
-
-
 def scipy_rows(law, n: np.ndarray, reference, subset: int) -> list[dict]:
     """Rows of the scipy peers, timed on ``subset`` evenly spread period ratios, scaled up."""
-    from camjax.studies import locate_errors
+    from camjax.studies import locate_errors, scipy_reference
 
     pick = np.unique(np.linspace(0, n.size - 1, subset).round().astype(int))
     rows = []
     for method, rtol in SCIPY_METHODS:
         start = time.perf_counter()
-        results = [scipy_metrics(law, float(n[i]), method, rtol) for i in pick]
+        results = [scipy_reference(law, float(n[i]), method, rtol) for i in pick]
         elapsed = time.perf_counter() - start
         ct, residual, nfev = (np.asarray(x) for x in zip(*results))
         rows.append({

@@ -111,18 +111,6 @@ def _fine_grid_peaks(law):
     return float(jnp.min(v)), float(jnp.max(jnp.abs(a))), float(jnp.max(jnp.abs(j)))
 
 
-def _convex_lower_bound(*args, **kwargs):
-    """The LP lower bound of experiments/design_convex.py (an independent method)."""
-    import importlib.util
-    import pathlib
-
-    path = pathlib.Path(__file__).parents[1] / "experiments" / "design_convex.py"
-    spec = importlib.util.spec_from_file_location("design_convex", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.convex_lower_bound(*args, **kwargs)
-
-
 def test_small_design_meets_caps_and_comes_within_two_percent_of_the_optimum():
     caps = D.Caps(max_ca=7.5, max_jerk=100.0)
     result = D.design(D.MaxResidual(6.0, 12.0, samples=128), caps=caps, knots=12, steps=300,
@@ -136,7 +124,7 @@ def test_small_design_meets_caps_and_comes_within_two_percent_of_the_optimum():
     assert reported == pytest.approx(float(curve.residual.max()), rel=1e-8)
     # No 12-knot spline within the caps does better than the LP bound (0.0430); the
     # design comes within 1% of it (0.0434), three times below 4-5-6-7 (0.151).
-    bound, _ = _convex_lower_bound(6.0, 12.0, 7.5, 100.0, knots=12)
+    bound, _ = D.ConvexBound(6.0, 12.0, knots=12).lower_bound(7.5, 100.0)  # an independent LP
     assert bound <= reported <= 1.02 * bound
 
 
@@ -169,7 +157,7 @@ def test_same_seed_same_design():
 
 @pytest.mark.slow
 def test_within_five_percent_of_the_convex_optimum():
-    bound, _ = _convex_lower_bound(6.0, 12.0, 6.3, 100.0, knots=24)
+    bound, _ = D.ConvexBound(6.0, 12.0, knots=24).lower_bound(6.3, 100.0)
     result = D.design(D.MaxResidual(6.0, 12.0), caps=D.Caps(6.3, 100.0), knots=24,
                       progress=False)
     assert result.values["max R over [6, 12]"] <= 1.05 * bound

@@ -14,9 +14,17 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import EXAMPLES, SDOF_LIMITS, all_models
 
 import camjax
-from camjax.models import Backlash, CoulombFriction, SpringMass, TwoMass
+from camjax.models import (
+    MODELS,
+    AbstractMachineModel,
+    Backlash,
+    CoulombFriction,
+    SpringMass,
+    TwoMass,
+)
 
 LAW = camjax.laws.get("cycloidal")
 
@@ -102,15 +110,7 @@ def test_a_period_ratio_too_large_for_memory_is_refused_before_any_work():
         camjax.ct_curve(LAW, [1e6])
 
 
-@pytest.mark.parametrize(
-    "template, tol",
-    [
-        (CoulombFriction(1.0, 0.0, 0.05), 1e-7),
-        (Backlash(1.0, 0.5, 20.0, 0.05), 1e-7),  # dn holds it on the flank
-        (TwoMass(1.0, 1.0, 0.0), None),  # m = 0: a rigid camshaft
-    ],
-    ids=["friction", "backlash", "two-mass"],
-)
+@pytest.mark.parametrize("template, tol", list(SDOF_LIMITS.values()), ids=list(SDOF_LIMITS))
 def test_every_sdof_family_model_goes_through_solve_and_ct_curve_alike(template, tol):
     """One call shape for every model; the sweep equals the solves one by one, and with the
     extra physics switched off every model gives the SDOF's numbers."""
@@ -213,9 +213,7 @@ def test_only_models_that_ask_compile_their_solve_with_other_xla_options():
     from camjax.models import _solve
     from camjax.models.swinging_follower import SwingingFollower
 
-    for model in (SpringMass(period_ratio=2.0), CoulombFriction(period_ratio=2.0, friction=0.1),
-                  Backlash(period_ratio=2.0, backlash=0.02), TwoMass(period_ratio=2.0,
-                  stiffness_ratio=1.0, inertia_ratio=1.0)):
+    for _, model in all_models(swept=True):
         assert _solve._program(model) is _solve._solve
     follower = _solve._program(SwingingFollower())
     expected = _solve._solve if jax.default_backend() != "cpu" else \
@@ -223,3 +221,30 @@ def test_only_models_that_ask_compile_their_solve_with_other_xla_options():
     assert follower is expected
     if jax.default_backend() == "cpu":
         assert follower is not _solve._solve
+
+
+def test_the_registry_and_the_test_table_list_the_same_models():
+    """Every registered model has an example in tests/helpers.py (so the generic tests see
+    it) and every swept one its SDOF limit; each example is the registry's class, and
+    only machine models (holding their own laws) are not swept."""
+    assert list(EXAMPLES) == [m.name for m in MODELS]
+    assert set(SDOF_LIMITS) == {m.name for m in MODELS if m.swept} - {"spring-mass"}
+    for entry, example in all_models():
+        assert type(example) is entry.model_class()
+        assert isinstance(example, AbstractMachineModel) == (not entry.swept)
+
+
+@pytest.mark.parametrize("entry, example", all_models(swept=True), ids=lambda x: getattr(x, "name", ""))
+def test_every_swept_model_is_reached_from_the_command_line(entry, example):
+    """``--model NAME:V1,...`` builds the registry's class from its listed parameters, and
+    ``solve``'s refusal of a non-model names every registered class."""
+    from camjax.cli.ct import parse_model
+
+    values = [float(getattr(example, field)) for field, _ in entry.parameters]
+    text = entry.name + (":" + ",".join(map(str, values)) if values else "")
+    template = parse_model(text, 0.0)
+    assert type(template) is type(example)
+    for field, _ in entry.parameters:
+        assert float(getattr(template, field)) == float(getattr(example, field))
+    with pytest.raises(TypeError, match=entry.class_name):
+        camjax.solve(LAW, object())

@@ -6,6 +6,7 @@ import csv
 import io
 import sys
 
+from ..registry import MODELS
 from ._common import (
     RANGE_METAVAR,
     CliError,
@@ -19,6 +20,7 @@ from ._common import (
 )
 
 DEFAULT_N = "1:30:1000"
+SWEPT_MODELS = [m.usage for m in MODELS if m.swept]
 
 
 def register(sub) -> None:
@@ -38,8 +40,8 @@ def register(sub) -> None:
     parser.add_argument("--dwell", type=float, default=1.0,
                         help="dwell after the rise over which Ct looks, in rise durations")
     parser.add_argument("--model", default="spring-mass", metavar="MODEL",
-                        help="the model whose period ratio is swept: spring-mass, friction:MU, "
-                        "backlash:BK,DN or two-mass:K,M (normalised parameters; --damping "
+                        help="the model whose period ratio is swept: "
+                        f"{', '.join(SWEPT_MODELS)} (normalised parameters; --damping "
                         "applies to it)")
     parser.add_argument("--method", default=None,
                         help="solution method (default: the model's own; spring-mass: exact, "
@@ -51,7 +53,8 @@ def register(sub) -> None:
 
 
 def parse_model(text: str, damping: float):
-    """The model template named by ``--model`` (its period ratio is swept)."""
+    """The model template named by ``--model`` (its period ratio is swept), from the
+    models' registry."""
     from .. import models  # only the model named is imported (the others import diffrax)
 
     name, _, values = str(text).strip().lower().partition(":")
@@ -59,21 +62,10 @@ def parse_model(text: str, damping: float):
         numbers = [float(v) for v in values.split(",")] if values else []
     except ValueError as error:
         raise CliError(f"--model {text!r}: parameters must be numbers") from error
-    expected = {"spring-mass": 0, "friction": 1, "backlash": 2, "two-mass": 2}
-    if name not in expected:
-        raise CliError(f"--model {text!r}: unknown model; valid: spring-mass, friction:MU, "
-                       "backlash:BK,DN, two-mass:K,M")
-    if len(numbers) != expected[name]:
-        raise CliError(f"--model {name} takes {expected[name]} parameter(s), got {len(numbers)}")
-    if name == "spring-mass":
-        return models.SpringMass(1.0, damping)
-    if name == "friction":
-        return models.CoulombFriction(1.0, numbers[0], damping)
-    if name == "backlash":
-        return models.Backlash(1.0, numbers[0], numbers[1], damping)
-    if damping:
-        raise CliError("--model two-mass has no damping ratio (leave --damping at 0)")
-    return models.TwoMass(1.0, numbers[0], numbers[1])
+    try:
+        return models.model_entry(name, swept=True).template(numbers, damping)
+    except ValueError as error:
+        raise CliError(f"--model {text!r}: {error}") from None
 
 
 def _fit_or_none(curve):

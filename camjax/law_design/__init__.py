@@ -33,6 +33,8 @@ from ._caps import MIN_CJ as MIN_CJ
 from ._caps import CapError as CapError
 from ._caps import Caps as Caps
 from ._caps import least_jerk as least_jerk
+from ._convex import ConvexBound as ConvexBound
+from ._convex import affine_map as affine_map
 from ._objectives import EVALUATION_SAMPLES as EVALUATION_SAMPLES
 from ._objectives import AbstractObjective as AbstractObjective
 from ._objectives import CaCt as CaCt
@@ -45,6 +47,8 @@ from ._optimise import DEFAULT_STEPS as DEFAULT_STEPS
 from ._optimise import DesignResult as DesignResult
 from ._optimise import design as design
 from ._optimise import linear_maps as linear_maps
+from ._residual import dense_tau as dense_tau
 from ._residual import quadrature as quadrature
 from ._residual import residual as residual
 from ._residual import residual_amplitude as residual_amplitude
+from ._residual import residual_kernel as residual_kernel

@@ -11,7 +11,7 @@ import jax.numpy as jnp
 
 from ..laws import AbstractMotionLaw, BSplineLaw
 from ..laws import get as get_law
-from ._residual import _dense_tau
+from ._residual import dense_tau
 
 
 class CapError(ValueError):
@@ -70,7 +70,7 @@ class Caps:
 
     def features(self, law):
         """``(v, a, j)`` on a dense grid of every smooth piece (linear in the law)."""
-        return law.evaluate(_dense_tau(law))[1:]
+        return law.evaluate(dense_tau(law))[1:]
 
     def penalty(self, law, margin: float) -> jax.Array:
         """Sum of squared relative violations on a dense grid (zero when inside)."""

@@ -16,7 +16,7 @@ from ..laws import AbstractMotionLaw, BSplineLaw
 from ..laws import get as get_law
 from ._caps import CapError, Caps, _describe, _fine_checks, _restore
 from ._objectives import AbstractObjective
-from ._residual import _dense_tau
+from ._residual import dense_tau
 
 DEFAULT_STEPS = 6000
 """Optimiser steps of a design (L-BFGS: 1000 per sharpness stage; a stage that has
@@ -149,7 +149,7 @@ def design(
 
     def features(theta):
         law = law_of(theta)
-        acceleration = law.a(_dense_tau(law)) if caps.max_ca is None else jnp.zeros(())
+        acceleration = law.a(dense_tau(law)) if caps.max_ca is None else jnp.zeros(())
         return [o.features(law) for o in objectives], caps.features(law), acceleration
 
     linear = _linearised(features, knots)

@@ -45,8 +45,9 @@ def quadrature(law: AbstractMotionLaw, max_period_ratio: float) -> tuple[np.ndar
     return np.concatenate(nodes), np.concatenate(weights)
 
 
-def _kernel(period_ratios: np.ndarray, damping: float, nodes, weights):
-    """``K[k, q]`` with ``R_k Ca = |K[k] @ a(nodes)|`` (complex, NumPy)."""
+def residual_kernel(period_ratios: np.ndarray, damping: float, nodes, weights):
+    """``K[k, q]`` with ``R_k Ca = |K[k] @ a(nodes)|`` (complex, NumPy): the residual is
+    linear in the acceleration at the quadrature ``nodes`` (``quadrature``)."""
     omega = 2 * np.pi * np.asarray(period_ratios, dtype=float)[:, None]
     lam = -damping * omega + 1j * omega * np.sqrt(1.0 - damping**2)
     return omega / np.sqrt(1.0 - damping**2) * weights * np.exp(lam * (1.0 - nodes))
@@ -57,7 +58,7 @@ def _residual_components(law, period_ratios, damping: float) -> jax.Array:
     the law; its modulus is ``R * Ca``).  ``period_ratios`` must be concrete."""
     n = np.atleast_1d(np.asarray(period_ratios, dtype=float))
     nodes, weights = quadrature(law, n.max())
-    k = _kernel(n, float(damping), nodes, weights)
+    k = residual_kernel(n, float(damping), nodes, weights)
     acc = law.a(jnp.asarray(nodes))
     return jnp.stack([jnp.asarray(k.real) @ acc, jnp.asarray(k.imag) @ acc])
 
@@ -74,8 +75,9 @@ def _modulus(components):
     return jnp.hypot(components[0], components[1])
 
 
-def _dense_tau(law: AbstractMotionLaw) -> jax.Array:
-    """``_DENSE_PER_PIECE + 1`` samples of every smooth piece (both ends included)."""
+def dense_tau(law: AbstractMotionLaw) -> jax.Array:
+    """``_DENSE_PER_PIECE + 1`` samples of every smooth piece (both ends included): where
+    the caps on a design's acceleration and jerk are checked."""
     edges = _piece_edges(law)
     return jnp.asarray(np.concatenate(
         [np.linspace(lo, hi, _DENSE_PER_PIECE + 1) for lo, hi in zip(edges[:-1], edges[1:])]))

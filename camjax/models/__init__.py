@@ -11,6 +11,10 @@ diffrax are imported on first use, so that the exact path never pays for diffrax
 
 import importlib
 
+from ..registry import MODELS as MODELS
+from ..registry import ModelEntry as ModelEntry
+from ..registry import model_entry as model_entry
+from ._base import AbstractMachineModel as AbstractMachineModel
 from ._base import AbstractModel as AbstractModel
 from ._base import Metrics as Metrics
 from ._base import Options as Options
@@ -50,7 +54,7 @@ _LAZY = {
     "TwoMassResponse": "two_mass",
 }
 __all__ = sorted([
-    "AbstractModel", "Metrics", "Options", "Response", "solve", "trace_solve", "SpringMass",
+    "AbstractMachineModel", "AbstractModel", "MODELS", "ModelEntry", "model_entry", "Metrics", "Options", "Response", "solve", "trace_solve", "SpringMass",
     "SpringMassOptions", "SpringMassResponse", "natural_frequency", "period_ratio",
     "residual_vibration", "torsion_factor", "batch_metrics", "response_metrics", *_LAZY,
 ])

@@ -87,17 +87,22 @@ class Response(eqx.Module):
 class AbstractModel(eqx.Module):
     """A scene the cam drives: its parameters, methods and one jittable solution.
 
-    Subclasses define ``period_ratio`` (a field, or a property derived from physical
-    parameters), ``methods`` (the first is the default), ``options_type``, and
-    ``validated`` and ``_response``.
+    A new model subclasses this (or ``AbstractMachineModel``) and writes:
+
+    - ``period_ratio``: a field, or a property derived from physical parameters;
+    - ``methods`` (class variable; the first is the default) and ``options_type`` (an
+      ``Options`` dataclass of its static settings);
+    - ``_checked()``: its parameters checked (``camjax.checks``: concrete and traced);
+    - ``_response(law, options)``: the jittable solution, reporting failure in ``result``;
+
+    and may override ``_metrics`` (a lighter path to the metrics), ``_sweeps_in_turn`` and
+    ``sweep_law``.  The base supplies ``solve``'s checks, the period-ratio sweep and the
+    failure convention.  docs/extending.md has a complete example.
     """
 
     period_ratio: AbstractVar[float | jax.Array]
     methods: ClassVar[tuple[str, ...]]
     options_type: ClassVar[type[Options]]
-    carries_laws: ClassVar[bool] = False
-    """True for a model that holds its own motion laws (``solve(None, model)``) and has no
-    period-ratio sweep."""
     cpu_compiler_options: ClassVar[tuple[tuple[str, object], ...]] = ()
     """XLA options for compiling this model's ``solve`` on CPU (none: XLA's defaults)."""
 
@@ -200,3 +205,9 @@ class AbstractModel(eqx.Module):
                 except (TypeError, jax.errors.ConcretizationTypeError):
                     pass
         return f"{type(self).__name__}({', '.join(parts)})"
+
+
+class AbstractMachineModel(AbstractModel):
+    """A model of a whole machine that holds its own cam motion (its rise and fall laws):
+    ``camjax.solve(None, model)`` drives it with them, and it has no period-ratio sweep
+    (it is not an SDOF-family model)."""

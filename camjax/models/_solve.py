@@ -10,7 +10,8 @@ import jax
 from .. import checks
 from ..errors import raise_if_failed
 from ..laws import AbstractMotionLaw
-from ._base import AbstractModel, Response
+from ..registry import model_class_names
+from ._base import AbstractMachineModel, AbstractModel, Response
 
 
 def _response(law, model: AbstractModel, options, checked: bool) -> Response:
@@ -80,13 +81,11 @@ def solve(
 def _arguments(law, model, dwell, method, options):
     """``solve``'s checked options, and the arguments of its compiled program."""
     if not isinstance(model, AbstractModel):
-        raise TypeError(
-            "model must be a camjax model (SpringMass, CoulombFriction, Backlash, TwoMass, "
-            f"SwingingFollower), got {type(model).__name__}"
-        )
+        raise TypeError(f"model must be a camjax model ({model_class_names()}), "
+                        f"got {type(model).__name__}")
     if law is not None and not isinstance(law, AbstractMotionLaw):
         raise TypeError(f"law must be a camjax motion law, got {type(law).__name__}")
-    if law is None and not model.carries_laws:
+    if law is None and not isinstance(model, AbstractMachineModel):
         raise TypeError(f"{type(model).__name__} needs a motion law (law is None)")
     opts = model.options(method, dwell, **options)
     checked = checks.is_concrete(model)  # concrete parameters were checked at construction

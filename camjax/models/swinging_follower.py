@@ -32,7 +32,7 @@ from ..checks import is_concrete, require
 from ..errors import RESULTS, promote
 from ..laws import AbstractMotionLaw, Cycloidal, RiseDwellFall
 from ..solvers import solver
-from ._base import AbstractModel, Options, Response
+from ._base import AbstractMachineModel, Options, Response
 
 _QUADRATURE_POINTS = 24
 
@@ -148,7 +148,7 @@ class FollowerOptions(Options):
         return base
 
 
-class SwingingFollower(AbstractModel):
+class SwingingFollower(AbstractMachineModel):
     """The cam - flexible rod - roller system.  SI units; every default is written here once.
 
     Defaults (the paper gives omega, l, rod radius, phi_T; the rest are chosen here):
@@ -188,8 +188,6 @@ class SwingingFollower(AbstractModel):
 
     methods: ClassVar[tuple[str, ...]] = ("dopri8", "tsit5", "dopri5")
     options_type: ClassVar[type[Options]] = FollowerOptions
-    carries_laws: ClassVar[bool] = True
-    """``camjax.solve(None, follower)`` uses the model's own rise and fall laws."""
     cpu_compiler_options: ClassVar[tuple[tuple[str, object], ...]] = (
         ("xla_cpu_use_fusion_emitters", False),)
     """XLA's classic CPU fusion emitters: they compile the solve (a large vector field inside

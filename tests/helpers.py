@@ -1,0 +1,37 @@
+"""One table of every model for the generic tests (as diffrax's ``all_ode_solvers``).
+
+``EXAMPLES`` holds a small valid instance of every model in ``camjax.models.MODELS`` (a
+test checks the two agree, so a new model cannot miss the generic tests); ``SDOF_LIMITS``
+holds every swept model with its extra physics switched off, which must give the damped
+SDOF's numbers (to the tolerance given; ``None``: a model with no damping to compare).
+"""
+
+from camjax.models import (
+    MODELS,
+    Backlash,
+    CoulombFriction,
+    SpringMass,
+    SwingingFollower,
+    TwoMass,
+)
+
+EXAMPLES = {
+    "spring-mass": lambda: SpringMass(period_ratio=2.0, damping=0.05),
+    "friction": lambda: CoulombFriction(period_ratio=2.0, friction=0.1),
+    "backlash": lambda: Backlash(period_ratio=2.0, backlash=0.02),
+    "two-mass": lambda: TwoMass(period_ratio=2.0, stiffness_ratio=1.0, inertia_ratio=1.0),
+    "swinging-follower": lambda: SwingingFollower(),
+}
+
+SDOF_LIMITS = {
+    "friction": (CoulombFriction(1.0, 0.0, 0.05), 1e-7),
+    "backlash": (Backlash(1.0, 0.5, 20.0, 0.05), 1e-7),  # dn holds it on the flank
+    "two-mass": (TwoMass(1.0, 1.0, 0.0), None),  # m = 0: a rigid camshaft
+}
+
+
+def all_models(*, swept: bool | None = None):
+    """``(entry, example)`` for every registered model (``swept``: only those that can, or
+    cannot, sweep their period ratio)."""
+    return [(entry, EXAMPLES[entry.name]()) for entry in MODELS
+            if swept is None or entry.swept == swept]
