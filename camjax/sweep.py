@@ -53,7 +53,7 @@ class CtCurve(eqx.Module):
 @eqx.filter_jit
 def _sweep(law, template: AbstractModel, period_ratios, options):
     with checks.checked_outside():
-        return template._sweep(law, period_ratios, options)
+        return template.sweep(law, period_ratios, options)
 
 
 @eqx.filter_jit
@@ -62,7 +62,7 @@ def _sweep_stack(laws, template: AbstractModel, period_ratios, options):
     # size, and each law keeps its cache-sized ratio chunks (a vmap over laws multiplies the
     # working set and ran 1.4x slower on CPU).
     with checks.checked_outside():
-        return jax.lax.map(lambda law: template._sweep(law, period_ratios, options), laws)
+        return jax.lax.map(lambda law: template.sweep(law, period_ratios, options), laws)
 
 
 def sweep_metrics(law, period_ratios, template: AbstractModel, options, *, devices=None, like=()):

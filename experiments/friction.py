@@ -120,7 +120,7 @@ def main():
     # vmapped program, call the model's jittable solution with eps traced.
     model = CoulombFriction(n, mu)
     options = model.options("regularised", dwell, samples=SAMPLES)
-    smooth = jax.jit(jax.vmap(lambda eps: model._response(law, dataclasses.replace(options, eps=eps))))(
+    smooth = jax.jit(jax.vmap(lambda eps: model.response(law, dataclasses.replace(options, eps=eps))))(
         jnp.asarray(epsilons)
     )
     in_motion = exact.tau <= 1.0

@@ -4,7 +4,7 @@ A sweep of a phase-by-phase model (friction's events, backlash) runs loops whose
 counts differ from ratio to ratio; vmapped, every ratio runs in lockstep for as long as the
 longest, with the whole loop state selected at every trip.  This times both forms of the
 same program in one process, for the models whose sweeps run diffrax, checks that they
-agree, and prints the ratio; ``AbstractModel._sweeps_in_turn`` picks the faster per model.
+agree, and prints the ratio; ``AbstractModel.sweeps_in_turn`` picks the faster per model.
 
     python experiments/sweep_in_turn.py [--count 16] [--repeats 3]
 """
@@ -36,7 +36,7 @@ def program(form: str, options):
     @jax.jit
     def sweep(law, template, ratios):
         def one(n):
-            return template.with_period_ratio(n)._metrics(law, options)
+            return template.with_period_ratio(n).metrics(law, options)
 
         with checked_outside():
             return jax.lax.map(one, ratios) if form == "in turn" else jax.vmap(one)(ratios)
@@ -60,7 +60,7 @@ def main() -> None:
             ct[form] = np.asarray(call()[0].ct)
             seconds[form] = timed(call, args.repeats).best_s
         np.testing.assert_allclose(ct["in turn"], ct["lockstep"], rtol=1e-9)
-        picked = "in turn" if template._sweeps_in_turn(options) else "lockstep"
+        picked = "in turn" if template.sweeps_in_turn(options) else "lockstep"
         print(f"{name:<24} {seconds['lockstep']:9.3f} {seconds['in turn']:9.3f} "
               f"{seconds['in turn'] / seconds['lockstep']:19.2f} {picked:>9}", flush=True)
 

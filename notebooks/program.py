@@ -44,9 +44,9 @@ plt.show()
 
 # %%
 s, accel, force = cp.startup(cam, rpm, 3, steady=steady)
-steady = np.tile(history["contact_force_n"][:-1], 3)
+settled = np.tile(history["contact_force_n"][:-1], 3)
 print("largest difference in each turn (N):",
-      [f"{np.abs(d).max():.2e}" for d in np.split(force - steady, 3)])
+      [f"{np.abs(d).max():.2e}" for d in np.split(force - settled, 3)])
 
 # %% [markdown]
 # ## Across the speed range: minimum preload and the jump speed

@@ -259,7 +259,7 @@ class _DeceleratingHalf(camjax.laws.AbstractMotionLaw):
     name = "decelerating-half"
     Cv, Ca, Cj = 2.0, math.pi, math.pi**2
 
-    def _rise(self, tau):
+    def rise(self, tau):
         p = jnp.pi
         return (
             tau + jnp.sin(p * tau) / p,

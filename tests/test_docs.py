@@ -62,3 +62,27 @@ def test_every_public_name_has_an_api_entry(module_name):
     missing = [f"{module_name}.{name}" for name, obj in _public(module_name).items()
                if f"{module_name}.{name}" not in documented and id(obj) not in by_identity]
     assert not missing, f"add '::: NAME' entries to docs/api/*.md for {missing}"
+
+
+def test_the_extending_page_runs(capsys):
+    """docs/extending.md's examples, run as a reader would (its code blocks in order): the
+    law written from scratch gives the built-in cycloidal's Ct curve, the loss-factor
+    model SpringMass's at zeta = eta / 2 (sweep and solve), and the objective's training
+    value (quadrature) its reported value (the exact path)."""
+    code = "\n".join(re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "extending.md").read_text(),
+                                flags=re.S))
+    namespace = {}
+    exec(compile(code, "docs/extending.md", "exec"), namespace)
+    out = capsys.readouterr().out
+    differences = [float(x) for x in re.findall(r"difference from [^:]*: (\S+)", out)]
+    assert len(differences) == 2 and max(differences) < 1e-12
+    ct = float(re.search(r"Ct at n = 6.4: (\S+)", out).group(1))
+    import camjax
+
+    law = camjax.laws.get("modified-sine")
+    expected = float(camjax.solve(law, camjax.SpringMass(6.4, damping=0.05)).metrics.ct)
+    assert ct == pytest.approx(expected, abs=1e-6)  # printed to six places
+    training, reported = (float(x) for x in re.search(r"training value (\S+), reported (\S+)", out).groups())
+    goal, law = namespace["goal"], namespace["law"]
+    assert float(goal.train(law, law.Ca, 8.0)) == pytest.approx(goal.report(law), rel=1e-9)
+    assert training == pytest.approx(reported, abs=1e-8)

@@ -26,7 +26,7 @@ def require(condition: bool, message: str) -> None:
 class AbstractMotionLaw(eqx.Module):
     """A normalised rise: ``s`` goes from 0 at ``tau = 0`` to 1 at ``tau = 1``.
 
-    Subclasses implement :meth:`_rise` on ``[0, 1]``; outside that interval the law
+    Subclasses implement :meth:`rise` on ``[0, 1]``; outside that interval the law
     continues as a dwell (``s = 0`` before, ``s = 1`` after, all derivatives zero), which
     is what the response engine integrates through.  Every method is elementwise in
     ``tau`` (scalar or array), jittable, vmappable and differentiable in the law's
@@ -39,7 +39,7 @@ class AbstractMotionLaw(eqx.Module):
         """Canonical registry name (``camjax.laws.get(law.name)`` rebuilds the law)."""
 
     @abc.abstractmethod
-    def _rise(self, tau: jax.Array) -> LawValues:
+    def rise(self, tau: jax.Array) -> LawValues:
         """``(s, v, a, j)`` for ``tau`` in ``[0, 1]``."""
 
     @abc.abstractmethod
@@ -77,7 +77,7 @@ class AbstractMotionLaw(eqx.Module):
 
     def _evaluate(self, tau: jax.Array) -> LawValues:
         inside = (tau >= 0.0) & (tau <= 1.0)
-        s, v, a, j = self._rise(jnp.clip(tau, 0.0, 1.0))
+        s, v, a, j = self.rise(jnp.clip(tau, 0.0, 1.0))
         s = jnp.where(inside, s, jnp.where(tau > 1.0, 1.0, 0.0))
         v, a, j = (jnp.where(inside, x, 0.0) for x in (v, a, j))
         return s, v, a, j

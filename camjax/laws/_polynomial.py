@@ -53,7 +53,7 @@ class PolynomialLaw(AbstractMotionLaw):
         poly = np.polynomial.Polynomial(_rise_polynomial(self.order))
         return poly.deriv(derivative).coef if derivative else poly.coef
 
-    def _rise(self, tau) -> LawValues:
+    def rise(self, tau) -> LawValues:
         return tuple(
             jnp.polyval(jnp.asarray(self._coefficients(d)[::-1]), tau) for d in range(4)
         )

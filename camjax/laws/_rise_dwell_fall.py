@@ -103,8 +103,8 @@ class LawBank(AbstractMotionLaw):
     def name(self) -> str:
         return "bank(" + ",".join(law.name for law in self.laws) + ")"
 
-    def _rise(self, tau) -> LawValues:
-        each = [law._rise(tau) for law in self.laws]
+    def rise(self, tau) -> LawValues:
+        each = [law.rise(tau) for law in self.laws]
         return tuple(self._pick([e[k] for e in each]) for k in range(4))
 
     def breakpoints(self) -> Breakpoints:

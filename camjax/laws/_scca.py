@@ -132,7 +132,7 @@ class SCCA(AbstractMotionLaw):
         _, s_half, _ = _half_rise(jnp.zeros(()), self.sine, self.constant, self.cosine)
         return 0.5 / s_half
 
-    def _rise(self, tau) -> LawValues:
+    def rise(self, tau) -> LawValues:
         first = tau <= 0.5
         m = jnp.where(first, tau, 1.0 - tau)
         (s, v, acc, jerk), s_half, _ = _half_rise(m, self.sine, self.constant, self.cosine)

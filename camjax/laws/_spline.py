@@ -159,8 +159,8 @@ class BSplineLaw(AbstractMotionLaw):
         trimmed = np.asarray(knots)[order : len(knots) - order]
         return _basis(trimmed, self.degree - order, jnp.asarray(tau)) @ points
 
-    def _rise(self, tau) -> LawValues:
-        return _rise(self, tau)
+    def rise(self, tau) -> LawValues:
+        return _spline_rise(self, tau)
 
     def breakpoints(self) -> Breakpoints:
         return tuple(float(x) for x in np.unique(self.knots)[1:-1])
@@ -198,7 +198,7 @@ class BSplineLaw(AbstractMotionLaw):
 
 # Compiled once per spline size: eager evaluation dispatches hundreds of small ops.
 @eqx.filter_jit
-def _rise(law: BSplineLaw, tau) -> LawValues:
+def _spline_rise(law: BSplineLaw, tau) -> LawValues:
     return tuple(law._derivative(tau, order) for order in range(4))
 
 

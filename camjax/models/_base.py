@@ -4,7 +4,7 @@ the sweeps (``camjax.ct_curve``) in the same way.
 A model is an equinox module whose parameters are pytree leaves (so ``jit``, ``vmap`` and
 ``grad`` see them).  Subclasses supply the few pieces that differ: the methods they offer,
 their static options, a traced-safe check of their parameters, and one jittable
-``_response(law, options)`` that never raises but reports failure in ``result``.  The base
+``response(law, options)`` that never raises but reports failure in ``result``.  The base
 supplies the rest: option checking, the period-ratio sweep and the failure convention.
 """
 
@@ -92,10 +92,10 @@ class AbstractModel(eqx.Module):
     - ``period_ratio``: a field, or a property derived from physical parameters;
     - ``methods`` (class variable; the first is the default) and ``options_type`` (an
       ``Options`` dataclass of its static settings);
-    - ``_checked()``: its parameters checked (``camjax.checks``: concrete and traced);
-    - ``_response(law, options)``: the jittable solution, reporting failure in ``result``;
+    - ``checked_parameters()``: its parameters checked (``camjax.checks``: concrete and traced);
+    - ``response(law, options)``: the jittable solution, reporting failure in ``result``;
 
-    and may override ``_metrics`` (a lighter path to the metrics), ``_sweeps_in_turn`` and
+    and may override ``metrics`` (a lighter path to the metrics), ``sweeps_in_turn`` and
     ``sweep_law``.  The base supplies ``solve``'s checks, the period-ratio sweep and the
     failure convention.  docs/extending.md has a complete example.
     """
@@ -113,45 +113,45 @@ class AbstractModel(eqx.Module):
 
     def __check_init__(self):
         if is_concrete(self):
-            self._checked()  # ValueError naming the parameter
+            self.checked_parameters()  # ValueError naming the parameter
 
     @abc.abstractmethod
-    def _checked(self) -> dict:
+    def checked_parameters(self) -> dict:
         """The parameters that need checks, checked (``camjax.checks``), by field name."""
 
     def validated(self) -> "AbstractModel":
         """This model with every parameter checked, on concrete and traced values alike:
         a bad value raises ``ValueError`` now, or a runtime error from inside ``jit``,
         ``vmap`` or ``grad`` when the computation runs."""
-        return dataclasses.replace(self, **self._checked())
+        return dataclasses.replace(self, **self.checked_parameters())
 
     @abc.abstractmethod
-    def _response(self, law, options: Options) -> Response:
+    def response(self, law, options: Options) -> Response:
         """The solution: jittable, vmappable, never raising (failures go in ``result``)."""
 
-    def _metrics(self, law, options: Options) -> tuple[Metrics, RESULTS]:
+    def metrics(self, law, options: Options) -> tuple[Metrics, RESULTS]:
         """Metrics and result code of one solution (a lighter path where a model has one)."""
-        response = self._response(law, options)
+        response = self.response(law, options)
         return response.metrics, response.result
 
-    def _sweep(self, law, period_ratios: jax.Array, options: Options):
+    def sweep(self, law, period_ratios: jax.Array, options: Options):
         """Metrics and result codes over a batch of period ratios, in one program: vmapped,
-        or solved one ratio after another where ``_sweeps_in_turn`` says so."""
+        or solved one ratio after another where ``sweeps_in_turn`` says so."""
         def one(n):
-            return self.with_period_ratio(n)._metrics(law, options)
+            return self.with_period_ratio(n).metrics(law, options)
 
-        if self._sweeps_in_turn(options):
+        if self.sweeps_in_turn(options):
             return jax.lax.map(one, period_ratios)
         return jax.vmap(one)(period_ratios)
 
-    def _sweeps_in_turn(self, options: Options) -> bool:
+    def sweeps_in_turn(self, options: Options) -> bool:
         """Whether a sweep solves its ratios one after another (``lax.map``) rather than in
         lockstep (``vmap``): right for solutions whose loops run a different number of
         times per ratio, where lockstep runs every ratio for the longest."""
         return False
 
     def sweep_law(self, law, options: Options, *, like=()):
-        """The form of a concrete ``law`` that ``_sweep`` takes: the law itself, or (on a
+        """The form of a concrete ``law`` that ``sweep`` takes: the law itself, or (on a
         path that reads only samples of it) those samples as data, which lets laws of
         different types share one compiled sweep (with every law in ``like``)."""
         return law

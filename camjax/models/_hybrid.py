@@ -185,7 +185,7 @@ class PhaseSolution(eqx.Module):
 class AbstractHybridModel(AbstractModel):
     """A model whose motion is a sequence of smooth phases (``mode`` an integer)."""
 
-    def _sweeps_in_turn(self, options) -> bool:
+    def sweeps_in_turn(self, options) -> bool:
         """Phase by phase, ratios differ in their count of phases and steps.  Warm sweeps of
         16 ratios (``experiments/sweep_in_turn.py``): friction's events 13.9 s in lockstep,
         0.21 s in turn; backlash 1.78 s and 0.11 s."""

@@ -16,7 +16,7 @@ from ._base import AbstractMachineModel, AbstractModel, Response
 
 def _response(law, model: AbstractModel, options, checked: bool) -> Response:
     with checks.checked_outside(checked):
-        return model._response(law, options)
+        return model.response(law, options)
 
 
 @functools.cache

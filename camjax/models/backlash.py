@@ -355,7 +355,7 @@ class Backlash(AbstractHybridModel):
     methods: ClassVar[tuple[str, ...]] = ("tsit5", "dopri5", "dopri8", "bosh3", "kvaerno3", "kvaerno4", "kvaerno5")
     options_type: ClassVar[type[Options]] = BacklashOptions
 
-    def _checked(self) -> dict:
+    def checked_parameters(self) -> dict:
         return {
             "period_ratio": checks.positive(self.period_ratio, "period ratio"),
             "backlash": checks.positive(self.backlash, "backlash bk"),
@@ -416,7 +416,7 @@ class Backlash(AbstractHybridModel):
 
     # --- solution ---
 
-    def _response(self, law, options: BacklashOptions) -> BacklashResponse:
+    def response(self, law, options: BacklashOptions) -> BacklashResponse:
         model = self.validated()
         ts = sample_times(options.samples, options.dwell)
         rest = model.natural_deceleration / model.omega**2  # at rest on the driving flank

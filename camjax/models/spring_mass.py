@@ -119,13 +119,13 @@ class SpringMass(AbstractModel):
     methods: ClassVar[tuple[str, ...]] = ("exact", *SOLVERS)
     options_type: ClassVar[type[Options]] = SpringMassOptions
 
-    def _checked(self) -> dict:
+    def checked_parameters(self) -> dict:
         return {
             "period_ratio": checks.positive(self.period_ratio, "period ratio"),
             "damping": checks.damping_ratio(self.damping),
         }
 
-    def _response(self, law, options) -> SpringMassResponse:
+    def response(self, law, options) -> SpringMassResponse:
         model = self.validated()
         grid, q, result, steps = _mode(law, model, options)
         metrics = _metrics(q, grid, model, law.Ca, options.dwell)
@@ -145,12 +145,12 @@ class SpringMass(AbstractModel):
             deflection=jnp.imag(q_all) / jnp.imag(lam),
         )
 
-    def _metrics(self, law, options):
+    def metrics(self, law, options):
         model = self.validated()
         grid, q, result, _ = _mode(law, model, options)
         return _metrics(q, grid, model, law.Ca, options.dwell), result
 
-    def _sweep(self, law, period_ratios, options):
+    def sweep(self, law, period_ratios, options):
         metrics, result, _ = batch_metrics(law, period_ratios, self.damping, options)
         return metrics, result
 
@@ -204,7 +204,7 @@ def _metrics(q, grid, model: SpringMass, ca, dwell: float) -> Metrics:
 
 def response_metrics(law: AbstractMotionLaw, model: SpringMass, options: SpringMassOptions) -> Metrics:
     """Metrics of one response, jittable and differentiable (inputs checked even traced)."""
-    return model._metrics(law, options)[0]
+    return model.metrics(law, options)[0]
 
 
 @eqx.filter_jit

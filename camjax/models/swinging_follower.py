@@ -201,11 +201,11 @@ class SwingingFollower(AbstractMachineModel):
     def _option_scale(self) -> float:
         return 1.0  # the follower's options do not depend on a period ratio
 
-    def _checked(self) -> dict:
+    def checked_parameters(self) -> dict:
         names = ("omega", "length", "rod_radius", "youngs_modulus", "density", "roller_radius", "roller_mass", "base_radius")
         return {name: checks.positive(getattr(self, name), name) for name in names}
 
-    def _response(self, law, options: FollowerOptions) -> FollowerResponse:
+    def response(self, law, options: FollowerOptions) -> FollowerResponse:
         model = self.validated()
         if law is not None:
             model = dataclasses.replace(model, rise=law, fall=law)

@@ -78,7 +78,7 @@ class TwoMass(AbstractModel):
     methods: ClassVar[tuple[str, ...]] = ("dopri8", "kvaerno5")
     options_type: ClassVar[type[Options]] = TwoMassOptions
 
-    def _checked(self) -> dict:
+    def checked_parameters(self) -> dict:
         return {
             "period_ratio": checks.positive(self.period_ratio, "period ratio"),
             "stiffness_ratio": checks.positive(self.stiffness_ratio, "stiffness_ratio"),
@@ -90,7 +90,7 @@ class TwoMass(AbstractModel):
         """Camshaft natural frequency with the motor end held, ``w_i = w sqrt(k m)``."""
         return self.omega * jnp.sqrt(self.stiffness_ratio * self.inertia_ratio)
 
-    def _response(self, law, options: TwoMassOptions) -> TwoMassResponse:
+    def response(self, law, options: TwoMassOptions) -> TwoMassResponse:
         model = self.validated()
         ts = sample_times(options.samples, options.dwell)
         w = model.omega

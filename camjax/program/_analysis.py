@@ -14,15 +14,21 @@ from ._spec import Program
 
 def kinematic_acceleration_m_s2(program: Program, rpm) -> np.ndarray:
     """``max |y''|`` over the turn at each speed, exactly: ``|lift| Ca / t_segment^2``."""
-    rpm = check_rpm(rpm)
+    return _kinematic(program, check_rpm(rpm))
+
+
+def period_ratios(program: Program, rpm) -> np.ndarray:
+    """``(speeds, moving segments)``: each segment's duration times the natural frequency."""
+    return _period_ratios(program, check_rpm(rpm))
+
+
+def _kinematic(program: Program, rpm: np.ndarray) -> np.ndarray:
     peak = max((abs(s.lift_mm) * float(s.law.Ca) / (s.angle_deg / 360.0) ** 2 for s in program.segments if s.moving),
                default=0.0)
     return 1e-3 * peak * (rpm / 60.0) ** 2
 
 
-def period_ratios(program: Program, rpm) -> np.ndarray:
-    """``(speeds, moving segments)``: each segment's duration times the natural frequency."""
-    rpm = check_rpm(rpm)
+def _period_ratios(program: Program, rpm: np.ndarray) -> np.ndarray:
     f_n = program.follower.natural_frequency_hz
     fractions = np.array([program.segments[i].angle_deg / 360.0 for i in program.moving_segments()])
     return f_n * 60.0 / rpm[:, None] * fractions[None, :]
@@ -106,8 +112,8 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     out = steady.summary_checked(rpm)
     closed = program.follower.form_closed
     preload = min_preload_n(out.min_contact_force_n, program.follower.preload_n)
-    kinematic = kinematic_acceleration_m_s2(program, rpm)
-    ratios = period_ratios(program, rpm)
+    kinematic = _kinematic(program, rpm)  # rpm is checked once, above
+    ratios = _period_ratios(program, rpm)
     grooved = closed and bool(program.follower.groove_clearance_mm) and with_flight
     turns = groove_turns(program, rpm) if grooved else [None] * rpm.size
     speeds = []

@@ -76,7 +76,7 @@ class TurnLaw(AbstractMotionLaw):
             s, v, a, j = s + h * si, v + h * vi / f, a + h * ai / f**2, j + h * ji / f**3
         return s, v, a, j
 
-    def _rise(self, tau):
+    def rise(self, tau):
         return self.evaluate(tau)
 
     def breakpoints(self):
