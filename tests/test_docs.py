@@ -4,6 +4,8 @@ import ast
 import importlib
 import inspect
 import re
+import subprocess
+import sys
 import types
 from pathlib import Path
 
@@ -62,3 +64,28 @@ def test_every_public_name_has_an_api_entry(module_name):
     missing = [f"{module_name}.{name}" for name, obj in _public(module_name).items()
                if f"{module_name}.{name}" not in documented and id(obj) not in by_identity]
     assert not missing, f"add '::: NAME' entries to docs/api/*.md for {missing}"
+
+
+def _readme_block(heading: str, language: str = "") -> str:
+    """The first fenced block under a README heading."""
+    readme = (ROOT / "README.md").read_text()
+    match = re.search(rf"^## {heading}\n.*?^```{language}\n(.*?)^```", readme, flags=re.M | re.S)
+    assert match, f"README has no ```{language} block under '## {heading}'"
+    return match.group(1)
+
+
+def test_ci_runs_the_readme_quick_start():
+    commands = _readme_block("Quick start").strip().splitlines()
+    ci = (ROOT / ".ci" / "run").read_text().splitlines()
+    assert len(commands) == 2
+    assert [line for line in ci if line in commands] == commands
+
+
+@pytest.mark.slow  # the first jax.grad compiles for 13-15 s
+def test_readme_library_example_prints_what_the_readme_shows():
+    code = _readme_block("The library", "python")
+    readme = (ROOT / "README.md").read_text()
+    shown = re.search(r"^prints\n\n```\n(.*?)^```", readme, flags=re.M | re.S).group(1)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=ROOT, check=True)
+    assert done.stdout == shown
