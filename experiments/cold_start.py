@@ -5,10 +5,12 @@ Every command of the table below runs as a new Python process (what a user waits
 each run) and ``--repeats`` times with a cache the first cold run filled (warm).  The
 bare start of JAX, ``import jax; jax.numpy.zeros(1).block_until_ready()``, is timed in
 the same run, so every median is also printed as a ratio to it (the machine is shared:
-ratios travel better than seconds).  Writes results/cold_start/<label>.md and .json.
+ratios travel better than seconds).  Writes results/cold_start/<name>.md and .json, the
+name being the date and the short commit of the timed checkout, then ``--label`` if given
+(``2026-11-23-5a18caf-follower``), so that every record says when and what it measured.
 
     python experiments/cold_start.py [--repeats 3] [--only ct,help] [--root DIR]
-                                     [--baseline DIR] [--label after]
+                                     [--baseline DIR] [--label follower]
 
 ``--root`` times another checkout (its code is put first on ``PYTHONPATH``); ``--baseline``
 times a second one in turn with it, run by run, and adds the ratios of the two.  Code that
@@ -18,6 +20,7 @@ has no persistent cache ignores ``CAMJAX_CACHE_DIR``; its warm runs then equal i
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import os
 import statistics
@@ -51,6 +54,17 @@ SHOWN = {
     "bare-jax": 'python -c "import jax; jax.numpy.zeros(1).block_until_ready()"',
     "ct_curves": "python: camjax.ct_curves(standard_laws(), 1000 ratios in [1, 30])",
 }
+
+
+def record_name(root: Path, label: str | None) -> str:
+    """Today's date and the short commit of the checkout at ``root`` (``2026-11-23-5a18caf``),
+    then the label; without git, the date alone."""
+    parts = [datetime.date.today().isoformat()]
+    commit = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
+                            capture_output=True, text=True)
+    if commit.returncode == 0:
+        parts.append(commit.stdout.strip())
+    return "-".join([*parts, label] if label else parts)
 
 
 def run_once(argv, root: Path, cache: str) -> float:
@@ -92,10 +106,11 @@ def main() -> None:
     parser.add_argument("--root", default=str(Path(__file__).resolve().parents[1]),
                         help="checkout whose camjax is timed")
     parser.add_argument("--baseline", help="another checkout, timed in turn with --root")
-    parser.add_argument("--label", default="after")
+    parser.add_argument("--label", help="what the run compares, appended to the file name")
     parser.add_argument("--out", default="results/cold_start")
     args = parser.parse_args()
     roots = {"now": Path(args.root).resolve()}
+    name_of_record = record_name(roots["now"], args.label)
     if args.baseline:
         roots["baseline"] = Path(args.baseline).resolve()
     names = args.only.split(",") if args.only else list(COMMANDS)
@@ -116,7 +131,7 @@ def main() -> None:
     if compared:
         header += " baseline cold s | baseline warm s | cold now / baseline | warm now / baseline |"
     lines = [
-        f"# Cold start ({args.label}): whole-process wall time, median of {args.repeats}",
+        f"# Cold start ({name_of_record}): whole-process wall time, median of {args.repeats}",
         "",
         "Shared 2-core machine under load from other jobs: read the ratios to the bare JAX",
         f"start (`python -c \"{BARE}\"`, median {base:.2f} s in this run, timed again before",
@@ -140,9 +155,9 @@ def main() -> None:
     print(text)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / f"{args.label}.md").write_text(text)
-    (out / f"{args.label}.json").write_text(json.dumps(
-        {"label": args.label, "roots": {k: str(v) for k, v in roots.items()},
+    (out / f"{name_of_record}.md").write_text(text)
+    (out / f"{name_of_record}.json").write_text(json.dumps(
+        {"label": name_of_record, "roots": {k: str(v) for k, v in roots.items()},
          "repeats": args.repeats, "bare_s": base, "bare_runs": bare,
          "commands": {k: {**v, "argv": COMMANDS[k]} for k, v in rows.items()}}, indent=1) + "\n")
 

@@ -4,7 +4,7 @@ Serves ``site/`` (``mkdocs build --strict`` first) on a local port and loads, in
 browser, the home page, the API entry of ``camjax.ct_curve`` and the Ct-curves notebook.
 Each page's rendered DOM must hold what a reader comes for (the page title, the rendered
 signature of ``ct_curve``, the notebook's executed figures); the screenshots go to
-``docs/screenshots/`` (the README shows the home page's).
+``docs/screenshots/`` (docs/development.md shows the home page's).
 
     mkdocs build --strict && python experiments/docs_screenshots.py
 

@@ -4,6 +4,8 @@ import ast
 import importlib
 import inspect
 import re
+import subprocess
+import sys
 import types
 from pathlib import Path
 
@@ -86,3 +88,28 @@ def test_the_extending_page_runs(capsys):
     goal, law = namespace["goal"], namespace["law"]
     assert float(goal.train(law, law.Ca, 8.0)) == pytest.approx(goal.report(law), rel=1e-9)
     assert training == pytest.approx(reported, abs=1e-8)
+
+
+def _readme_block(heading: str, language: str = "") -> str:
+    """The first fenced block under a README heading."""
+    readme = (ROOT / "README.md").read_text()
+    match = re.search(rf"^## {heading}\n.*?^```{language}\n(.*?)^```", readme, flags=re.M | re.S)
+    assert match, f"README has no ```{language} block under '## {heading}'"
+    return match.group(1)
+
+
+def test_ci_runs_the_readme_quick_start():
+    commands = _readme_block("Quick start").strip().splitlines()
+    ci = (ROOT / ".ci" / "run").read_text().splitlines()
+    assert len(commands) == 2
+    assert [line for line in ci if line in commands] == commands
+
+
+@pytest.mark.slow  # the first jax.grad compiles for 13-15 s
+def test_readme_library_example_prints_what_the_readme_shows():
+    code = _readme_block("The library", "python")
+    readme = (ROOT / "README.md").read_text()
+    shown = re.search(r"^prints\n\n```\n(.*?)^```", readme, flags=re.M | re.S).group(1)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=ROOT, check=True)
+    assert done.stdout == shown
