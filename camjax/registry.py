@@ -64,16 +64,16 @@ class ModelEntry:
 
 
 MODELS: tuple[ModelEntry, ...] = (
-    ModelEntry("spring-mass", "SpringMass", "spring_mass",
+    ModelEntry("spring-mass", "SpringMass", "_spring_mass",
                summary="the linear SDOF: payload on an elastic transmission"),
-    ModelEntry("friction", "CoulombFriction", "friction", (("friction", "MU"),),
+    ModelEntry("friction", "CoulombFriction", "_friction", (("friction", "MU"),),
                summary="Coulomb friction on the payload"),
-    ModelEntry("backlash", "Backlash", "backlash", (("backlash", "BK"), ("natural_deceleration", "DN")),
+    ModelEntry("backlash", "Backlash", "_backlash", (("backlash", "BK"), ("natural_deceleration", "DN")),
                summary="a clearance in the transmission"),
-    ModelEntry("two-mass", "TwoMass", "two_mass",
+    ModelEntry("two-mass", "TwoMass", "_two_mass",
                (("stiffness_ratio", "K"), ("inertia_ratio", "M")), damping=False,
                summary="an elastic input drive"),
-    ModelEntry("swinging-follower", "SwingingFollower", "swinging_follower", damping=False,
+    ModelEntry("swinging-follower", "SwingingFollower", "_swinging_follower", damping=False,
                swept=False, summary="a flexible swinging roller follower in a grooved cam"),
 )
 """Every model, simplest first."""

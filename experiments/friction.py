@@ -31,7 +31,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from camjax.models.friction import CoulombFriction  # noqa: E402
+from camjax.models import CoulombFriction  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "friction"
 SAMPLES = 2048  # per rise

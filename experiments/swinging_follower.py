@@ -24,12 +24,17 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from camjax.laws._program import LawBank  # noqa: E402
 
 import camjax  # noqa: E402
 from camjax import geometry  # noqa: E402
-from camjax.laws import Cycloidal, ModifiedSine, ModifiedTrapezoid, PolynomialLaw  # noqa: E402
-from camjax.models.swinging_follower import SwingingFollower, spectral_peaks, spectrum  # noqa: E402
+from camjax.laws import (  # noqa: E402
+    Cycloidal,
+    LawBank,  # noqa: E402
+    ModifiedSine,
+    ModifiedTrapezoid,
+    PolynomialLaw,
+)
+from camjax.models import SwingingFollower, spectral_peaks, spectrum  # noqa: E402
 
 OUT = Path("results/swinging_follower")
 LAWS = (Cycloidal(), ModifiedSine(), ModifiedTrapezoid(), PolynomialLaw(3))

@@ -28,7 +28,7 @@ import numpy as np
 
 import camjax  # noqa: F401  (float64)
 from camjax.laws import Cycloidal, LawBank, ModifiedSine, ModifiedTrapezoid, PolynomialLaw
-from camjax.models.swinging_follower import SwingingFollower, spectral_peaks, spectrum
+from camjax.models import SwingingFollower, spectral_peaks, spectrum
 
 OUT = Path("results/swinging_follower")
 TURNS, PER_TURN = 3, 512

@@ -30,7 +30,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from camjax.models.two_mass import TwoMass  # noqa: E402
+from camjax.models import TwoMass  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "two_mass"
 LAWS = ("modified-sine", "modified-trapezoid", "cycloidal")

@@ -25,8 +25,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import camjax
-from camjax.models.friction import CoulombFriction, free_vibration
-from camjax.models.two_mass import TwoMass
+from camjax.models import CoulombFriction, TwoMass, free_vibration
 
 law = camjax.laws.Cycloidal()
 n = 5.25

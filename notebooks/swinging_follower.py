@@ -13,7 +13,7 @@ import numpy as np
 import camjax
 from camjax import geometry
 from camjax.laws import ModifiedSine
-from camjax.models.swinging_follower import SwingingFollower, spectral_peaks, spectrum
+from camjax.models import SwingingFollower, spectral_peaks, spectrum
 
 model = SwingingFollower(rise=ModifiedSine(), fall=ModifiedSine(), modes=2)
 theta = np.linspace(0, 2 * math.pi, 361)

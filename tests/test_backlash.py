@@ -14,7 +14,7 @@ from scipy.optimize import brentq
 import camjax
 from camjax.cli import CliError
 from camjax.cli import backlash as backlash_cli
-from camjax.models import backlash as bl
+import camjax.models as bl
 
 
 def _parabolic_closed_form(bk, dn):

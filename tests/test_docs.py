@@ -38,7 +38,7 @@ def _public(module_name: str) -> dict[str, object]:
     module = importlib.import_module(module_name)
     if hasattr(module, "__path__"):  # a package: what it re-exports (lazily: its __all__)
         names = [n for n in getattr(module, "__all__", vars(module)) if not n.startswith("_")
-                 and not isinstance(getattr(module, n), types.ModuleType)]
+                 and n != "TYPE_CHECKING" and not isinstance(getattr(module, n), types.ModuleType)]
     else:  # a module: what it defines at top level
         tree = ast.parse(inspect.getsource(module))
         names = []

@@ -8,7 +8,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 import camjax
-from camjax.models.friction import CoulombFriction, free_vibration
+from camjax.models import CoulombFriction, free_vibration
 
 solve = camjax.solve
 

@@ -210,8 +210,7 @@ def test_only_models_that_ask_compile_their_solve_with_other_xla_options():
     """``solve`` and ``trace_solve`` pick one jitted program per model class: XLA's defaults
     for every SDOF-family model, the follower's own CPU options for the follower (its
     spectra under them are checked by the follower's tests)."""
-    from camjax.models import _solve
-    from camjax.models.swinging_follower import SwingingFollower
+    from camjax.models import SwingingFollower, _solve
 
     for _, model in all_models(swept=True):
         assert _solve._program(model) is _solve._solve

@@ -11,7 +11,7 @@ from scipy.integrate import cumulative_simpson
 from scipy.optimize import brentq
 
 import camjax
-from camjax.models.swinging_follower import SwingingFollower, spectral_peaks, spectrum
+from camjax.models import SwingingFollower, spectral_peaks, spectrum
 
 
 def pinned_pinned_rayleigh(model, k):

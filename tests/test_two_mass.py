@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import cumulative_simpson
 
 import camjax
-from camjax.models.two_mass import TwoMass
+from camjax.models import TwoMass
 
 OPTIONS = dict(samples=1024)  # one static setting: the model compiles once per law
 

@@ -44,7 +44,7 @@ def backlash_report(law_names: list[str], bk: list[float], dn: list[float]) -> d
     import numpy as np
 
     from .. import laws as law_library
-    from ..models.backlash import STATUS_NAMES, kinematic_impact_table
+    from ..models import STATUS_NAMES, kinematic_impact_table
 
     report = {}
     for name in law_names:

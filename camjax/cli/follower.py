@@ -44,7 +44,7 @@ def register(subparsers) -> None:
 
 def _model(args):
     from .. import laws
-    from ..models.swinging_follower import SwingingFollower
+    from ..models import SwingingFollower
 
     try:
         law = laws.get(args.law)
@@ -73,8 +73,7 @@ def follower_report(model, law_name: str) -> tuple[dict, object]:
 
     import numpy as np
 
-    from ..models import solve, trace_solve
-    from ..models.swinging_follower import spectral_peaks, spectrum
+    from ..models import solve, spectral_peaks, spectrum, trace_solve
 
     # The solve is traced first (Python holds the GIL); its compile then releases the GIL,
     # and the natural frequency's program is traced and compiled beside it on a thread.

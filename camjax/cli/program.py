@@ -86,7 +86,7 @@ def _csv(report: dict) -> str:
 
 def _write_outputs(out: Path, program, steady, report: dict, rpm, points: int) -> None:
     from ..program import profile, response, write_csv, write_dxf
-    from ..program.figures import save_figures
+    from ..program._figures import save_figures
 
     dump_json(report, out / "summary.json")
     prof = profile(program, points)

@@ -10,6 +10,7 @@ diffrax are imported on first use, so that the exact path never pays for diffrax
 """
 
 import importlib
+from typing import TYPE_CHECKING
 
 from ..registry import MODELS as MODELS
 from ..registry import ModelEntry as ModelEntry
@@ -21,37 +22,79 @@ from ._base import Options as Options
 from ._base import Response as Response
 from ._solve import solve as solve
 from ._solve import trace_solve as trace_solve
-from .spring_mass import SpringMass as SpringMass
-from .spring_mass import SpringMassOptions as SpringMassOptions
-from .spring_mass import SpringMassResponse as SpringMassResponse
-from .spring_mass import batch_metrics as batch_metrics
-from .spring_mass import natural_frequency as natural_frequency
-from .spring_mass import period_ratio as period_ratio
-from .spring_mass import residual_vibration as residual_vibration
-from .spring_mass import response_metrics as response_metrics
-from .spring_mass import torsion_factor as torsion_factor
+from ._spring_mass import SpringMass as SpringMass
+from ._spring_mass import SpringMassOptions as SpringMassOptions
+from ._spring_mass import SpringMassResponse as SpringMassResponse
+from ._spring_mass import batch_metrics as batch_metrics
+from ._spring_mass import natural_frequency as natural_frequency
+from ._spring_mass import period_ratio as period_ratio
+from ._spring_mass import residual_vibration as residual_vibration
+from ._spring_mass import response_metrics as response_metrics
+from ._spring_mass import torsion_factor as torsion_factor
+
+if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
+    from ._backlash import STATUS_NAMES as STATUS_NAMES
+    from ._backlash import IMPACT as IMPACT
+    from ._backlash import NO_SEPARATION as NO_SEPARATION
+    from ._backlash import NO_IMPACT as NO_IMPACT
+    from ._backlash import DRIVING_FLANK as DRIVING_FLANK
+    from ._backlash import FREE as FREE
+    from ._backlash import OTHER_FLANK as OTHER_FLANK
+    from ._backlash import impact_velocity as impact_velocity
+    from ._backlash import Backlash as Backlash
+    from ._backlash import BacklashOptions as BacklashOptions
+    from ._backlash import BacklashResponse as BacklashResponse
+    from ._backlash import KinematicImpact as KinematicImpact
+    from ._backlash import impact_force as impact_force
+    from ._backlash import kinematic_impact as kinematic_impact
+    from ._backlash import kinematic_impact_table as kinematic_impact_table
+    from ._backlash import normalised_backlash as normalised_backlash
+    from ._backlash import normalised_deceleration as normalised_deceleration
+    from ._friction import CoulombFriction as CoulombFriction
+    from ._friction import FreeVibration as FreeVibration
+    from ._friction import FrictionOptions as FrictionOptions
+    from ._friction import FrictionResponse as FrictionResponse
+    from ._friction import free_vibration as free_vibration
+    from ._swinging_follower import FollowerOptions as FollowerOptions
+    from ._swinging_follower import FollowerResponse as FollowerResponse
+    from ._swinging_follower import SwingingFollower as SwingingFollower
+    from ._swinging_follower import spectral_peaks as spectral_peaks
+    from ._swinging_follower import spectrum as spectrum
+    from ._two_mass import TwoMass as TwoMass
+    from ._two_mass import TwoMassOptions as TwoMassOptions
+    from ._two_mass import TwoMassResponse as TwoMassResponse
 
 _LAZY = {
-    "Backlash": "backlash",
-    "BacklashOptions": "backlash",
-    "BacklashResponse": "backlash",
-    "KinematicImpact": "backlash",
-    "impact_force": "backlash",
-    "kinematic_impact": "backlash",
-    "kinematic_impact_table": "backlash",
-    "normalised_backlash": "backlash",
-    "normalised_deceleration": "backlash",
-    "CoulombFriction": "friction",
-    "FreeVibration": "friction",
-    "FrictionOptions": "friction",
-    "FrictionResponse": "friction",
-    "free_vibration": "friction",
-    "FollowerOptions": "swinging_follower",
-    "FollowerResponse": "swinging_follower",
-    "SwingingFollower": "swinging_follower",
-    "TwoMass": "two_mass",
-    "TwoMassOptions": "two_mass",
-    "TwoMassResponse": "two_mass",
+    "Backlash": "_backlash",
+    "BacklashOptions": "_backlash",
+    "BacklashResponse": "_backlash",
+    "KinematicImpact": "_backlash",
+    "impact_force": "_backlash",
+    "kinematic_impact": "_backlash",
+    "kinematic_impact_table": "_backlash",
+    "normalised_backlash": "_backlash",
+    "normalised_deceleration": "_backlash",
+    "STATUS_NAMES": "_backlash",
+    "IMPACT": "_backlash",
+    "NO_SEPARATION": "_backlash",
+    "NO_IMPACT": "_backlash",
+    "DRIVING_FLANK": "_backlash",
+    "FREE": "_backlash",
+    "OTHER_FLANK": "_backlash",
+    "impact_velocity": "_backlash",
+    "CoulombFriction": "_friction",
+    "FreeVibration": "_friction",
+    "FrictionOptions": "_friction",
+    "FrictionResponse": "_friction",
+    "free_vibration": "_friction",
+    "FollowerOptions": "_swinging_follower",
+    "FollowerResponse": "_swinging_follower",
+    "SwingingFollower": "_swinging_follower",
+    "spectral_peaks": "_swinging_follower",
+    "spectrum": "_swinging_follower",
+    "TwoMass": "_two_mass",
+    "TwoMassOptions": "_two_mass",
+    "TwoMassResponse": "_two_mass",
 }
 __all__ = sorted([
     "AbstractMachineModel", "AbstractModel", "MODELS", "ModelEntry", "model_entry", "Metrics", "Options", "Response", "solve", "trace_solve", "SpringMass",

@@ -9,6 +9,8 @@ segment's law (``MaxPreload``: the least preload over a speed range).  The equat
 in docs/program.md.
 """
 
+from typing import TYPE_CHECKING
+
 from ._analysis import Report as Report
 from ._analysis import SpeedReport as SpeedReport
 from ._analysis import analyse as analyse
@@ -41,11 +43,20 @@ from ._spec import example_path as example_path
 from ._spec import segment_band as segment_band
 from ._spec import with_law as with_law
 
+if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
+    from ._figures import save_figures as save_figures
+    from ._preload import MaxPreload as MaxPreload
+
+# Loaded on first use: MaxPreload subclasses camjax.law_design's objective (which imports
+# optax) and the figures import matplotlib.
+_LAZY = {"MaxPreload": "._preload", "save_figures": "._figures"}
+
 
 def __getattr__(name):
-    # MaxPreload subclasses camjax.law_design's objective, which imports optax: load on use.
-    if name == "MaxPreload":
-        from ._preload import MaxPreload
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
 
-        return MaxPreload
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_LAZY[name], __name__), name)
+    globals()[name] = value
+    return value

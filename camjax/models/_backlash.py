@@ -46,9 +46,12 @@ from ._base import Metrics, Options, Response
 from ._hybrid import AbstractHybridModel, bisect, sample_times
 
 # Status codes of a kinematic case.
-IMPACT = 0  # strikes the other flank
-NO_SEPARATION = 1  # dn above the law's peak deceleration: never leaves the driving flank
-NO_IMPACT = 2  # leaves, but falls back onto the driving flank before crossing bk
+IMPACT = 0
+"""The payload strikes the other flank."""
+NO_SEPARATION = 1
+"""The natural deceleration dn exceeds the law's peak deceleration: never leaves the driving flank."""
+NO_IMPACT = 2
+"""The payload leaves, but falls back onto the driving flank before crossing bk."""
 STATUS_NAMES = {IMPACT: "impact", NO_SEPARATION: "no separation", NO_IMPACT: "no impact"}
 
 _FALL_TOL = 1e-12  # a gap below -_FALL_TOL means the payload is back on the driving flank
@@ -255,9 +258,12 @@ def impact_force(
 # --- dynamic model: SDOF with a dead zone ----------------------------------------------
 
 # Contact states of the dynamic model.
-DRIVING_FLANK = 0  # deflection e = s - x > 0: the transmission pushes the payload
-FREE = 1  # -bk < e < 0: free flight, only the natural deceleration acts
-OTHER_FLANK = 2  # e < -bk: the other flank holds the payload back
+DRIVING_FLANK = 0
+"""Deflection e = s - x > 0: the transmission pushes the payload."""
+FREE = 1
+"""-bk < e < 0: free flight, only the natural deceleration acts."""
+OTHER_FLANK = 2
+"""E < -bk: the other flank holds the payload back."""
 
 
 @dataclasses.dataclass(frozen=True)
