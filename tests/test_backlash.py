@@ -12,9 +12,9 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 import camjax
+import camjax.models as bl
 from camjax.cli import CliError
 from camjax.cli import backlash as backlash_cli
-import camjax.models as bl
 
 
 def _parabolic_closed_form(bk, dn):

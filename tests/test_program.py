@@ -476,7 +476,7 @@ def test_groove_clearance_hands_over_to_backlash(tmp_path, capsys):
     rpm = 600.0
     program = groove_cam(0.1)
     turns = camjax.program.groove_turns(program, [rpm])[0]
-    settle = 7
+    settle = turns.turns  # the turns from rest the settled run took
     period = 60.0 / rpm
     reference = [r for r in _scipy_groove(program, rpm, settle) if r[0] >= (settle - 1) * period]
     assert len(turns.impacts) == len(reference) >= 4
@@ -522,3 +522,31 @@ def test_strikes_closer_than_a_sample_get_the_next_samples_force():
     assert peaks[1] == inside[np.argmax(np.abs(inside))]
     rest = acceleration[151:]
     assert peaks[2] == rest[np.argmax(np.abs(rest))]
+
+
+def test_a_groove_turn_is_settled_when_its_strikes_repeat():
+    """The settling criterion compares strikes turn by turn: flanks must match, angles
+    within SETTLED_DEG and velocities within SETTLED_REL, else the change is infinite."""
+    from camjax.program import SETTLED_DEG, GrooveTurn, Impact
+
+    def turn(*strikes):
+        return GrooveTurn(600.0, np.zeros(2), np.zeros(2), [Impact(a, f, v, 1.0) for a, f, v in strikes])
+
+    before = turn((10.0, "outer", 0.5), (200.0, "inner", 0.25))
+    assert turn((10.0 + 3e-7, "outer", 0.5), (200.0 - 5e-7, "inner", 0.25)).change_from(before) == \
+        pytest.approx(5e-7, rel=1e-6)
+    assert turn((10.0 + 2e-6, "outer", 0.5), (200.0, "inner", 0.25)).change_from(before) > SETTLED_DEG
+    assert turn((10.0, "outer", 0.5)).change_from(before) == math.inf  # a strike fewer
+    assert turn((10.0, "inner", 0.5), (200.0, "inner", 0.25)).change_from(before) == math.inf
+    assert turn((10.0, "outer", 0.5 * (1 + 1e-5)), (200.0, "inner", 0.25)).change_from(before) == math.inf
+
+
+@pytest.mark.slow
+def test_a_settled_groove_turn_does_not_move_with_more_turns():
+    """Run from rest until the strikes repeat: twice the turns moves them by less than
+    SETTLED_DEG (a fixed count from the contact decay left them moving by 5e-4 deg)."""
+    settled = camjax.program.groove_turns(groove_cam(0.1), [600.0])[0]
+    assert settled.settled and settled.turns >= 2
+    longer = camjax.program.groove_turns(groove_cam(0.1), [600.0], turns=2 * settled.turns)[0]
+    assert [i.flank for i in longer.impacts] == [i.flank for i in settled.impacts]
+    assert max(abs(a.angle_deg - b.angle_deg) for a, b in zip(longer.impacts, settled.impacts)) < 1e-6

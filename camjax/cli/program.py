@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import csv
 import io
+import math
+import sys
 from pathlib import Path
 
 from ._common import CliError, add_format, dump_json, output_dir, parse_range
@@ -30,6 +32,9 @@ def register(subparsers) -> None:
     parser.add_argument("--no-flight", action="store_true", help="skip the flight simulation where contact is lost "
                         "(and a grooved cam's impacts)")
     parser.add_argument("--points", type=int, default=3600, help="profile points over the turn (default 3600)")
+    parser.add_argument("--plot-rpm", type=float, default=None, metavar="RPM",
+                        help="the speed whose turn the figures show (default: the speed given "
+                        "nearest the jump speed, else the highest)")
     add_format(parser)
     parser.add_argument("--out", metavar="DIR", help="write profile.csv, profile.dxf, response.csv, "
                         "summary.json and figures here (response.csv at up to 10 speeds)")
@@ -51,11 +56,21 @@ def _cell(value, fmt):
     return "-" if value is None else fmt.format(value)
 
 
-def _table(report: dict) -> str:
+def _numbers(values, fmt="{:.4g}") -> str:
+    return " ".join(fmt.format(v) for v in values) or "-"
+
+
+def _table(report: dict, grooved: bool = False) -> str:
     lines = [f"program {report['program']}"]
-    lines.append("".join(f"{title:>16}" for _, title, _ in _COLUMNS))
+    lines.append("".join(f"{title:>16}" for _, title, _ in _COLUMNS) + "  period ratios   residual mm")
     for s in report["speeds"]:
-        lines.append("".join(f"{_cell(s[key], fmt):>16}" for key, _, fmt in _COLUMNS))
+        lines.append("".join(f"{_cell(s[key], fmt):>16}" for key, _, fmt in _COLUMNS)
+                     + f"  {_numbers(s['period_ratios'], '{:.3f}'):<15} {_numbers(s['residual_vibration_mm'])}")
+    lines.append("Fc: contact force of the periodic steady state with contact held (linear); period "
+                 "ratios per moving segment; residual: vibration amplitude at the start of each dwell")
+    if grooved:
+        lines.append("the strikes below are the groove's, with its clearance (the Backlash model): "
+                     "their forces are not bounded by the contact-held Fc above")
     for s in report["speeds"]:
         for f in s["flights"] or []:
             lines.append(
@@ -69,7 +84,11 @@ def _table(report: dict) -> str:
             lines.append(f"at {s['rpm']:g} rpm the roller strikes the {i['flank']} flank at {i['angle_deg']:.3f} deg, "
                          f"{i['velocity_m_s']:.4g} m/s, peak force {i['peak_force_n']:.5g} N")
     speed = report["jump_speed_rpm"]
-    if len(report["speeds"]) > 1:
+    if report["jump_below_range"]:
+        lowest = min(s["rpm"] for s in report["speeds"])
+        lines.append(f"jump speed: below the range (contact is already lost at {lowest:g} rpm, "
+                     "the lowest speed given)")
+    elif len(report["speeds"]) > 1:
         lines.append("jump speed: " + ("none in the range" if speed is None else f"{speed:.1f} rpm"))
     return "\n".join(lines)
 
@@ -78,15 +97,33 @@ def _csv(report: dict) -> str:
     buffer = io.StringIO()
     writer = csv.writer(buffer)
     keys = [key for key, _, _ in _COLUMNS]
-    writer.writerow(keys + ["jump_speed_rpm"])
+    segments = len(report["speeds"][0]["period_ratios"])
+    dwells = len(report["speeds"][0]["residual_vibration_mm"])
+    writer.writerow(keys + [f"period_ratio_{i + 1}" for i in range(segments)]
+                    + [f"residual_vibration_mm_{i + 1}" for i in range(dwells)]
+                    + ["jump_speed_rpm", "jump_below_range"])
     for s in report["speeds"]:
-        writer.writerow(["" if s[k] is None else s[k] for k in keys] + [report["jump_speed_rpm"] or ""])
+        writer.writerow(["" if s[k] is None else s[k] for k in keys] + list(s["period_ratios"])
+                        + list(s["residual_vibration_mm"])
+                        + [report["jump_speed_rpm"] or "", report["jump_below_range"]])
     return buffer.getvalue().rstrip()
 
 
-def _write_outputs(out: Path, program, steady, report: dict, rpm, points: int) -> None:
-    from ..program import profile, response, write_csv, write_dxf
-    from ..program._figures import save_figures
+def plot_speed(report: dict, chosen: float | None) -> float:
+    """The speed whose turn the figures draw: ``chosen``, else the speed given nearest the
+    jump speed (the first that jumps when the jump lies below the range), else the highest."""
+    speeds = [s["rpm"] for s in report["speeds"]]
+    if chosen is not None:
+        return chosen
+    if report["jump_below_range"]:
+        return min(speeds)
+    if report["jump_speed_rpm"] is not None:
+        return min(speeds, key=lambda r: abs(r - report["jump_speed_rpm"]))
+    return max(speeds)
+
+
+def _write_outputs(out: Path, program, steady, report: dict, rpm, points: int, plot_rpm: float) -> None:
+    from ..program import groove_turns, profile, response, save_figures, write_csv, write_dxf
 
     dump_json(report, out / "summary.json")
     prof = profile(program, points)
@@ -100,28 +137,43 @@ def _write_outputs(out: Path, program, steady, report: dict, rpm, points: int) -
         for r, h in histories:
             for i in range(h["theta_deg"].size):
                 writer.writerow([r] + [f"{h[k][i]:.10g}" for k in keys])
-    save_figures(out, program, report, histories[0], prof)
+    shown = next((h for r, h in histories if r == plot_rpm), None)
+    shown = shown if shown is not None else response(program, plot_rpm, steady=steady)
+    groove = None
+    if program.follower.form_closed and program.follower.groove_clearance_mm:
+        groove = groove_turns(program, [plot_rpm])[0]
+    save_figures(out, program, report, (plot_rpm, shown), prof, groove=groove)
 
 
 def run(args) -> int:
-    from ..program import Program, SteadyState, analyse, example_path
+    from ..program import MAX_TURNS, SETTLED_DEG, Program, SteadyState, analyse, example_path
 
     rpm = parse_range(args.rpm, "--rpm")
     if not all(r > 0 for r in rpm):
         raise CliError(f"--rpm: speeds must be positive, got {args.rpm!r}")
     if args.points < 8:
         raise CliError(f"--points: must be at least 8, got {args.points}")
+    if args.plot_rpm is not None and not (math.isfinite(args.plot_rpm) and args.plot_rpm >= min(rpm)):
+        raise CliError(f"--plot-rpm: must be a speed at or above the lowest --rpm ({min(rpm):g}), "
+                       f"got {args.plot_rpm:g}")
     path = Path(args.file) if args.file else example_path()
     program = Program.load(path)
     out = output_dir(args.out)
     steady = SteadyState(program, float(min(rpm)))
     report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady).as_dict()
     if out is not None:
-        _write_outputs(out, program, steady, report, rpm, args.points)
+        _write_outputs(out, program, steady, report, rpm, args.points, plot_speed(report, args.plot_rpm))
+    for s in report["speeds"]:
+        change = s["impacts_change_deg"]
+        if change is not None and not change <= SETTLED_DEG:
+            print(f"warning: at {s['rpm']:g} rpm the groove's strikes had not settled after "
+                  f"{MAX_TURNS} turns (they still move by {change:.3g} deg per turn): the "
+                  "roller chatters without a period; the last turn is reported", file=sys.stderr)
     if args.format == "json":
         print(dump_json(report))
     elif args.format == "csv":
         print(_csv(report))
     else:
-        print(_table(report))
+        print(_table(report, grooved=bool(program.follower.form_closed and program.follower.groove_clearance_mm
+                                          and not args.no_flight)))
     return 0

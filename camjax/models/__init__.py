@@ -33,19 +33,19 @@ from ._spring_mass import response_metrics as response_metrics
 from ._spring_mass import torsion_factor as torsion_factor
 
 if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
-    from ._backlash import STATUS_NAMES as STATUS_NAMES
-    from ._backlash import IMPACT as IMPACT
-    from ._backlash import NO_SEPARATION as NO_SEPARATION
-    from ._backlash import NO_IMPACT as NO_IMPACT
     from ._backlash import DRIVING_FLANK as DRIVING_FLANK
     from ._backlash import FREE as FREE
+    from ._backlash import IMPACT as IMPACT
+    from ._backlash import NO_IMPACT as NO_IMPACT
+    from ._backlash import NO_SEPARATION as NO_SEPARATION
     from ._backlash import OTHER_FLANK as OTHER_FLANK
-    from ._backlash import impact_velocity as impact_velocity
+    from ._backlash import STATUS_NAMES as STATUS_NAMES
     from ._backlash import Backlash as Backlash
     from ._backlash import BacklashOptions as BacklashOptions
     from ._backlash import BacklashResponse as BacklashResponse
     from ._backlash import KinematicImpact as KinematicImpact
     from ._backlash import impact_force as impact_force
+    from ._backlash import impact_velocity as impact_velocity
     from ._backlash import kinematic_impact as kinematic_impact
     from ._backlash import kinematic_impact_table as kinematic_impact_table
     from ._backlash import normalised_backlash as normalised_backlash

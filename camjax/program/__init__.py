@@ -27,6 +27,9 @@ from ._export import Profile as Profile
 from ._export import profile as profile
 from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
+from ._groove import MAX_TURNS as MAX_TURNS
+from ._groove import SETTLED_DEG as SETTLED_DEG
+from ._groove import SETTLED_REL as SETTLED_REL
 from ._groove import GrooveTurn as GrooveTurn
 from ._groove import Impact as Impact
 from ._groove import TurnLaw as TurnLaw

@@ -50,6 +50,8 @@ class SpeedReport:
         period_ratios: each moving segment's duration times the natural frequency.
         flights: every flight of the turn where contact is lost (``None`` where it holds).
         impacts: a grooved cam's strikes on its flanks in a settled turn (else ``None``).
+        impacts_change_deg: how far the strikes still moved from the turn before (degrees;
+            at most ``camjax.program.SETTLED_DEG`` once settled; ``None`` without a groove).
     """
 
     rpm: float
@@ -63,6 +65,7 @@ class SpeedReport:
     period_ratios: tuple[float, ...]
     flights: tuple[Flight, ...] | None = None
     impacts: tuple[Impact, ...] | None = None
+    impacts_change_deg: float | None = None
 
     @property
     def flight(self) -> Flight | None:
@@ -83,15 +86,18 @@ class SpeedReport:
 @dataclasses.dataclass(frozen=True)
 class Report:
     """A program's report over a list of speeds: one ``SpeedReport`` each, and the jump
-    speed (the lowest speed in the range at which contact is lost; ``None`` if none)."""
+    speed, the lowest speed in the range at which contact is lost (``None`` if contact
+    holds over the whole range, or if it is lost already at the lowest speed given: then
+    ``jump_below_range`` is true and the jump speed lies below the range)."""
 
     program: str
     speeds: tuple[SpeedReport, ...]
     jump_speed_rpm: float | None
+    jump_below_range: bool = False
 
     def as_dict(self) -> dict:
         return {"program": self.program, "speeds": [s.as_dict() for s in self.speeds],
-                "jump_speed_rpm": self.jump_speed_rpm}
+                "jump_speed_rpm": self.jump_speed_rpm, "jump_below_range": self.jump_below_range}
 
 
 def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadyState | None = None,
@@ -132,11 +138,13 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
             period_ratios=tuple(float(v) for v in ratios[i]),
             flights=found,
             impacts=None if turns[i] is None else tuple(turns[i].impacts),
+            impacts_change_deg=None if turns[i] is None else turns[i].change_deg,
         ))
     jump_speed = None
-    if not closed and rpm.size > 1 and rpm.max() > rpm.min():
+    below = not closed and bool(out.min_contact_force_n[np.argmin(rpm)] < 0)
+    if not closed and not below and rpm.size > 1 and rpm.max() > rpm.min():
         jump_speed = jump_speed_rpm(steady, float(rpm.min()), float(rpm.max()))
-    return Report(program.name, tuple(speeds), jump_speed)
+    return Report(program.name, tuple(speeds), jump_speed, below)
 
 
 def response(program: Program, rpm: float, *, steady: SteadyState | None = None) -> dict[str, np.ndarray]:

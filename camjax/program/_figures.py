@@ -33,27 +33,59 @@ def svaj(program: Program, rpm: float, history: dict) -> plt.Figure:
     return fig
 
 
-def contact_force(program: Program, rpm: float, history: dict) -> plt.Figure:
-    """Contact force over one turn, with the zero line and the preload."""
+def contact_force(program: Program, rpm: float, history: dict, groove=None) -> plt.Figure:
+    """Contact force over one turn, with the zero line and the preload (a spring-loaded
+    cam); for a grooved cam with clearance, the force with the clearance (``groove``, a
+    ``GrooveTurn``) and its strikes beside the contact-held one."""
     fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
-    ax.plot(history["theta_deg"], history["contact_force_n"], lw=1)
+    f = program.follower
     ax.axhline(0.0, color="k", lw=0.8)
-    ax.axhline(program.follower.preload_n, color="C1", lw=0.8, ls="--", label="preload")
+    if groove is not None:
+        ax.plot(history["theta_deg"], history["contact_force_n"], lw=0.8, ls="--", color="0.5",
+                label="contact held (no clearance)")
+        ax.plot(groove.theta_deg, groove.force_n, lw=1, color="C0",
+                label=f"with the groove's clearance {f.groove_clearance_mm:g} mm")
+        for i, impact in enumerate(groove.impacts):
+            ax.axvline(impact.angle_deg, color="C3", lw=0.6, ls=":", label="strikes" if i == 0 else None)
+        ax.set_ylabel("flank force (N, + inner flank)")
+        what = "grooved cam"
+    else:
+        ax.plot(history["theta_deg"], history["contact_force_n"], lw=1,
+                label="flank force" if f.form_closed else "contact force")
+        if not f.form_closed:
+            ax.axhline(f.preload_n, color="C1", lw=0.8, ls="--", label="preload")
+        ax.set_ylabel("flank force (N, + inner flank)" if f.form_closed else "contact force (N)")
+        what = "form-closed, contact held" if f.form_closed else "periodic steady state"
     ax.set_xlabel("cam angle (deg)")
-    ax.set_ylabel("contact force (N)")
-    ax.set_title(f"{program.name} at {rpm:g} rpm")
+    ax.set_title(f"{program.name}: contact force at {rpm:g} rpm ({what})")
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     return fig
 
 
-def sweep(report: dict) -> plt.Figure:
-    """Minimum preload and peak accelerations against speed."""
+def sweep(program: Program, report: dict) -> plt.Figure:
+    """Against speed: the preload needed, with the preload fitted and the jump speed (a
+    spring-loaded cam), or the flank forces (a form-closed one); peak accelerations."""
     speeds = report["speeds"]
     rpm = [s["rpm"] for s in speeds]
     fig, (a, b) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, constrained_layout=True)
-    a.plot(rpm, [s["min_preload_n"] or 0.0 for s in speeds], marker=".")
-    a.set_ylabel("minimum preload (N)")
+    if program.follower.form_closed:
+        a.plot(rpm, [s["max_contact_force_n"] for s in speeds], marker=".", label="max (inner flank)")
+        a.plot(rpm, [s["min_contact_force_n"] for s in speeds], marker=".", label="min (outer flank < 0)")
+        a.axhline(0.0, color="k", lw=0.8)
+        a.set_ylabel("flank force, contact held (N)")
+        a.legend(fontsize=8)
+    else:
+        a.plot(rpm, [s["min_preload_n"] for s in speeds], marker=".", label="preload needed")
+        a.axhline(program.follower.preload_n, color="C1", lw=0.8, ls="--", label="preload fitted")
+        if report["jump_speed_rpm"] is not None:
+            for ax in (a, b):
+                ax.axvline(report["jump_speed_rpm"], color="C3", lw=0.8)
+            a.annotate(f"jump {report['jump_speed_rpm']:.0f} rpm", (report["jump_speed_rpm"], 0.0),
+                       xytext=(4, 4), textcoords="offset points", fontsize=8, color="C3")
+        a.set_ylabel("preload needed (N)")
+        a.legend(fontsize=8)
+    a.set_title(f"{program.name}: periodic steady state against speed")
     b.plot(rpm, [s["max_payload_acceleration_m_s2"] for s in speeds], marker=".", label="payload")
     b.plot(rpm, [s["max_kinematic_acceleration_m_s2"] for s in speeds], marker=".", label="cam (kinematic)")
     b.set_ylabel("max |acceleration| (m/s^2)")
@@ -64,9 +96,10 @@ def sweep(report: dict) -> plt.Figure:
     return fig
 
 
-def cam(prof: Profile) -> plt.Figure:
+def cam(prof: Profile, name: str = "") -> plt.Figure:
     """The profile and pitch curve, with the pressure angle and radius of curvature."""
     fig = plt.figure(figsize=(11, 5), constrained_layout=True)
+    fig.suptitle(f"{name}: cam profile" if name else "cam profile")
     ax = fig.add_subplot(1, 2, 1)
     ax.plot(*prof.pitch.T, lw=0.8, ls="--", label="pitch curve")
     ax.plot(*prof.profile.T, lw=1.2, label="profile")
@@ -86,10 +119,13 @@ def cam(prof: Profile) -> plt.Figure:
     return fig
 
 
-def save_figures(out: Path, program: Program, report: dict, history: tuple, prof: Profile) -> None:
+def save_figures(out: Path, program: Program, report: dict, history: tuple, prof: Profile,
+                 *, groove=None) -> None:
+    """The four figures of ``camjax program --out``: ``history`` is ``(rpm, response)`` of
+    the turn to draw, ``groove`` that speed's ``GrooveTurn`` for a grooved cam."""
     rpm, h = history
     plot.save(svaj(program, rpm, h), out / "svaj.png")
-    plot.save(contact_force(program, rpm, h), out / "contact_force.png")
+    plot.save(contact_force(program, rpm, h, groove), out / "contact_force.png")
     if len(report["speeds"]) > 1:
-        plot.save(sweep(report), out / "sweep.png")
-    plot.save(cam(prof), out / "profile.png")
+        plot.save(sweep(program, report), out / "sweep.png")
+    plot.save(cam(prof, program.name), out / "profile.png")

@@ -12,9 +12,11 @@ driving flank: ``e = y - x > 0`` presses it, ``e < -g`` the outer one.  Back in 
 units an impact velocity is ``v h / T`` and the train force ``F = m x''`` is
 ``m h / T^2`` times the model's normalised payload acceleration.
 
-The periodic state is approached by running ``turns`` turns from rest on the base circle
-(enough for the contact vibration to decay by 1e-9 between impacts); the impacts of the
-last turn are reported.
+The periodic state is approached by running turns from rest on the base circle until the
+strikes of the last two turns agree (same flanks, angles within ``SETTLED_DEG``, velocities
+within ``SETTLED_REL``): a measured criterion, since the damping acts only in contact and a
+turn count from the contact decay alone left the strikes moving by 5e-4 degrees.  The
+impacts of the last turn are reported, with the change that remained.
 """
 
 from __future__ import annotations
@@ -30,7 +32,13 @@ from ..laws import AbstractMotionLaw
 from ._dynamics import check_rpm
 from ._spec import Program
 
-_SETTLE = math.log(1e9)  # decay of the contact vibration over the turns before the last
+_SETTLE = math.log(1e9)  # decay of the contact vibration over the first turns tried
+SETTLED_DEG = 1e-6
+"""Largest change of a strike's angle between the last two turns of a settled run."""
+SETTLED_REL = 1e-6
+"""Largest relative change of a strike's velocity between the last two turns of a settled run."""
+MAX_TURNS = 1024
+"""Most turns a groove run takes from rest before it reports that it has not settled."""
 _SAMPLES_PER_PERIOD = 128  # samples per natural period (force peaks sampled: within 0.03%)
 FLANKS = {0: "inner", 2: "outer"}
 
@@ -143,12 +151,24 @@ class GrooveTurn:
     theta_deg: np.ndarray
     force_n: np.ndarray
     impacts: list[Impact]
+    turns: int = 0
+    """Turns run from rest (this one is the last)."""
+    change_deg: float = 0.0
+    """Largest change of a strike's angle from the turn before (``inf`` where the strikes
+    differ in number or flank): at most ``SETTLED_DEG`` once settled."""
+
+    @property
+    def settled(self) -> bool:
+        """Whether the strikes repeated from the turn before (``SETTLED_DEG``)."""
+        return self.change_deg <= SETTLED_DEG
 
     @classmethod
     def from_response(cls, rpm, response, turns: int, mass: float, stroke_m: float,
-                      period: float) -> GrooveTurn:
-        """The last of ``turns`` turns of a ``Backlash`` response (``camjax.solve``) in
-        physical units: ``mass`` in kg, ``stroke_m`` the length unit, ``period`` in s."""
+                      period: float, *, turn: int | None = None) -> GrooveTurn:
+        """Turn ``turn`` (0-based; default the last) of a ``turns``-turn ``Backlash``
+        response (``camjax.solve``) in physical units: ``mass`` in kg, ``stroke_m`` the
+        length unit, ``period`` in s."""
+        turn = turns - 1 if turn is None else int(turn)
         count = int(response.n_impacts)
         tau = np.asarray(response.impact_tau)[:count]
         velocity = np.asarray(response.impact_velocity)[:count]
@@ -156,22 +176,38 @@ class GrooveTurn:
         ts = np.asarray(response.tau)
         force = mass * stroke_m / period**2 * np.asarray(response.payload_acceleration)
         impacts = []
-        for i in np.flatnonzero(tau >= turns - 1):
+        for i in np.flatnonzero((tau >= turn) & (tau < turn + 1)):
             end = tau[i + 1] if i + 1 < count else ts[-1]
             first = min(int(np.searchsorted(ts, tau[i])), ts.size - 1)
             window = force[first:max(int(np.searchsorted(ts, end, side="right")), first + 1)]
             peak = float(window[np.argmax(np.abs(window))])
-            impacts.append(Impact(float(360.0 * (tau[i] - (turns - 1))), FLANKS[int(flank[i])],
+            impacts.append(Impact(float(360.0 * (tau[i] - turn)), FLANKS[int(flank[i])],
                                   float(velocity[i] * stroke_m / period), peak))
-        last = ts >= turns - 1
-        return cls(rpm, 360.0 * (ts[last] - (turns - 1)), force[last], impacts)
+        inside = (ts >= turn) & (ts <= turn + 1)
+        return cls(rpm, 360.0 * (ts[inside] - turn), force[inside], impacts, turns)
+
+    def change_from(self, before: GrooveTurn) -> float:
+        """Largest change of a strike angle (degrees) from ``before``; ``inf`` where the
+        strikes differ in number, flank, or velocity by more than ``SETTLED_REL``."""
+        if [i.flank for i in self.impacts] != [i.flank for i in before.impacts]:
+            return math.inf
+        change = 0.0
+        for now, then in zip(self.impacts, before.impacts):
+            if abs(now.velocity_m_s - then.velocity_m_s) > SETTLED_REL * abs(then.velocity_m_s):
+                return math.inf
+            change = max(change, abs(now.angle_deg - then.angle_deg))
+        return change
 
 
 def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[GrooveTurn]:
-    """The last of ``turns`` turns from rest (default ``settling_turns``) at every speed.
+    """The settled turn at every speed: turns from rest until the strikes of the last two
+    agree (``GrooveTurn.settled``; doubling the turns from ``settling_turns``, up to
+    ``MAX_TURNS``), or exactly ``turns`` turns when given.
 
     Needs a form-closed follower with ``groove_clearance_mm``.  One compiled solve serves
-    every speed (the model's numbers are traced).
+    every speed with the same turn count (the model's numbers are traced).  A run that has
+    not settled by ``MAX_TURNS`` (a roller that chatters without a period) is returned with
+    its ``change_deg``; the command line warns about it.
     """
     from ..models import Backlash, solve
 
@@ -181,15 +217,25 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[Gro
     if not f.damping_ratio > 0:
         raise ValueError("groove impacts need follower.damping_ratio > 0 (the start-up must settle)")
     rpm = check_rpm(rpm)
-    turns = settling_turns(program, float(rpm.max())) if turns is None else int(turns)
     h = stroke_mm(program)
-    law = TurnLaw.of(program, h, turns)
     samples = _SAMPLES_PER_PERIOD * math.ceil(f.natural_frequency_hz * 60.0 / float(rpm.min()))
-    out = []
-    for r in rpm:
-        period = 60.0 / float(r)
+
+    def run(r: float, count: int) -> GrooveTurn:
+        period = 60.0 / r
         model = Backlash(f.natural_frequency_hz * period, f.groove_clearance_mm / h, 0.0, f.damping_ratio)
-        response = solve(law, model.with_array_leaves(), dwell=turns - 1, samples=samples,
-                         max_segments=64 * turns)  # a failure is a SolverError naming the model
-        out.append(GrooveTurn.from_response(float(r), response, turns, f.mass_kg, 1e-3 * h, period))
+        response = solve(TurnLaw.of(program, h, count), model.with_array_leaves(), dwell=count - 1,
+                         samples=samples, max_segments=64 * count)  # a failure is a SolverError
+        last, before = (GrooveTurn.from_response(r, response, count, f.mass_kg, 1e-3 * h, period, turn=k)
+                        for k in (count - 1, count - 2))
+        return dataclasses.replace(last, change_deg=last.change_from(before))
+
+    first = settling_turns(program, float(rpm.max())) if turns is None else max(2, int(turns))
+    out = []
+    for r in map(float, rpm):
+        count = first  # the same count at every speed: one compiled solve
+        turn = run(r, count)
+        while turns is None and not turn.settled and 2 * count <= MAX_TURNS:
+            count *= 2
+            turn = run(r, count)
+        out.append(turn)
     return out
