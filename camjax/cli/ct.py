@@ -30,7 +30,10 @@ def register(sub) -> None:
         help="torsion factor, residual vibration and Ca*Ct curves over period ratios",
         description="Sweep period ratios for one or more motion laws (default: every "
         "standard law, n from 1 to 30) and report Ct, residual vibration R and Ca*Ct, with "
-        "the fitted torsion-factor envelope Ct = p/n^q + r of each law.",
+        "the fitted torsion-factor envelope Ct = p/n^q + r of each law.  A period ratio "
+        "where the solver fails does not end the sweep: its metrics are NaN (null in JSON), "
+        "its result code is in the output's result column, and one line on stderr names "
+        "the failed ratios.",
     )
     add_law_option(parser)
     parser.add_argument("--n", default=DEFAULT_N, metavar=RANGE_METAVAR,
