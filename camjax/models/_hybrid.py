@@ -13,7 +13,11 @@ integrator.  A phase is solved one of two ways:
   flight: its error estimate is zero there, its step grows without a cap, and a step
   that spans an excursion past a flank sees no sign change.
 - **with diffrax** otherwise (the phases in which the transmission acts), the step capped
-  at an eighth of the natural period and the event root-found by ``EventBisection``.
+  (``max_step``) and the event root-found by ``EventBisection``.  diffrax sees an event as
+  a sign change between step ends, so ``ExcursionGuard`` screens each step's dense output
+  and rejects a step inside which the exit function rises through zero and falls back
+  (a velocity reversal shorter than a step): the shorter retry ends inside the excursion
+  and the event is seen.
 
 After the solve, each model checks its invariants on every sample (contact state
 consistent with the deflection, a stuck payload inside its stick band); a violation is
