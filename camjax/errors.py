@@ -89,6 +89,36 @@ def first_failure(result) -> int | None:
     return int(failed[0]) if failed.size else None
 
 
+def result_names(result) -> list[str]:
+    """The name of each entry of a (batched) result code: ``"successful"`` or the
+    failure's (``"invariant_violated"``, ``"max_steps_reached"``, ...)."""
+    names = {int(item._value): name for name, item in RESULTS._name_to_item.items()}
+    return [names[int(code)] for code in np.atleast_1d(np.asarray(promote(result)._value))]
+
+
+def mark_failures(result, *values):
+    """A batch's result code and values with its failures marked, for a caller that
+    reports them rather than raising (``throw=False``).
+
+    An entry that succeeded with a non-finite value becomes ``nonfinite``; every value of
+    a failed entry becomes NaN.  Returns ``(result, values)``: values as float NumPy
+    arrays, batched like ``result`` on their first axis.
+    """
+    result = promote(result)
+    codes = np.atleast_1d(np.asarray(result._value)).copy()
+    arrays = [np.array(np.atleast_1d(np.asarray(v)), dtype=float) for v in values]
+    finite = np.ones(codes.shape, bool)
+    for array in arrays:
+        finite &= np.isfinite(array).reshape(array.shape[0], -1).all(axis=1)
+    success = int(RESULTS.successful._value)
+    codes[(codes == success) & ~finite] = int(RESULTS.nonfinite._value)
+    failed = codes != success
+    for array in arrays:
+        array[failed] = np.nan
+    marked = type(RESULTS.successful)(jnp.asarray(codes), RESULTS)
+    return marked, tuple(arrays)
+
+
 def raise_if_failed(result, describe, *values) -> None:
     """Raise ``SolverError`` for the first failed batch entry, or a non-finite value.
 

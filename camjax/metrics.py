@@ -110,9 +110,12 @@ def upper_envelope(period_ratio, ct) -> tuple[np.ndarray, np.ndarray]:
     crests the envelope is what the fit interpolates.  Points that another point at
     larger ``n`` exceeds are dropped, so the envelope never increases with ``n``
     (a curve that falls into its crests, as Ct curves do, is bounded from above).
+    Non-finite points (ratios where a sweep's solver failed) are left out.
     """
     n = np.asarray(period_ratio, dtype=float)
     c = np.asarray(ct, dtype=float)
+    solved = np.isfinite(c)
+    n, c = n[solved], c[solved]
     order = np.argsort(n)
     n, c = n[order], c[order]
     padded = np.concatenate([[-np.inf], c, [-np.inf]])

@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import checks
-from .errors import raise_if_failed
+from .errors import RESULTS, mark_failures, raise_if_failed, result_names
 from .laws import AbstractMotionLaw
 from .models import AbstractMachineModel, AbstractModel, SpringMass
 from .sdof import TARGET_PHASE_STEP, default_resolution
@@ -27,6 +27,8 @@ class CtCurve(eqx.Module):
 
     All values are in units of the law's Ca (multiply by ``ca`` for units of h/T^2).
     ``model`` names the model swept (its parameters other than the period ratio).
+    ``result`` is the ``RESULTS`` code of each ratio (``None``: not recorded); a sweep with
+    ``throw=False`` keeps the ratios where the solver failed, their metrics NaN.
     """
 
     period_ratio: np.ndarray
@@ -38,6 +40,21 @@ class CtCurve(eqx.Module):
     damping: float = eqx.field(static=True, default=0.0)
     method: str = eqx.field(static=True, default="exact")
     model: str = eqx.field(static=True, default="SpringMass")
+    result: RESULTS | None = None
+
+    @property
+    def failed(self) -> np.ndarray:
+        """Whether the solver failed at each period ratio (its metrics are then NaN)."""
+        if self.result is None:
+            return np.zeros(np.shape(self.period_ratio), bool)
+        return np.asarray(self.result._value) != np.asarray(RESULTS.successful._value)
+
+    @property
+    def result_names(self) -> list[str]:
+        """The result code of each period ratio by name: ``"successful"`` or the failure's."""
+        if self.result is None:
+            return ["successful"] * np.size(self.period_ratio)
+        return result_names(self.result)
 
     @property
     def ca_ct(self) -> np.ndarray:
@@ -151,26 +168,30 @@ def prepare_sweep(period_ratios, model=None, damping=0.0, method=None, dwell=1.0
     return n, template.with_array_leaves(), options
 
 
-def _curve(law, n, template, options, metrics) -> CtCurve:
+def _curve(law, n, template, options, metrics, result, throw: bool) -> CtCurve:
+    """The curve of one law's sweep: raising at the first failed ratio (``throw``), or
+    with the failed ratios marked (NaN metrics, their codes in ``result``)."""
+    if throw:
+        def describe(i):
+            return f"{options.method} solve of {template.with_period_ratio(n[i]).describe()}"
+
+        raise_if_failed(result, describe, metrics.ct, metrics.residual)
+    result, (ct, residual, peak_in_motion) = mark_failures(
+        result, metrics.ct, metrics.residual, metrics.peak_in_motion
+    )
     damping = getattr(template, "damping", 0.0)
     return CtCurve(
         period_ratio=n,
-        ct=np.asarray(metrics.ct),
-        residual=np.asarray(metrics.residual),
-        peak_in_motion=np.asarray(metrics.peak_in_motion),
+        ct=ct,
+        residual=residual,
+        peak_in_motion=peak_in_motion,
         ca=law.peak_coefficients()["Ca"],  # one compiled call (eagerly, Ca runs op by op)
         name=law.name,
         damping=float(damping),
         method=options.method,
         model=type(template).__name__,
+        result=result,
     )
-
-
-def _check(result, metrics, n, template, options):
-    def describe(i):
-        return f"{options.method} solve of {template.with_period_ratio(n[i]).describe()}"
-
-    raise_if_failed(result, describe, metrics.ct, metrics.residual)
 
 
 def ct_curve(
@@ -182,6 +203,7 @@ def ct_curve(
     method: str | None = None,
     dwell: float = 1.0,
     devices=None,
+    throw: bool = True,
     **solver_options,
 ) -> CtCurve:
     """Ct, residual vibration and peak in motion of ``law`` at every period ratio.
@@ -200,16 +222,19 @@ def ct_curve(
         dwell: dwell after the rise, in motion periods.
         devices: the local devices to split the ratios over (default: every local device;
             see ``camjax.sharding.shard_batch``); results equal the single-device run.
+        throw: raise ``SolverError`` if the solver failed at any period ratio (default, as
+            ``camjax.solve``); with ``throw=False`` the sweep finishes, and the failed
+            ratios have NaN metrics and their code in the curve's ``result``.
         solver_options: the model's static options (e.g. ``resolution``, ``rtol``).
 
     Raises:
         ValueError: bad input, named.
-        SolverError: the solver failed at any period ratio (the first is named).
+        SolverError: the solver failed at any period ratio (the first is named), with
+            ``throw=True``.
     """
     n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)
     metrics, result = sweep_metrics(law, n, template, options, devices=devices)
-    _check(result, metrics, n, template, options)
-    return _curve(law, n, template, options, metrics)
+    return _curve(law, n, template, options, metrics, result, throw)
 
 
 def ct_curves(
@@ -222,9 +247,11 @@ def ct_curves(
     dwell: float = 1.0,
     devices=None,
     like: Iterable[AbstractMotionLaw] = (),
+    throw: bool = True,
     **solver_options,
 ) -> dict[str, CtCurve]:
-    """``ct_curve`` for several laws, keyed by name (or by the mapping's keys).
+    """``ct_curve`` for several laws, keyed by name (or by the mapping's keys); ``throw``
+    as there.
 
     On the exact path every law with fixed breakpoints is swept from its samples
     (``camjax.sdof.SampledLaw``, padded to the piece count of the longest law
@@ -253,6 +280,5 @@ def ct_curves(
             out = sweep_law_stack(stacked, ratios, template, options, devices=devices)
             batch = [jax.tree.map(lambda x, i=i: x[i], out) for i in range(len(members))]
         for key, law, (metrics, result) in zip(keys, members, batch):
-            _check(result, metrics, n, template, options)
-            curves[key] = _curve(law, n, template, options, metrics)
+            curves[key] = _curve(law, n, template, options, metrics, result, throw)
     return {key: curves[key] for key in named}

@@ -53,8 +53,33 @@ def test_ct_writes_tables_and_figures(capsys, tmp_path):
                  "residual_curves.png", "ca_ct.png"):
         assert (tmp_path / name).stat().st_size > 0
     rows = (tmp_path / "ct.csv").read_text().splitlines()
-    assert rows[0] == "law,period_ratio,ct,residual,peak_in_motion,ca_ct" and len(rows) == 241
+    assert rows[0] == "law,period_ratio,ct,residual,peak_in_motion,ca_ct,result" and len(rows) == 241
+    assert all(row.endswith(",successful") for row in rows[1:])
     assert "| cycloidal |" in (tmp_path / "torsion_factor_fit.md").read_text()
+
+
+def test_ct_finishes_a_sweep_with_failed_ratios_and_names_them(capsys, tmp_path):
+    """Heun at the default grid for n <= 20 is stable up to n ~ 10: the ratios past it
+    fail, the sweep goes on, exits 0, and marks them in every output."""
+    code, _, err = run(capsys, "ct", "--law", "cycloidal", "--method", "heun", "--n", "1:20:12",
+                       "--out", str(tmp_path))
+    assert code == 0
+    warning = [line for line in err.splitlines() if "warning" in line]
+    assert warning == [
+        "camjax ct: warning: cycloidal: the solver failed at 6 of 12 period ratios (n = 11.3636, "
+        "13.0909, 14.8182, 16.5455, 18.2727, ...; unstable_fixed_step); their metrics are NaN "
+        "in the output"
+    ]
+    curve = camjax.ct_curve(laws.Cycloidal(), np.linspace(1, 20, 12), method="heun", throw=False)
+    failed = [False] * 6 + [True] * 6
+    np.testing.assert_array_equal(curve.failed, failed)
+    rows = [row.split(",") for row in (tmp_path / "ct.csv").read_text().splitlines()[1:]]
+    assert [row[-1] for row in rows] == curve.result_names
+    assert [row[2] == "nan" for row in rows] == failed
+    np.testing.assert_allclose([float(row[2]) for row in rows[:6]], curve.ct[:6], rtol=1e-11)
+    entry = json.loads((tmp_path / "ct.json").read_text())["laws"]["cycloidal"]
+    assert entry["result"] == ["successful"] * 6 + ["unstable_fixed_step"] * 6
+    assert [x is None for x in entry["ct"]] == failed
 
 
 @pytest.mark.parametrize(

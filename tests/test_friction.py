@@ -206,6 +206,62 @@ def test_a_short_stick_phase_inside_the_rise_is_not_stepped_over():
     assert int(response.stats["segments"]) == len(phases)
 
 
+def _modified_sine_command():
+    """Position of the modified-sine rise, then the dwell, as a NumPy function of tau (the
+    law's own closed form, compiled once: the reference's input, not under test)."""
+    law = camjax.laws.get("modified-sine")
+    position = jax.jit(lambda t: law.s(jnp.minimum(t, 1.0)))
+    return lambda t: (np.asarray(position(np.asarray(t, dtype=float))),)
+
+
+@pytest.mark.parametrize(
+    "n, sequence",
+    [
+        (7.01508, [0, 1, 0, 1, 0]),  # a stick of 9e-4 near tau = 0.9753
+        pytest.param(7.0, [0, 1, -1, 0, 1, 0], marks=pytest.mark.slow),  # a reversal there
+        pytest.param(7.0152, [0, 1, 0], marks=pytest.mark.slow),  # past the grazing ratio
+    ],
+)
+def test_a_reversal_shorter_than_a_slip_step_is_found(n, sequence):
+    """Modified sine, mu = 0.3, n = 7.01508: near tau = 0.975 the velocity dips below zero
+    for 9e-4, less than one slip step (2.2e-3).  Sign changes at step ends missed it and
+    the invariant check failed the solve (a whole ``camjax ct`` sweep with it); each step's
+    dense output is now screened for such an excursion.  Reference: scipy, DOP853 with
+    max_step 1e-4 (events at sign changes between its steps) and a grid scan of the stick
+    force."""
+    law = camjax.laws.get("modified-sine")
+    response = solve(law, CoulombFriction(n, 0.3), samples=SAMPLES)
+    phases = _stick_slip_reference(_modified_sine_command(), n, 0.3, 2.0, max_step=1e-4)
+    assert [p[1] for p in phases] == sequence
+    tau = np.asarray(response.tau)
+    np.testing.assert_allclose(np.asarray(response.position), _reference_positions(phases, tau),
+                               rtol=0, atol=1e-12)
+    assert int(response.stats["segments"]) == len(phases)
+
+
+def test_a_friction_sweep_solves_every_ratio():
+    """Both laws over n in [1, 20] with the ratio that used to fail among them; each
+    ratio as its own solve gives the same Ct."""
+    n = np.sort(np.append(np.linspace(1.0, 20.0, 24), 7.01508))
+    for name in ("modified-sine", "cycloidal"):
+        law = camjax.laws.get(name)
+        curve = camjax.ct_curve(law, n, model=CoulombFriction(1.0, 0.3), samples=SAMPLES)
+        assert not curve.failed.any() and np.all(np.isfinite(curve.ct))
+        k = int(np.flatnonzero(n == 7.01508)[0])
+        one = solve(law, CoulombFriction(7.01508, 0.3), samples=SAMPLES)
+        assert curve.ct[k] == pytest.approx(float(one.metrics.ct), rel=1e-9)
+
+
+@pytest.mark.slow
+def test_a_dense_friction_sweep_solves_every_ratio():
+    n = np.linspace(1.0, 20.0, 400)
+    for name in ("modified-sine", "cycloidal"):
+        curve = camjax.ct_curve(camjax.laws.get(name), n, model=CoulombFriction(1.0, 0.3),
+                                throw=False)
+        assert curve.result_names == ["successful"] * n.size
+        assert np.all(np.isfinite(curve.ct))
+
+
 def test_regularised_converges_to_stick_slip_as_eps_shrinks(cycloidal):
     model = CoulombFriction(5.25, 0.5)
     events = solve(cycloidal, model, samples=SAMPLES)

@@ -59,6 +59,39 @@ def test_unstable_fixed_step_raises_instead_of_a_wrong_ct():
         camjax.ct_curve(CYCLOIDAL, [2.0, 30.0], method="heun", steps=200)
 
 
+def test_a_sweep_with_throw_false_marks_the_failed_ratios_only():
+    """Heun with 200 steps is stable at n = 2.5 and not at n = 30: the sweep finishes, the
+    failed ratio NaN with its code, the other as solved on its own."""
+    grid = {"method": "heun", "steps": 200, "resolution": 4096}  # one grid for sweep and solve
+    curve = camjax.ct_curve(CYCLOIDAL, [2.5, 30.0], throw=False, **grid)
+    assert curve.result_names == ["successful", "unstable_fixed_step"]
+    np.testing.assert_array_equal(curve.failed, [False, True])
+    for values in (curve.ct, curve.residual, curve.peak_in_motion, curve.ca_ct):
+        assert np.isfinite(values[0]) and np.isnan(values[1])
+    alone = camjax.solve(CYCLOIDAL, camjax.SpringMass(2.5, 0.0), **grid)
+    assert curve.ct[0] == pytest.approx(float(alone.metrics.ct), rel=1e-12)
+    assert curve.residual[0] == pytest.approx(cycloidal_residual(2.5), rel=MAX_FREE_VIBRATION_GROWTH - 1)
+    both = camjax.ct_curves([CYCLOIDAL], [2.5, 30.0], throw=False, **grid)
+    assert both["cycloidal"].result_names == curve.result_names
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("model", [
+    camjax.models.CoulombFriction(1.0, 0.3),
+    camjax.models.Backlash(1.0, 0.01, 0.5),
+    camjax.models.TwoMass(1.0, 1.0, 1.0),
+    camjax.SpringMass(1.0, 0.0),
+], ids=lambda m: type(m).__name__)
+def test_every_model_sweep_reports_its_failures_with_throw_false(model):
+    """A step limit no ratio can meet: each model's sweep path returns the code per ratio."""
+    method = "tsit5" if isinstance(model, camjax.SpringMass) else None
+    curve = camjax.ct_curve(CYCLOIDAL, [1.5, 8.0], model=model, method=method, max_steps=8,
+                            throw=False)
+    assert curve.result_names == ["max_steps_reached"] * 2 and np.isnan(curve.ct).all()
+    with pytest.raises(camjax.SolverError, match=r"\(2 of 2 failed\): the maximum number of solver steps"):
+        camjax.ct_curve(CYCLOIDAL, [1.5, 8.0], model=model, method=method, max_steps=8)
+
+
 def test_detection_limit_is_where_the_growth_crosses_the_threshold():
     """Just inside the limit a run succeeds and is close to the closed form; just past it, it fails."""
     n = 5.5

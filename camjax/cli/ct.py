@@ -5,6 +5,9 @@ from __future__ import annotations
 import csv
 import io
 import sys
+from collections import Counter
+
+import numpy as np
 
 from ..registry import MODELS
 from ._common import (
@@ -29,7 +32,10 @@ def register(sub) -> None:
         help="torsion factor, residual vibration and Ca*Ct curves over period ratios",
         description="Sweep period ratios for one or more motion laws (default: every "
         "standard law, n from 1 to 30) and report Ct, residual vibration R and Ca*Ct, with "
-        "the fitted torsion-factor envelope Ct = p/n^q + r of each law.",
+        "the fitted torsion-factor envelope Ct = p/n^q + r of each law.  A period ratio "
+        "where the solver fails does not end the sweep: its metrics are NaN (null in JSON), "
+        "its result code is in the output's result column, and one line on stderr names "
+        "the failed ratios.",
     )
     add_law_option(parser)
     parser.add_argument("--n", default=DEFAULT_N, metavar=RANGE_METAVAR,
@@ -83,23 +89,44 @@ def _table(curves, fits) -> str:
     for name, c in curves.items():
         f = fits.get(name)
         fit = f"{f.p:7.3f} {f.q:6.3f} {f.r:6.3f}" if f else f"{'-':>7} {'-':>6} {'-':>6}"
-        lines.append(f"{name:<20} {c.ca:7.4f} {c.ct.max():7.4f} {c.ca_ct.max():8.4f} "
-                     f"{c.residual.max():7.4f} {fit}")
+        lines.append(f"{name:<20} {c.ca:7.4f} {_largest(c.ct):7.4f} {_largest(c.ca_ct):8.4f} "
+                     f"{_largest(c.residual):7.4f} {fit}")
     lines.append("Ca and Ca*Ct in units of h/T^2 (stroke over rise time squared); Ct and R in "
-                 "units of Ca; maxima over the period ratios given.")
+                 "units of Ca; maxima over the period ratios given (those solved).")
     lines.append("p, q, r: the fit Ct ~ p/n^q + r of the upper envelope; '-' where it cannot "
                  "be fitted (too few period ratios or envelope points).")
     return "\n".join(lines)
 
 
+def _largest(values) -> float:
+    """Largest of the values solved (NaN marks a failed ratio); NaN if none was."""
+    finite = np.asarray(values)[np.isfinite(values)]
+    return float(finite.max()) if finite.size else float("nan")
+
+
 def _csv(curves) -> str:
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    writer.writerow(["law", "period_ratio", "ct", "residual", "peak_in_motion", "ca_ct"])
+    writer.writerow(["law", "period_ratio", "ct", "residual", "peak_in_motion", "ca_ct", "result"])
     for name, c in curves.items():
-        for row in zip(c.period_ratio, c.ct, c.residual, c.peak_in_motion, c.ca_ct):
-            writer.writerow([name, *(f"{x:.12g}" for x in row)])
+        for *row, code in zip(c.period_ratio, c.ct, c.residual, c.peak_in_motion, c.ca_ct,
+                              c.result_names):
+            writer.writerow([name, *(f"{x:.12g}" for x in row), code])
     return buffer.getvalue()
+
+
+def failure_warning(name: str, curve, shown: int = 5) -> str | None:
+    """One line naming the period ratios where ``curve``'s solver failed, or ``None``."""
+    failed = np.flatnonzero(curve.failed)
+    if not failed.size:
+        return None
+    ratios = ", ".join(f"{curve.period_ratio[i]:.6g}" for i in failed[:shown])
+    more = ", ..." if failed.size > shown else ""
+    counts = Counter(curve.result_names[i] for i in failed)
+    codes = ", ".join(f"{code}" if len(counts) == 1 else f"{code} x{k}" for code, k in counts.items())
+    return (f"camjax ct: warning: {name}: the solver failed at {failed.size} of "
+            f"{curve.period_ratio.size} period ratios (n = {ratios}{more}; {codes}); their "
+            "metrics are NaN in the output")
 
 
 def _json(curves, args, selected) -> dict:
@@ -115,6 +142,7 @@ def _json(curves, args, selected) -> dict:
                 "ct": c.ct,
                 "residual": c.residual,
                 "peak_in_motion": c.peak_in_motion,
+                "result": c.result_names,
             }
             for name, c in curves.items()
         },
@@ -157,7 +185,13 @@ def run(args) -> int:
     curves = {}
     for name, law in tqdm(selected.items(), desc="camjax ct", unit="law", file=sys.stderr,
                           disable=not sys.stderr.isatty()):
-        curves[name] = ct_curve(law, n, model=model, method=args.method, dwell=args.dwell)
+        # A failed ratio does not end the sweep: it is NaN in the output, named on stderr.
+        curves[name] = ct_curve(law, n, model=model, method=args.method, dwell=args.dwell,
+                                throw=False)
+    for name, curve in curves.items():
+        warning = failure_warning(name, curve)
+        if warning:
+            print(warning, file=sys.stderr)
     fits = {k: f for k, f in ((k, _fit_or_none(c)) for k, c in curves.items()) if f}
     if out is not None:
         plot = plotting()

@@ -15,7 +15,7 @@ In a dwell (``s = 1``) a stuck payload rests out of position by ``|x - 1| <= mu 
 Three solution paths (the first two through ``camjax.solve`` and the sweeps):
 - ``method="events"`` (default): one phase per slip or stick phase (true stick-slip,
   ``camjax.models._hybrid``): slip phases by diffrax, ended by an event where the
-  velocity reverses; stick phases in closed form (the payload is at rest), ended by an
+  velocity reverses (however briefly); stick phases in closed form (the payload is at rest), ended by an
   exact search for ``|F| = mu`` that cannot step over a short excursion;
 - ``method="regularised"``: ``sign(x')`` replaced by ``tanh(x'/eps)``, smooth and
   differentiable, but it creeps instead of sticking;
@@ -58,10 +58,10 @@ class FrictionOptions(Options):
         max_segments: most slip and stick phases in one solve.
         max_steps: step limit of one phase.
         max_step: largest step of a slip phase, in natural periods ``1/n`` (default 1/64).
-            A slip phase ends where the velocity reverses, an event seen as a sign change
-            between step ends: a reversal and return within one step is not seen.  The
-            invariant check after the solve then reports it (``SolverError``), never a
-            number; a smaller ``max_step`` resolves it.
+            A slip phase ends where the velocity reverses; a step inside which it reverses
+            and returns is rejected and retried shorter (``_hybrid.ExcursionGuard``), so
+            such a reversal is found too.  Should one still escape (shallower than
+            ``atol``), the invariant check after the solve reports it, never a number.
     """
 
     method: str = "events"

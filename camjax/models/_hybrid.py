@@ -13,7 +13,11 @@ integrator.  A phase is solved one of two ways:
   flight: its error estimate is zero there, its step grows without a cap, and a step
   that spans an excursion past a flank sees no sign change.
 - **with diffrax** otherwise (the phases in which the transmission acts), the step capped
-  at an eighth of the natural period and the event root-found by ``EventBisection``.
+  (``max_step``) and the event root-found by ``EventBisection``.  diffrax sees an event as
+  a sign change between step ends, so ``ExcursionGuard`` screens each step's dense output
+  and rejects a step inside which the exit function rises through zero and falls back
+  (a velocity reversal shorter than a step): the shorter retry ends inside the excursion
+  and the event is seen.
 
 After the solve, each model checks its invariants on every sample (contact state
 consistent with the deflection, a stuck payload inside its stick band); a violation is
@@ -153,6 +157,92 @@ def first_exit(g, dg, t0, t_end, curvature, points):
     return t_exit, found
 
 
+GUARD_POINTS = 8
+"""Sub-intervals of each accepted diffrax step screened for an excursion of the exit function."""
+
+
+def cubic_peak(p0, p1, m0, m1):
+    """Largest value on ``[0, 1]`` of the cubic with ends ``p0, p1`` and end slopes ``m0, m1``
+    (Hermite form; the slopes per unit of ``u``): the ends and the critical points inside."""
+    a = 6.0 * (p0 - p1) + 3.0 * (m0 + m1)  # p'(u) = a u^2 + b u + c
+    b = 6.0 * (p1 - p0) - 4.0 * m0 - 2.0 * m1
+    c = m0
+    root = jnp.sqrt(jnp.maximum(b * b - 4.0 * a * c, 0.0))
+    q = -0.5 * (b + jnp.where(b >= 0, root, -root))
+    safe = lambda num, den: jnp.where(den != 0, num / jnp.where(den != 0, den, 1.0), 0.0)  # noqa: E731
+    candidates = jnp.clip(jnp.stack([safe(q, a), safe(c, q)]), 0.0, 1.0)
+
+    def value(u):
+        h00, h10 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u
+        h01, h11 = -2 * u**3 + 3 * u**2, u**3 - u**2
+        return h00 * p0 + h10 * m0 + h01 * p1 + h11 * m1
+
+    return jnp.maximum(jnp.maximum(p0, p1), jnp.max(value(candidates), axis=0))
+
+
+class ExcursionGuard(diffrax.AbstractAdaptiveSolver, diffrax.AbstractWrappedSolver):
+    """Rejects a step inside which the event function crosses zero unseen.
+
+    diffrax sees an event as a sign change of ``exit(t, y)`` between step ends: an
+    excursion through zero and back within one step (a velocity reversal shorter than a
+    slip step) is stepped over.  Each step's dense output is screened on ``GUARD_POINTS``
+    sub-intervals: the value and slope of ``exit`` along it at their ends, and the peak of
+    the cubic through them.  A peak above ``tol`` followed by a value at or below zero
+    later in the step (a crossing up and back, or up, back and up again) rejects the step
+    (an infinite error estimate: the controller shrinks it), until the step ends inside
+    the excursion and the event is seen, or before it.  ``tol`` is the solve's absolute
+    tolerance: a shallower excursion is within the solution's error.
+    """
+
+    solver: diffrax.AbstractSolver
+    exit: Callable
+    tol: float
+
+    @property
+    def term_structure(self):
+        return self.solver.term_structure
+
+    @property
+    def interpolation_cls(self):
+        return self.solver.interpolation_cls
+
+    @property
+    def term_compatible_contr_kwargs(self):
+        return self.solver.term_compatible_contr_kwargs
+
+    def order(self, terms):
+        return self.solver.order(terms)
+
+    def error_order(self, terms):
+        return self.solver.error_order(terms)
+
+    def init(self, terms, t0, t1, y0, args):
+        return self.solver.init(terms, t0, t1, y0, args)
+
+    def func(self, terms, t0, y0, args):
+        return self.solver.func(terms, t0, y0, args)
+
+    def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        y1, y_error, dense_info, solver_state, result = self.solver.step(
+            terms, t0, t1, y0, args, solver_state, made_jump
+        )
+        if y_error is None:
+            return y1, y_error, dense_info, solver_state, result
+        path = self.solver.interpolation_cls(t0=t0, t1=t1, **dense_info)
+
+        def along(t):
+            return self.exit(t, path.evaluate(t), args)
+
+        nodes = t0 + (t1 - t0) * jnp.linspace(0.0, 1.0, GUARD_POINTS + 1)
+        values, slopes = jax.vmap(lambda t: jax.jvp(along, (t,), (jnp.ones_like(t),)))(nodes)
+        width = (t1 - t0) / GUARD_POINTS
+        peaks = cubic_peak(values[:-1], values[1:], slopes[:-1] * width, slopes[1:] * width)
+        later_low = jax.lax.cummin(values[1:], reverse=True)  # lowest value from each node on
+        hidden = jnp.any((peaks > self.tol) & (later_low <= 0.0))
+        y_error = jax.tree.map(lambda e: jnp.where(hidden, jnp.inf, e), y_error)
+        return y1, y_error, dense_info, solver_state, result
+
+
 def search_points(law, t_end):
     """Screening times for ``first_exit``: a fine grid plus the law's breakpoints."""
     grid = jnp.linspace(0.0, t_end, SEARCH_POINTS + 1)
@@ -239,10 +329,11 @@ class AbstractHybridModel(AbstractModel):
             direction=True,
         )
         term = diffrax.ODETerm(lambda t, y, args: self._field(t, y, args[0], args[1]))
+        guarded = ExcursionGuard(solver, lambda t, y, args: self._exit(t, y, args[0], args[1]), atol)
 
         def smooth(t0, y0, mode):
             sol = diffrax.diffeqsolve(
-                term, solver, t0=t0, t1=t_end, dt0=None, y0=y0, args=(law, mode),
+                term, guarded, t0=t0, t1=t_end, dt0=None, y0=y0, args=(law, mode),
                 saveat=diffrax.SaveAt(
                     subs=[diffrax.SubSaveAt(ts=jnp.clip(ts, t0, t_end)), diffrax.SubSaveAt(t1=True)]
                 ),
