@@ -33,6 +33,7 @@ from ._spring_mass import response_metrics as response_metrics
 from ._spring_mass import torsion_factor as torsion_factor
 
 if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
+    from ._hybrid import AbstractHybridModel as AbstractHybridModel
     from ._backlash import DRIVING_FLANK as DRIVING_FLANK
     from ._backlash import FREE as FREE
     from ._backlash import IMPACT as IMPACT
@@ -65,6 +66,7 @@ if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
     from ._two_mass import TwoMassResponse as TwoMassResponse
 
 _LAZY = {
+    "AbstractHybridModel": "_hybrid",
     "Backlash": "_backlash",
     "BacklashOptions": "_backlash",
     "BacklashResponse": "_backlash",

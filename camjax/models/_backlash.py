@@ -380,24 +380,24 @@ class Backlash(AbstractHybridModel):
         w = self.omega
         return w**2 * stretch + jnp.where(touching, 2 * self.damping * w * de, 0.0)
 
-    def _field(self, t, y, law, mode):
+    def phase_field(self, t, y, law, mode):
         e, de = y
         return de, law.a(t) + self.natural_deceleration - self._restoring(e, de, mode)
 
-    def _exit(self, t, y, law, mode):
+    def phase_exit(self, t, y, law, mode):
         e = y[0]
         return jnp.where(
             mode == DRIVING_FLANK, -e, jnp.where(mode == FREE, e * (e + self.backlash), e + self.backlash)
         )
 
-    def _next(self, t, y, law, mode):
+    def next_phase(self, t, y, law, mode):
         strike = jnp.where(y[0] > -0.5 * self.backlash, DRIVING_FLANK, OTHER_FLANK)
         return jnp.where(mode == FREE, strike, FREE), y
 
-    def _closed_form(self, mode):
+    def closed_form(self, mode):
         return mode == FREE
 
-    def _closed_state(self, t, t0, y0, law, mode):
+    def closed_state(self, t, t0, y0, law, mode):
         """Free flight ``x'' = -dn``: ``x = x0 + x0' u - dn u^2 / 2`` and ``e = s - x``."""
         s0, v0, _, _ = law.evaluate(t0)
         x0, dx0 = s0 - y0[0], v0 - y0[1]
@@ -406,18 +406,18 @@ class Backlash(AbstractHybridModel):
         dn = self.natural_deceleration
         return s - x0 - dx0 * u + 0.5 * dn * u**2, v - dx0 + dn * u
 
-    def _closed_exits(self, t0, y0, law, mode):
+    def closed_exits(self, t0, y0, law, mode):
         def g(t):
-            e = self._closed_state(t, t0, y0, law, mode)[0]
+            e = self.closed_state(t, t0, y0, law, mode)[0]
             return jnp.stack([e, -self.backlash - e])
 
         def dg(t):
-            de = self._closed_state(t, t0, y0, law, mode)[1]
+            de = self.closed_state(t, t0, y0, law, mode)[1]
             return jnp.stack([de, -de])
 
         return g, dg, law.Ca + self.natural_deceleration  # |e''| = |a + dn|
 
-    def _acceleration(self, t, y, law, mode):
+    def phase_acceleration(self, t, y, law, mode):
         return self._restoring(y[0], y[1], mode) - self.natural_deceleration
 
     # --- solution ---
@@ -441,7 +441,7 @@ class Backlash(AbstractHybridModel):
         result = RESULTS.where(
             (sol.result == RESULTS.successful) & ~jnp.all(consistent), RESULTS.invariant_violated, sol.result
         )
-        acceleration = jax.vmap(lambda t, y, m: model._acceleration(t, y, law, m))(ts, sol.y, sol.mode)
+        acceleration = jax.vmap(lambda t, y, m: model.phase_acceleration(t, y, law, m))(ts, sol.y, sol.mode)
         in_motion, peak = model._peaks(law, ts, sol)
         i_end = options.samples  # tau = 1
         residual = residual_amplitude(e[i_end] - rest, de[i_end], model.omega, model.damping)

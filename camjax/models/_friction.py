@@ -117,29 +117,29 @@ class CoulombFriction(AbstractHybridModel):
         w = self.omega
         return w**2 * (s - x) + 2 * self.damping * w * v
 
-    def _field(self, t, y, law, mode):
+    def phase_field(self, t, y, law, mode):
         x, dx = y
         s, v = _command(law, t)
         w = self.omega
         slip = w**2 * (s - x) + 2 * self.damping * w * (v - dx) - self.friction * mode
         return jnp.where(mode == 0, 0.0, dx), jnp.where(mode == 0, 0.0, slip)
 
-    def _exit(self, t, y, law, mode):
+    def phase_exit(self, t, y, law, mode):
         return -mode * y[1]  # a slip phase ends where the velocity reverses
 
-    def _next(self, t, y, law, mode):
+    def next_phase(self, t, y, law, mode):
         force = self._force(t, y[0], law)
         sticks = (mode != 0) & (jnp.abs(force) <= self.friction)
         new = jnp.where(sticks, 0, jnp.where(force > 0, 1, -1))
         return new, (y[0], jnp.zeros_like(y[1]))  # the phase ends exactly at zero velocity
 
-    def _closed_form(self, mode):
+    def closed_form(self, mode):
         return mode == 0
 
-    def _closed_state(self, t, t0, y0, law, mode):
+    def closed_state(self, t, t0, y0, law, mode):
         return y0[0] + 0.0 * t, jnp.zeros_like(t)
 
-    def _closed_exits(self, t0, y0, law, mode):
+    def closed_exits(self, t0, y0, law, mode):
         """A stuck payload slips once ``|F(t)| = mu``, ``F = w^2 (s - x0) + 2 zeta w s'``."""
         w, zeta = self.omega, self.damping
 
@@ -157,8 +157,8 @@ class CoulombFriction(AbstractHybridModel):
         jerk = jnp.where(jnp.isfinite(law.Cj), law.Cj, _piecewise_jerk_bound(law))
         return g, dg, w**2 * law.Ca + 2 * zeta * w * jerk
 
-    def _acceleration(self, t, y, law, mode):
-        return self._field(t, y, law, mode)[1]
+    def phase_acceleration(self, t, y, law, mode):
+        return self.phase_field(t, y, law, mode)[1]
 
     # --- solution ---
 
@@ -190,7 +190,7 @@ class CoulombFriction(AbstractHybridModel):
             )
             x, dx = sol.y
             stuck = sol.mode == 0
-            acc = jax.vmap(lambda t, y, m: model._acceleration(t, y, law, m))(ts, sol.y, sol.mode)
+            acc = jax.vmap(lambda t, y, m: model.phase_acceleration(t, y, law, m))(ts, sol.y, sol.mode)
             peak_rise, peak_all = model._peaks(law, ts, sol)
             # Invariants: a stuck payload is at rest inside the stick band; a slipping one
             # moves the way it slips.

@@ -273,7 +273,10 @@ class PhaseSolution(eqx.Module):
 
 
 class AbstractHybridModel(AbstractModel):
-    """A model whose motion is a sequence of smooth phases (``mode`` an integer)."""
+    """A model whose motion is a sequence of smooth phases (``mode`` an integer): friction,
+    backlash.  A new one writes the phase methods below (public: they are its interface);
+    the base integrates phase after phase (diffrax within a phase, events at its ends) and
+    supplies the sweep."""
 
     def sweeps_in_turn(self, options) -> bool:
         """Phase by phase, ratios differ in their count of phases and steps.  Warm sweeps of
@@ -282,31 +285,31 @@ class AbstractHybridModel(AbstractModel):
         return True
 
     @abc.abstractmethod
-    def _field(self, t, y, law, mode):
+    def phase_field(self, t, y, law, mode):
         """``dy/dt`` in ``mode`` (a pair of scalars)."""
 
     @abc.abstractmethod
-    def _exit(self, t, y, law, mode):
+    def phase_exit(self, t, y, law, mode):
         """Event function of a diffrax phase: negative inside, crossing zero upward at its end."""
 
     @abc.abstractmethod
-    def _next(self, t, y, law, mode):
+    def next_phase(self, t, y, law, mode):
         """``(new mode, state after the event)`` at an event that ends ``mode``."""
 
     @abc.abstractmethod
-    def _closed_form(self, mode) -> jax.Array:
+    def closed_form(self, mode) -> jax.Array:
         """Whether ``mode`` is solved in closed form."""
 
     @abc.abstractmethod
-    def _closed_state(self, t, t0, y0, law, mode):
+    def closed_state(self, t, t0, y0, law, mode):
         """State at ``t`` of a closed-form phase that started at ``(t0, y0)``."""
 
     @abc.abstractmethod
-    def _closed_exits(self, t0, y0, law, mode):
+    def closed_exits(self, t0, y0, law, mode):
         """``(g, dg, curvature)`` of the closed-form phase (see ``first_exit``)."""
 
     @abc.abstractmethod
-    def _acceleration(self, t, y, law, mode):
+    def phase_acceleration(self, t, y, law, mode):
         """Payload acceleration ``x''`` (units of h/T^2) in ``mode``."""
 
     def _integrate(self, law, ts, y0, mode0, *, solver, rtol, atol, max_steps, max_segments,
@@ -324,12 +327,12 @@ class AbstractHybridModel(AbstractModel):
             diffrax.PIDController(rtol=rtol, atol=atol, dtmax=dtmax), jump_ts=jumps
         )
         event = diffrax.Event(
-            lambda t, y, args, **kw: self._exit(t, y, args[0], args[1]),
+            lambda t, y, args, **kw: self.phase_exit(t, y, args[0], args[1]),
             EventBisection(rtol=1e-14, atol=1e-14),
             direction=True,
         )
-        term = diffrax.ODETerm(lambda t, y, args: self._field(t, y, args[0], args[1]))
-        guarded = ExcursionGuard(solver, lambda t, y, args: self._exit(t, y, args[0], args[1]), atol)
+        term = diffrax.ODETerm(lambda t, y, args: self.phase_field(t, y, args[0], args[1]))
+        guarded = ExcursionGuard(solver, lambda t, y, args: self.phase_exit(t, y, args[0], args[1]), atol)
 
         def smooth(t0, y0, mode):
             sol = diffrax.diffeqsolve(
@@ -348,20 +351,20 @@ class AbstractHybridModel(AbstractModel):
             return t1, jax.tree.map(lambda x: x[0], end), saved, ended, result, steps
 
         def closed(t0, y0, mode):
-            g, dg, curvature = self._closed_exits(t0, y0, law, mode)
+            g, dg, curvature = self.closed_exits(t0, y0, law, mode)
             t1, ended = first_exit(g, dg, t0, t_end, curvature, points)
-            at = lambda t: self._closed_state(t, t0, y0, law, mode)  # noqa: E731
+            at = lambda t: self.closed_state(t, t0, y0, law, mode)  # noqa: E731
             return t1, at(t1), jax.vmap(at)(jnp.clip(ts, t0, t1)), ended, RESULTS.successful, jnp.asarray(0, dtype=int)
 
         def segment(state):
             t0, y0, mode, ys, modes, events, count, steps, result = state
             t1, y1, saved, ended, seg_result, seg_steps = jax.lax.cond(
-                self._closed_form(mode), closed, smooth, t0, y0, mode
+                self.closed_form(mode), closed, smooth, t0, y0, mode
             )
             inside = (ts >= t0) & (ts <= t1)
             ys = jax.tree.map(lambda old, new: jnp.where(inside, new, old), ys, saved)
             modes = jnp.where(inside, mode, modes)
-            new_mode, y_next = self._next(t1, y1, law, mode)
+            new_mode, y_next = self.next_phase(t1, y1, law, mode)
             new_mode = jnp.where(ended, new_mode, mode)
             y_next = jax.tree.map(lambda a, b: jnp.where(ended, a, b), y_next, y1)
             times, states, mode_pairs = events
@@ -396,12 +399,12 @@ class AbstractHybridModel(AbstractModel):
 
         def along(fn):
             def derivative(t, y):
-                field = self._field(t, y, law, mode)
+                field = self.phase_field(t, y, law, mode)
                 return jax.jvp(fn, (t, y), (jnp.ones_like(t), field))[1]
 
             return derivative
 
-        d0 = lambda t, y: self._acceleration(t, y, law, mode)  # noqa: E731
+        d0 = lambda t, y: self.phase_acceleration(t, y, law, mode)  # noqa: E731
         d1 = along(d0)
         d2 = along(d1)
         d3 = along(d2)
@@ -428,13 +431,13 @@ class AbstractHybridModel(AbstractModel):
             inner = mask_nodes[:-1] & mask_nodes[1:]
             return refined_peak(values, jnp.where(inner, widths, 0.0), jets[:-1], jets[1:])
 
-        before = jax.vmap(lambda t, y, m: self._acceleration(t, y, law, m))(
+        before = jax.vmap(lambda t, y, m: self.phase_acceleration(t, y, law, m))(
             solution.event_t, solution.event_y, solution.event_mode[:, 0]
         )
-        after_y = jax.vmap(lambda t, y, m: self._next(t, y, law, m)[1])(
+        after_y = jax.vmap(lambda t, y, m: self.next_phase(t, y, law, m)[1])(
             solution.event_t, solution.event_y, solution.event_mode[:, 0]
         )
-        after = jax.vmap(lambda t, y, m: self._acceleration(t, y, law, m))(
+        after = jax.vmap(lambda t, y, m: self.phase_acceleration(t, y, law, m))(
             solution.event_t, after_y, solution.event_mode[:, 1]
         )
         at_events = jnp.where(valid, jnp.maximum(jnp.abs(before), jnp.abs(after)), 0.0)
