@@ -34,6 +34,9 @@ from ._jump import flight as flight
 from ._jump import flights as flights
 from ._jump import jump_speed_rpm as jump_speed_rpm
 from ._jump import min_preload_n as min_preload_n
+from ._motion import EndState as EndState
+from ._motion import Join as Join
+from ._motion import segment_kinematics as segment_kinematics
 from ._spec import Follower as Follower
 from ._spec import Program as Program
 from ._spec import Segment as Segment

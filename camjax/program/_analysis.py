@@ -9,6 +9,7 @@ import numpy as np
 from ._dynamics import SteadyState, check_rpm
 from ._groove import Impact, groove_turns
 from ._jump import Flight, flights, jump_speed_rpm, min_preload_n
+from ._motion import Join, segment_kinematics
 from ._spec import Program
 
 
@@ -40,7 +41,8 @@ class SpeedReport:
             turn (for a form-closed cam the signed flank force).
         jump: whether the contact force goes negative (a spring-loaded cam only).
         min_preload_n: the preload that just keeps contact (``None`` when form-closed).
-        residual_vibration_mm: amplitude of the free vibration at the start of each dwell.
+        residual_vibration_mm: amplitude of the free vibration at the start of each dwell
+            and constant-velocity segment (``Program.residual_segments``), in program order.
         period_ratios: each moving segment's duration times the natural frequency.
         flights: every flight of the turn where contact is lost (``None`` where it holds).
         impacts: a grooved cam's strikes on its flanks in a settled turn (else ``None``).
@@ -77,15 +79,20 @@ class SpeedReport:
 @dataclasses.dataclass(frozen=True)
 class Report:
     """A program's report over a list of speeds: one ``SpeedReport`` each, and the jump
-    speed (the lowest speed in the range at which contact is lost; ``None`` if none)."""
+    speed (the lowest speed in the range at which contact is lost; ``None`` if none);
+    ``segments`` (``segment_kinematics``) and ``joins`` (``Program.joins``) describe the
+    motion itself, at any speed."""
 
     program: str
     speeds: tuple[SpeedReport, ...]
     jump_speed_rpm: float | None
+    segments: tuple[dict, ...] = ()
+    joins: tuple[Join, ...] = ()
 
     def as_dict(self) -> dict:
         return {"program": self.program, "speeds": [s.as_dict() for s in self.speeds],
-                "jump_speed_rpm": self.jump_speed_rpm}
+                "jump_speed_rpm": self.jump_speed_rpm, "segments": list(self.segments),
+                "joins": [j.as_dict() for j in self.joins]}
 
 
 def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadyState | None = None,
@@ -130,7 +137,8 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     jump_speed = None
     if not closed and rpm.size > 1 and rpm.max() > rpm.min():
         jump_speed = jump_speed_rpm(steady, float(rpm.min()), float(rpm.max()))
-    return Report(program.name, tuple(speeds), jump_speed)
+    return Report(program.name, tuple(speeds), jump_speed, tuple(segment_kinematics(program)),
+                  tuple(program.joins()))
 
 
 def response(program: Program, rpm: float, *, steady: SteadyState | None = None) -> dict[str, np.ndarray]:
