@@ -20,6 +20,7 @@ from ._design import write_program as write_program
 from ._dynamics import Cycle as Cycle
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
+from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
 from ._export import Profile as Profile
 from ._export import profile as profile

@@ -376,3 +376,23 @@ def startup(program: Program, rpm: float, cycles: int, *, steady: SteadyState | 
         force.append(np.asarray(run.contact_force_n[:-1]))
         q_start = run.q[-1]
     return np.concatenate(s), np.concatenate(accel), np.concatenate(force)
+
+
+def node_contact_force(program: Program, rpm, laws: dict | None = None, *, rpm_min: float | None = None):
+    """Contact force (N) of the periodic steady state at every grid node and speed,
+    ``(speeds, nodes)``, with the laws of some segments replaced (``{segment: law}``,
+    1-based; the laws may be traced: the force is affine in each, so it differentiates).
+
+    A replacement keeps the breakpoints of the law it replaces (``with_segment_law``).
+    The grid is the one for ``rpm_min`` (default: the slowest of ``rpm``, which must then
+    be concrete).
+    """
+    rpm = jnp.atleast_1d(jnp.asarray(rpm, dtype=float))
+    if rpm_min is None:
+        rpm_min = float(np.min(np.asarray(rpm)))
+    with jax.ensure_compile_time_eval():
+        grid = cycle_grid(program, resolution(program, rpm_min))
+    for segment, law in (laws or {}).items():
+        grid = with_segment_law(grid, program, segment - 1, law)
+    train = Train.of(program)
+    return jax.vmap(lambda r: _cycle(grid, train, r).contact_force_n)(rpm)
