@@ -309,7 +309,11 @@ def test_feed_steady_state_and_constant_velocity_residual_match_scipy(feed):
     amplitude = math.hypot(free, (free_rate + zeta * omega * free) / omega_d)
     residual = steady.summary([rpm]).residual_vibration_mm[0]
     assert residual[1] == pytest.approx(1e3 * amplitude, rel=1e-6)
-    assert amplitude > 100 * abs(slope * 0.01)  # the steady offset is not negligible beside it
+    # Measured about the static point of the start's lift alone (a dwell's definition), the
+    # amplitude would be far off: the steady motion's rate B matters.
+    static = e0 - forcing * y0 / omega**2
+    naive = math.hypot(static, (de0 + zeta * omega * static) / omega_d)
+    assert abs(naive - amplitude) > 0.1 * amplitude  # 18% at 600 rpm
     # The dwells' residuals keep their definition (static point of the lift).
     assert residual[0] > 0 and residual[2] > 0
 
