@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import jax
 import numpy as np
 
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
@@ -44,7 +45,8 @@ def law_state(seg, at_end: bool) -> tuple[float, float, float]:
     """``(v, a, j)`` of a segment at its start or end (mm/deg, mm/deg^2, mm/deg^3); zeros for a dwell."""
     if not seg.moving:
         return 0.0, 0.0, 0.0
-    _, v, a, j = (float(x[1 if at_end else 0]) for x in seg.law.evaluate(np.array([0.0, 1.0])))
+    with jax.ensure_compile_time_eval():  # concrete even when a design traces around it
+        _, v, a, j = (float(x[1 if at_end else 0]) for x in seg.law.evaluate(np.array([0.0, 1.0])))
     beta, h = seg.angle_deg, seg.lift_mm
     return h * v / beta, h * a / beta**2, h * j / beta**3
 
