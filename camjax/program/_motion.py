@@ -118,8 +118,8 @@ def resolve_segments(segments: tuple) -> tuple:
             end = facing((k + 1) % n, False, k) if seg.end == MATCH else _state(seg.end)
             beta, h = seg.angle_deg, seg.lift_mm
             scale = np.array([beta / h, beta**2 / h, beta**3 / h])
-            v0, a0, j0 = np.asarray(start) * scale
-            v1, a1, j1 = np.asarray(end) * scale
+            v0, a0, j0 = np.asarray(start) * scale + 0.0  # + 0.0: no negative zeros in names
+            v1, a1, j1 = np.asarray(end) * scale + 0.0
             if degree == 5:
                 j0 = j1 = 0.0
             law = BoundaryPolynomial(v0=v0, a0=a0, v1=v1, a1=a1, j0=j0, j1=j1, degree=degree)
@@ -183,8 +183,13 @@ def joins(segments, start_deg) -> list[Join]:
                 f"segments {k + 1} and {after + 1} meet at {angle:g} deg with velocity {v0:.6g} mm/deg "
                 f"(end of segment {k + 1}) and {v1:.6g} mm/deg (start of segment {after + 1}): a "
                 "velocity that jumps is an impact; match the two")
-        out.append(Join(k + 1, after + 1, angle, 0.5 * (v0 + v1), a0, a1))
+        out.append(Join(k + 1, after + 1, angle, *(_snap(x) for x in (0.5 * (v0 + v1), a0, a1))))
     return out
+
+
+def _snap(value: float) -> float:
+    """Round-off (below ``1e-12``) reported as zero."""
+    return 0.0 if abs(value) < _STATE_TOLERANCE else float(value)
 
 
 def displacement_range(law: AbstractMotionLaw) -> tuple[float, float]:
