@@ -20,7 +20,7 @@ import numpy as np
 
 from .._custom_types import Breakpoints, LawValues
 from ._base import AbstractMotionLaw, is_concrete, polynomial_peaks, require
-from ._spline import max_abs_piecewise
+from ._spline import BSplineLaw, max_abs_piecewise
 
 DEGREES = (5, 7)
 
@@ -48,8 +48,10 @@ def _end_low(degree: int) -> np.ndarray:
     return np.array(rows)
 
 
-def _number(value) -> jax.Array:
-    return jnp.asarray(value, dtype=float)
+def _number(value):
+    """A boundary value as an array leaf: numpy for plain numbers (concrete even when a
+    law is built under a trace), as given for JAX arrays and tracers."""
+    return value if isinstance(value, jax.Array) else np.asarray(value, dtype=float)
 
 
 class BoundaryPolynomial(AbstractMotionLaw):
@@ -169,3 +171,52 @@ class ConstantVelocity(AbstractMotionLaw):
 
     def displacement_range(self) -> tuple[float, float]:
         return 0.0, 1.0
+
+
+class CorrectedPolynomial(AbstractMotionLaw):
+    """A ``BoundaryPolynomial`` plus a B-spline correction that keeps its end states.
+
+    ``s = base(tau) + sum_i c_i B_i(tau)`` on the clamped uniform basis of a
+    ``BSplineLaw`` of ``spline_degree`` whose first three (degree-7 base: four) control
+    points at each end are zero, so the correction vanishes with its first two (three)
+    derivatives at both ends: the base's velocity, acceleration (and jerk) hold there for
+    any coefficients.  Only the coefficients are leaves a design moves (the base's are
+    leaves too, so the law differentiates in both).  A family for designing a segment
+    that starts or ends in motion.
+    """
+
+    base: BoundaryPolynomial
+    coefficients: jax.Array
+    spline_degree: int = eqx.field(static=True, default=5)
+
+    def _spline(self, coefficients) -> BSplineLaw:
+        return BSplineLaw(coefficients, self.spline_degree, zero_jerk=self.base.degree == 7)
+
+    @property
+    def name(self) -> str:
+        return f"corrected-polynomial{self.base.degree}:{len(self.coefficients)}"
+
+    def _rise(self, tau) -> LawValues:
+        base = self.base._rise(tau)
+        full = self._spline(self.coefficients)._rise(tau)
+        zero = self._spline(jnp.zeros_like(self.coefficients))._rise(tau)
+        return tuple(b + f - z for b, f, z in zip(base, full, zero))
+
+    def breakpoints(self) -> Breakpoints:
+        return self._spline(self.coefficients).breakpoints()
+
+    def _peak(self, order: int):
+        edges = np.array([0.0, *self.breakpoints(), 1.0])
+        return max_abs_piecewise(lambda t: self._rise(t)[order], edges)
+
+    @property
+    def Cv(self):
+        return self._peak(1)
+
+    @property
+    def Ca(self):
+        return self._peak(2)
+
+    @property
+    def Cj(self):
+        return self._peak(3)
