@@ -369,3 +369,40 @@ def test_required_preload_gradient_in_a_join_velocity(feed):
     # At the program's own velocity the value is the SteadyState's required preload (nodes).
     force = SteadyState(feed, 500.0).summary(np.asarray(rpm)).min_contact_force_n
     assert float(value(velocity)) == pytest.approx(np.max(feed.follower.preload_n - force), rel=2e-3)
+
+
+# -- design of a segment in motion ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("degree", [5, 7])
+def test_corrected_polynomial_keeps_the_end_states_of_its_base(degree):
+    base = laws.BoundaryPolynomial(v0=-1.5, a0=2.0, v1=0.7, a1=-3.0, j0=4.0 if degree == 7 else 0.0,
+                                   j1=-1.0 if degree == 7 else 0.0, degree=degree)
+    law = laws.CorrectedPolynomial(base, jnp.asarray(np.random.default_rng(1).normal(size=9)))
+    ends = [np.asarray(x) for x in law.evaluate(np.array([0.0, 1.0]))]
+    expected = [np.asarray(x) for x in base.evaluate(np.array([0.0, 1.0]))]
+    for order in range(2 if degree == 5 else 3):
+        assert ends[order] == pytest.approx(expected[order], abs=1e-9)
+    assert float(law.Ca) > 0 and laws.from_dict(json.loads(json.dumps(laws.to_dict(law)))) == law
+
+
+def test_design_a_segment_in_motion_keeps_its_joins(feed, tmp_path, capsys):
+    """``--objective preload`` on the feed cam's reversal (a septic in motion at both ends):
+    the designed law keeps every join's state and lowers the preload the program needs."""
+    argv = ["design", "--program", str(example_path("feed")), "--segment", "4", "--rpm", "500:650",
+            "--objective", "preload", "--knots", "8", "--steps", "200", "--quiet", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    new = Program.load(tmp_path / "program.toml")
+    law = new.segments[3].law
+    assert isinstance(law, laws.CorrectedPolynomial)
+    for before, after in zip(feed.joins(), new.joins()):
+        assert after.state == before.state and after.continuity == before.continuity
+        assert after.velocity_mm_per_deg == pytest.approx(before.velocity_mm_per_deg, abs=1e-9)
+    from camjax.program import MaxPreload
+
+    objective = MaxPreload(feed, 4, 500.0, 650.0)
+    assert objective.report(law) < 0.5 * objective.report(feed.segments[3].law)  # 94 N from 280 N
+    argv[argv.index("preload")] = "residual"
+    assert main(argv) == 2
+    assert "segment 4 starts or ends in motion: only the preload objective" in capsys.readouterr().err
