@@ -20,7 +20,6 @@ from camjax.program import (
     Program,
     Segment,
     SteadyState,
-    analyse,
     example_path,
     node_contact_force,
     profile,

@@ -15,8 +15,8 @@ import math
 import jax
 import numpy as np
 
-from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
 from ..checks import is_concrete
+from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
 
 MATCH = "match"
 END_STATE_KEYS = ("velocity_mm_per_deg", "acceleration_mm_per_deg2", "jerk_mm_per_deg3")
