@@ -192,6 +192,7 @@ BAD = [
     (FEED_TEXT.replace('law = "constant-velocity"', 'law = "constant-speed"'),
      "segment 3: unknown law 'constant-speed'.*or \"polynomial\""),
     (FEED_TEXT.replace("degree = 7", "degree = 6"), "segment 4: degree must be 5 or 7, got 6"),
+    (FEED_TEXT.replace("degree = 7", "degree = 7.0"), "segment 4: degree must be 5 or 7, got 7.0"),
     (FEED_TEXT.replace("velocity_mm_per_deg = -0.4", 'velocity_mm_per_deg = "fast"'),
      "segment 4: end.velocity_mm_per_deg must be a number, got 'fast'"),
     (FEED_TEXT.replace("jerk_mm_per_deg3 = 0.0", "jerk = 0.0"),

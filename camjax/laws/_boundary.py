@@ -73,7 +73,8 @@ class BoundaryPolynomial(AbstractMotionLaw):
     degree: int = eqx.field(static=True, default=5)
 
     def __check_init__(self):
-        require(self.degree in DEGREES, f"polynomial degree must be 5 or 7, got {self.degree!r}")
+        require(type(self.degree) is int and self.degree in DEGREES,
+                f"polynomial degree must be 5 or 7, got {self.degree!r}")
         if is_concrete(self):
             values = [float(getattr(self, k)) for k in ("v0", "a0", "v1", "a1", "j0", "j1")]
             require(all(math.isfinite(x) for x in values),

@@ -356,7 +356,7 @@ def _segment(i: int, data, base: Path | None) -> Segment:
             raise ValueError(f"segment {i}: law given without lift_mm")
         if data["law"] == "polynomial":
             degree = data.get("degree", 5)
-            if isinstance(degree, bool) or degree not in (5, 7):
+            if isinstance(degree, bool) or not isinstance(degree, int) or degree not in (5, 7):
                 raise ValueError(f"segment {i}: degree must be 5 or 7, got {degree!r}")
             return Segment(data["angle_deg"], lift, BoundaryPolynomial(degree=degree),
                            _end_state(i, "start", data.get("start", MATCH)),
