@@ -21,12 +21,14 @@ def register(subparsers) -> None:
             "Periodic steady state of a cam program (rises, dwells and returns over 360 "
             "degrees, follower with mass, train stiffness and return spring) at each speed: "
             "peak payload and kinematic acceleration, contact force, minimum preload, "
-            "residual vibration in the dwells, and where contact is lost the flight and "
+            "residual vibration in the dwells and constant-velocity strokes, each segment's peaks "
+            "and each join's state (VDI 2143), and where contact is lost the flight and "
             "re-impact.  With several speeds, the jump speed (lowest speed in the range at "
-            "which the preload loses contact).  Without FILE, the built-in 'indexer' example."
+            "which the preload loses contact).  Without FILE, the built-in 'indexer' example; "
+            "FILE may also name a built-in example ('indexer', 'feed')."
         ),
     )
-    parser.add_argument("file", nargs="?", metavar="FILE", help="program TOML file (default: built-in indexer)")
+    parser.add_argument("file", nargs="?", metavar="FILE", help="program TOML file or built-in example name (default: indexer)")
     parser.add_argument("--rpm", default=DEFAULT_RPM, metavar="RPM|V1,V2,...|START:STOP:COUNT",
                         help=f"cam speed(s) in rpm (default {DEFAULT_RPM})")
     parser.add_argument("--no-flight", action="store_true", help="skip the flight simulation where contact is lost "
@@ -83,6 +85,7 @@ def _table(report: dict, grooved: bool = False) -> str:
         for i in s.get("impacts") or []:
             lines.append(f"at {s['rpm']:g} rpm the roller strikes the {i['flank']} flank at {i['angle_deg']:.3f} deg, "
                          f"{i['velocity_m_s']:.4g} m/s, peak force {i['peak_force_n']:.5g} N")
+    lines += _motion_lines(report)
     speed = report["jump_speed_rpm"]
     if report["jump_below_range"]:
         lowest = min(s["rpm"] for s in report["speeds"])
@@ -91,6 +94,20 @@ def _table(report: dict, grooved: bool = False) -> str:
     elif len(report["speeds"]) > 1:
         lines.append("jump speed: " + ("none in the range" if speed is None else f"{speed:.1f} rpm"))
     return "\n".join(lines)
+
+
+def _motion_lines(report: dict) -> list[str]:
+    """The motion at any speed: each moving segment's peaks and every join's state."""
+    lines = []
+    for g in report["segments"]:
+        if g["kind"] != "dwell":
+            lines.append(
+                f"segment {g['segment']} {g['kind']} ({g['law']}): peak y' {g['peak_velocity_mm_per_deg']:.4g} "
+                f"mm/deg, y'' {g['peak_acceleration_mm_per_deg2']:.4g} mm/deg2, y''' "
+                f"{g['peak_jerk_mm_per_deg3']:.4g} mm/deg3" + (", overshoots its ends" if g["overshoot"] else ""))
+    lines += [f"join {j['before']}|{j['after']} at {j['angle_deg']:g} deg: {j['state']} {j['continuity']}, "
+              f"y' {j['velocity_mm_per_deg']:.4g} mm/deg" for j in report["joins"]]
+    return lines
 
 
 def _csv(report: dict) -> str:
@@ -157,6 +174,8 @@ def run(args) -> int:
         raise CliError(f"--plot-rpm: must be a speed at or above the lowest --rpm ({min(rpm):g}), "
                        f"got {args.plot_rpm:g}")
     path = Path(args.file) if args.file else example_path()
+    if args.file and args.file.isidentifier() and not path.exists() and example_path(args.file).exists():
+        path = example_path(args.file)  # a built-in example by name
     program = Program.load(path)
     out = output_dir(args.out)
     steady = SteadyState(program, float(min(rpm)))

@@ -12,7 +12,7 @@ import numpy as np
 import optax
 from tqdm.auto import tqdm
 
-from ..laws import AbstractMotionLaw, BSplineLaw
+from ..laws import AbstractMotionLaw, BoundaryPolynomial, BSplineLaw, CorrectedPolynomial
 from ..laws import get as get_law
 from ._caps import CapError, Caps, _describe, _fine_checks, _restore
 from ._objectives import AbstractObjective
@@ -35,7 +35,7 @@ class DesignResult(eqx.Module):
     seconds: float = eqx.field(static=True)
 
 
-def _acceleration_coordinates(knots: int, degree: int) -> jax.Array:
+def _acceleration_coordinates(knots: int, degree: int, fixed: int = 3) -> jax.Array:
     """Matrix ``M`` such that a step ``theta`` in the coefficients ``M theta`` moves the
     acceleration's control points by ``U theta`` with ``U`` orthonormal.
 
@@ -46,10 +46,28 @@ def _acceleration_coordinates(knots: int, degree: int) -> jax.Array:
     """
     from ..laws import BSplineLaw
 
-    n_basis = knots + 6
-    second = BSplineLaw.derivative_map(n_basis, degree, 2)[:, 3:-3]
+    n_basis = knots + 2 * fixed
+    second = BSplineLaw.derivative_map(n_basis, degree, 2)[:, fixed:-fixed]
     _, singular, vt = np.linalg.svd(second, full_matrices=False)
     return jnp.asarray(vt.T / singular)
+
+
+def _restore_corrected(law: CorrectedPolynomial, caps: Caps) -> CorrectedPolynomial:
+    """The nearest point towards the base polynomial (no correction) that meets the caps."""
+    if caps.met(law):
+        return law
+
+    def blend(t):
+        return CorrectedPolynomial(law.base, (1 - t) * law.coefficients, law.spline_degree)
+
+    if not caps.met(blend(1.0)):
+        raise CapError(f"the design breaks its caps ({_describe(caps.violations(law))}) and so does "
+                       f"its boundary polynomial ({_describe(caps.violations(blend(1.0)))}); relax the caps")
+    lo, hi = 0.0, 1.0
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if caps.met(blend(mid)) else (mid, hi)
+    return blend(hi)
 
 
 def _as_objectives(objective) -> tuple[AbstractObjective, ...]:
@@ -112,7 +130,10 @@ def design(
             (default ``Caps()``: a monotone rise, no caps on Ca and Cj).
         knots: free B-spline coefficients (the boundary conditions fix three more at
             each end).
-        initial: the law (or its name) fitted as the starting point.
+        initial: the law (or its name) fitted as the starting point.  A
+            ``BoundaryPolynomial`` (or ``CorrectedPolynomial``) starts the design in the
+            ``CorrectedPolynomial`` family instead: the polynomial plus a B-spline
+            correction of ``knots`` coefficients, so the design keeps its end states.
         optimizer: ``"lbfgs"`` (optax L-BFGS with zoom line search, restarted at each
             sharpness stage) or ``"adam"`` (rate decaying 100-fold, sharpness ramped
             geometrically over the run).
@@ -141,11 +162,21 @@ def design(
         raise ValueError(f"sharpness must be two increasing exponents >= 1, got {sharpness}")
     knots = int(knots)
     start_law = get_law(initial) if isinstance(initial, str) else initial
-    start = BSplineLaw.fit(start_law, knots, degree)
-    to_coefficients = _acceleration_coordinates(knots, degree)
+    if isinstance(start_law, BoundaryPolynomial | CorrectedPolynomial):
+        base = start_law if isinstance(start_law, BoundaryPolynomial) else start_law.base
+        same_size = (isinstance(start_law, CorrectedPolynomial) and start_law.spline_degree == degree
+                     and len(start_law.coefficients) == knots)
+        start_coefficients = start_law.coefficients if same_size else jnp.zeros(knots)
+        to_coefficients = _acceleration_coordinates(knots, degree, 4 if base.degree == 7 else 3)
 
-    def law_of(theta):
-        return BSplineLaw(start.coefficients + to_coefficients @ theta, degree)
+        def law_of(theta):
+            return CorrectedPolynomial(base, start_coefficients + to_coefficients @ theta, degree)
+    else:
+        start = BSplineLaw.fit(start_law, knots, degree)
+        to_coefficients = _acceleration_coordinates(knots, degree)
+
+        def law_of(theta):
+            return BSplineLaw(start.coefficients + to_coefficients @ theta, degree)
 
     def features(theta):
         law = law_of(theta)
@@ -223,7 +254,7 @@ def design(
         # repair, the reported values): the bar stays up and says which.
         bar.set_postfix_str("checking the caps on a fine grid")
         law = law_of(theta)
-        final = _restore(law, caps)
+        final = _restore_corrected(law, caps) if isinstance(law, CorrectedPolynomial) else _restore(law, caps)
         violations = caps.violations(final)
         if any(v > 0 for v in violations.values()):  # pragma: no cover - _restore guarantees it
             raise CapError(f"the design breaks its caps: {_describe(violations)}")

@@ -1,6 +1,9 @@
 """Motion laws: normalised rises ``s(tau)`` with exact derivatives and coefficients."""
 
 from ._base import AbstractMotionLaw as AbstractMotionLaw
+from ._boundary import BoundaryPolynomial as BoundaryPolynomial
+from ._boundary import ConstantVelocity as ConstantVelocity
+from ._boundary import CorrectedPolynomial as CorrectedPolynomial
 from ._io import from_dict as from_dict
 from ._io import load as load
 from ._io import save as save

@@ -9,6 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._base import AbstractMotionLaw
+from ._boundary import CorrectedPolynomial
 from ._registry import get
 from ._spline import BSplineLaw
 
@@ -29,6 +30,15 @@ def to_dict(law: AbstractMotionLaw) -> dict:
             "control_points": [float(x) for x in np.asarray(law.control_points)],
             "coefficients": [float(x) for x in np.asarray(law.coefficients)],
         }
+    if isinstance(law, CorrectedPolynomial):
+        return {
+            "format": FORMAT,
+            "version": VERSION,
+            "kind": "corrected-polynomial",
+            "base": law.base.name,
+            "spline_degree": law.spline_degree,
+            "coefficients": [float(x) for x in np.asarray(law.coefficients)],
+        }
     name = law.name
     rebuilt = get(name)
     tau = np.linspace(0.0, 1.0, 101)
@@ -46,8 +56,14 @@ def from_dict(data: dict) -> AbstractMotionLaw:
     kind = data.get("kind")
     if kind == "named":
         return get(data["name"])
+    if kind == "corrected-polynomial":
+        try:
+            return CorrectedPolynomial(get(data["base"]), jnp.asarray(np.asarray(data["coefficients"], dtype=float)),
+                                       spline_degree=int(data["spline_degree"]))
+        except KeyError as missing:
+            raise ValueError(f"corrected-polynomial law description lacks {missing}") from None
     if kind != "bspline":
-        raise ValueError(f"unknown law kind {kind!r}; expected 'bspline' or 'named'")
+        raise ValueError(f"unknown law kind {kind!r}; expected 'bspline', 'corrected-polynomial' or 'named'")
     try:
         law = BSplineLaw(
             jnp.asarray(np.asarray(data["coefficients"], dtype=float)),

@@ -1,10 +1,16 @@
-"""Look laws up by name: ``get("modsine")``, ``get("scca:0.25,0.5,0.25")``, ``get("poly:5")``."""
+"""Look laws up by name: ``get("modsine")``, ``get("scca:0.25,0.5,0.25")``, ``get("poly:5")``.
+
+``names()`` and ``standard_laws()`` list the rest-to-rest laws only; ``get`` also knows the
+laws that start or end in motion (``constant-velocity``, ``polynomial5:V0,A0,V1,A1`` and
+``polynomial7:V0,A0,J0,V1,A1,J1``, boundary values in normalised units).
+"""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
 from ._base import AbstractMotionLaw
+from ._boundary import BoundaryPolynomial, ConstantVelocity
 from ._polynomial import PolynomialLaw
 from ._scca import (
     SCCA,
@@ -23,6 +29,10 @@ _STANDARD: dict[str, Callable[[], AbstractMotionLaw]] = {
     "parabolic": Parabolic,
     "poly345": lambda: PolynomialLaw(3),
     "poly4567": lambda: PolynomialLaw(4),
+}
+
+_IN_MOTION: dict[str, Callable[[], AbstractMotionLaw]] = {
+    "constant-velocity": ConstantVelocity,
 }
 
 _ALIASES = {
@@ -64,6 +74,16 @@ def get(name: str) -> AbstractMotionLaw:
     key = _ALIASES.get(key, key)
     if key in _STANDARD:
         return _STANDARD[key]()
+    if key in _IN_MOTION:
+        return _IN_MOTION[key]()
+    if key.startswith(("polynomial5:", "polynomial7:")):
+        degree = int(key[10])
+        values = _parse_numbers(key[12:], float, name)
+        keys = ("v0", "a0", "v1", "a1") if degree == 5 else ("v0", "a0", "j0", "v1", "a1", "j1")
+        if len(values) != len(keys):
+            raise ValueError(f"law {name!r}: polynomial{degree} takes {len(keys)} boundary values, "
+                             f"'polynomial{degree}:{','.join(k.upper() for k in keys)}'")
+        return BoundaryPolynomial(**dict(zip(keys, values)), degree=degree)
     if key.startswith("scca:"):
         fractions = _parse_numbers(key[5:], float, name)
         if len(fractions) != 3:
@@ -72,5 +92,6 @@ def get(name: str) -> AbstractMotionLaw:
     if key.startswith("poly:"):
         (order,) = _parse_numbers(key[5:], int, name)
         return PolynomialLaw(order)
-    valid = ", ".join(names() + sorted(_ALIASES) + ["scca:A,B,C", "poly:K"])
+    valid = ", ".join(names() + sorted(_ALIASES) + ["scca:A,B,C", "poly:K"] + list(_IN_MOTION)
+                      + ["polynomial5:V0,A0,V1,A1", "polynomial7:V0,A0,J0,V1,A1,J1"])
     raise ValueError(f"unknown law {name!r}; valid names: {valid}")

@@ -33,7 +33,6 @@ from ._spring_mass import response_metrics as response_metrics
 from ._spring_mass import torsion_factor as torsion_factor
 
 if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
-    from ._hybrid import AbstractHybridModel as AbstractHybridModel
     from ._backlash import DRIVING_FLANK as DRIVING_FLANK
     from ._backlash import FREE as FREE
     from ._backlash import IMPACT as IMPACT
@@ -56,6 +55,7 @@ if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
     from ._friction import FrictionOptions as FrictionOptions
     from ._friction import FrictionResponse as FrictionResponse
     from ._friction import free_vibration as free_vibration
+    from ._hybrid import AbstractHybridModel as AbstractHybridModel
     from ._swinging_follower import FollowerOptions as FollowerOptions
     from ._swinging_follower import FollowerResponse as FollowerResponse
     from ._swinging_follower import SwingingFollower as SwingingFollower

@@ -22,6 +22,7 @@ from ._design import write_program as write_program
 from ._dynamics import Cycle as Cycle
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
+from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
 from ._export import Profile as Profile
 from ._export import profile as profile
@@ -39,6 +40,9 @@ from ._jump import flight as flight
 from ._jump import flights as flights
 from ._jump import jump_speed_rpm as jump_speed_rpm
 from ._jump import min_preload_n as min_preload_n
+from ._motion import EndState as EndState
+from ._motion import Join as Join
+from ._motion import segment_kinematics as segment_kinematics
 from ._spec import Follower as Follower
 from ._spec import Program as Program
 from ._spec import Segment as Segment

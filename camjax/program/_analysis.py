@@ -9,6 +9,7 @@ import numpy as np
 from ._dynamics import SteadyState, check_rpm
 from ._groove import Impact, groove_turns
 from ._jump import Flight, flights, jump_speed_rpm, min_preload_n
+from ._motion import Join, segment_kinematics
 from ._spec import Program
 
 
@@ -46,7 +47,8 @@ class SpeedReport:
             turn (for a form-closed cam the signed flank force).
         jump: whether the contact force goes negative (a spring-loaded cam only).
         min_preload_n: the preload that just keeps contact (``None`` when form-closed).
-        residual_vibration_mm: amplitude of the free vibration at the start of each dwell.
+        residual_vibration_mm: amplitude of the free vibration at the start of each dwell
+            and constant-velocity segment (``Program.residual_segments``), in program order.
         period_ratios: each moving segment's duration times the natural frequency.
         flights: every flight of the turn where contact is lost (``None`` where it holds).
         impacts: a grooved cam's strikes on its flanks in a settled turn (else ``None``).
@@ -88,16 +90,21 @@ class Report:
     """A program's report over a list of speeds: one ``SpeedReport`` each, and the jump
     speed, the lowest speed in the range at which contact is lost (``None`` if contact
     holds over the whole range, or if it is lost already at the lowest speed given: then
-    ``jump_below_range`` is true and the jump speed lies below the range)."""
+    ``jump_below_range`` is true and the jump speed lies below the range); ``segments``
+    (``segment_kinematics``) and ``joins`` (``Program.joins``) describe the motion itself,
+    at any speed."""
 
     program: str
     speeds: tuple[SpeedReport, ...]
     jump_speed_rpm: float | None
     jump_below_range: bool = False
+    segments: tuple[dict, ...] = ()
+    joins: tuple[Join, ...] = ()
 
     def as_dict(self) -> dict:
         return {"program": self.program, "speeds": [s.as_dict() for s in self.speeds],
-                "jump_speed_rpm": self.jump_speed_rpm, "jump_below_range": self.jump_below_range}
+                "jump_speed_rpm": self.jump_speed_rpm, "jump_below_range": self.jump_below_range,
+                "segments": list(self.segments), "joins": [j.as_dict() for j in self.joins]}
 
 
 def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadyState | None = None,
@@ -144,7 +151,8 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     below = not closed and bool(out.min_contact_force_n[np.argmin(rpm)] < 0)
     if not closed and not below and rpm.size > 1 and rpm.max() > rpm.min():
         jump_speed = jump_speed_rpm(steady, float(rpm.min()), float(rpm.max()))
-    return Report(program.name, tuple(speeds), jump_speed, below)
+    return Report(program.name, tuple(speeds), jump_speed, below, tuple(segment_kinematics(program)),
+                  tuple(program.joins()))
 
 
 def response(program: Program, rpm: float, *, steady: SteadyState | None = None) -> dict[str, np.ndarray]:

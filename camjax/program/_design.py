@@ -7,7 +7,11 @@ with the oscillator's damping ratio ``zeta sqrt(k / (k + k_s))``.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
+
+import jax.numpy as jnp
+import numpy as np
 
 from .. import laws
 from ._spec import Program, segment_band, with_law
@@ -23,6 +27,12 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     (largest Ca*Ct), both for the segment alone at the oscillator's damping, or
     ``"preload"`` (largest preload the whole program needs over the speed range,
     ``MaxPreload``); ``design_options`` go to ``camjax.design`` (``knots``, ``steps``, ...).
+
+    A segment that starts or ends in motion (a polynomial, constant velocity, any law whose
+    end velocity is not zero) is designed as a ``CorrectedPolynomial``
+    from the ``BoundaryPolynomial`` of its end states, so every join keeps its state; only
+    ``"preload"`` applies to it (the others measure a rise from rest to rest), and the
+    monotone cap only where that polynomial is monotone.
     """
     from .. import law_design
     from ._preload import MaxPreload  # imports optax: only when designing
@@ -39,8 +49,29 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     else:
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
     seg = program.segments[segment - 1]
-    result = law_design.design(goal, caps=caps or law_design.Caps(), initial=seg.law, **design_options)
+    caps = caps or law_design.Caps()
+    initial = _in_motion_start(seg.law)
+    if initial is None:
+        initial = seg.law
+    else:
+        if objective != "preload":
+            raise ValueError(f"segment {segment} starts or ends in motion: only the preload objective "
+                             f"designs it ({objective} measures a rise from rest to rest)")
+        base = initial if isinstance(initial, laws.BoundaryPolynomial) else initial.base
+        monotone = float(jnp.min(base.v(jnp.linspace(0.0, 1.0, 20001)))) >= -1e-12
+        caps = dataclasses.replace(caps, monotone=caps.monotone and monotone)
+    result = law_design.design(goal, caps=caps, initial=initial, **design_options)
     return with_law(program, segment, result.law), result
+
+
+def _in_motion_start(law):
+    """The law a design of a segment in motion starts from, or ``None`` for a rest-to-rest law."""
+    if isinstance(law, laws.BoundaryPolynomial | laws.CorrectedPolynomial):
+        return law
+    _, v, a, _ = (np.asarray(x, dtype=float) for x in law.evaluate(np.array([0.0, 1.0])))
+    if np.all(np.abs(v) < 1e-12):  # from and to rest: the rest-to-rest B-spline meets it
+        return None
+    return laws.BoundaryPolynomial(v0=v[0], a0=a[0], v1=v[1], a1=a[1], degree=5)
 
 
 def write_program(program: Program, directory) -> Path:

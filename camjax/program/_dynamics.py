@@ -57,7 +57,8 @@ class CycleGrid(NamedTuple):
     ``motion.forcing`` and ``lift`` are ``(K, 6)`` monomial coefficients (in the local
     ``sigma``) of ``y_ss`` and ``y`` on each interval (mm, time in turns); ``lift_nodes``
     and ``velocity_nodes`` are ``y`` and ``y_s`` at the nodes; ``segment_start`` the
-    interval index where each segment starts (``dwell_start``: each dwell).
+    interval index where each segment starts (``residual_start``: each dwell and
+    constant-velocity segment, where the residual vibration is measured).
     """
 
     motion: MotionGrid
@@ -65,7 +66,7 @@ class CycleGrid(NamedTuple):
     lift_nodes: np.ndarray
     velocity_nodes: np.ndarray
     segment_start: np.ndarray
-    dwell_start: np.ndarray
+    residual_start: np.ndarray
 
     @property
     def nodes(self) -> np.ndarray:
@@ -151,7 +152,7 @@ def cycle_grid(program: Program, intervals: int) -> CycleGrid:
         lift_nodes=lift_nodes,
         velocity_nodes=velocity_nodes,
         segment_start=np.asarray(starts),
-        dwell_start=np.asarray([starts[i] for i in program.dwell_segments()], dtype=int),
+        residual_start=np.asarray([starts[i] for i in program.residual_segments()], dtype=int),
     )
 
 
@@ -264,9 +265,11 @@ def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True) -> C
     force = train.preload + jnp.real(force_gain * q)
     min_force, max_force = refined_extremes(force, widths, gain_derivatives(force_gain, lam, q[:-1], left),
                                             gain_derivatives(force_gain, lam, q[1:], right))
-    # Residual vibration in each dwell: distance of the mode from the dwell's static point.
-    starts = jnp.asarray(grid.dwell_start)
-    q_static = -beta * y[starts] / lam
+    # Residual vibration in each dwell and constant-velocity segment: distance of the mode
+    # from the steady motion there.  The forcing is beta (y0 + y_s sigma) (no y_ss), whose
+    # particular solution of q_s = lam q + forcing is -beta (y0 + y_s sigma) / lam - beta y_s / lam^2.
+    starts = jnp.asarray(grid.residual_start)
+    q_static = -beta * (y[starts] + ys[starts] / lam) / lam
     residual = jnp.abs(q[starts] - q_static) / jnp.imag(lam)
     return Cycle(q, accel, force, max_accel, min_force, max_force, residual)
 
@@ -373,3 +376,23 @@ def startup(program: Program, rpm: float, cycles: int, *, steady: SteadyState | 
         force.append(np.asarray(run.contact_force_n[:-1]))
         q_start = run.q[-1]
     return np.concatenate(s), np.concatenate(accel), np.concatenate(force)
+
+
+def node_contact_force(program: Program, rpm, laws: dict | None = None, *, rpm_min: float | None = None):
+    """Contact force (N) of the periodic steady state at every grid node and speed,
+    ``(speeds, nodes)``, with the laws of some segments replaced (``{segment: law}``,
+    1-based; the laws may be traced: the force is affine in each, so it differentiates).
+
+    A replacement keeps the breakpoints of the law it replaces (``with_segment_law``).
+    The grid is the one for ``rpm_min`` (default: the slowest of ``rpm``, which must then
+    be concrete).
+    """
+    rpm = jnp.atleast_1d(jnp.asarray(rpm, dtype=float))
+    if rpm_min is None:
+        rpm_min = float(np.min(np.asarray(rpm)))
+    with jax.ensure_compile_time_eval():
+        grid = cycle_grid(program, resolution(program, rpm_min))
+    for segment, law in (laws or {}).items():
+        grid = with_segment_law(grid, program, segment - 1, law)
+    train = Train.of(program)
+    return jax.vmap(lambda r: _cycle(grid, train, r).contact_force_n)(rpm)

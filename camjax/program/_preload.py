@@ -69,7 +69,8 @@ class MaxPreload(AbstractObjective):
         # The grid's layout depends only on the law's breakpoints: build it from a copy of
         # the law with zero leaves, then fill the segment's samples from the (traced) law.
         # (Evaluated eagerly even under a trace: the placeholder's leaves are concrete.)
-        placeholder = jax.tree.map(lambda x: np.zeros(np.shape(x)), law)
+        # Concrete leaves (a corrected polynomial's base) stay: the program must keep its joins.
+        placeholder = jax.tree.map(lambda x: np.zeros(np.shape(x)) if isinstance(x, jax.core.Tracer) else x, law)
         program = with_law(self.program, self.segment, placeholder)
         with jax.ensure_compile_time_eval():
             grid = cycle_grid(program, resolution(program, self.rpm_lo))

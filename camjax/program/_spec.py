@@ -16,7 +16,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import laws
-from ..laws import AbstractMotionLaw
+from ..checks import is_concrete
+from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
+from ._motion import END_STATE_KEYS, MATCH, EndState, is_polynomial, joins, resolve_segments
 
 FOLLOWER_KINDS = ("translating-roller", "swinging-roller")
 _ANGLE_TOLERANCE_DEG = 1e-9
@@ -28,16 +30,30 @@ class Segment:
     """One stretch of the cam turn: a rise or return by ``law`` over ``angle_deg``, or a dwell.
 
     ``lift_mm`` is the change of lift over the segment (negative for a return); a dwell has
-    ``law=None`` and ``lift_mm=0``.
+    ``law=None`` and ``lift_mm=0``.  A polynomial segment (``Segment.polynomial``) has
+    ``start`` and ``end``: each ``"match"`` (the neighbour's state there) or an
+    ``EndState``; the program solves its ``BoundaryPolynomial`` law from them.
     """
 
     angle_deg: float
     lift_mm: float = 0.0
     law: AbstractMotionLaw | None = None
+    start: str | EndState | None = None
+    end: str | EndState | None = None
 
     @property
     def moving(self) -> bool:
         return self.law is not None and self.lift_mm != 0.0
+
+    @classmethod
+    def polynomial(cls, angle_deg: float, lift_mm: float, degree: int = 5, start=MATCH, end=MATCH) -> Segment:
+        """A polynomial of ``degree`` 5 or 7 from ``start`` to ``end`` (``"match"`` or ``EndState``)."""
+        return cls(angle_deg, lift_mm, BoundaryPolynomial(degree=degree), start, end)
+
+    @classmethod
+    def constant_velocity(cls, angle_deg: float, lift_mm: float) -> Segment:
+        """The follower moving at ``lift_mm / angle_deg`` mm/deg over the whole segment."""
+        return cls(angle_deg, lift_mm, ConstantVelocity())
 
 
 @dataclasses.dataclass(frozen=True)
@@ -141,8 +157,11 @@ class Program:
     Checks (each a ``ValueError`` naming the segment or field): angles positive and
     summing to 360 degrees; a law on every segment with a lift and a lift on every
     segment with a law; the cumulative lift never below zero and back to zero at 360
-    degrees (the program starts and ends on the base circle); the follower's numbers
-    positive and finite.  Any number of segments, in any order.
+    degrees (the program starts and ends on the base circle); the velocity continuous at
+    every join, the wrap from the last segment to the first included (an acceleration
+    step is allowed: ``joins``); the follower's numbers positive and finite.  Any number
+    of segments, in any order.  Polynomial segments get their laws solved from their end
+    states (``"match"`` reads the neighbour's).
     """
 
     name: str
@@ -171,7 +190,15 @@ class Program:
             raise ValueError(f"segment angles sum to {total:g} degrees, not 360")
         if abs(lift) > _LIFT_TOLERANCE_MM:
             raise ValueError(f"the cumulative lift ends at {lift:g} mm, not back at zero (the base circle)")
+        object.__setattr__(self, "segments", resolve_segments(self.segments))
+        if is_concrete([s.law for s in self.segments]):
+            self.joins()
         _check_follower(self.follower)
+
+    def joins(self):
+        """Every join of the turn (``camjax.program.Join``: velocity, acceleration either
+        side, C1/C2, VDI 2143 state); a velocity jump is a ``ValueError``."""
+        return joins(self.segments, self.start_deg)
 
     # -- reading and writing -------------------------------------------------------------
 
@@ -218,7 +245,11 @@ class Program:
         lines = ["[program]", f'name = "{self.name}"', ""]
         for i, seg in enumerate(self.segments, 1):
             lines.append("[[segment]]")
-            if seg.law is not None:
+            if is_polynomial(seg):
+                lines += ['law = "polynomial"', f"degree = {seg.law.degree}", f"lift_mm = {seg.lift_mm!r}"]
+                lines += [f"{key} = " + ('"match"' if spec == MATCH else spec.toml())
+                          for key, spec in (("start", seg.start), ("end", seg.end))]
+            elif seg.law is not None:
                 lines += [f'law = "{law_files.get(i, seg.law.name)}"', f"lift_mm = {seg.lift_mm!r}"]
             lines += [f"angle_deg = {seg.angle_deg!r}", ""]
         lines.append("[follower]")
@@ -279,6 +310,10 @@ class Program:
     def dwell_segments(self) -> list[int]:
         return [i for i, s in enumerate(self.segments) if not s.moving]
 
+    def residual_segments(self) -> list[int]:
+        """The dwells and constant-velocity segments: where the residual vibration is reported."""
+        return [i for i, s in enumerate(self.segments) if not s.moving or isinstance(s.law, ConstantVelocity)]
+
 
 class LiftCurve(eqx.Module):
     """The program's lift over the turn as a JAX pytree, ``camjax.geometry``'s program interface.
@@ -311,7 +346,7 @@ def _no_unknown(table, allowed: set[str], where: str) -> None:
 
 
 def _segment(i: int, data, base: Path | None) -> Segment:
-    _no_unknown(data, {"law", "lift_mm", "angle_deg"}, f"segment {i}")
+    _no_unknown(data, {"law", "lift_mm", "angle_deg", "degree", "start", "end"}, f"segment {i}")
     if "angle_deg" not in data:
         raise ValueError(f"segment {i}: needs angle_deg")
     lift = data.get("lift_mm", 0.0)
@@ -319,8 +354,32 @@ def _segment(i: int, data, base: Path | None) -> Segment:
     if "law" in data:
         if "lift_mm" not in data:
             raise ValueError(f"segment {i}: law given without lift_mm")
+        if data["law"] == "polynomial":
+            degree = data.get("degree", 5)
+            if isinstance(degree, bool) or not isinstance(degree, int) or degree not in (5, 7):
+                raise ValueError(f"segment {i}: degree must be 5 or 7, got {degree!r}")
+            return Segment(data["angle_deg"], lift, BoundaryPolynomial(degree=degree),
+                           _end_state(i, "start", data.get("start", MATCH)),
+                           _end_state(i, "end", data.get("end", MATCH)))
         law = _law(i, data["law"], base)
+    extra = sorted({"degree", "start", "end"} & set(data))
+    if extra:
+        raise ValueError(f'segment {i}: {", ".join(extra)} belong(s) to law = "polynomial"')
     return Segment(angle_deg=data["angle_deg"], lift_mm=lift, law=law)
+
+
+def _end_state(i: int, key: str, value) -> str | EndState:
+    """``"match"`` or an ``EndState`` from a program file's ``start`` or ``end``."""
+    if value == MATCH:
+        return MATCH
+    if not isinstance(value, dict):
+        raise ValueError(f'segment {i}: {key} must be "match" or a table {{ {", ".join(END_STATE_KEYS)} }}, '
+                         f"got {value!r}")
+    _no_unknown(value, set(END_STATE_KEYS), f"segment {i}: {key}")
+    if "velocity_mm_per_deg" not in value:
+        raise ValueError(f"segment {i}: {key} needs velocity_mm_per_deg")
+    numbers = {k: _finite(v, f"segment {i}: {key}.{k}") for k, v in value.items()}
+    return EndState(**numbers)
 
 
 def _law(i: int, name, base: Path | None) -> AbstractMotionLaw:
@@ -337,13 +396,14 @@ def _law(i: int, name, base: Path | None) -> AbstractMotionLaw:
     try:
         return laws.get(name)
     except ValueError as error:
-        raise ValueError(f"segment {i}: {error}") from None
+        raise ValueError(f'segment {i}: {error}, or "polynomial" (with degree, start, end)') from None
 
 
 def with_law(program: Program, segment: int, law) -> Program:
     """``program`` with segment ``segment``'s (1-based) law replaced."""
     segments = list(program.segments)
-    segments[segment - 1] = dataclasses.replace(segments[segment - 1], law=law)
+    # The new law is the segment's own: a polynomial's end states no longer solve for it.
+    segments[segment - 1] = dataclasses.replace(segments[segment - 1], law=law, start=None, end=None)
     return dataclasses.replace(program, segments=tuple(segments))
 
 
