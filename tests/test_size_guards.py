@@ -35,18 +35,35 @@ def test_a_very_low_speed_is_refused_before_any_work():
         analyse(_cam(), [1e-6, 600.0])
 
 
-def test_thousands_of_tiny_segments_are_refused():
-    """A lift table imported as 3600 segments of 0.1 degree asked for 40 GB."""
-    law = laws.get("cycloidal")
-    segments = tuple(Segment(0.1, 0.01 if i % 2 == 0 else -0.01, law) for i in range(3600))
-    program = Program("table", segments, Follower(**FOLLOWER))
-    with pytest.raises(ValueError, match="grid intervals"):
-        SteadyState(program, 600.0)
-
-
 def test_the_command_line_refuses_with_exit_2_and_one_line(tmp_path, capsys):
     path = tmp_path / "stiff.toml"
     path.write_text(_cam(stiffness_n_per_mm=1e12).to_toml())
     assert main(["program", str(path), "--rpm", "600"]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "Traceback" not in err and "grid intervals" in err
+
+
+def test_a_lift_table_of_3600_segments_runs_in_bounded_memory():
+    """3600 segments of 0.1 degree (a lift table imported as segments) asked for 40 GB: the
+    engine selected each interval's weights by a product with an intervals x pieces
+    matrix.  Many pieces now gather them instead (the same numbers, next test)."""
+    law = laws.get("cycloidal")
+    segments = tuple(Segment(0.1, 0.01 if i % 2 == 0 else -0.01, law) for i in range(3600))
+    out = SteadyState(Program("table", segments, Follower(**FOLLOWER)), 600.0).summary([600.0])
+    # 0.01 mm wiggles at 36,000 per second barely move a 2000 N/mm train: the force stays
+    # within a few N/mm of the preload's static value.
+    assert 100.0 < float(out.min_contact_force_n[0]) <= 300.0 <= float(out.max_contact_force_n[0]) < 500.0
+
+
+def test_gathered_and_multiplied_piece_weights_agree():
+    import numpy as np
+
+    from camjax import sdof
+
+    edges = np.linspace(0.0, 1.0, 81)  # 80 pieces of 5 intervals: above the product's 64
+    grid, times = sdof.piecewise_grid(edges, np.full(80, 5))
+    grid = grid._replace(forcing=sdof.to_monomial(np.sin(7.0 * times) + times**2))
+    for omega, zeta in ((40.0, 0.0), (300.0, 0.1)):
+        product = sdof.propagate(grid, omega, zeta, gather=False)
+        gathered = sdof.propagate(grid, omega, zeta, gather=True)
+        assert np.max(np.abs(gathered - product)) <= 1e-13 * np.max(np.abs(product))

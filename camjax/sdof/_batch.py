@@ -21,4 +21,4 @@ def chunked_map(one, batch, nodes_per_member: int):
     chunks = -(-size // max(1, CHUNK_NODES // max(1, nodes_per_member)))
     padded = jnp.pad(batch, [(0, (-size) % chunks)] + [(0, 0)] * (batch.ndim - 1), mode="edge")
     out = jax.lax.map(jax.vmap(one), padded.reshape(chunks, -1, *batch.shape[1:]))
-    return jax.tree.map(lambda x: x.reshape(-1, *x.shape[2:])[:size], out)
+    return jax.tree.map(lambda x: x.reshape(x.shape[0] * x.shape[1], *x.shape[2:])[:size], out)

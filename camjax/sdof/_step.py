@@ -55,11 +55,13 @@ def eigenvalue(omega, zeta):
 
 
 _BLOCK = 32
+_DENSE_PIECES = 64  # above this many pieces, gather each interval's weights
 
 
-def propagate(grid: MotionGrid, omega, zeta, q0=None) -> jax.Array:
+def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = None) -> jax.Array:
     """Complex mode ``q`` at every node of ``grid``, starting from rest (or from ``q0``
-    at the first node).
+    at the first node).  ``gather`` picks how each interval finds its piece's weights
+    (``None``: by a matrix product up to 64 pieces, by a gather above; the same numbers).
 
     The recurrence ``q_(k+1) = E_k q_k + F_k`` runs in blocks of 32 intervals: inside a
     block, ``q = G cumsum(F / G)`` with ``G`` the running product of the step factors
@@ -68,16 +70,24 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None) -> jax.Array:
     """
     lam = eigenvalue(omega, zeta)
     z = lam * grid.piece_width
-    weights = psi(z).reshape(-1)  # (P * 6,): every piece's weights
-    # Each interval's kick uses its own piece's weights.  The piece layout may be traced,
-    # so the selection is a product with the law-only matrix ``piece_forcing`` (one row
-    # per interval, its forcing placed in its piece's columns): under vmap over period
-    # ratios it is one matrix product, not a gather.
-    forcing = grid.piece_forcing()
-    kick = (forcing @ weights.real + 1j * (forcing @ weights.imag)) * grid.widths
     step = jnp.exp(z)
-    selector = grid.piece_selector()
-    factor = selector @ step.real + 1j * (selector @ step.imag)
+    # Each interval's kick uses its own piece's weights.  With few pieces (a law's rise)
+    # the selection is a product with the law-only matrix ``piece_forcing`` (one row per
+    # interval, its forcing placed in its piece's columns): the piece layout may be
+    # traced, and under vmap over period ratios it is one matrix product, not a gather.
+    # With many (a program's turn: a piece per law piece of every segment) that matrix
+    # grows as intervals x pieces, so the weights are gathered instead.
+    if gather is None:
+        gather = grid.piece_width.shape[0] > _DENSE_PIECES
+    if not gather:
+        weights = psi(z).reshape(-1)  # (P * 6,): every piece's weights
+        forcing = grid.piece_forcing()
+        kick = (forcing @ weights.real + 1j * (forcing @ weights.imag)) * grid.widths
+        selector = grid.piece_selector()
+        factor = selector @ step.real + 1j * (selector @ step.imag)
+    else:
+        kick = jnp.sum(grid.forcing * psi(z)[grid.piece], axis=1) * grid.widths
+        factor = step[grid.piece]
     n_intervals = kick.shape[0]
     n_blocks = -(-n_intervals // _BLOCK)
     pad = n_blocks * _BLOCK - n_intervals
