@@ -182,7 +182,9 @@ def response(program: Program, rpm: float, *, steady: SteadyState | None = None)
     """Steady state over one turn at ``rpm``, at the grid nodes (law breakpoints included).
 
     Keys: ``theta_deg``, ``lift_mm``, ``payload_displacement_mm``, ``kinematic_acceleration_m_s2``
-    (``y''``), ``payload_acceleration_m_s2`` (``x''``), ``contact_force_n``.
+    (``y''``), ``payload_acceleration_m_s2`` (``x''``), ``contact_force_n``,
+    ``drive_torque_n_m`` (``F_c dy/dtheta``) and ``contact_stress_mpa`` (Hertz, zero without
+    ``follower.contact_width_mm`` and where contact is lost).
     """
     rpm = float(check_rpm(rpm)[0])
     steady = steady or SteadyState(program, rpm)
@@ -198,4 +200,6 @@ def response(program: Program, rpm: float, *, steady: SteadyState | None = None)
         "kinematic_acceleration_m_s2": 1e-3 * ddy * (360.0 * rpm / 60.0) ** 2,
         "payload_acceleration_m_s2": cycle.payload_acceleration_m_s2,
         "contact_force_n": cycle.contact_force_n,
+        "drive_torque_n_m": cycle.drive_torque_n_m,
+        "contact_stress_mpa": cycle.contact_stress_mpa,
     }

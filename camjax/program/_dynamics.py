@@ -219,7 +219,8 @@ class Cycle(NamedTuple):
     """Node series and refined extrema of one turn at one speed (s-time, mm).
 
     ``q`` is the complex mode at the nodes (periodic steady state unless built otherwise).
-    Forces in N, accelerations in m/s^2, the drive torque in N m (its figures over the turn
+    Forces in N, accelerations in m/s^2, the drive torque in N m (with its first three
+    derivatives in turn time at both ends of every interval; its figures over the turn
     from ``camjax.program._machine.torque_figures``), energy in J, the Hertz stress in MPa
     (zero without a contact width) and the node where it peaks.
     """
@@ -240,6 +241,8 @@ class Cycle(NamedTuple):
     max_contact_stress_mpa: jax.Array
     max_contact_stress_node: jax.Array
     max_contact_stress_radius_mm: jax.Array
+    drive_torque_left: jax.Array
+    drive_torque_right: jax.Array
 
 
 def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True,
@@ -292,7 +295,7 @@ def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True,
     q_static = -beta * y[starts] / lam
     residual = jnp.abs(q[starts] - q_static) / jnp.imag(lam)
     return Cycle(q, accel, force, max_accel, min_force, max_force, residual, torque[0], *figures, stress,
-                 stress[node], node, radius)
+                 stress[node], node, radius, torque[1], torque[2])
 
 
 class SpeedSummary(NamedTuple):
