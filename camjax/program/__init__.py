@@ -47,6 +47,7 @@ from ._shaft import Machine as Machine
 from ._shaft import MachineReport as MachineReport
 from ._shaft import ShaftSpeedReport as ShaftSpeedReport
 from ._shaft import analyse_machine as analyse_machine
+from ._shaft import is_machine_file as is_machine_file
 from ._shaft import shaft_torque as shaft_torque
 from ._spec import Follower as Follower
 from ._spec import Materials as Materials
