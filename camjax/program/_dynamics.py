@@ -342,7 +342,10 @@ class SteadyState:
 
     def _summary(self, rpm):
         c = _cycle(self.grid, self.train, rpm, contact=self.contact)
-        return (c.max_payload_acceleration_m_s2, c.min_contact_force_n, c.max_contact_force_n, c.residual_vibration_mm,
+        # A program without a dwell has no residual: one zero stands in (chunked_map cannot
+        # reshape a leaf of size zero) and is cut in summary_checked.
+        residual = c.residual_vibration_mm if self.grid.dwell_start.size else jnp.zeros(1)
+        return (c.max_payload_acceleration_m_s2, c.min_contact_force_n, c.max_contact_force_n, residual,
                 c.max_drive_torque_n_m, c.rms_drive_torque_n_m, c.mean_drive_torque_n_m, c.energy_fluctuation_j,
                 c.max_contact_stress_mpa, c.max_contact_stress_node, c.max_contact_stress_radius_mm)
 
@@ -361,6 +364,7 @@ class SteadyState:
         padded = np.pad(rpm, (0, len(devices) * width - size), mode="edge")
         out = shard_batch(self._batch, jnp.asarray(padded), devices=devices)
         accel, fmin, fmax, *rest = (np.asarray(x)[:size] for x in out)
+        rest[0] = rest[0][:, : self.grid.dwell_start.size]
         raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm",
                         accel, fmin, fmax, *rest[1:6])
         return SpeedSummary(rpm, accel, fmin, fmax, *rest)
