@@ -24,8 +24,8 @@ from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
 from ._dynamics import startup as startup
 from ._export import Profile as Profile
-from ._export import shape as shape
 from ._export import profile as profile
+from ._export import shape as shape
 from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
 from ._groove import GrooveTurn as GrooveTurn

@@ -20,7 +20,12 @@ import numpy as np
 from ..metrics import septic_coefficients
 from ._analysis import Report, analyse
 from ._dynamics import SteadyState, check_rpm
-from ._machine import DEFAULT_SPEED_FLUCTUATION, check_speed_fluctuation, flywheel_inertia_kg_m2, torque_figures
+from ._machine import (
+    DEFAULT_SPEED_FLUCTUATION,
+    check_speed_fluctuation,
+    flywheel_inertia_kg_m2,
+    torque_figures,
+)
 from ._spec import Program, _no_unknown
 
 
