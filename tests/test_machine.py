@@ -117,6 +117,23 @@ def test_hertz_stress_against_a_hand_computed_case(indexer):
     assert report.contact_half_width_mm > 0
 
 
+def test_grooved_cam_bears_on_the_other_wall_where_the_force_is_negative(indexer):
+    """Form-closed, on the base-circle dwell: the inner flank is the base circle (40 mm,
+    convex); the other wall, 0.05 mm of clearance further out, is concave to the roller:
+    ``1/R' = 1/12 - 1/(52 + 12 + 0.05)``."""
+    follower = dataclasses.replace(indexer.follower, spring_rate_n_per_mm=None, preload_n=0.0,
+                                   groove_clearance_mm=0.05, contact_width_mm=12.0)
+    program = dataclasses.replace(indexer, follower=follower)
+    h = response(program, 600.0)
+    e_star = Materials().contact_modulus_mpa
+    dwell = (h["theta_deg"] > 290.0) & (h["theta_deg"] < 355.0)
+    force = h["contact_force_n"][dwell]
+    assert (force > 0).any() and (force < 0).any()  # the free vibration about zero in the dwell
+    radius = np.where(force > 0, 1 / (1 / 12.0 + 1 / 40.0), 1 / (1 / 12.0 - 1 / 64.05))
+    hand = np.sqrt(np.abs(force) * e_star / (math.pi * 12.0 * radius))
+    assert np.abs(h["contact_stress_mpa"][dwell] - hand).max() < 1e-9 * hand.max()
+
+
 def eccentric(kind: str, **follower) -> Program:
     """Harmonic rise over 180 degrees and return over 180: ``y = e (1 - cos theta)``, ``e = 5``."""
     law = laws.get("harmonic")
