@@ -338,6 +338,10 @@ class SteadyState:
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
         nodes = self.grid.nodes.size
         self._batch = jax.jit(lambda rpm: chunked_map(self._summary, rpm, nodes))
+        # The contact force's minimum alone (the jump's scan and bisection, the preload):
+        # a smaller program to compile than the whole summary.
+        self._min_force = jax.jit(lambda rpm: chunked_map(
+            lambda r: _cycle(self.grid, self.train, r).min_contact_force_n, rpm, nodes))
         self._one = jax.jit(lambda rpm: _cycle(self.grid, self.train, rpm, contact=self.contact))
 
     def _summary(self, rpm):
@@ -357,17 +361,31 @@ class SteadyState:
         """``summary`` of speeds already checked (``check_rpm``)."""
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
+        out = self._sharded(self._batch, rpm)
+        accel, fmin, fmax, *rest = out
+        rest[0] = rest[0][:, : self.grid.dwell_start.size]
+        raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm",
+                        accel, fmin, fmax, *rest[1:6])
+        return SpeedSummary(rpm, accel, fmin, fmax, *rest)
+
+    def min_contact_force_n(self, rpm) -> np.ndarray:
+        """``summary(rpm).min_contact_force_n`` alone (the same numbers, less to compile)."""
+        rpm = check_rpm(rpm)
+        if rpm.min() < self.rpm_min * (1 - 1e-12):
+            raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
+        force = self._sharded(self._min_force, rpm)
+        raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm", force)
+        return force
+
+    def _sharded(self, batch, rpm: np.ndarray):
+        """``batch`` over the speeds, padded to a multiple of 16 and split over the devices."""
         size = rpm.size
         # A device per 16 speeds at most: a short batch (a bisection step) stays on one.
         devices = self.devices[: max(1, min(len(self.devices), size // 16))]
         width = 16 * -(-size // (16 * len(devices)))
         padded = np.pad(rpm, (0, len(devices) * width - size), mode="edge")
-        out = shard_batch(self._batch, jnp.asarray(padded), devices=devices)
-        accel, fmin, fmax, *rest = (np.asarray(x)[:size] for x in out)
-        rest[0] = rest[0][:, : self.grid.dwell_start.size]
-        raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm",
-                        accel, fmin, fmax, *rest[1:6])
-        return SpeedSummary(rpm, accel, fmin, fmax, *rest)
+        out = shard_batch(batch, jnp.asarray(padded), devices=devices)
+        return jax.tree.map(lambda x: np.asarray(x)[:size], out)
 
     def cycle(self, rpm: float) -> Cycle:
         """Node series and extrema of the periodic steady state at one speed."""

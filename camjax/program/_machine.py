@@ -24,8 +24,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from ..metrics import refined_peak, septic_coefficients
-from ..sdof import refined_extremes
+from ..metrics import interval_peaks, septic_coefficients
 from ._export import _angle_ranges, shape
 from ._spec import Program
 
@@ -65,8 +64,10 @@ def torque_figures(values, widths, left, right) -> TorqueFigures:
     """The figures of a torque sampled over one turn (``sum(widths) == 1``), jittable.
 
     Mean and RMS integrate the septic interpolant exactly; ``W(s) = 2 pi int (T - mean) ds``
-    is its running integral at the nodes, its extremes refined between nodes from
-    ``W' = T - mean, W'' = T', W''' = T''``.
+    is its running integral at the nodes, with ``W' = T - mean``, ``W'' = T'``, ``W''' = T''``
+    at both ends of every interval.  ``max |T|``, ``max W`` and ``min W`` are refined between
+    nodes as ``refined_peak`` does, in one pass over the three signals' intervals (``W``
+    shifted below its smallest node value for its maximum, above its largest for its minimum).
     """
     c = septic_coefficients(values, widths, left, right)
     integrals = widths * (c @ jnp.asarray(1.0 / np.arange(1, 9)))
@@ -77,8 +78,15 @@ def torque_figures(values, widths, left, right) -> TorqueFigures:
     def work_ends(t, d):
         return jnp.stack([t - mean, d[:, 0], d[:, 1]], axis=1)
 
-    low, high = refined_extremes(work, widths, work_ends(values[:-1], left), work_ends(values[1:], right))
-    return TorqueFigures(refined_peak(values, widths, left, right), rms, mean, 2 * math.pi * (high - low))
+    w = septic_coefficients(work, widths, work_ends(values[:-1], left), work_ends(values[1:], right))
+    span = jnp.max(work) - jnp.min(work) + 1.0
+    below, above = jnp.min(work) - span, jnp.max(work) + span
+    constant = jnp.zeros(8).at[0].set(1.0)
+    peaks = interval_peaks(jnp.concatenate([c, w - below * constant, w - above * constant]))
+    k = values.shape[0] - 1
+    high = jnp.max(peaks[k:2 * k]) + below
+    low = above - jnp.max(peaks[2 * k:])
+    return TorqueFigures(jnp.max(peaks[:k]), rms, mean, 2 * math.pi * (high - low))
 
 
 def flywheel_inertia_kg_m2(energy_fluctuation_j, rpm, speed_fluctuation: float):
