@@ -5,6 +5,7 @@ hand-computed Hertz cases and the closed forms of the cam's curvature."""
 import dataclasses
 import json
 import math
+import tomllib
 
 import numpy as np
 import pytest
@@ -158,6 +159,8 @@ def test_flat_face_on_a_harmonic_eccentric_is_a_circle():
     assert geometry.face_width_mm == pytest.approx(2 * e, rel=1e-12)
     assert geometry.min_radius_of_curvature_mm == pytest.approx(rb + e, rel=1e-12)
     assert geometry.max_pressure_angle_deg == 0.0 and geometry.min_concave_radius_of_curvature_mm is None
+    again = Program.from_dict(tomllib.loads(dataclasses.replace(program, materials=Materials(70.0, 0.33)).to_toml()))
+    assert again == dataclasses.replace(program, materials=Materials(70.0, 0.33))
 
 
 def test_swinging_flat_face_envelope():

@@ -220,9 +220,9 @@ class Cycle(NamedTuple):
 
     ``q`` is the complex mode at the nodes (periodic steady state unless built otherwise).
     Forces in N, accelerations in m/s^2, the drive torque in N m (with its first three
-    derivatives in turn time at both ends of every interval; its figures over the turn
-    from ``camjax.program._machine.torque_figures``), energy in J, the Hertz stress in MPa
-    (zero without a contact width) and the node where it peaks.
+    derivatives in turn time at both ends of every interval, and its peak, RMS, mean and
+    energy fluctuation over the turn: docs/machine.md), energy in J, the Hertz stress in
+    MPa (zero without a contact width) and the node where it peaks.
     """
 
     q: jax.Array

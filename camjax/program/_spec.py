@@ -278,6 +278,8 @@ class Program:
         lines.append("[follower]")
         for field in dataclasses.fields(Follower):
             value = getattr(self.follower, field.name)
+            if field.name == "roller_radius_mm" and self.follower.flat_face:
+                continue
             if value is not None:
                 lines.append(f'{field.name} = "{value}"' if isinstance(value, str) else f"{field.name} = {value!r}")
         if self.materials != Materials():
