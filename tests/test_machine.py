@@ -27,6 +27,7 @@ from camjax.program import (
     profile,
     response,
     shaft_torque,
+    shape,
 )
 from camjax.sdof import deflection_gains
 
@@ -339,3 +340,33 @@ def test_flat_face_over_a_cusp_names_the_angles(capsys, tmp_path):
         analyse(program, [300.0], speed_fluctuation=0.0)
     assert main(["program", "--speed-fluctuation", "0"]) == 2
     assert "--speed-fluctuation: must be in (0, 2)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("kind, extra", [("translating-roller", dict(offset_mm=6.0)),
+                                         ("swinging-roller", dict(arm_mm=98.0, pivot_mm=110.0)),
+                                         ("swinging-flat", dict(arm_mm=80.0, pivot_mm=100.0))])
+def test_drive_torque_is_the_moment_of_the_normal_force(kind, extra):
+    """``T = F_c dy/dtheta`` (power balance) equals the moment about the cam centre of the
+    normal contact force ``F_n`` acting along the contact normal: for a roller
+    ``F_n = F_c / cos(phi)`` through the roller centre, under a swinging face
+    ``F_n = F_c arm / l`` at the contact point (``l`` its distance from the pivot)."""
+    law = laws.get("cycloidal")
+    follower = {**FOLLOWER, "kind": kind, **extra}
+    if kind.endswith("flat"):
+        follower.pop("roller_radius_mm")
+    program = Program("p", (Segment(120, 15.0, law), Segment(60), Segment(120, -15.0, law), Segment(60)),
+                      Follower(**follower))
+    h = response(program, 400.0)
+    cam = shape(program, h["theta_deg"])
+    if kind.endswith("roller"):
+        point = np.asarray(cam.pitch)
+        normal = (point - np.asarray(cam.inner)) / 12.0
+        normal_force = h["contact_force_n"] / np.cos(np.asarray(cam.pressure_angle))
+    else:
+        point = np.asarray(cam.profile)
+        alpha = np.arccos(40.0 / 100.0) - h["lift_mm"] / 80.0 - np.radians(h["theta_deg"])
+        normal = np.stack([np.cos(alpha), np.sin(alpha)], 1)
+        normal_force = h["contact_force_n"] * 80.0 / np.asarray(cam.face_position)
+    moment = 1e-3 * normal_force * (point[:, 0] * normal[:, 1] - point[:, 1] * normal[:, 0])
+    assert np.abs(moment - h["drive_torque_n_m"]).max() < 1e-12 * np.abs(moment).max()
+    assert np.abs(moment).max() > 1.0
