@@ -176,3 +176,127 @@ def undercut(profile: CamProfile, roller_radius) -> Undercut:
         min_inner_radius=jnp.min(jnp.abs(profile.inner_radius_of_curvature)),
         min_outer_radius=jnp.min(jnp.abs(profile.outer_radius_of_curvature)),
     )
+
+
+class _LocalLift(eqx.Module):
+    """The lift near ``theta0`` from its value and first two derivatives there (a jet).
+
+    Geometry from a jet takes the curvature from the derivatives the caller chose, one-sided
+    at a join where the acceleration steps (autodiff through a law's clip halves them there).
+    """
+
+    theta0: jax.Array
+    y: jax.Array
+    dy: jax.Array
+    ddy: jax.Array
+
+    def displacement(self, theta):
+        d = theta - self.theta0
+        return self.y + self.dy * d + 0.5 * self.ddy * d**2
+
+
+def cam_profile_from_jet(follower: AbstractRollerFollower, theta, y, dy, ddy) -> CamProfile:
+    """``cam_profile`` from the follower displacement and its first two derivatives in
+    ``theta`` (radians) at each angle instead of a program: one-sided values at a join give
+    the one-sided curvature there."""
+    theta, y, dy, ddy = (jnp.atleast_1d(jnp.asarray(x, dtype=float)) for x in (theta, y, dy, ddy))
+    return _cam_profile_from_jet(follower, theta, y, dy, ddy)
+
+
+@eqx.filter_jit
+def _cam_profile_from_jet(follower, theta, y, dy, ddy) -> CamProfile:
+    parts = jax.vmap(lambda t, a, b, c: _profile_at(follower, _LocalLift(t, a, b, c), t, follower.roller_radius))(
+        theta, y, dy, ddy)
+    return CamProfile(theta, *parts)
+
+
+class AbstractFlatFollower(eqx.Module):
+    """A flat-faced follower: the line of its face in the fixed frame for a displacement ``y``,
+    as the angle ``beta`` of its normal (pointing away from the cam) and its distance from
+    the cam centre."""
+
+    base_radius: jax.Array | float
+
+    @abc.abstractmethod
+    def face(self, y) -> tuple[jax.Array, jax.Array]:
+        """``(beta, distance)`` of the face at follower displacement ``y``."""
+
+    @abc.abstractmethod
+    def face_position(self, contact, beta) -> jax.Array:
+        """Where the fixed-frame ``contact`` point lies along the face (mm from its origin)."""
+
+
+class TranslatingFlatFollower(AbstractFlatFollower):
+    """Face perpendicular to the follower's line ``x = 0``; ``y`` is the lift (length).
+    The face position is the contact point's ``x``: ``dy/dtheta``."""
+
+    base_radius: jax.Array | float = 0.040
+
+    def face(self, y):
+        return jnp.pi / 2 + 0.0 * y, self.base_radius + y
+
+    def face_position(self, contact, beta):
+        return contact[0]
+
+
+class SwingingFlatFollower(AbstractFlatFollower):
+    """Face on a plane through the pivot at ``(pivot_distance, 0)``; ``y`` is the swing (rad).
+
+    At ``y = 0`` the face touches the base circle (``cos beta0 = r_b / d``) on the same side
+    as ``SwingingRollerFollower``'s roller; a positive swing turns it away from the cam.  The
+    face position is the contact point's distance from the pivot along the face.
+    """
+
+    pivot_distance: jax.Array | float = 0.110
+    base_radius: jax.Array | float = 0.040
+
+    def face(self, y):
+        beta = jnp.arccos(self.base_radius / self.pivot_distance) - y
+        return beta, self.pivot_distance * jnp.cos(beta)
+
+    def face_position(self, contact, beta):
+        along = jnp.stack([-jnp.sin(beta), jnp.cos(beta)])
+        return (contact - jnp.stack([self.pivot_distance, 0.0 * beta])) @ along
+
+
+class FlatProfile(NamedTuple):
+    """A cam under a flat face over the angles ``theta``: contact points in the cam frame,
+    the cam's radius of curvature there (``r_b + y + y''`` for the translating face; not
+    positive is a cusp) and where the contact lies along the face."""
+
+    theta: jax.Array
+    profile: jax.Array
+    radius_of_curvature: jax.Array
+    face_position: jax.Array
+
+
+def flat_profile_from_jet(follower: AbstractFlatFollower, theta, y, dy, ddy) -> FlatProfile:
+    """The envelope of the face's lines from the displacement's jet at each angle.
+
+    In the cam frame the face has normal angle ``alpha = beta - theta`` and distance ``p``
+    from the centre; the envelope is ``p n(alpha) + p_alpha t(alpha)`` with radius of
+    curvature ``p + p_alpha_alpha`` (the support-function form).
+    """
+    theta, y, dy, ddy = (jnp.atleast_1d(jnp.asarray(x, dtype=float)) for x in (theta, y, dy, ddy))
+    return _flat_profile(follower, theta, y, dy, ddy)
+
+
+@eqx.filter_jit
+def _flat_profile(follower, theta, y, dy, ddy) -> FlatProfile:
+    def one(t, a, b, c):
+        lift = _LocalLift(t, a, b, c)
+
+        def support(u):
+            beta, p = follower.face(lift.displacement(u))
+            return jnp.stack([beta - u, p])
+
+        first = lambda u: jax.jvp(support, (u,), (jnp.ones_like(u),))[1]  # noqa: E731
+        (alpha, p), (da, dp) = support(t), first(t)
+        dda, ddp = jax.jvp(first, (t,), (jnp.ones_like(t),))[1]
+        p_alpha = dp / da
+        radius = p + (ddp * da - dp * dda) / da**3
+        normal, tangent = jnp.stack([jnp.cos(alpha), jnp.sin(alpha)]), jnp.stack([-jnp.sin(alpha), jnp.cos(alpha)])
+        point = p * normal + p_alpha * tangent
+        return point, radius, follower.face_position(_rot(t, point), alpha + t)
+
+    return FlatProfile(theta, *jax.vmap(one)(theta, y, dy, ddy))

@@ -11,6 +11,7 @@ from pathlib import Path
 from ._common import CliError, add_format, dump_json, output_dir, parse_range
 
 DEFAULT_RPM = "600"
+DEFAULT_SPEED_FLUCTUATION = 0.05  # camjax.program.DEFAULT_SPEED_FLUCTUATION (not imported: JAX loads late)
 
 
 def register(subparsers) -> None:
@@ -24,15 +25,23 @@ def register(subparsers) -> None:
             "residual vibration in the dwells and constant-velocity strokes, each segment's peaks "
             "and each join's state (VDI 2143), and where contact is lost the flight and "
             "re-impact.  With several speeds, the jump speed (lowest speed in the range at "
-            "which the preload loses contact).  Without FILE, the built-in 'indexer' example; "
-            "FILE may also name a built-in example ('indexer', 'feed')."
+            "which the preload loses contact).  The drive torque (peak, RMS, mean), the energy "
+            "fluctuation and flywheel, the Hertz contact stress (with follower.contact_width_mm) "
+            "and the cam's geometry.  FILE may be a machine file ([[cam]] tables: program files "
+            "with phase angles on one shaft): each cam's report and the shaft's torque.  "
+            "Without FILE, the built-in 'indexer' example; FILE may also name a built-in "
+            "example ('indexer', 'feed')."
         ),
     )
-    parser.add_argument("file", nargs="?", metavar="FILE", help="program TOML file or built-in example name (default: indexer)")
+    parser.add_argument("file", nargs="?", metavar="FILE",
+                        help="program or machine TOML file, or a built-in example name (default: indexer)")
     parser.add_argument("--rpm", default=DEFAULT_RPM, metavar="RPM|V1,V2,...|START:STOP:COUNT",
                         help=f"cam speed(s) in rpm (default {DEFAULT_RPM})")
     parser.add_argument("--no-flight", action="store_true", help="skip the flight simulation where contact is lost "
                         "(and a grooved cam's impacts)")
+    parser.add_argument("--speed-fluctuation", type=float, default=DEFAULT_SPEED_FLUCTUATION, metavar="CS",
+                        help="coefficient of speed fluctuation the flywheel is sized for, "
+                        f"(max - min speed) / mean (default {DEFAULT_SPEED_FLUCTUATION})")
     parser.add_argument("--points", type=int, default=3600, help="profile points over the turn (default 3600)")
     parser.add_argument("--plot-rpm", type=float, default=None, metavar="RPM",
                         help="the speed whose turn the figures show (default: the speed given "
@@ -52,6 +61,19 @@ _COLUMNS = (
     ("min_preload_n", "min preload N", "{:.6g}"),
     ("jump", "jump", "{}"),
 )
+_DRIVE_COLUMNS = (
+    ("rpm", "rpm", "{:.6g}"),
+    ("max_drive_torque_n_m", "max|T| N m", "{:.6g}"),
+    ("rms_drive_torque_n_m", "rms T N m", "{:.6g}"),
+    ("mean_drive_torque_n_m", "mean T N m", "{:.6g}"),
+    ("energy_fluctuation_j", "dE J", "{:.6g}"),
+    ("flywheel_inertia_kg_m2", "flywheel kg m2", "{:.6g}"),
+)
+_CONTACT_COLUMNS = (
+    ("max_contact_stress_mpa", "max p MPa", "{:.6g}"),
+    ("max_contact_stress_deg", "at deg", "{:.5g}"),
+    ("contact_half_width_mm", "half-width mm", "{:.4g}"),
+)
 
 
 def _cell(value, fmt):
@@ -62,6 +84,29 @@ def _numbers(values, fmt="{:.4g}") -> str:
     return " ".join(fmt.format(v) for v in values) or "-"
 
 
+def _rows(speeds: list, columns) -> list[str]:
+    lines = ["".join(f"{title:>16}" for _, title, _ in columns)]
+    lines += ["".join(f"{_cell(s[key], fmt):>16}" for key, _, fmt in columns) for s in speeds]
+    return lines
+
+
+def _geometry_lines(g: dict) -> list[str]:
+    lines = [f"max pressure angle {g['max_pressure_angle_deg']:.4g} deg; "
+             + "min radius of curvature of the cam "
+             + ("-" if g["min_radius_of_curvature_mm"] is None else f"{g['min_radius_of_curvature_mm']:.5g} mm")
+             + " (convex), "
+             + ("none concave" if g["min_concave_radius_of_curvature_mm"] is None else
+                f"{g['min_concave_radius_of_curvature_mm']:.5g} mm (concave)")]
+    if g["face_width_mm"] is not None:
+        lines.append(f"face width {g['face_width_mm']:.5g} mm (the contact's travel along the face; "
+                     "add twice the contact half-width and a margin)")
+    for j in g["joins"]:
+        if j["radius_before_mm"] != j["radius_after_mm"]:
+            lines.append(f"join at {j['angle_deg']:g} deg: radius of curvature {j['radius_before_mm']:.5g} mm "
+                         f"before, {j['radius_after_mm']:.5g} mm after")
+    return lines
+
+
 def _table(report: dict, grooved: bool = False) -> str:
     lines = [f"program {report['program']}"]
     lines.append("".join(f"{title:>16}" for _, title, _ in _COLUMNS) + "  period ratios   residual mm")
@@ -69,7 +114,10 @@ def _table(report: dict, grooved: bool = False) -> str:
         lines.append("".join(f"{_cell(s[key], fmt):>16}" for key, _, fmt in _COLUMNS)
                      + f"  {_numbers(s['period_ratios'], '{:.3f}'):<15} {_numbers(s['residual_vibration_mm'])}")
     lines.append("Fc: contact force of the periodic steady state with contact held (linear); period "
-                 "ratios per moving segment; residual: vibration amplitude at the start of each dwell")
+                 "ratios per moving segment; residual: vibration amplitude at the start of each dwell "
+                 "and constant-velocity stroke")
+    stressed = any(s["max_contact_stress_mpa"] is not None for s in report["speeds"])
+    lines += _rows(report["speeds"], _DRIVE_COLUMNS + (_CONTACT_COLUMNS if stressed else ()))
     if grooved:
         lines.append("the strikes below are the groove's, with its clearance (the Backlash model): "
                      "their forces are not bounded by the contact-held Fc above")
@@ -93,6 +141,17 @@ def _table(report: dict, grooved: bool = False) -> str:
                      "the lowest speed given)")
     elif len(report["speeds"]) > 1:
         lines.append("jump speed: " + ("none in the range" if speed is None else f"{speed:.1f} rpm"))
+    if report.get("geometry") is not None:
+        lines += _geometry_lines(report["geometry"])
+    return "\n".join(lines)
+
+
+def _machine_table(report: dict) -> str:
+    lines = [f"machine {report['machine']}"]
+    for cam in report["cams"]:
+        lines += ["", f"cam at phase {cam['phase_deg']:g} deg:", _table(cam)]
+    lines += ["", "shaft (sum of the cams' torques):"]
+    lines += _rows(report["shaft"]["speeds"], _DRIVE_COLUMNS)
     return "\n".join(lines)
 
 
@@ -113,7 +172,7 @@ def _motion_lines(report: dict) -> list[str]:
 def _csv(report: dict) -> str:
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    keys = [key for key, _, _ in _COLUMNS]
+    keys = [key for key, _, _ in _COLUMNS + _DRIVE_COLUMNS[1:] + _CONTACT_COLUMNS]
     segments = len(report["speeds"][0]["period_ratios"])
     dwells = len(report["speeds"][0]["residual_vibration_mm"])
     writer.writerow(keys + [f"period_ratio_{i + 1}" for i in range(segments)]
@@ -159,7 +218,19 @@ def _write_outputs(out: Path, program, steady, report: dict, rpm, points: int, p
     groove = None
     if program.follower.form_closed and program.follower.groove_clearance_mm:
         groove = groove_turns(program, [plot_rpm])[0]
-    save_figures(out, program, report, (plot_rpm, shown), prof, groove=groove)
+    save_figures(out, program, report, (plot_rpm, shown), prof, histories=histories, groove=groove)
+
+
+def _write_machine(out: Path, machine, report: dict, rpm, points: int) -> None:
+    from ..program import SteadyState, shaft_figures
+
+    dump_json(report, out / "summary.json")
+    for i, ((program, _), cam) in enumerate(zip(machine.cams, report["cams"]), 1):
+        folder = out / f"cam{i}-{program.name}"
+        folder.mkdir(exist_ok=True)
+        _write_outputs(folder, program, SteadyState(program, float(min(rpm))), cam, rpm, points,
+                       plot_speed(cam, None))
+    shaft_figures(out, machine, report, rpm)
 
 
 def run(args) -> int:
@@ -173,13 +244,18 @@ def run(args) -> int:
     if args.plot_rpm is not None and not (math.isfinite(args.plot_rpm) and args.plot_rpm >= min(rpm)):
         raise CliError(f"--plot-rpm: must be a speed at or above the lowest --rpm ({min(rpm):g}), "
                        f"got {args.plot_rpm:g}")
+    if not 0 < args.speed_fluctuation < 2:
+        raise CliError(f"--speed-fluctuation: must be in (0, 2), got {args.speed_fluctuation:g}")
     path = Path(args.file) if args.file else example_path()
     if args.file and args.file.isidentifier() and not path.exists() and example_path(args.file).exists():
         path = example_path(args.file)  # a built-in example by name
+    if _is_machine(path):
+        return _run_machine(args, path, rpm)
     program = Program.load(path)
     out = output_dir(args.out)
     steady = SteadyState(program, float(min(rpm)))
-    report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady).as_dict()
+    report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
+                     speed_fluctuation=args.speed_fluctuation).as_dict()
     if out is not None:
         _write_outputs(out, program, steady, report, rpm, args.points, plot_speed(report, args.plot_rpm))
     for s in report["speeds"]:
@@ -195,4 +271,40 @@ def run(args) -> int:
     else:
         print(_table(report, grooved=bool(program.follower.form_closed and program.follower.groove_clearance_mm
                                           and not args.no_flight)))
+    return 0
+
+
+def _is_machine(path: Path) -> bool:
+    """A file with ``[[cam]]`` or ``[machine]`` tables (unreadable files: left to ``Program.load``)."""
+    import tomllib
+
+    from ..program import is_machine_file
+
+    try:
+        return is_machine_file(tomllib.loads(path.read_text()))
+    except (OSError, tomllib.TOMLDecodeError):
+        return False
+
+
+def _run_machine(args, path: Path, rpm) -> int:
+    from ..program import Machine, analyse_machine
+
+    machine = Machine.load(path)
+    out = output_dir(args.out)
+    report = analyse_machine(machine, rpm, with_flight=not args.no_flight,
+                             speed_fluctuation=args.speed_fluctuation).as_dict()
+    if out is not None:
+        _write_machine(out, machine, report, rpm, args.points)
+    if args.format == "json":
+        print(dump_json(report))
+    elif args.format == "csv":
+        buffer = io.StringIO()
+        writer = csv.writer(buffer)
+        keys = [key for key, _, _ in _DRIVE_COLUMNS]
+        writer.writerow(keys)
+        for s in report["shaft"]["speeds"]:
+            writer.writerow([s[k] for k in keys])
+        print(buffer.getvalue().rstrip())
+    else:
+        print(_machine_table(report))
     return 0

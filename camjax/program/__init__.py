@@ -4,9 +4,11 @@
 ``analyse`` reports the periodic steady state, contact force, minimum preload, jump speed,
 every flight of a turn (``flights``) and a grooved cam's strikes (``groove_turns``) over a
 list of speeds; ``response`` gives the histories over one turn at one speed; ``profile``,
-``write_csv`` and ``write_dxf`` export the cam's shape; ``design_segment`` designs one
-segment's law (``MaxPreload``: the least preload over a speed range).  The equations are
-in docs/program.md.
+``write_csv`` and ``write_dxf`` export the cam's shape (roller or flat face); ``analyse``
+also sizes the drive (torque, energy, flywheel), the Hertz contact stress and the cam's
+``Geometry``; ``analyse_machine`` adds the torques of several cams on one shaft
+(``Machine``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
+preload over a speed range).  The equations are in docs/program.md and docs/machine.md.
 """
 
 from typing import TYPE_CHECKING
@@ -26,6 +28,7 @@ from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
 from ._export import Profile as Profile
 from ._export import profile as profile
+from ._export import shape as shape
 from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
 from ._groove import MAX_TURNS as MAX_TURNS
@@ -40,10 +43,23 @@ from ._jump import flight as flight
 from ._jump import flights as flights
 from ._jump import jump_speed_rpm as jump_speed_rpm
 from ._jump import min_preload_n as min_preload_n
+from ._machine import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
+from ._machine import ContactGeometry as ContactGeometry
+from ._machine import Geometry as Geometry
+from ._machine import JoinCurvature as JoinCurvature
+from ._machine import cam_geometry as cam_geometry
+from ._machine import contact_geometry as contact_geometry
 from ._motion import EndState as EndState
 from ._motion import Join as Join
 from ._motion import segment_kinematics as segment_kinematics
+from ._shaft import Machine as Machine
+from ._shaft import MachineReport as MachineReport
+from ._shaft import ShaftSpeedReport as ShaftSpeedReport
+from ._shaft import analyse_machine as analyse_machine
+from ._shaft import is_machine_file as is_machine_file
+from ._shaft import shaft_torque as shaft_torque
 from ._spec import Follower as Follower
+from ._spec import Materials as Materials
 from ._spec import Program as Program
 from ._spec import Segment as Segment
 from ._spec import example_path as example_path
@@ -52,11 +68,12 @@ from ._spec import with_law as with_law
 
 if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
     from ._figures import save_figures as save_figures
+    from ._figures import shaft_figures as shaft_figures
     from ._preload import MaxPreload as MaxPreload
 
 # Loaded on first use: MaxPreload subclasses camjax.law_design's objective (which imports
 # optax) and the figures import matplotlib.
-_LAZY = {"MaxPreload": "._preload", "save_figures": "._figures"}
+_LAZY = {"MaxPreload": "._preload", "save_figures": "._figures", "shaft_figures": "._figures"}
 
 
 def __getattr__(name):

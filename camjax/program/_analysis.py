@@ -9,6 +9,13 @@ import numpy as np
 from ._dynamics import SteadyState, check_rpm
 from ._groove import Impact, groove_turns
 from ._jump import Flight, flights, jump_speed_rpm, min_preload_n
+from ._machine import (
+    DEFAULT_SPEED_FLUCTUATION,
+    Geometry,
+    cam_geometry,
+    check_speed_fluctuation,
+    flywheel_inertia_kg_m2,
+)
 from ._motion import Join, segment_kinematics
 from ._spec import Program
 
@@ -54,6 +61,13 @@ class SpeedReport:
         impacts: a grooved cam's strikes on its flanks in a settled turn (else ``None``).
         impacts_change_deg: how far the strikes still moved from the turn before (degrees;
             at most ``camjax.program.SETTLED_DEG`` once settled; ``None`` without a groove).
+        max_drive_torque_n_m, rms_drive_torque_n_m, mean_drive_torque_n_m: peak ``|T|``, RMS
+            and mean of the camshaft torque ``T = F_c dy/dtheta`` over the turn.
+        energy_fluctuation_j: ``max W - min W``, ``W = integral of (T - mean T) dtheta``.
+        flywheel_inertia_kg_m2: ``energy_fluctuation / (Cs Omega^2)`` (``Report.speed_fluctuation``).
+        max_contact_stress_mpa, max_contact_stress_deg: peak Hertz line-contact pressure over
+            the grid's nodes and where (``None`` without ``follower.contact_width_mm``).
+        contact_half_width_mm: the Hertz contact half-width there, ``2 R' p_max / E*``.
     """
 
     rpm: float
@@ -68,6 +82,14 @@ class SpeedReport:
     flights: tuple[Flight, ...] | None = None
     impacts: tuple[Impact, ...] | None = None
     impacts_change_deg: float | None = None
+    max_drive_torque_n_m: float = 0.0
+    rms_drive_torque_n_m: float = 0.0
+    mean_drive_torque_n_m: float = 0.0
+    energy_fluctuation_j: float = 0.0
+    flywheel_inertia_kg_m2: float = 0.0
+    max_contact_stress_mpa: float | None = None
+    max_contact_stress_deg: float | None = None
+    contact_half_width_mm: float | None = None
 
     @property
     def flight(self) -> Flight | None:
@@ -92,7 +114,8 @@ class Report:
     holds over the whole range, or if it is lost already at the lowest speed given: then
     ``jump_below_range`` is true and the jump speed lies below the range); ``segments``
     (``segment_kinematics``) and ``joins`` (``Program.joins``) describe the motion itself,
-    at any speed."""
+    at any speed; the cam's ``Geometry`` and the coefficient of speed fluctuation the
+    flywheel is sized for."""
 
     program: str
     speeds: tuple[SpeedReport, ...]
@@ -100,15 +123,19 @@ class Report:
     jump_below_range: bool = False
     segments: tuple[dict, ...] = ()
     joins: tuple[Join, ...] = ()
+    geometry: Geometry | None = None
+    speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION
 
     def as_dict(self) -> dict:
         return {"program": self.program, "speeds": [s.as_dict() for s in self.speeds],
                 "jump_speed_rpm": self.jump_speed_rpm, "jump_below_range": self.jump_below_range,
-                "segments": list(self.segments), "joins": [j.as_dict() for j in self.joins]}
+                "segments": list(self.segments), "joins": [j.as_dict() for j in self.joins],
+                "geometry": None if self.geometry is None else self.geometry.as_dict(),
+                "speed_fluctuation": self.speed_fluctuation}
 
 
 def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadyState | None = None,
-            devices=None) -> Report:
+            devices=None, speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION) -> Report:
     """The steady-state report at every speed in ``rpm`` (see docs/program.md).
 
     Every field but ``flights`` and ``impacts`` is the periodic steady state with contact
@@ -118,9 +145,13 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     ``jump`` is false and ``min_preload_n`` is ``None``; with a groove clearance
     ``impacts`` lists the roller's strikes on the flanks in one settled turn (the
     ``Backlash`` hand-over, ``camjax.program.groove_turns``).  The speeds are split over
-    ``devices`` (``SteadyState``) when no ``steady`` is given.
+    ``devices`` (``SteadyState``) when no ``steady`` is given.  The drive torque, energy
+    fluctuation and flywheel (for ``speed_fluctuation`` ``Cs``) and the Hertz stress come
+    from the same steady state; ``geometry`` from the profile at the grid's nodes and 3600
+    angles over the turn (a flat face over a cusp is a ``ValueError`` naming the angles).
     """
     rpm = check_rpm(rpm)
+    speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
     steady = steady or SteadyState(program, rpm.min(), devices=devices)
     out = steady.summary_checked(rpm)
     closed = program.follower.form_closed
@@ -129,8 +160,13 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     ratios = _period_ratios(program, rpm)
     grooved = closed and bool(program.follower.groove_clearance_mm) and with_flight
     turns = groove_turns(program, rpm) if grooved else [None] * rpm.size
+    flywheel = flywheel_inertia_kg_m2(out.energy_fluctuation_j, rpm, speed_fluctuation)
+    stressed = program.follower.contact_width_mm is not None
+    theta_nodes = 360.0 * steady.grid.nodes
     speeds = []
     for i, r in enumerate(rpm):
+        stress = float(out.max_contact_stress_mpa[i])
+        half_width = 2 * float(out.max_contact_stress_radius_mm[i]) * stress / program.materials.contact_modulus_mpa
         jump = bool(out.min_contact_force_n[i] < 0) and not closed
         found = tuple(flights(steady, float(r))) if jump and with_flight else None
         speeds.append(SpeedReport(
@@ -146,20 +182,31 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
             flights=found,
             impacts=None if turns[i] is None else tuple(turns[i].impacts),
             impacts_change_deg=None if turns[i] is None else turns[i].change_deg,
+            max_drive_torque_n_m=float(out.max_drive_torque_n_m[i]),
+            rms_drive_torque_n_m=float(out.rms_drive_torque_n_m[i]),
+            mean_drive_torque_n_m=float(out.mean_drive_torque_n_m[i]),
+            energy_fluctuation_j=float(out.energy_fluctuation_j[i]),
+            flywheel_inertia_kg_m2=float(flywheel[i]),
+            max_contact_stress_mpa=stress if stressed else None,
+            max_contact_stress_deg=float(theta_nodes[int(out.max_contact_stress_node[i])]) if stressed else None,
+            contact_half_width_mm=half_width if stressed else None,
         ))
     jump_speed = None
     below = not closed and bool(out.min_contact_force_n[np.argmin(rpm)] < 0)
     if not closed and not below and rpm.size > 1 and rpm.max() > rpm.min():
         jump_speed = jump_speed_rpm(steady, float(rpm.min()), float(rpm.max()))
+    geometry = cam_geometry(program, np.union1d(theta_nodes[:-1], np.arange(3600) * 0.1))
     return Report(program.name, tuple(speeds), jump_speed, below, tuple(segment_kinematics(program)),
-                  tuple(program.joins()))
+                  tuple(program.joins()), geometry, speed_fluctuation)
 
 
 def response(program: Program, rpm: float, *, steady: SteadyState | None = None) -> dict[str, np.ndarray]:
     """Steady state over one turn at ``rpm``, at the grid nodes (law breakpoints included).
 
     Keys: ``theta_deg``, ``lift_mm``, ``payload_displacement_mm``, ``kinematic_acceleration_m_s2``
-    (``y''``), ``payload_acceleration_m_s2`` (``x''``), ``contact_force_n``.
+    (``y''``), ``payload_acceleration_m_s2`` (``x''``), ``contact_force_n``,
+    ``drive_torque_n_m`` (``F_c dy/dtheta``) and ``contact_stress_mpa`` (Hertz, zero without
+    ``follower.contact_width_mm`` and where contact is lost).
     """
     rpm = float(check_rpm(rpm)[0])
     steady = steady or SteadyState(program, rpm)
@@ -175,4 +222,6 @@ def response(program: Program, rpm: float, *, steady: SteadyState | None = None)
         "kinematic_acceleration_m_s2": 1e-3 * ddy * (360.0 * rpm / 60.0) ** 2,
         "payload_acceleration_m_s2": cycle.payload_acceleration_m_s2,
         "contact_force_n": cycle.contact_force_n,
+        "drive_torque_n_m": cycle.drive_torque_n_m,
+        "contact_stress_mpa": cycle.contact_stress_mpa,
     }

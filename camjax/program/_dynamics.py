@@ -44,6 +44,7 @@ from ..sdof import (
     to_monomial,
 )
 from ..sharding import resolve_devices, shard_batch
+from ._machine import NodeContact, contact_stress_squared, node_contact, torque_figures, torque_jets
 from ._spec import Program
 
 _MIN_PER_SEGMENT = 64
@@ -219,7 +220,10 @@ class Cycle(NamedTuple):
     """Node series and refined extrema of one turn at one speed (s-time, mm).
 
     ``q`` is the complex mode at the nodes (periodic steady state unless built otherwise).
-    Forces in N, accelerations in m/s^2.
+    Forces in N, accelerations in m/s^2, the drive torque in N m (with its first three
+    derivatives in turn time at both ends of every interval, and its peak, RMS, mean and
+    energy fluctuation over the turn: docs/machine.md), energy in J, the Hertz stress in
+    MPa (zero without a contact width) and the node where it peaks.
     """
 
     q: jax.Array
@@ -229,9 +233,21 @@ class Cycle(NamedTuple):
     min_contact_force_n: jax.Array
     max_contact_force_n: jax.Array
     residual_vibration_mm: jax.Array
+    drive_torque_n_m: jax.Array
+    max_drive_torque_n_m: jax.Array
+    rms_drive_torque_n_m: jax.Array
+    mean_drive_torque_n_m: jax.Array
+    energy_fluctuation_j: jax.Array
+    contact_stress_mpa: jax.Array
+    max_contact_stress_mpa: jax.Array
+    max_contact_stress_node: jax.Array
+    max_contact_stress_radius_mm: jax.Array
+    drive_torque_left: jax.Array
+    drive_torque_right: jax.Array
 
 
-def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True) -> Cycle:
+def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True,
+           contact: NodeContact | None = None) -> Cycle:
     """The response over one turn at ``rpm`` (jittable, vmappable in ``rpm``): the program's
     forcing at this speed through the engine, and its outputs in SI units."""
     period = 60.0 / rpm
@@ -263,15 +279,26 @@ def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True) -> C
     accel_right = (gain_derivatives(accel_gain, lam, q[1:], right) - beta * lift_terms(ys[1:], lift_right)) * to_si
     max_accel = refined_peak(accel, widths, accel_left, accel_right)
     force = train.preload + jnp.real(force_gain * q)
-    min_force, max_force = refined_extremes(force, widths, gain_derivatives(force_gain, lam, q[:-1], left),
-                                            gain_derivatives(force_gain, lam, q[1:], right))
+    force_left = gain_derivatives(force_gain, lam, q[:-1], left)
+    force_right = gain_derivatives(force_gain, lam, q[1:], right)
+    min_force, max_force = refined_extremes(force, widths, force_left, force_right)
+    torque = torque_jets(force, force_left, force_right, ys, lift_left, lift_right)
+    figures = torque_figures(torque[0], widths, *torque[1:])
+    if contact is None:
+        contact = NodeContact(*(jnp.zeros_like(force),) * 4)
+    contact = jax.tree.map(jnp.asarray, contact)
+    stress_sq = contact_stress_squared(force, contact)
+    stress = jnp.sqrt(stress_sq)
+    node = jnp.argmax(stress_sq)
+    radius = jnp.where(force[node] >= 0, contact.radius_inner[node], contact.radius_outer[node])
     # Residual vibration in each dwell and constant-velocity segment: distance of the mode
     # from the steady motion there.  The forcing is beta (y0 + y_s sigma) (no y_ss), whose
     # particular solution of q_s = lam q + forcing is -beta (y0 + y_s sigma) / lam - beta y_s / lam^2.
     starts = jnp.asarray(grid.residual_start)
     q_static = -beta * (y[starts] + ys[starts] / lam) / lam
     residual = jnp.abs(q[starts] - q_static) / jnp.imag(lam)
-    return Cycle(q, accel, force, max_accel, min_force, max_force, residual)
+    return Cycle(q, accel, force, max_accel, min_force, max_force, residual, torque[0], *figures, stress,
+                 stress[node], node, radius, torque[1], torque[2])
 
 
 class SpeedSummary(NamedTuple):
@@ -282,6 +309,13 @@ class SpeedSummary(NamedTuple):
     min_contact_force_n: np.ndarray
     max_contact_force_n: np.ndarray
     residual_vibration_mm: np.ndarray
+    max_drive_torque_n_m: np.ndarray
+    rms_drive_torque_n_m: np.ndarray
+    mean_drive_torque_n_m: np.ndarray
+    energy_fluctuation_j: np.ndarray
+    max_contact_stress_mpa: np.ndarray
+    max_contact_stress_node: np.ndarray
+    max_contact_stress_radius_mm: np.ndarray
 
 
 class SteadyState:
@@ -304,13 +338,21 @@ class SteadyState:
         self.rpm_min = float(check_rpm(rpm_min)[0])
         self.devices = resolve_devices(devices)
         self.grid = cycle_grid(program, resolution(program, self.rpm_min))
+        self.contact = node_contact(program, 360.0 * self.grid.nodes)
         nodes = self.grid.nodes.size
         self._batch = jax.jit(lambda rpm: chunked_map(self._summary, rpm, nodes))
-        self._one = jax.jit(lambda rpm: _cycle(self.grid, self.train, rpm))
+        # The contact force's minimum alone (the jump's scan and bisection, the preload):
+        # a smaller program to compile than the whole summary.
+        self._min_force = jax.jit(lambda rpm: chunked_map(
+            lambda r: _cycle(self.grid, self.train, r).min_contact_force_n, rpm, nodes))
+        self._one = jax.jit(lambda rpm: _cycle(self.grid, self.train, rpm, contact=self.contact))
 
     def _summary(self, rpm):
-        c = _cycle(self.grid, self.train, rpm)
-        return c.max_payload_acceleration_m_s2, c.min_contact_force_n, c.max_contact_force_n, c.residual_vibration_mm
+        c = _cycle(self.grid, self.train, rpm, contact=self.contact)
+        return (c.max_payload_acceleration_m_s2, c.min_contact_force_n, c.max_contact_force_n,
+                c.residual_vibration_mm,
+                c.max_drive_torque_n_m, c.rms_drive_torque_n_m, c.mean_drive_torque_n_m, c.energy_fluctuation_j,
+                c.max_contact_stress_mpa, c.max_contact_stress_node, c.max_contact_stress_radius_mm)
 
     def summary(self, rpm) -> SpeedSummary:
         """Refined extrema and residual vibration at every speed in ``rpm``."""
@@ -320,16 +362,30 @@ class SteadyState:
         """``summary`` of speeds already checked (``check_rpm``)."""
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
+        out = self._sharded(self._batch, rpm)
+        accel, fmin, fmax, *rest = out
+        raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm",
+                        accel, fmin, fmax, *rest[1:6])
+        return SpeedSummary(rpm, accel, fmin, fmax, *rest)
+
+    def min_contact_force_n(self, rpm) -> np.ndarray:
+        """``summary(rpm).min_contact_force_n`` alone (the same numbers, less to compile)."""
+        rpm = check_rpm(rpm)
+        if rpm.min() < self.rpm_min * (1 - 1e-12):
+            raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
+        force = self._sharded(self._min_force, rpm)
+        raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm", force)
+        return force
+
+    def _sharded(self, batch, rpm: np.ndarray):
+        """``batch`` over the speeds, padded to a multiple of 16 and split over the devices."""
         size = rpm.size
         # A device per 16 speeds at most: a short batch (a bisection step) stays on one.
         devices = self.devices[: max(1, min(len(self.devices), size // 16))]
         width = 16 * -(-size // (16 * len(devices)))
         padded = np.pad(rpm, (0, len(devices) * width - size), mode="edge")
-        out = shard_batch(self._batch, jnp.asarray(padded), devices=devices)
-        accel, fmin, fmax, residual = (np.asarray(x)[:size] for x in out)
-        raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm",
-                        accel, fmin, fmax)
-        return SpeedSummary(rpm, accel, fmin, fmax, residual)
+        out = shard_batch(batch, jnp.asarray(padded), devices=devices)
+        return jax.tree.map(lambda x: np.asarray(x)[:size], out)
 
     def cycle(self, rpm: float) -> Cycle:
         """Node series and extrema of the periodic steady state at one speed."""

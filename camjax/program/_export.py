@@ -12,6 +12,7 @@ import math
 from pathlib import Path
 from typing import NamedTuple
 
+import jax
 import numpy as np
 
 from .. import geometry
@@ -19,7 +20,13 @@ from ._spec import Program
 
 
 class Profile(NamedTuple):
-    """Cam geometry over ``theta_deg`` (mm, degrees) with its undercut check."""
+    """Cam geometry over ``theta_deg`` (mm, degrees) with its undercut check.
+
+    ``pressure_angle_deg`` has camjax's sign (``camjax.geometry``): negative on a rise of a
+    translating roller follower without offset, the opposite of most textbooks.  Under a
+    flat face ``pitch`` repeats the profile (there is no roller centre), the radii are the
+    cam's and ``face_position_mm`` says where the contact lies along the face.
+    """
 
     theta_deg: np.ndarray
     lift_mm: np.ndarray
@@ -31,26 +38,90 @@ class Profile(NamedTuple):
     profile_radius_of_curvature_mm: np.ndarray
     undercut: np.ndarray
     """True where the roller cannot follow the pitch curve (the profile loops)."""
+    face_position_mm: np.ndarray | None = None
+
+    @property
+    def flat_face(self) -> bool:
+        return self.face_position_mm is not None
 
 
-def follower_geometry(program: Program) -> geometry.AbstractRollerFollower:
+def follower_geometry(program: Program) -> geometry.AbstractRollerFollower | geometry.AbstractFlatFollower:
     """The ``camjax.geometry`` follower of the program, in mm."""
     f = program.follower
     if f.kind == "swinging-roller":
         return geometry.SwingingRollerFollower(pivot_distance=f.pivot_mm, arm_length=f.arm_mm,
                                                roller_radius=f.roller_radius_mm, base_radius=f.base_radius_mm)
+    if f.kind == "translating-flat":
+        return geometry.TranslatingFlatFollower(base_radius=f.base_radius_mm)
+    if f.kind == "swinging-flat":
+        return geometry.SwingingFlatFollower(pivot_distance=f.pivot_mm, base_radius=f.base_radius_mm)
     return geometry.TranslatingRollerFollower(offset=f.offset_mm, roller_radius=f.roller_radius_mm,
                                               base_radius=f.base_radius_mm)
 
 
+def _angle_ranges(theta_deg: np.ndarray, bad: np.ndarray) -> str:
+    """``"a-b, c-d deg"`` of the runs of ``bad`` (sorted angles)."""
+    runs, i = [], 0
+    while i < bad.size:
+        if bad[i]:
+            j = i
+            while j + 1 < bad.size and bad[j + 1]:
+                j += 1
+            runs.append(f"{theta_deg[i]:.2f}-{theta_deg[j]:.2f}" if j > i else f"{theta_deg[i]:.2f}")
+            i = j + 1
+        else:
+            i += 1
+    return ", ".join(runs) + " deg"
+
+
+def shape(program: Program, theta_deg, side: str = "after"):
+    """The cam's shape at ``theta_deg`` from the lift's one-sided jet (``Program.lift``):
+    ``geometry.CamProfile`` for a roller, ``geometry.FlatProfile`` for a flat face.
+
+    A flat face over a cusp (radius of curvature not positive) is a ``ValueError`` naming
+    the angles: no face can cut that cam.
+    """
+    theta_deg = np.asarray(theta_deg, dtype=float)
+    y, dy, ddy = program.lift(theta_deg, side)
+    f = program.follower
+    per_rad = 180.0 / math.pi
+    scale = 1.0 / f.arm_mm if f.swinging else 1.0
+    jet = (np.radians(theta_deg), scale * y, scale * dy * per_rad, scale * ddy * per_rad**2)
+    if not f.flat_face:
+        return geometry.cam_profile_from_jet(follower_geometry(program), *jet)
+    flat = jax.tree.map(np.asarray, geometry.flat_profile_from_jet(follower_geometry(program), *jet))
+    cusp = ~(flat.radius_of_curvature > 0)
+    if cusp.any():
+        order = np.argsort(np.mod(theta_deg, 360.0))
+        raise ValueError(f"follower.kind = {f.kind!r}: the cam's radius of curvature under the flat face "
+                         f"(r_b + y + y'' for a translating one) is not positive at "
+                         f"{_angle_ranges(np.mod(theta_deg, 360.0)[order], cusp[order])}: a cusp; "
+                         "raise base_radius_mm or soften the motion")
+    if f.kind == "swinging-flat" and not (flat.face_position > 0).all():
+        raise ValueError("follower.pivot_mm: the contact point passes the pivot along the face; "
+                         "move the pivot further out")
+    return flat
+
+
 def profile(program: Program, points: int = 3600) -> Profile:
-    """Pitch curve and profile at ``points`` cam angles evenly over the turn."""
+    """Pitch curve and profile at ``points`` cam angles evenly over the turn.
+
+    The geometry comes from the lift's derivatives after each angle (``shape``), so a join
+    where the acceleration steps gets the next segment's curvature, not an average.
+    """
     if int(points) < 8:
         raise ValueError(f"points must be at least 8, got {points}")
     theta_deg = np.arange(int(points)) * 360.0 / int(points)
-    follower = follower_geometry(program)
-    cam = geometry.cam_profile(follower, program.lift_curve(), np.radians(theta_deg))
-    cut = geometry.undercut(cam, follower.roller_radius)
+    lift_mm = program.lift(theta_deg)[0]
+    cam = shape(program, theta_deg)
+    if program.follower.flat_face:
+        points_ = cam.profile
+        return Profile(theta_deg=theta_deg, lift_mm=lift_mm, pitch=points_, profile=points_, outer=points_,
+                       pressure_angle_deg=np.zeros_like(theta_deg),
+                       pitch_radius_of_curvature_mm=cam.radius_of_curvature,
+                       profile_radius_of_curvature_mm=cam.radius_of_curvature,
+                       undercut=np.zeros(theta_deg.shape, bool), face_position_mm=cam.face_position)
+    cut = geometry.undercut(cam, program.follower.roller_radius_mm)
     outer = np.asarray(cam.outer)
     clearance = program.follower.groove_clearance_mm
     if clearance:  # the groove's other wall stands the clearance further off the pitch curve
@@ -58,7 +129,7 @@ def profile(program: Program, points: int = 3600) -> Profile:
         outer = pitch + (outer - pitch) * (1.0 + clearance / program.follower.roller_radius_mm)
     return Profile(
         theta_deg=theta_deg,
-        lift_mm=program.lift(theta_deg)[0],
+        lift_mm=lift_mm,
         pitch=np.asarray(cam.pitch),
         profile=np.asarray(cam.inner),
         outer=outer,
@@ -70,8 +141,14 @@ def profile(program: Program, points: int = 3600) -> Profile:
 
 
 def write_csv(prof: Profile, path, *, outer: bool = False) -> Path:
-    """One row per cam angle: lift, pitch and profile points, pressure angle, curvature."""
+    """One row per cam angle: lift, pitch and profile points, pressure angle, curvature.
+
+    ``pressure_angle_deg`` has camjax's sign: negative on a rise (see ``Profile``).  Under a
+    flat face: lift, profile point, the cam's radius of curvature and the face position.
+    """
     path = Path(path)
+    if prof.flat_face:
+        return _write_flat_csv(prof, path)
     header = ["theta_deg", "lift_mm", "pitch_x_mm", "pitch_y_mm", "profile_x_mm", "profile_y_mm",
               "pressure_angle_deg", "pitch_radius_of_curvature_mm", "profile_radius_of_curvature_mm", "undercut"]
     if outer:
@@ -88,17 +165,30 @@ def write_csv(prof: Profile, path, *, outer: bool = False) -> Path:
     return path
 
 
+def _write_flat_csv(prof: Profile, path: Path) -> Path:
+    header = ["theta_deg", "lift_mm", "profile_x_mm", "profile_y_mm", "pressure_angle_deg",
+              "profile_radius_of_curvature_mm", "face_position_mm"]
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        for i in range(prof.theta_deg.size):
+            row = [prof.theta_deg[i], prof.lift_mm[i], *prof.profile[i], prof.pressure_angle_deg[i],
+                   prof.profile_radius_of_curvature_mm[i], prof.face_position_mm[i]]
+            writer.writerow([f"{float(v):.10g}" for v in row])
+    return path
+
+
 def write_dxf(prof: Profile, path, *, outer: bool = False) -> Path:
     """DXF in mm: the profile as one closed polyline on layer PROFILE, the pitch curve on PITCH.
 
-    A grooved cam's other wall goes on layer PROFILE_OUTER.
+    A grooved cam's other wall goes on layer PROFILE_OUTER; a flat face's cam has no PITCH.
     """
     import ezdxf
 
     path = Path(path)
     doc = ezdxf.new(units=ezdxf.units.MM)
     msp = doc.modelspace()
-    layers = {"PROFILE": prof.profile, "PITCH": prof.pitch}
+    layers = {"PROFILE": prof.profile} if prof.flat_face else {"PROFILE": prof.profile, "PITCH": prof.pitch}
     if outer:
         layers["PROFILE_OUTER"] = prof.outer
     for name, points in layers.items():

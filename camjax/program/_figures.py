@@ -119,13 +119,68 @@ def cam(prof: Profile, name: str = "") -> plt.Figure:
     return fig
 
 
+def over_turn(title: str, key: str, label: str, histories: list[tuple[float, dict]]) -> plt.Figure:
+    """One history (``response`` key) over the turn at up to four speeds."""
+    fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
+    for rpm, h in histories[:4]:
+        ax.plot(h["theta_deg"], h[key], lw=1, label=f"{rpm:g} rpm")
+    ax.axhline(0.0, color="k", lw=0.8)
+    ax.set_xlabel("cam angle (deg)")
+    ax.set_ylabel(label)
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    return fig
+
+
+def torque_sweep(speeds: list[dict], title: str) -> plt.Figure:
+    """Peak and RMS drive torque against speed (``SpeedReport`` or shaft dicts)."""
+    fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
+    rpm = [s["rpm"] for s in speeds]
+    ax.plot(rpm, [s["max_drive_torque_n_m"] for s in speeds], marker=".", label="peak |T|")
+    ax.plot(rpm, [s["rms_drive_torque_n_m"] for s in speeds], marker=".", label="RMS T")
+    ax.set_xlabel("speed (rpm)")
+    ax.set_ylabel("drive torque (N m)")
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    return fig
+
+
 def save_figures(out: Path, program: Program, report: dict, history: tuple, prof: Profile,
-                 *, groove=None) -> None:
-    """The four figures of ``camjax program --out``: ``history`` is ``(rpm, response)`` of
-    the turn to draw, ``groove`` that speed's ``GrooveTurn`` for a grooved cam."""
+                 *, histories: list[tuple[float, dict]] = (), groove=None) -> None:
+    """The figures of ``camjax program --out``: svaj and contact force of the turn
+    ``history`` (``(rpm, response)``; ``groove`` that speed's ``GrooveTurn`` for a grooved
+    cam), drive torque (and contact stress) over the turn at up to four of ``histories``,
+    the sweeps against speed, the profile."""
     rpm, h = history
+    histories = list(histories) or [history]
     plot.save(svaj(program, rpm, h), out / "svaj.png")
     plot.save(contact_force(program, rpm, h, groove), out / "contact_force.png")
+    plot.save(over_turn(f"{program.name}: drive torque T = F_c dy/dtheta", "drive_torque_n_m",
+                        "drive torque (N m)", histories), out / "drive_torque.png")
+    if program.follower.contact_width_mm is not None:
+        plot.save(over_turn(f"{program.name}: Hertz contact stress", "contact_stress_mpa",
+                            "contact stress (MPa)", histories), out / "contact_stress.png")
     if len(report["speeds"]) > 1:
         plot.save(sweep(program, report), out / "sweep.png")
+        plot.save(torque_sweep(report["speeds"], f"{program.name}: drive torque"), out / "torque_sweep.png")
     plot.save(cam(prof, program.name), out / "profile.png")
+
+
+def shaft_figures(out: Path, machine, report: dict, rpm) -> None:
+    """The shaft's torque over the turn at up to four speeds, and against speed."""
+    from ._dynamics import SteadyState
+    from ._shaft import shaft_torque
+
+    steadies = [SteadyState(p, float(min(rpm))) for p, _ in machine.cams]
+    histories = []
+    for r in list(rpm)[:4]:
+        nodes, values, _, _ = shaft_torque([s.cycle(float(r)) for s in steadies], [s.grid.nodes for s in steadies],
+                                           [phase for _, phase in machine.cams])
+        histories.append((float(r), {"theta_deg": 360.0 * nodes, "drive_torque_n_m": values}))
+    plot.save(over_turn(f"{machine.name}: shaft torque", "drive_torque_n_m", "drive torque (N m)", histories),
+              out / "shaft_torque.png")
+    if len(report["shaft"]["speeds"]) > 1:
+        plot.save(torque_sweep(report["shaft"]["speeds"], f"{machine.name}: shaft torque"),
+                  out / "shaft_torque_sweep.png")

@@ -68,7 +68,7 @@ def jump_speed_rpm(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_
         return None
     rpm = scan_speeds(steady.program, rpm_lo, rpm_hi, 16)
     rpm[0], rpm[-1] = rpm_lo, rpm_hi
-    force = steady.summary(rpm).min_contact_force_n
+    force = steady.min_contact_force_n(rpm)
     if not np.any(force < 0):
         return None
     i = int(np.argmax(force < 0))
@@ -77,7 +77,7 @@ def jump_speed_rpm(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_
     lo, hi = rpm[i - 1], rpm[i]
     while hi - lo > tolerance_rpm:
         trial = np.linspace(lo, hi, 18)[1:-1]
-        f = steady.summary(trial).min_contact_force_n
+        f = steady.min_contact_force_n(trial)
         below = np.flatnonzero(f < 0)
         if below.size:
             hi = trial[below[0]]

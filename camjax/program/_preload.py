@@ -85,7 +85,7 @@ class MaxPreload(AbstractObjective):
     def required_preload(self, law) -> np.ndarray:
         """Required preload (N) at every evaluation speed, by ``SteadyState`` on the program with ``law``."""
         program = with_law(self.program, self.segment, law)
-        force = SteadyState(program, self.rpm_lo).summary(self.evaluation_speeds()).min_contact_force_n
+        force = SteadyState(program, self.rpm_lo).min_contact_force_n(self.evaluation_speeds())
         return min_preload_n(force, program.follower.preload_n)
 
     def report(self, law) -> float:

@@ -20,7 +20,7 @@ from ..checks import is_concrete
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
 from ._motion import END_STATE_KEYS, MATCH, EndState, is_polynomial, joins, resolve_segments
 
-FOLLOWER_KINDS = ("translating-roller", "swinging-roller")
+FOLLOWER_KINDS = ("translating-roller", "swinging-roller", "translating-flat", "swinging-flat")
 _ANGLE_TOLERANCE_DEG = 1e-9
 _LIFT_TOLERANCE_MM = 1e-9
 
@@ -64,7 +64,10 @@ class Follower:
     preload, no jump; ``groove_clearance_mm`` (form-closed only) is how much wider than
     the roller its groove is: the roller then crosses it when the train force changes sign.  For ``kind="swinging-roller"`` the lift is the arc length of the
     roller centre (swing angle times ``arm_mm``) and ``pivot_mm`` is the cam-centre to pivot
-    distance.
+    distance.  A flat-faced follower (``"translating-flat"``, ``"swinging-flat"``) has no
+    roller: the swinging face is a plane through the pivot and its lift is the swing angle
+    times ``arm_mm``.  ``contact_width_mm`` is the width of the line contact (the roller's, or
+    the cam's under a flat face) for the Hertz stress; without it no stress is reported.
     """
 
     mass_kg: float
@@ -79,6 +82,15 @@ class Follower:
     arm_mm: float | None = None
     pivot_mm: float | None = None
     groove_clearance_mm: float | None = None
+    contact_width_mm: float | None = None
+
+    @property
+    def flat_face(self) -> bool:
+        return self.kind.endswith("-flat")
+
+    @property
+    def swinging(self) -> bool:
+        return self.kind.startswith("swinging")
 
     @property
     def form_closed(self) -> bool:
@@ -138,9 +150,21 @@ def _check_follower(f: Follower) -> None:
         _positive(f.groove_clearance_mm, "follower.groove_clearance_mm")
     if _finite(f.preload_n, "follower.preload_n") < 0:
         raise ValueError(f"follower.preload_n must be non-negative, got {f.preload_n:g}")
+    if f.contact_width_mm is not None:
+        _positive(f.contact_width_mm, "follower.contact_width_mm")
     offset = _finite(f.offset_mm, "follower.offset_mm")
     if f.kind == "translating-roller" and abs(offset) >= f.base_radius_mm + f.roller_radius_mm:
         raise ValueError("follower.offset_mm: |offset| must be below base_radius_mm + roller_radius_mm")
+    if f.flat_face and f.groove_clearance_mm is not None:
+        raise ValueError("follower.groove_clearance_mm: a flat-faced follower runs on no groove")
+    if f.kind == "translating-flat" and offset != 0:
+        raise ValueError("follower.offset_mm: a flat face's profile does not depend on an offset; "
+                         "leave it 0")
+    if f.kind == "swinging-flat":
+        _positive(f.arm_mm, "follower.arm_mm")
+        if _positive(f.pivot_mm, "follower.pivot_mm") <= f.base_radius_mm:
+            raise ValueError("follower.pivot_mm: the pivot must lie outside the base circle "
+                             "(pivot_mm > base_radius_mm) for its face to touch it")
     if f.kind == "swinging-roller":
         arm = _positive(f.arm_mm, "follower.arm_mm")
         pivot = _positive(f.pivot_mm, "follower.pivot_mm")
@@ -148,6 +172,30 @@ def _check_follower(f: Follower) -> None:
         if not abs(pivot - arm) < rp < pivot + arm:
             raise ValueError("follower.arm_mm, pivot_mm: the arm cannot reach the base circle "
                              "(|pivot - arm| < base + roller < pivot + arm fails)")
+
+
+@dataclasses.dataclass(frozen=True)
+class Materials:
+    """Elastic constants of the cam and the follower (roller or face) for the Hertz stress."""
+
+    cam_youngs_modulus_gpa: float = 210.0
+    cam_poisson_ratio: float = 0.3
+    follower_youngs_modulus_gpa: float = 210.0
+    follower_poisson_ratio: float = 0.3
+
+    def __post_init__(self):
+        for part in ("cam", "follower"):
+            _positive(getattr(self, f"{part}_youngs_modulus_gpa"), f"materials.{part}_youngs_modulus_gpa")
+            nu = _finite(getattr(self, f"{part}_poisson_ratio"), f"materials.{part}_poisson_ratio")
+            if not -1.0 < nu < 0.5:
+                raise ValueError(f"materials.{part}_poisson_ratio must be in (-1, 0.5), got {nu:g}")
+
+    @property
+    def contact_modulus_mpa(self) -> float:
+        """``E*`` with ``1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2``, in MPa (N/mm^2)."""
+        compliance = sum((1 - getattr(self, f"{p}_poisson_ratio") ** 2) / getattr(self, f"{p}_youngs_modulus_gpa")
+                         for p in ("cam", "follower"))
+        return 1e3 / compliance
 
 
 @dataclasses.dataclass(frozen=True)
@@ -167,6 +215,7 @@ class Program:
     name: str
     segments: tuple[Segment, ...]
     follower: Follower
+    materials: Materials = Materials()
 
     def __post_init__(self):
         object.__setattr__(self, "segments", tuple(self.segments))
@@ -222,7 +271,7 @@ class Program:
     @classmethod
     def from_dict(cls, data: dict, *, base: Path | None = None) -> Program:
         """A program from the TOML structure (``program``, ``segment`` list, ``follower``)."""
-        _no_unknown(data, {"program", "segment", "follower"}, "top level")
+        _no_unknown(data, {"program", "segment", "follower", "materials"}, "top level")
         header = data.get("program", {})
         _no_unknown(header, {"name"}, "[program]")
         segments_data = data.get("segment")
@@ -237,7 +286,12 @@ class Program:
         for required in ("mass_kg", "stiffness_n_per_mm"):
             if required not in follower_data:
                 raise ValueError(f"[follower] needs {required}")
-        return cls(str(header.get("name", "program")), tuple(segments), Follower(**follower_data))
+        if str(follower_data.get("kind", "")).endswith("-flat") and "roller_radius_mm" in follower_data:
+            raise ValueError("[follower] roller_radius_mm: a flat-faced follower has no roller")
+        materials = data.get("materials", {})
+        _no_unknown(materials, {f.name for f in dataclasses.fields(Materials)}, "[materials]")
+        return cls(str(header.get("name", "program")), tuple(segments), Follower(**follower_data),
+                   Materials(**materials))
 
     def to_toml(self, law_files: dict[int, str] | None = None) -> str:
         """The program as TOML text: laws by registry name, or by ``law_files[i]`` (1-based)."""
@@ -255,8 +309,13 @@ class Program:
         lines.append("[follower]")
         for field in dataclasses.fields(Follower):
             value = getattr(self.follower, field.name)
+            if field.name == "roller_radius_mm" and self.follower.flat_face:
+                continue
             if value is not None:
                 lines.append(f'{field.name} = "{value}"' if isinstance(value, str) else f"{field.name} = {value!r}")
+        if self.materials != Materials():
+            lines += ["", "[materials]"]
+            lines += [f"{f.name} = {getattr(self.materials, f.name)!r}" for f in dataclasses.fields(Materials)]
         return "\n".join(lines) + "\n"
 
     # -- the lift over the turn ----------------------------------------------------------
@@ -271,12 +330,23 @@ class Program:
         """Lift at the start of each segment (mm)."""
         return np.concatenate([[0.0], np.cumsum([s.lift_mm for s in self.segments])[:-1]])
 
-    def lift(self, theta_deg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Lift (mm) and its first two derivatives in cam angle (mm/deg, mm/deg^2), periodic."""
+    def lift(self, theta_deg, side: str = "after") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Lift (mm) and its first two derivatives in cam angle (mm/deg, mm/deg^2), periodic.
+
+        At a join of two segments the derivatives are the next segment's (``side="after"``)
+        or the one ending there (``side="before"``): where the acceleration steps they differ.
+        """
         theta = np.mod(np.asarray(theta_deg, dtype=float), 360.0)
+        if side == "before":
+            theta = np.where(theta == 0.0, 360.0, theta)
+        elif side != "after":
+            raise ValueError(f"side must be 'before' or 'after', got {side!r}")
         y, dy, ddy = (np.zeros_like(theta) for _ in range(3))
         for seg, start, y0 in zip(self.segments, self.start_deg, self.start_lift_mm):
-            inside = (theta >= start) & (theta < start + seg.angle_deg)
+            if side == "before":
+                inside = (theta > start) & (theta <= start + seg.angle_deg)
+            else:
+                inside = (theta >= start) & (theta < start + seg.angle_deg)
             if not inside.any():
                 continue
             y[inside] = y0
@@ -291,7 +361,7 @@ class Program:
     def lift_curve(self) -> LiftCurve:
         """The lift as a pytree (laws as leaves) for ``camjax.geometry`` and other JAX code."""
         moving = [i for i, seg in enumerate(self.segments) if seg.moving]
-        scale = 1.0 / self.follower.arm_mm if self.follower.kind == "swinging-roller" else 1.0
+        scale = 1.0 / self.follower.arm_mm if self.follower.swinging else 1.0
         return LiftCurve(
             laws=tuple(self.segments[i].law for i in moving),
             start_deg=tuple(float(self.start_deg[i]) for i in moving),

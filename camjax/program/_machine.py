@@ -1,0 +1,245 @@
+"""What the machine designer sizes from a cam's motion: drive torque, energy, contact stress.
+
+Drive torque (frictionless, power balance): the cam's power ``T Omega`` is the contact
+force's power on the follower, ``F_c`` along the follower's path times the path's speed, so
+``T = F_c dy/dtheta`` for a translating follower and, with the lift the arc length at
+``arm_mm`` (the force referred to that radius), for a swinging one too (the arm's moment
+``F_c arm`` times the swing rate ``dy/dtheta / arm``).  In turn time ``s`` (``theta =
+2 pi s``) ``T = 1e-3 F_c y_s / (2 pi)`` N m with ``y_s`` in mm per turn; its derivatives
+at both ends of every interval follow from the force's and the lift's one-sided ones, so
+the torque has the same septic Hermite interpolant per interval as the refined peaks
+(``camjax.metrics.septic_coefficients``), which is integrated exactly.
+
+Hertz line contact: ``p_max^2 = F_n E* / (pi L R')`` is the contact force times a factor of
+the geometry alone, sampled once per program at the grid's nodes (both one-sided values at a
+join, the larger taken).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import NamedTuple
+
+import jax.numpy as jnp
+import numpy as np
+
+from ..metrics import interval_peaks, septic_coefficients
+from ._export import _angle_ranges, shape
+from ._spec import Program
+
+TORQUE_PER_FORCE_VELOCITY = 1e-3 / (2 * math.pi)
+"""N m of drive torque per N of contact force and mm per turn of lift velocity."""
+DEFAULT_SPEED_FLUCTUATION = 0.05
+"""Coefficient of speed fluctuation ``Cs = (Omega_max - Omega_min) / Omega_mean`` for the flywheel."""
+_HILBERT = 1.0 / (np.arange(8)[:, None] + np.arange(8)[None, :] + 1.0)
+
+
+def torque_jets(force, force_left, force_right, velocity, lift_left, lift_right):
+    """Drive torque (N m) at the nodes and its first three derivatives in turn time at both
+    ends of every interval, from the contact force's (``gain_derivatives``) and the lift's
+    (``y_s`` at the nodes, ``(y_ss, y_sss, y_ssss)`` one-sided, ``MotionGrid.one_sided``)."""
+
+    def ends(f, df, ys, dy):
+        d1 = df[:, 0] * ys + f * dy[:, 0]
+        d2 = df[:, 1] * ys + 2 * df[:, 0] * dy[:, 0] + f * dy[:, 1]
+        d3 = df[:, 2] * ys + 3 * df[:, 1] * dy[:, 0] + 3 * df[:, 0] * dy[:, 1] + f * dy[:, 2]
+        return TORQUE_PER_FORCE_VELOCITY * jnp.stack([d1, d2, d3], axis=1)
+
+    values = TORQUE_PER_FORCE_VELOCITY * force * velocity
+    return (values, ends(force[:-1], force_left, velocity[:-1], lift_left),
+            ends(force[1:], force_right, velocity[1:], lift_right))
+
+
+class TorqueFigures(NamedTuple):
+    """Peak ``|T|``, RMS and mean torque (N m) over a turn and the energy fluctuation (J)."""
+
+    max_abs: float
+    rms: float
+    mean: float
+    energy_fluctuation: float
+
+
+def torque_figures(values, widths, left, right) -> TorqueFigures:
+    """The figures of a torque sampled over one turn (``sum(widths) == 1``), jittable.
+
+    Mean and RMS integrate the septic interpolant exactly; ``W(s) = 2 pi int (T - mean) ds``
+    is its running integral at the nodes, with ``W' = T - mean``, ``W'' = T'``, ``W''' = T''``
+    at both ends of every interval.  ``max |T|``, ``max W`` and ``min W`` are refined between
+    nodes as ``refined_peak`` does, in one pass over the three signals' intervals (``W``
+    shifted below its smallest node value for its maximum, above its largest for its minimum).
+    """
+    c = septic_coefficients(values, widths, left, right)
+    integrals = widths * (c @ jnp.asarray(1.0 / np.arange(1, 9)))
+    mean = jnp.sum(integrals)
+    rms = jnp.sqrt(jnp.maximum(jnp.sum(widths * jnp.einsum("ki,ij,kj->k", c, jnp.asarray(_HILBERT), c)), 0.0))
+    work = jnp.concatenate([jnp.zeros(1), jnp.cumsum(integrals - mean * widths)])
+
+    def work_ends(t, d):
+        return jnp.stack([t - mean, d[:, 0], d[:, 1]], axis=1)
+
+    w = septic_coefficients(work, widths, work_ends(values[:-1], left), work_ends(values[1:], right))
+    span = jnp.max(work) - jnp.min(work) + 1.0
+    below, above = jnp.min(work) - span, jnp.max(work) + span
+    constant = jnp.zeros(8).at[0].set(1.0)
+    peaks = interval_peaks(jnp.concatenate([c, w - below * constant, w - above * constant]))
+    k = values.shape[0] - 1
+    high = jnp.max(peaks[k:2 * k]) + below
+    low = above - jnp.max(peaks[2 * k:])
+    return TorqueFigures(jnp.max(peaks[:k]), rms, mean, 2 * math.pi * (high - low))
+
+
+def flywheel_inertia_kg_m2(energy_fluctuation_j, rpm, speed_fluctuation: float):
+    """``J = dE / (Cs Omega^2)``: the inertia that keeps the speed within ``Cs`` of its mean."""
+    omega = 2 * math.pi * np.asarray(rpm) / 60.0
+    return np.asarray(energy_fluctuation_j) / (speed_fluctuation * omega**2)
+
+
+def check_speed_fluctuation(value, what: str = "speed_fluctuation") -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < value < 2 or not math.isfinite(value):
+        raise ValueError(f"{what} must be a number in (0, 2), got {value!r}")
+    return float(value)
+
+
+# -- the cam's geometry for the contact ---------------------------------------------------------
+
+
+class ContactGeometry(NamedTuple):
+    """The cam's contact geometry at angles ``theta_deg``, each array ``(2, n)``: the
+    one-sided values before and after each angle (equal but at a join where the
+    acceleration steps).
+
+    ``cam_radius_mm`` is the signed radius of curvature of the cam surface the follower
+    rides (negative where concave), ``outer_radius_mm`` a grooved cam's other wall as the
+    roller sees it, ``normal_per_contact`` ``F_n / F_c`` (``1 / cos(pressure angle)``; under a
+    swinging face ``arm / distance of the contact from the pivot``), ``face_position_mm`` the
+    contact along a flat face (zeros for a roller).
+    """
+
+    theta_deg: np.ndarray
+    pressure_angle_deg: np.ndarray
+    cam_radius_mm: np.ndarray
+    outer_radius_mm: np.ndarray
+    normal_per_contact: np.ndarray
+    face_position_mm: np.ndarray
+
+
+def contact_geometry(program: Program, theta_deg) -> ContactGeometry:
+    """The cam's contact geometry at ``theta_deg`` from both one-sided jets of the lift."""
+    theta_deg = np.asarray(theta_deg, dtype=float)
+    f = program.follower
+    sides = [shape(program, theta_deg, side) for side in ("before", "after")]
+    if f.flat_face:
+        radius = np.stack([np.asarray(s.radius_of_curvature) for s in sides])
+        position = np.stack([np.asarray(s.face_position) for s in sides])
+        pressure = np.zeros_like(radius)
+        normal = f.arm_mm / position if f.kind == "swinging-flat" else np.ones_like(radius)
+        return ContactGeometry(theta_deg, pressure, radius, np.full_like(radius, np.inf), normal, position)
+    pitch = np.stack([np.asarray(s.pitch_radius_of_curvature) for s in sides])
+    pressure = np.stack([np.degrees(np.asarray(s.pressure_angle)) for s in sides])
+    wall = f.roller_radius_mm + (f.groove_clearance_mm or 0.0)
+    return ContactGeometry(theta_deg, pressure, pitch - f.roller_radius_mm, -(pitch + wall),
+                           1.0 / np.cos(np.radians(pressure)), np.zeros_like(pitch))
+
+
+class NodeContact(NamedTuple):
+    """``p_max^2 = F_c * factor`` (MPa^2 per N) at the grid's nodes, for the flank the
+    follower rides (``inner``) and a grooved cam's other wall (``outer``), with the
+    effective radius ``R'`` (mm) there, the smaller of a join's two sides taken."""
+
+    inner: np.ndarray
+    outer: np.ndarray
+    radius_inner: np.ndarray
+    radius_outer: np.ndarray
+
+
+def _effective_radius(program: Program, cam_radius: np.ndarray, where: str, theta_deg) -> np.ndarray:
+    """``R'`` with ``1/R' = 1/r_roller + 1/rho_cam`` (``rho_cam`` alone under a flat face)."""
+    f = program.follower
+    with np.errstate(divide="ignore"):
+        curvature = 1.0 / cam_radius + (0.0 if f.flat_face else 1.0 / f.roller_radius_mm)
+    bad = ~(curvature > 0)
+    if bad.any():
+        angles = np.broadcast_to(theta_deg, bad.shape)
+        raise ValueError(f"follower.roller_radius_mm: the roller does not fit the cam's {where} at "
+                         f"{_angle_ranges(angles[0], bad.any(axis=0))} (an undercut): no contact stress")
+    return 1.0 / curvature
+
+
+def node_contact(program: Program, theta_deg) -> NodeContact:
+    """The Hertz factors at ``theta_deg`` (zeros without ``follower.contact_width_mm``)."""
+    f = program.follower
+    n = np.asarray(theta_deg).size
+    if f.contact_width_mm is None:
+        zeros = np.zeros(n)
+        return NodeContact(zeros, zeros, zeros, zeros)
+    g = contact_geometry(program, theta_deg)
+    scale = program.materials.contact_modulus_mpa / (math.pi * f.contact_width_mm)
+    inner_radius = _effective_radius(program, g.cam_radius_mm, "profile", theta_deg)
+    inner = (scale * g.normal_per_contact / inner_radius).max(axis=0)
+    if f.form_closed and not f.flat_face:
+        outer_radius = _effective_radius(program, g.outer_radius_mm, "outer wall", theta_deg)
+        outer = (scale * g.normal_per_contact / outer_radius).max(axis=0)
+        radius_outer = outer_radius.min(axis=0)
+    else:
+        outer, radius_outer = np.zeros(n), np.full(n, np.inf)
+    return NodeContact(inner, outer, inner_radius.min(axis=0), radius_outer)
+
+
+def contact_stress_squared(force, contact: NodeContact):
+    """``p_max^2`` (MPa^2) at the nodes for the contact force there (no contact: zero)."""
+    return jnp.maximum(force, 0.0) * contact.inner + jnp.maximum(-force, 0.0) * contact.outer
+
+
+@dataclasses.dataclass(frozen=True)
+class JoinCurvature:
+    """The cam surface's radius of curvature (mm) on both sides of a segment join."""
+
+    angle_deg: float
+    radius_before_mm: float
+    radius_after_mm: float
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass(frozen=True)
+class Geometry:
+    """The cam's shape as the designer checks it (mm, degrees).
+
+    ``min_radius_of_curvature_mm`` is the cam surface's where convex (the smaller one-sided
+    value at a join); ``min_concave_radius_of_curvature_mm`` the smallest ``|rho|`` where
+    concave (``None`` if nowhere); ``face_width_mm`` (flat faces) is the span of the contact
+    along the face, ``max y' - min y'`` for a translating one, before any margin.
+    """
+
+    max_pressure_angle_deg: float
+    min_radius_of_curvature_mm: float | None
+    min_concave_radius_of_curvature_mm: float | None
+    face_width_mm: float | None
+    joins: tuple[JoinCurvature, ...]
+
+    def as_dict(self) -> dict:
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        out["joins"] = [j.as_dict() for j in self.joins]
+        return out
+
+
+def cam_geometry(program: Program, theta_deg) -> Geometry:
+    """``Geometry`` over ``theta_deg`` and every segment join (both sides)."""
+    joins_deg = np.asarray(program.start_deg, dtype=float)
+    g = contact_geometry(program, np.concatenate([np.asarray(theta_deg, dtype=float), joins_deg]))
+    rho = g.cam_radius_mm
+    convex, concave = rho[rho > 0], -rho[rho < 0]
+    width = None
+    if program.follower.flat_face:
+        width = float(g.face_position_mm.max() - g.face_position_mm.min())
+    n = joins_deg.size
+    joins = tuple(JoinCurvature(float(a), float(rho[0, -n + i]), float(rho[1, -n + i])) for i, a in enumerate(joins_deg))
+    return Geometry(
+        max_pressure_angle_deg=float(np.abs(g.pressure_angle_deg).max()),
+        min_radius_of_curvature_mm=float(convex.min()) if convex.size else None,
+        min_concave_radius_of_curvature_mm=float(concave.min()) if concave.size else None,
+        face_width_mm=width,
+        joins=joins,
+    )
