@@ -26,7 +26,7 @@ import numpy as np
 import optax
 
 import camjax
-from camjax.models import backlash as bl
+import camjax.models as bl
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402

@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import camjax
-from camjax.models import backlash as bl
+import camjax.models as bl
 
 # %% [markdown]
 # ## Kinematic impact velocity against backlash, for several natural decelerations

@@ -110,9 +110,9 @@ def test_bad_arguments_exit_2_with_one_line(capsys, tmp_path, argv, message):
 
 _HELP_SCRIPT = """
 import sys
-from camjax.cli import _COMMANDS, main
+from camjax.cli import COMMANDS, main
 texts = {}
-for argv in [["--help"]] + [[name, "--help"] for name in _COMMANDS]:
+for argv in [["--help"]] + [[name, "--help"] for name in COMMANDS]:
     try:
         main(argv)
     except SystemExit:

@@ -550,3 +550,21 @@ def test_a_settled_groove_turn_does_not_move_with_more_turns():
     longer = camjax.program.groove_turns(groove_cam(0.1), [600.0], turns=2 * settled.turns)[0]
     assert [i.flank for i in longer.impacts] == [i.flank for i in settled.impacts]
     assert max(abs(a.angle_deg - b.angle_deg) for a, b in zip(longer.impacts, settled.impacts)) < 1e-6
+
+
+def test_results_outside_the_design_rules_are_warned_about(tmp_path, capsys):
+    """A 100 mm lift over 60 degrees on a 40 mm base circle: the pressure angle (64 deg)
+    passes the translating roller's 30 and the lift is large against the base circle;
+    both are said on stderr, once each, and the run still reports."""
+    law = laws.get("cycloidal")
+    program = Program("absurd", (Segment(60, 100.0, law), Segment(120), Segment(60, -100.0, law), Segment(120)),
+                      Follower(**FOLLOWER))
+    path = tmp_path / "absurd.toml"
+    path.write_text(program.to_toml())
+    assert main(["program", str(path), "--rpm", "100"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2
+    assert err[0].startswith("warning: the pressure angle reaches 64.4 deg, above the 30 deg")
+    assert "the lift (100 mm) is more than twice the base circle's radius (40 mm)" in err[1]
+    assert main(["program", "--rpm", "300"]) == 0  # the indexer: within the rules
+    assert "warning" not in capsys.readouterr().err

@@ -24,7 +24,7 @@ class _Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
 # Modules under camjax.cli that define ``register(subparsers)``; each sets ``func``.
-_COMMANDS = ("laws", "ct", "design", "backlash", "follower", "bench", "program", "sweep")
+COMMANDS = ("laws", "ct", "design", "backlash", "follower", "bench", "program", "sweep")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -34,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
                                 parser_class=_Parser)
-    for name in _COMMANDS:
+    for name in COMMANDS:
         importlib.import_module(f"camjax.cli.{name}").register(sub)
     return parser
 

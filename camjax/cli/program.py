@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 import math
 import sys
 from pathlib import Path
@@ -185,6 +186,29 @@ def _csv(report: dict) -> str:
     return buffer.getvalue().rstrip()
 
 
+MAX_PRESSURE_ANGLE_DEG = {"translating-roller": 30.0, "swinging-roller": 45.0}
+"""The pressure angle above which a roller follower is taken to jam or wear (the design
+rule of thumb: 30 degrees translating, 45 swinging); flat faces have their own checks."""
+
+
+def validity_warnings(program, report: dict) -> list[str]:
+    """Where a result lies outside what the design rules hold: a pressure angle past the
+    follower's limit, a lift large against the base circle (often a unit slip)."""
+    out = []
+    geometry = report.get("geometry") or {}
+    limit = MAX_PRESSURE_ANGLE_DEG.get(program.follower.kind)
+    angle = geometry.get("max_pressure_angle_deg")
+    if limit is not None and angle is not None and abs(angle) > limit:
+        out.append(f"the pressure angle reaches {abs(angle):.3g} deg, above the {limit:g} deg a "
+                   f"{program.follower.kind} follower tolerates: enlarge follower.base_radius_mm "
+                   "or lengthen the rises")
+    stroke = max(abs(y) for y in itertools.accumulate(s.lift_mm for s in program.segments))
+    if stroke > 2 * program.follower.base_radius_mm:
+        out.append(f"the lift ({stroke:g} mm) is more than twice the base circle's radius "
+                   f"({program.follower.base_radius_mm:g} mm): check the program's units")
+    return out
+
+
 def plot_speed(report: dict, chosen: float | None) -> float:
     """The speed whose turn the figures draw: ``chosen``, else the speed given nearest the
     jump speed (the first that jumps when the jump lies below the range), else the highest."""
@@ -258,6 +282,8 @@ def run(args) -> int:
                      speed_fluctuation=args.speed_fluctuation).as_dict()
     if out is not None:
         _write_outputs(out, program, steady, report, rpm, args.points, plot_speed(report, args.plot_rpm))
+    for line in validity_warnings(program, report):
+        print(f"warning: {line}", file=sys.stderr)
     for s in report["speeds"]:
         change = s["impacts_change_deg"]
         if change is not None and not change <= SETTLED_DEG:
