@@ -64,9 +64,17 @@ def ensure(value, predicate, message: str):
             bad = np.broadcast_to(array, ok.shape)[~ok].ravel()[0]
             raise ValueError(f"{message}, got {bad:g}")
         return value
+    return guard(value, ~predicate(jnp.asarray(value)), message)
+
+
+def guard(value, bad, message: str):
+    """``value`` (any pytree) made to raise ``message`` when the computation runs with the
+    traced condition ``bad`` true (``equinox.error_if``); unchanged under
+    ``checked_outside``.  For checks that ``ensure``'s one-array predicate cannot state
+    (several leaves at once, such as fractions that must sum to at most 1)."""
     if _CHECKED_OUTSIDE.get():
         return value
-    return eqx.error_if(value, ~predicate(jnp.asarray(value)), message)
+    return eqx.error_if(value, bad, message)
 
 
 def positive(value, name: str):

@@ -6,6 +6,7 @@ from ._io import save as save
 from ._polynomial import PolynomialLaw as PolynomialLaw
 from ._program import LawBank as LawBank
 from ._program import MotionProgram as MotionProgram
+from ._registry import as_law as as_law
 from ._registry import get as get
 from ._registry import names as names
 from ._registry import standard_laws as standard_laws

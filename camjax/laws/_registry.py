@@ -74,3 +74,13 @@ def get(name: str) -> AbstractMotionLaw:
         return PolynomialLaw(order)
     valid = ", ".join(names() + sorted(_ALIASES) + ["scca:A,B,C", "poly:K"])
     raise ValueError(f"unknown law {name!r}; valid names: {valid}")
+
+
+def as_law(law, what: str = "law") -> AbstractMotionLaw:
+    """``law`` itself, or the law that a name gives (``get``): how every public function
+    that takes a motion law reads it, so that ``ct_curve("cycloidal", ...)`` works."""
+    if isinstance(law, AbstractMotionLaw):
+        return law
+    if isinstance(law, str):
+        return get(law)
+    raise TypeError(f"{what} must be a camjax motion law or a law name, got {type(law).__name__}")

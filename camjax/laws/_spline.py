@@ -9,8 +9,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import checks
 from .._custom_types import Breakpoints, LawValues
 from ._base import AbstractMotionLaw, is_concrete, require
+
+COEFFICIENTS_RULE = "BSplineLaw coefficients must be finite (got NaN or inf)"
 
 
 @functools.lru_cache(maxsize=64)
@@ -119,7 +122,7 @@ class BSplineLaw(AbstractMotionLaw):
         if is_concrete(self.coefficients):
             require(
                 bool(np.all(np.isfinite(np.asarray(self.coefficients)))),
-                "BSplineLaw coefficients must be finite (got NaN or inf)",
+                COEFFICIENTS_RULE,
             )
 
     @property
@@ -136,8 +139,12 @@ class BSplineLaw(AbstractMotionLaw):
 
     @property
     def control_points(self) -> jax.Array:
-        """All control points: the fixed 0s and 1s around the free coefficients."""
+        """All control points: the fixed 0s and 1s around the free coefficients (traced
+        coefficients checked finite when the computation runs, as concrete ones are at
+        construction)."""
         c = jnp.asarray(self.coefficients)
+        if not is_concrete(c):
+            c = checks.guard(c, ~jnp.all(jnp.isfinite(c)), COEFFICIENTS_RULE)
         return jnp.concatenate(
             [jnp.zeros(self._n_fixed, c.dtype), c, jnp.ones(self._n_fixed, c.dtype)]
         )

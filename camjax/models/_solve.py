@@ -9,7 +9,7 @@ import jax
 
 from .. import checks
 from ..errors import raise_if_failed
-from ..laws import AbstractMotionLaw
+from ..laws import AbstractMotionLaw, as_law
 from ._base import AbstractModel, Response
 
 
@@ -34,7 +34,7 @@ def _program(model: AbstractModel):
 
 
 def solve(
-    law: AbstractMotionLaw | None,
+    law: AbstractMotionLaw | str | None,
     model: AbstractModel,
     *,
     dwell: float = 1.0,
@@ -51,7 +51,7 @@ def solve(
     ``camjax.models.SpringMassOptions``); an unknown one is a ``ValueError``.
 
     Args:
-        law: the rise (followed by a dwell).  For ``SwingingFollower``, ``None`` keeps
+        law: the rise (followed by a dwell), or its name (``"cycloidal"``).  For ``SwingingFollower``, ``None`` keeps
             the model's own rise and fall laws; a law replaces both.
         model: the scene, with its parameters.
         dwell: dwell after the rise, in motion periods.
@@ -84,8 +84,7 @@ def _arguments(law, model, dwell, method, options):
             "model must be a camjax model (SpringMass, CoulombFriction, Backlash, TwoMass, "
             f"SwingingFollower), got {type(model).__name__}"
         )
-    if law is not None and not isinstance(law, AbstractMotionLaw):
-        raise TypeError(f"law must be a camjax motion law, got {type(law).__name__}")
+    law = None if law is None else as_law(law)
     if law is None and not model.carries_laws:
         raise TypeError(f"{type(model).__name__} needs a motion law (law is None)")
     opts = model.options(method, dwell, **options)
