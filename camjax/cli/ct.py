@@ -11,9 +11,11 @@ from ._common import (
     CliError,
     add_format,
     add_law_option,
+    check_damping,
     dump_json,
     import_aside,
-    law_names_of,
+    laws_of,
+    options_named,
     output_dir,
     parse_range,
 )
@@ -65,6 +67,11 @@ def parse_model(text: str, damping: float):
                        "backlash:BK,DN, two-mass:K,M")
     if len(numbers) != expected[name]:
         raise CliError(f"--model {name} takes {expected[name]} parameter(s), got {len(numbers)}")
+    with options_named(stiffness_ratio="K", inertia_ratio="M"):
+        return _model(models, name, numbers, damping, text)
+
+
+def _model(models, name, numbers, damping, text):
     if name == "spring-mass":
         return models.SpringMass(1.0, damping)
     if name == "friction":
@@ -149,17 +156,15 @@ def _fit_report(curves, fits) -> str:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from .. import laws
     from ..sweep import ct_curve
 
     plotting = import_aside("camjax.plot") if args.out else None  # imports while the sweep compiles
 
-    names = law_names_of(args)
-    selected = {}
-    for name in names:
-        law = laws.get(name)
-        selected[law.name] = law
+    selected = laws_of(args)
     n = parse_range(args.n, "--n")
+    check_damping(args.damping)
+    if not args.dwell >= 0:
+        raise CliError(f"--dwell: must be a non-negative number of rise durations, got {args.dwell:g}")
     model = parse_model(args.model, args.damping)
     out = output_dir(args.out)
     curves = {}

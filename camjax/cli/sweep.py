@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from ._common import CliError
+from ._common import CliError, output_dir
 
 
 def register(sub) -> None:
@@ -39,6 +39,7 @@ def run(args) -> int:
             raise CliError(f"--process-id must be in 0..{args.num_processes - 1}")
         distributed.initialize(args.coordinator, args.num_processes, args.process_id)
     spec = distributed.load_spec(args.spec)  # after initialize: building laws starts JAX
+    output_dir(str(spec.output), f"{args.spec}: output")  # writable, before any work
     path = distributed.run_distributed(spec, devices=args.devices)
     if path is not None:
         print(f"wrote {path} ({len(spec.laws)} laws x {spec.period_ratio.size} period ratios "

@@ -126,6 +126,10 @@ def _check_follower(f: Follower) -> None:
     if f.kind == "translating-roller" and abs(offset) >= f.base_radius_mm + f.roller_radius_mm:
         raise ValueError("follower.offset_mm: |offset| must be below base_radius_mm + roller_radius_mm")
     if f.kind == "swinging-roller":
+        for name in ("arm_mm", "pivot_mm"):
+            if getattr(f, name) is None:
+                raise ValueError(f"follower.{name} is missing: a swinging-roller follower needs "
+                                 "arm_mm and pivot_mm")
         arm = _positive(f.arm_mm, "follower.arm_mm")
         pivot = _positive(f.pivot_mm, "follower.pivot_mm")
         rp = f.base_radius_mm + f.roller_radius_mm
@@ -180,7 +184,9 @@ class Program:
         """Read a program TOML file (law files named in it are relative to it)."""
         path = Path(path)
         try:
-            text = path.read_text()
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise ValueError(f"{path}: not a program file (TOML text), it is not UTF-8") from None
         except OSError as error:
             raise ValueError(f"{path}: cannot read the program file ({error.strerror})") from None
         try:
@@ -331,9 +337,9 @@ def _law(i: int, name, base: Path | None) -> AbstractMotionLaw:
         if not path.exists():
             raise ValueError(f"segment {i}: law file {str(path)!r} not found")
         try:
-            return laws.load(path)
-        except (ValueError, KeyError, TypeError) as error:
-            raise ValueError(f"segment {i}: law file {str(path)!r}: {error}") from None
+            return laws.load(path)  # its errors name the file
+        except ValueError as error:
+            raise ValueError(f"segment {i}: law file {error}") from None
     try:
         return laws.get(name)
     except ValueError as error:
