@@ -74,7 +74,28 @@ def guard(value, bad, message: str):
     (several leaves at once, such as fractions that must sum to at most 1)."""
     if _CHECKED_OUTSIDE.get():
         return value
-    return eqx.error_if(value, bad, message)
+    with as_value_errors():  # evaluated at once under grad or vmap without jit: one line
+        return eqx.error_if(value, bad, message)
+
+
+_EQUINOX_MESSAGE = "equinox.EquinoxRuntimeError: "
+
+
+@contextlib.contextmanager
+def as_value_errors():
+    """Inside, a failed runtime check of a program compiled by ``equinox.filter_jit`` (a
+    camjax entry point's own) comes out as ``ValueError(message)``: one line, as if checked
+    concretely, instead of equinox's report with the message on its third line.  (Inside a
+    caller's ``jax.jit`` the error is raised by the caller's program, out of camjax's reach:
+    docs/conventions.md says how to read it.)"""
+    try:
+        yield
+    except eqx.EquinoxRuntimeError as error:
+        lines = str(error).splitlines()
+        messages = [x[len(_EQUINOX_MESSAGE):] for x in lines if x.startswith(_EQUINOX_MESSAGE)]
+        if not messages:
+            raise
+        raise ValueError(messages[-1]) from None
 
 
 def positive(value, name: str):

@@ -65,7 +65,8 @@ def solve(
         SolverError: the solution failed (with ``throw=True``).
     """
     opts, arguments = _arguments(law, model, dwell, method, options)
-    response = _program(model)(*arguments)
+    with checks.as_value_errors():
+        response = _program(model)(*arguments)
     if throw:
         reached = response.stats.get("reached")
         where = f" (reached tau = {float(reached):.6g})" if reached is not None else ""

@@ -370,13 +370,14 @@ def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
     options = model.options("exact", dwell, resolution=resolution)
     limit = options.resolution * MAX_PHASE_STEP / (2 * math.pi)
     n = checks.ensure(
-        model.period_ratio,
+        checks.positive(model.period_ratio, "period ratio"),  # this check first
         lambda v: v <= limit,
         f"period ratio must be at most {limit:.4g} on a grid of resolution "
         f"{options.resolution} (give resolution >= {2 * math.pi / MAX_PHASE_STEP:.3g} n)",
     )
     model = dataclasses.replace(model, period_ratio=n).with_array_leaves()
-    return _compiled_metrics(law, model, options, checks.is_concrete(law, model))
+    with checks.as_value_errors():
+        return _compiled_metrics(law, model, options, checks.is_concrete(law, model))
 
 
 @eqx.filter_jit
