@@ -206,18 +206,24 @@ def test_backlash_takes_scca_fractions(capsys):
 
 
 def test_every_option_with_a_default_states_it_in_help():
+    """Each option entry of every subcommand's help (a line starting ``  -`` and its
+    continuation lines) states the default, if the option has one."""
     parser = build_parser()
     commands = parser._subparsers._group_actions[0].choices
     for name, sub in commands.items():
-        text = " ".join(sub.format_help().split())
+        entries: dict[str, str] = {}
+        option = None
+        for line in sub.format_help().split("options:")[-1].splitlines():
+            if line.startswith("  -"):
+                option = line.split()[0].rstrip(",")
+                entries[option] = ""
+            if option is not None:
+                entries[option] += " " + line.strip()
         for action in sub._actions:
             if not action.option_strings or action.default in (None, False, "==SUPPRESS=="):
                 continue
-            start = text.index(action.option_strings[-1])
-            following = [text.find(o, start + 1) for a in sub._actions for o in a.option_strings
-                         if a is not action and text.find(o, start + 1) > start]
-            entry = text[start:min(following, default=len(text))]
-            assert "default" in entry, f"camjax {name} {action.option_strings[-1]}: {entry}"
+            entry = entries[action.option_strings[0]]
+            assert "default" in entry, f"camjax {name} {action.option_strings[0]}: {entry}"
 
 
 def _spec(tmp_path, body: str):
@@ -249,7 +255,7 @@ def _cases(tmp_path):
     law_file.write_bytes(b"\xff\xfe\x00")
     a_file = tmp_path / "file"
     a_file.write_text("x")
-    spec_damping = _spec(tmp_path, GOOD_SPEC.format(out=tmp_path / "o") + 'damping = "abc"\n')
+    spec_damping = _spec(tmp_path, 'damping = "abc"\n' + GOOD_SPEC.format(out=tmp_path / "o"))
     twice = tmp_path / "twice.toml"
     twice.write_text(GOOD_SPEC.format(out=tmp_path / "o").replace(
         '"cycloidal"]', '"cycloidal", "cycloid"]'))
