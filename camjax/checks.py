@@ -74,8 +74,13 @@ def guard(value, bad, message: str):
     (several leaves at once, such as fractions that must sum to at most 1)."""
     if _CHECKED_OUTSIDE.get():
         return value
+    bad = jnp.any(bad)
+    # The message's index is computed from ``bad`` (always 0): with a constant index,
+    # ``jax.ensure_compile_time_eval`` (which laws meet inside grid builders) would run the
+    # raising callback while tracing, whatever ``bad`` turns out to be.
+    index = bad.astype(jnp.int32) * 0
     with as_value_errors():  # evaluated at once under grad or vmap without jit: one line
-        return eqx.error_if(value, bad, message)
+        return eqx.branched_error_if(value, bad, index, [message])
 
 
 _EQUINOX_MESSAGE = "equinox.EquinoxRuntimeError: "

@@ -12,7 +12,6 @@ the sinusoidal SCCA pieces its error is O(h^6) and far below 1e-12 at default re
 
 from __future__ import annotations
 
-import contextlib
 import math
 from typing import NamedTuple
 
@@ -119,9 +118,7 @@ def motion_grid(law: AbstractMotionLaw, resolution: int) -> MotionGrid:
     """Grid over the rise with ``resolution`` intervals plus one per law piece."""
     # A law without traced parameters gives a constant grid: compute it now rather than
     # leave it to XLA's constant folder, which takes minutes over the sampled forcing.
-    # (Only then: a traced law's runtime checks misfire under compile-time evaluation.)
-    concrete = not any(isinstance(x, jax.core.Tracer) for x in jax.tree.leaves(law))
-    with jax.ensure_compile_time_eval() if concrete else contextlib.nullcontext():
+    with jax.ensure_compile_time_eval():
         grid, sample_times = _layout(law.breakpoints(), resolution)
         return grid._replace(forcing=law.a(sample_times) @ jnp.asarray(_TO_MONOMIAL.T))
 
