@@ -106,12 +106,13 @@ def law_of(spec: str, option: str = "--law"):
 
 
 def laws_of(args, default=None) -> dict:
-    """The ``--law`` laws by name (a law file's law under its file name's stem if the law's
-    own name would clash), in the order given."""
+    """The ``--law`` laws by name, in the order given: a name given twice (or an alias of
+    it) counts once; a law file whose law's name is taken goes by the file's stem."""
     selected = {}
     for spec in law_names_of(args, default):
         law = law_of(spec)
-        name = law.name if law.name not in selected else Path(spec).stem
+        from_file = spec.lower().endswith(".json") or Path(spec).is_file()
+        name = Path(spec).stem if from_file and law.name in selected else law.name
         selected[name] = law
     return selected
 
