@@ -68,6 +68,14 @@ def test_a_traced_period_ratio_past_the_grid_raises_instead_of_a_number(transfor
             getattr(jax, transform)(ct)(1e6)
 
 
+def test_a_ca_ct_objective_past_the_largest_training_grid_is_refused():
+    from camjax import law_design
+
+    with pytest.raises(ValueError, match=r"^MaxCaCt: period ratio 30000 needs a training grid"):
+        law_design.MaxCaCt(1.0, 30000.0)
+    law_design.MaxCaCt(1.0, 20000.0)  # within the limit
+
+
 def test_gradient_at_the_traced_default_grid_matches_finite_differences():
     n, h = 6.4, 1e-4
     exact = float(jax.grad(lambda x: camjax.torsion_factor(MODSINE, x, 0.02))(n))
@@ -283,6 +291,9 @@ def _cases(tmp_path):
         (("design", "--n", "3", "--max-ca", "3", "--out", tmp_path / "d"),
          "camjax design: error: --max-ca = 3.0 is infeasible: every rise has Ca >= 4 (the "
          "parabolic law's bound)"),
+        (("design", "--band", "1:30000", "--objective", "ca-ct", "--out", tmp_path / "d"),
+         "camjax design: error: --band: period ratio 30000 needs a training grid of 1,508,096 "
+         "intervals; the limit is 1,048,576 (period ratios up to about 20,861)"),
         (("follower", "--law", "cycloidal", "--rise", "10"),
          "camjax follower: error: --rise must be in (0, pi/2) rad, got 10.0"),
         (("follower", "--law", "cycloidal", "--modes", "0"),

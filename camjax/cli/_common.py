@@ -126,17 +126,18 @@ def check_damping(value: float, option: str = "--damping") -> float:
 
 
 @contextlib.contextmanager
-def options_named(**options: str):
+def options_named(option: str | None = None, /, **names: str):
     """Report a ``ValueError`` of the API called inside as a ``CliError`` that says the
     user's options (``options_named(total_swing="--rise")``) instead of the API's argument
-    names, without the class name the API prefixes (``Caps: ...``)."""
+    names, without the class name the API prefixes (``Caps: ...``), after ``option: `` if
+    given (the option whose value the API refused)."""
     try:
         yield
     except ValueError as error:
-        text = re.sub(r"^[A-Z][A-Za-z]+: ", "", str(error))
-        for name, option in options.items():
-            text = re.sub(rf"\b{name}\b", option, text)
-        raise CliError(text) from None
+        text = re.sub(r"^[A-Z][A-Za-z*]+: ", "", str(error))
+        for name, replacement in names.items():
+            text = re.sub(rf"\b{name}\b", replacement, text)
+        raise CliError(text if option is None else f"{option}: {text}") from None
 
 
 def parse_float_list(text: str, what: str) -> list[float]:

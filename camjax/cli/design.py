@@ -135,12 +135,13 @@ def run(args) -> int:
     if args.n is not None and not args.n > 0:
         raise CliError(f"--n: period ratio must be positive, got {args.n}")
     band = _band(args.band) if args.band else None
-    if args.objective == "residual":
-        objective = (D.MaxResidual(*band, damping=args.damping) if band
-                     else D.Residual(args.n, damping=args.damping))
-    else:
-        objective = (D.MaxCaCt(*band, damping=args.damping) if band
-                     else D.CaCt(args.n, damping=args.damping))
+    with options_named("--band" if band else "--n"):
+        if args.objective == "residual":
+            objective = (D.MaxResidual(*band, damping=args.damping) if band
+                         else D.Residual(args.n, damping=args.damping))
+        else:
+            objective = (D.MaxCaCt(*band, damping=args.damping) if band
+                         else D.CaCt(args.n, damping=args.damping))
     caps = D.Caps(args.max_ca, args.max_jerk)
     steps = args.steps
     n1, n2 = band if band else (0.8 * args.n, 1.2 * args.n)
