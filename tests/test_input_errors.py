@@ -234,6 +234,13 @@ def test_every_option_with_a_default_states_it_in_help():
             assert "default" in entry, f"camjax {name} {action.option_strings[0]}: {entry}"
 
 
+def test_bench_takes_scca_fractions_beside_a_named_law():
+    from camjax.cli._common import laws_of
+
+    args = build_parser().parse_args(["bench", "--law", "scca:0.3,0.2,0.5", "--law", "cycloidal"])
+    assert list(laws_of(args)) == ["scca:0.3,0.2,0.5", "cycloidal"]
+
+
 def _spec(tmp_path, body: str):
     path = tmp_path / "spec.toml"
     path.write_text(body)
@@ -294,6 +301,12 @@ def _cases(tmp_path):
         (("design", "--band", "1:30000", "--objective", "ca-ct", "--out", tmp_path / "d"),
          "camjax design: error: --band: period ratio 30000 needs a training grid of 1,508,096 "
          "intervals; the limit is 1,048,576 (period ratios up to about 20,861)"),
+        (("sweep", _spec(tmp_path, GOOD_SPEC.format(out=tmp_path / "o")), "--devices", "0"),
+         "camjax sweep: error: --devices: must be between 1 and the "
+         f"{jax.local_device_count()} local device(s), got 0"),
+        (("ct", "--n", "2", "--method", "rk99"),
+         "camjax ct: error: --method: unknown method 'rk99' for SpringMass; valid methods: "
+         + ", ".join(SpringMass.methods)),
         (("follower", "--law", "cycloidal", "--rise", "10"),
          "camjax follower: error: --rise must be in (0, pi/2) rad, got 10.0"),
         (("follower", "--law", "cycloidal", "--modes", "0"),

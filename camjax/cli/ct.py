@@ -166,6 +166,8 @@ def run(args) -> int:
     if not args.dwell >= 0:
         raise CliError(f"--dwell: must be a non-negative number of rise durations, got {args.dwell:g}")
     model = parse_model(args.model, args.damping)
+    with options_named("--method"):
+        model.options(args.method, args.dwell)  # the method named, before any work
     out = output_dir(args.out)
     curves = {}
     for name, law in tqdm(selected.items(), desc="camjax ct", unit="law", file=sys.stderr,
