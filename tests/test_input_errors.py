@@ -241,8 +241,8 @@ def test_bench_takes_scca_fractions_beside_a_named_law():
     assert list(laws_of(args)) == ["scca:0.3,0.2,0.5", "cycloidal"]
 
 
-def _spec(tmp_path, body: str):
-    path = tmp_path / "spec.toml"
+def _spec(tmp_path, body: str, name: str = "spec.toml"):
+    path = tmp_path / name
     path.write_text(body)
     return path
 
@@ -301,7 +301,8 @@ def _cases(tmp_path):
         (("design", "--band", "1:30000", "--objective", "ca-ct", "--out", tmp_path / "d"),
          "camjax design: error: --band: period ratio 30000 needs a training grid of 1,508,096 "
          "intervals; the limit is 1,048,576 (period ratios up to about 20,861)"),
-        (("sweep", _spec(tmp_path, GOOD_SPEC.format(out=tmp_path / "o")), "--devices", "0"),
+        (("sweep", _spec(tmp_path, GOOD_SPEC.format(out=tmp_path / "o"), "good.toml"), "--devices",
+          "0"),
          "camjax sweep: error: --devices: must be between 1 and the "
          f"{jax.local_device_count()} local device(s), got 0"),
         (("ct", "--n", "2", "--method", "rk99"),
