@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -108,9 +107,21 @@ class SCCA(AbstractMotionLaw):
     stored as float arrays whatever is passed, so all SCCA laws share compiled programs.
     """
 
-    sine: jax.Array = eqx.field(converter=_fraction)
-    constant: jax.Array = eqx.field(converter=_fraction)
-    cosine: jax.Array = eqx.field(converter=_fraction)
+    sine: jax.Array
+    constant: jax.Array
+    cosine: jax.Array
+
+    def __init__(self, sine, constant, cosine):
+        fractions = tuple(_fraction(x) for x in (sine, constant, cosine))
+        if not is_concrete(*fractions):
+            # Traced (built inside jit, vmap or grad): the computation that uses the law
+            # raises FRACTIONS_RULE when it runs with invalid fractions.  A law built
+            # concrete and passed into a compiled function is checked here once, not there.
+            a, b, c = fractions
+            total = a + b + c
+            valid = (jnp.minimum(jnp.minimum(a, b), c) >= 0) & (total > 0) & (total <= 1 + 1e-12)
+            fractions = checks.guard(fractions, ~valid, FRACTIONS_RULE)  # NaN fails them all
+        self.sine, self.constant, self.cosine = fractions
 
     def __check_init__(self):
         if is_concrete(self.sine, self.constant, self.cosine):
@@ -119,23 +130,12 @@ class SCCA(AbstractMotionLaw):
 
     @property
     def fractions(self):
-        """``(sine, constant, cosine)``: the fractions a, b, c of MISSION.md.
-
-        Traced fractions come back checked: the computation that uses them raises
-        ``FRACTIONS_RULE`` when it runs with invalid ones (``camjax.checks.guard``).
-        """
-        fractions = self.sine, self.constant, self.cosine
-        if is_concrete(*fractions):
-            return fractions  # checked at construction
-        a, b, c = fractions
-        total = a + b + c
-        valid = (jnp.minimum(jnp.minimum(a, b), c) >= 0) & (total > 0) & (total <= 1 + 1e-12)
-        return checks.guard(fractions, ~valid, FRACTIONS_RULE)  # NaN fails every comparison
+        """``(sine, constant, cosine)``: the fractions a, b, c of MISSION.md."""
+        return self.sine, self.constant, self.cosine
 
     def _concrete_fractions(self) -> tuple[float, float, float] | None:
-        raw = self.sine, self.constant, self.cosine
-        if is_concrete(*raw) and jnp.ndim(self.sine) == 0:
-            return tuple(float(x) for x in raw)
+        if is_concrete(*self.fractions) and jnp.ndim(self.sine) == 0:
+            return tuple(float(x) for x in self.fractions)
         return None
 
     @property

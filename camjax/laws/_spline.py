@@ -105,6 +105,16 @@ class BSplineLaw(AbstractMotionLaw):
     degree: int = eqx.field(static=True, default=5)
     zero_jerk: bool = eqx.field(static=True, default=False)
 
+    def __init__(self, coefficients, degree: int = 5, zero_jerk: bool = False):
+        if not is_concrete(coefficients):
+            # Built from traced coefficients (inside jit, vmap or grad): the computation
+            # that uses the law raises when it runs with one that is not finite.
+            coefficients = checks.guard(
+                coefficients, ~jnp.all(jnp.isfinite(coefficients)), COEFFICIENTS_RULE)
+        self.coefficients = coefficients
+        self.degree = degree
+        self.zero_jerk = zero_jerk
+
     def __check_init__(self):
         require(
             isinstance(self.degree, int) and 3 <= self.degree <= 9,
@@ -139,12 +149,8 @@ class BSplineLaw(AbstractMotionLaw):
 
     @property
     def control_points(self) -> jax.Array:
-        """All control points: the fixed 0s and 1s around the free coefficients (traced
-        coefficients checked finite when the computation runs, as concrete ones are at
-        construction)."""
+        """All control points: the fixed 0s and 1s around the free coefficients."""
         c = jnp.asarray(self.coefficients)
-        if not is_concrete(c):
-            c = checks.guard(c, ~jnp.all(jnp.isfinite(c)), COEFFICIENTS_RULE)
         return jnp.concatenate(
             [jnp.zeros(self._n_fixed, c.dtype), c, jnp.ones(self._n_fixed, c.dtype)]
         )
