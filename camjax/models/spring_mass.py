@@ -28,7 +28,7 @@ import jax.numpy as jnp
 from .. import checks
 from ..checks import require
 from ..errors import RESULTS, promote
-from ..laws import AbstractMotionLaw
+from ..laws import AbstractMotionLaw, as_law
 from ..metrics import refined_peak
 from ..propagation import (
     MotionGrid,
@@ -361,8 +361,6 @@ def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
     ``None``), and a period ratio past what that grid resolves raises, when the
     computation runs, instead of returning a wrong number.
     """
-    from ..laws import as_law
-
     law = as_law(law)
     model = SpringMass(period_ratio, damping)  # concrete values checked here
     if resolution is None and model._option_scale() is None:
