@@ -64,9 +64,43 @@ def ensure(value, predicate, message: str):
             bad = np.broadcast_to(array, ok.shape)[~ok].ravel()[0]
             raise ValueError(f"{message}, got {bad:g}")
         return value
+    return guard(value, ~predicate(jnp.asarray(value)), message)
+
+
+def guard(value, bad, message: str):
+    """``value`` (any pytree) made to raise ``message`` when the computation runs with the
+    traced condition ``bad`` true (``equinox.error_if``); unchanged under
+    ``checked_outside``.  For checks that ``ensure``'s one-array predicate cannot state
+    (several leaves at once, such as fractions that must sum to at most 1)."""
     if _CHECKED_OUTSIDE.get():
         return value
-    return eqx.error_if(value, ~predicate(jnp.asarray(value)), message)
+    bad = jnp.any(bad)
+    # The message's index is computed from ``bad`` (always 0): with a constant index,
+    # ``jax.ensure_compile_time_eval`` (which laws meet inside grid builders) would run the
+    # raising callback while tracing, whatever ``bad`` turns out to be.
+    index = bad.astype(jnp.int32) * 0
+    with as_value_errors():  # evaluated at once under grad or vmap without jit: one line
+        return eqx.branched_error_if(value, bad, index, [message])
+
+
+_EQUINOX_MESSAGE = "equinox.EquinoxRuntimeError: "
+
+
+@contextlib.contextmanager
+def as_value_errors():
+    """Inside, a failed runtime check of a program compiled by ``equinox.filter_jit`` (a
+    camjax entry point's own) comes out as ``ValueError(message)``: one line, as if checked
+    concretely, instead of equinox's report with the message on its third line.  (Inside a
+    caller's ``jax.jit`` the error is raised by the caller's program, out of camjax's reach:
+    docs/conventions.md says how to read it.)"""
+    try:
+        yield
+    except eqx.EquinoxRuntimeError as error:
+        lines = str(error).splitlines()
+        messages = [x[len(_EQUINOX_MESSAGE):] for x in lines if x.startswith(_EQUINOX_MESSAGE)]
+        if not messages:
+            raise
+        raise ValueError(messages[-1]) from None
 
 
 def positive(value, name: str):

@@ -109,13 +109,38 @@ class SweepSpec:
 
 
 def load_spec(path) -> SweepSpec:
-    """Read and check a TOML sweep spec; ``ValueError`` names any problem."""
+    """Read and check a TOML sweep spec; ``ValueError`` names the file and any problem."""
     path = Path(path)
     try:
-        raw = tomllib.loads(path.read_text())
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a sweep spec (TOML text), it is not UTF-8") from None
     except OSError as error:
         raise ValueError(f"cannot read spec {str(path)!r}: {error.strerror}") from None
-    return spec_from_dict(raw, base=path.parent)
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ValueError(f"{path}: not valid TOML ({error})") from None
+    try:
+        return spec_from_dict(raw, base=path.parent)
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from None
+
+
+def _number(value, key: str, kind=float):
+    """``value`` as a ``kind`` (float or int), or a ``ValueError`` naming ``key``: a spec
+    takes numbers as TOML numbers, as program files do (``"0.1"`` is refused)."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or (
+            kind is int and not float(value).is_integer()):
+        expected = "an integer" if kind is int else "a number"
+        raise ValueError(f"{key} must be {expected}, got {value!r}")
+    return kind(value)
+
+
+def _numbers(value, key: str) -> list[float]:
+    """A number or a list of numbers as floats, or a ``ValueError`` naming ``key``."""
+    items = value if isinstance(value, list) else [value]
+    return [_number(x, key) for x in items]
 
 
 def spec_from_dict(raw: dict, base=".") -> SweepSpec:
@@ -125,36 +150,48 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
         raise ValueError(f"unknown spec keys {sorted(unknown)}; expected some of {sorted(_KEYS)}")
     if "output" not in raw:
         raise ValueError("spec needs an output directory: output = \"DIR\"")
+    if not isinstance(raw["output"], str):
+        raise ValueError(f"output must be a directory name (a string), got {raw['output']!r}")
     ratios = raw.get("period_ratio")
     if not isinstance(ratios, dict):
         raise ValueError("spec needs [period_ratio] with start/stop/count or values")
     if "values" in ratios:
-        n = np.asarray(ratios["values"], dtype=float)
+        n = np.asarray(_numbers(ratios["values"], "period_ratio.values"), dtype=float)
     else:
         try:
-            n = np.linspace(float(ratios["start"]), float(ratios["stop"]), int(ratios["count"]))
+            n = np.linspace(_number(ratios["start"], "period_ratio.start"),
+                            _number(ratios["stop"], "period_ratio.stop"),
+                            _number(ratios["count"], "period_ratio.count", int))
         except KeyError as error:
             raise ValueError(f"[period_ratio] is missing {error.args[0]!r}") from None
     if n.ndim != 1 or n.size == 0 or not np.all(np.isfinite(n)) or np.any(n <= 0):
         raise ValueError("period ratios must be a non-empty list of positive finite numbers")
     table = raw.get("laws", {})
-    laws = [get(name) for name in table.get("names", [])]
+    names = table.get("names", [])
+    if not isinstance(names, list) or not all(isinstance(x, str) for x in names):
+        raise ValueError(f"laws.names must be a list of law names, got {names!r}")
+    laws = [get(name) for name in names]
     if "scca_step" in table:
-        laws += scca_grid(float(table["scca_step"]), face=bool(table.get("scca_face", False)))
+        laws += scca_grid(_number(table["scca_step"], "laws.scca_step"),
+                          face=bool(table.get("scca_face", False)))
     if not laws:
         raise ValueError("spec needs [laws] with names = [...] and/or scca_step = STEP")
     names = [law.name for law in laws]
-    if len(set(names)) != len(names):
-        raise ValueError("spec lists a law twice")
-    damping = raw.get("damping", [0.0])
-    damping = tuple(float(z) for z in (damping if isinstance(damping, list) else [damping]))
+    twice = sorted({x for x in names if names.count(x) > 1})
+    if twice:
+        raise ValueError(f"spec lists the law {twice[0]} twice (laws.names and the SCCA grid "
+                         "together must name each law once)")
+    damping = tuple(_numbers(raw.get("damping", [0.0]), "damping"))
     if not all(0.0 <= z < 1.0 for z in damping):
         raise ValueError(f"damping ratios must be in [0, 1), got {list(damping)}")
-    per_chunk = int(raw.get("laws_per_chunk", 64))
+    per_chunk = _number(raw.get("laws_per_chunk", 64), "laws_per_chunk", int)
     if per_chunk < 1:
         raise ValueError(f"laws_per_chunk must be at least 1, got {per_chunk}")
-    method, dwell = str(raw.get("method", "exact")), float(raw.get("dwell", 1.0))
-    phase_step = float(raw.get("phase_step", TARGET_PHASE_STEP))
+    method = raw.get("method", "exact")
+    if not isinstance(method, str):
+        raise ValueError(f"method must be a method name (a string), got {method!r}")
+    dwell = _number(raw.get("dwell", 1.0), "dwell")
+    phase_step = _number(raw.get("phase_step", TARGET_PHASE_STEP), "phase_step")
     if not 0.0 < phase_step <= 1.0:
         raise ValueError(f"phase_step must be in (0, 1] (radians per grid interval), got {phase_step}")
     what = json.dumps([names, n.tolist(), damping, method, dwell, per_chunk]

@@ -18,7 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .errors import RESULTS
-from .laws import get as get_law
+from .laws import as_law
 from .models import SpringMassOptions, batch_metrics
 from .sdof import default_resolution
 from .solvers import FIXED_STEP_SOLVERS
@@ -279,11 +279,11 @@ def default_method(rows: list[dict], goal: float = ACCURACY_GOAL, laws=None) -> 
     return {"method": method, "warm_s": qualified[method]}
 
 
-def run_study(law_names, period_ratios, cases, *, repeats: int = 2, progress=None) -> list[dict]:
-    """Rows of :func:`measure` for every law and case."""
+def run_study(laws, period_ratios, cases, *, repeats: int = 2, progress=None) -> list[dict]:
+    """Rows of :func:`measure` for every law (or law name) and case."""
     rows = []
-    for name in law_names:
-        law = get_law(name)
+    for name in laws:
+        law = as_law(name)
         reference = reference_metrics(law, period_ratios)
         for case in cases:
             rows.append(measure(law, period_ratios, case, reference, repeats=repeats))

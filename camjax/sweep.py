@@ -12,7 +12,7 @@ import numpy as np
 
 from . import checks
 from .errors import RESULTS, mark_failures, raise_if_failed, result_names
-from .laws import AbstractMotionLaw
+from .laws import AbstractMotionLaw, as_law
 from .models import AbstractMachineModel, AbstractModel, SpringMass
 from .sdof import TARGET_PHASE_STEP, default_resolution
 from .sharding import shard_batch
@@ -195,7 +195,7 @@ def _curve(law, n, template, options, metrics, result, throw: bool) -> CtCurve:
 
 
 def ct_curve(
-    law: AbstractMotionLaw,
+    law: AbstractMotionLaw | str,
     period_ratios,
     *,
     model: AbstractModel | None = None,
@@ -211,7 +211,7 @@ def ct_curve(
     One compiled, vmapped call covers the whole batch.
 
     Args:
-        law: the rise.
+        law: the rise, or its name (``"cycloidal"``, ``"scca:0.25,0,0.75"``).
         period_ratios: positive finite period ratios (1-D).
         model: a model instance used as a template whose period ratio is swept
             (``SpringMass`` by default; also ``CoulombFriction``,
@@ -232,6 +232,7 @@ def ct_curve(
         SolverError: the solver failed at any period ratio (the first is named), with
             ``throw=True``.
     """
+    law = as_law(law)
     n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)
     metrics, result = sweep_metrics(law, n, template, options, devices=devices)
     return _curve(law, n, template, options, metrics, result, throw)
@@ -250,8 +251,8 @@ def ct_curves(
     throw: bool = True,
     **solver_options,
 ) -> dict[str, CtCurve]:
-    """``ct_curve`` for several laws, keyed by name (or by the mapping's keys); ``throw``
-    as there.
+    """``ct_curve`` for several laws (or law names), keyed by name (or by the mapping's
+    keys); ``throw`` as there.
 
     On the exact path every law with fixed breakpoints is swept from its samples
     (``camjax.sdof.SampledLaw``, padded to the piece count of the longest law
@@ -261,8 +262,13 @@ def ct_curves(
     ``devices``.  ``like`` (not swept) lets a later call share the program: a spline of the
     size being designed, say.
     """
-    named = dict(laws) if isinstance(laws, Mapping) else {law.name: law for law in laws}
-    like = [*named.values(), *like]
+    if isinstance(laws, str):
+        raise TypeError("laws must be a list of laws or law names (or a mapping), not one name")
+    if isinstance(laws, Mapping):
+        named = {key: as_law(law) for key, law in laws.items()}
+    else:
+        named = {law.name: law for law in map(as_law, laws)}
+    like = [*named.values(), *map(as_law, like)]
     n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)
     groups: dict = {}
     for key, law in named.items():

@@ -196,7 +196,7 @@ def test_cli_table_and_bad_arguments(capsys):
     assert "parabolic" in out and out.splitlines()[-1].split()[1:] == ["-", "-"]
     with pytest.raises(CliError, match="--bk"):
         _cli(["--law", "cycloidal", "--bk", "0,0.1", "--dn", "0"])
-    with pytest.raises(ValueError, match="unknown law"):
+    with pytest.raises(CliError, match="--law: unknown law 'nope'"):
         _cli(["--law", "nope", "--bk", "0.1", "--dn", "0"])
 
 

@@ -133,7 +133,7 @@ def test_help_imports_no_jax_and_states_defaults():
     assert "``" not in text
     assert "optimiser steps (default: 6000)" in text
     assert "damping ratio zeta in [0, 1) (dimensionless) (default: 0.0)" in text
-    assert "poly:K (repeatable, or comma-separated; default: all standard laws)" in text
+    assert "or a law file written by `camjax design` (law.json)" in text
 
 
 def test_cli_defaults_agree_with_the_library():

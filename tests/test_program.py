@@ -362,7 +362,7 @@ def test_swinging_roller_program_geometry():
     swing = np.arctan2(fixed[:, 1], fixed[:, 0] - 110.0)
     assert np.abs(np.unwrap(swing[0] - swing) - prof.lift_mm / 98.0).max() < 1e-9
     assert np.abs(np.linalg.norm(prof.profile - prof.pitch, axis=1) - 12.0).max() < 1e-9
-    with pytest.raises(ValueError, match="follower.arm_mm must be a number"):
+    with pytest.raises(ValueError, match="follower.arm_mm is missing: a swinging-roller follower needs"):
         Program("swing", program.segments, Follower(**{**FOLLOWER, "kind": "swinging-roller"}))
 
 

@@ -6,8 +6,10 @@ Nothing here imports JAX (nor NumPy at import time), so that ``--help`` stays in
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import re
 from pathlib import Path
 
 RANGE_METAVAR = "START:STOP:COUNT|V1,V2,..."
@@ -37,6 +39,10 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         return f"{text} (default: %(default)s)"
 
 
+LAW_HELP = ("a name of `camjax laws`, an alias such as modsine, scca:A,B,C, poly:K, or a law "
+            "file written by `camjax design` (law.json)")
+
+
 def add_law_option(parser: argparse.ArgumentParser, default=None, what: str = "motion law") -> None:
     """The repeatable ``--law NAME`` of every command (``--law a,b`` also works)."""
     if default is None:
@@ -45,14 +51,36 @@ def add_law_option(parser: argparse.ArgumentParser, default=None, what: str = "m
         shown = ", ".join(default)
     parser.add_argument(
         "--law", action="append", metavar="NAME",
-        help=f"{what}: a name of `camjax laws`, an alias such as modsine, scca:A,B,C or "
-        f"poly:K (repeatable, or comma-separated; default: {shown})",
+        help=f"{what}: {LAW_HELP} (repeatable, or comma-separated; default: {shown})",
     )
 
 
+def split_law_specs(text: str) -> list[str]:
+    """``--law`` text as law specs: split at commas, except those between the numbers of a
+    ``scca:A,B,C`` (a number joins the spec before it), so ``scca:0.25,0,0.75,cycloidal``
+    is two laws."""
+    specs: list[str] = []
+    for part in (p.strip() for p in text.split(",")):
+        if not part:
+            continue
+        if specs and ":" in specs[-1] and _is_number(part):
+            specs[-1] += "," + part
+        else:
+            specs.append(part)
+    return specs
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def law_names_of(args, default=None) -> list[str]:
-    """The ``--law`` names, split at commas; ``default`` (None: every standard law) if none."""
-    given = [name.strip() for item in (args.law or []) for name in item.split(",") if name.strip()]
+    """The ``--law`` specs (``split_law_specs``); ``default`` (None: every standard law) if none."""
+    given = [spec for item in (args.law or []) for spec in split_law_specs(item)]
     if given:
         return given
     if args.law:
@@ -62,6 +90,54 @@ def law_names_of(args, default=None) -> list[str]:
 
         return names()
     return list(default)
+
+
+def law_of(spec: str, option: str = "--law"):
+    """The law that ``spec`` names: a law file (``*.json``, or an existing file) or a name,
+    as a ``CliError`` naming ``option`` if neither."""
+    from ..laws import get, load
+
+    try:
+        if spec.lower().endswith(".json") or Path(spec).is_file():
+            return load(spec)
+        return get(spec)
+    except (ValueError, TypeError) as error:
+        raise CliError(f"{option}: {error}") from None
+
+
+def laws_of(args, default=None) -> dict:
+    """The ``--law`` laws by name, in the order given: a name given twice (or an alias of
+    it) counts once; a law file whose law's name is taken goes by the file's stem."""
+    selected = {}
+    for spec in law_names_of(args, default):
+        law = law_of(spec)
+        from_file = spec.lower().endswith(".json") or Path(spec).is_file()
+        name = Path(spec).stem if from_file and law.name in selected else law.name
+        selected[name] = law
+    return selected
+
+
+def check_damping(value: float, option: str = "--damping") -> float:
+    """``value`` if a damping ratio in ``[0, 1)``, else a ``CliError`` naming ``option``."""
+    if not 0.0 <= value < 1.0:  # NaN fails too
+        raise CliError(f"{option}: damping ratio must be in [0, 1) (an underdamped payload), "
+                       f"got {value:g}")
+    return value
+
+
+@contextlib.contextmanager
+def options_named(option: str | None = None, /, **names: str):
+    """Report a ``ValueError`` of the API called inside as a ``CliError`` that says the
+    user's options (``options_named(total_swing="--rise")``) instead of the API's argument
+    names, without the class name the API prefixes (``Caps: ...``), after ``option: `` if
+    given (the option whose value the API refused)."""
+    try:
+        yield
+    except ValueError as error:
+        text = re.sub(r"^[A-Z][A-Za-z*]+: ", "", str(error))
+        for name, replacement in names.items():
+            text = re.sub(rf"\b{name}\b", replacement, text)
+        raise CliError(text if option is None else f"{option}: {text}") from None
 
 
 def parse_float_list(text: str, what: str) -> list[float]:
@@ -129,13 +205,23 @@ def dump_json(value, path: Path | None = None) -> str:
     return text
 
 
-def output_dir(text: str | None) -> Path | None:
+def output_dir(text: str | None, what: str = "--out") -> Path | None:
+    """The output directory ``text``, created and checked writable before any work, or a
+    one-line ``CliError`` naming ``what`` (the option, or the spec key) and the path."""
     if text is None:
         return None
+    import tempfile
+
     path = Path(text)
     if path.exists() and not path.is_dir():
-        raise CliError(f"--out: {text!r} exists and is not a directory")
-    path.mkdir(parents=True, exist_ok=True)
+        raise CliError(f"{what}: {text!r} exists and is not a directory")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError as error:
+        reason = error.strerror or str(error)
+        raise CliError(f"{what}: cannot write to directory {text!r} ({reason})") from None
     return path
 
 

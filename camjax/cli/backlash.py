@@ -7,7 +7,7 @@ from ._common import (
     add_format,
     add_law_option,
     dump_json,
-    law_names_of,
+    laws_of,
     output_dir,
     parse_float_list,
 )
@@ -35,23 +35,22 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def backlash_report(law_names: list[str], bk: list[float], dn: list[float]) -> dict:
-    """The JSON document: per law, ``[dn][bk]`` tables (NaN where the event is absent)."""
+def backlash_report(selected: dict, bk: list[float], dn: list[float]) -> dict:
+    """The JSON document: per law of ``selected`` (laws by name), ``[dn][bk]`` tables (NaN
+    where the event is absent)."""
     if any(b <= 0 for b in bk):
         raise CliError(f"--bk: backlash must be positive, got {bk}")
     if any(d < 0 for d in dn):
         raise CliError(f"--dn: natural deceleration must be non-negative, got {dn}")
     import numpy as np
 
-    from .. import laws as law_library
     from ..models import STATUS_NAMES, kinematic_impact_table
 
     report = {}
-    for name in law_names:
-        law = law_library.get(name)
+    for name, law in selected.items():
         table = kinematic_impact_table(law, bk, dn)
         status = np.asarray(table.status)
-        report[law.name] = {
+        report[name] = {
             "bk": bk,
             "dn": dn,
             "impact_velocity": np.asarray(table.impact_velocity),
@@ -87,9 +86,9 @@ def _format_table(report: dict) -> str:
 def run(args) -> int:
     bk = parse_float_list(args.bk, "--bk")
     dn = parse_float_list(args.dn, "--dn")
-    law_names = law_names_of(args)
+    selected = laws_of(args)
     out = output_dir(args.out)
-    report = backlash_report(law_names, bk, dn)
+    report = backlash_report(selected, bk, dn)
     text = dump_json(report, out / "backlash.json" if out else None)
     print(text if args.format == "json" else _format_table(report))
     return 0

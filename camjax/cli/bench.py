@@ -11,7 +11,7 @@ from ._common import (
     add_format,
     add_law_option,
     dump_json,
-    law_names_of,
+    laws_of,
     parse_range,
 )
 
@@ -40,18 +40,15 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..laws import get as get_law
     from ..studies import ACCURACY_GOAL, default_method, format_table, run_study, study_cases
 
-    law_names = law_names_of(args, DEFAULT_LAWS)
-    for name in law_names:
-        get_law(name)  # a ValueError naming the valid laws if unknown
+    selected = laws_of(args, DEFAULT_LAWS)
     n = parse_range(args.n, "--n")
     if (n < 1e-3).any() or n.size < 1:
         raise CliError("--n: period ratios must be positive")
     if args.repeats < 1:
         raise CliError(f"--repeats: must be at least 1, got {args.repeats}")
-    rows = run_study(law_names, n, study_cases(args.level), repeats=args.repeats)
+    rows = run_study(list(selected.values()), n, study_cases(args.level), repeats=args.repeats)
     best = default_method(rows)
     if args.format == "json":
         print(dump_json({"rows": rows, "default_method": best, "accuracy_goal": ACCURACY_GOAL}))

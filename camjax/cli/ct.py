@@ -15,9 +15,11 @@ from ._common import (
     CliError,
     add_format,
     add_law_option,
+    check_damping,
     dump_json,
     import_aside,
-    law_names_of,
+    laws_of,
+    options_named,
     output_dir,
     parse_range,
 )
@@ -69,9 +71,15 @@ def parse_model(text: str, damping: float):
     except ValueError as error:
         raise CliError(f"--model {text!r}: parameters must be numbers") from error
     try:
-        return models.model_entry(name, swept=True).template(numbers, damping)
+        entry = models.model_entry(name, swept=True)
     except ValueError as error:
         raise CliError(f"--model {text!r}: {error}") from None
+    # The API's messages name the model's fields; the user gave the registry's placeholders.
+    with options_named(**{field: placeholder for field, placeholder in entry.parameters}):
+        try:
+            return entry.template(numbers, damping)
+        except ValueError as error:
+            raise ValueError(f"--model {text!r}: {error}") from None
 
 
 def _fit_or_none(curve):
@@ -169,18 +177,18 @@ def _fit_report(curves, fits) -> str:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from .. import laws
     from ..sweep import ct_curve
 
     plotting = import_aside("camjax.plot") if args.out else None  # imports while the sweep compiles
 
-    names = law_names_of(args)
-    selected = {}
-    for name in names:
-        law = laws.get(name)
-        selected[law.name] = law
+    selected = laws_of(args)
     n = parse_range(args.n, "--n")
+    check_damping(args.damping)
+    if not args.dwell >= 0:
+        raise CliError(f"--dwell: must be a non-negative number of rise durations, got {args.dwell:g}")
     model = parse_model(args.model, args.damping)
+    with options_named("--method"):
+        model.options(args.method, args.dwell)  # the method named, before any work
     out = output_dir(args.out)
     curves = {}
     for name, law in tqdm(selected.items(), desc="camjax ct", unit="law", file=sys.stderr,

@@ -6,7 +6,15 @@ import sys
 
 import numpy as np
 
-from ._common import CliError, dump_json, import_aside, output_dir, parse_float_list
+from ._common import (
+    CliError,
+    check_damping,
+    dump_json,
+    import_aside,
+    options_named,
+    output_dir,
+    parse_float_list,
+)
 
 DEFAULT_STEPS = 6000
 """The design's own default (``camjax.law_design.DEFAULT_STEPS``; a test checks they agree)."""
@@ -66,7 +74,8 @@ def _run_program(args, out) -> int:
     if not 0 < rpm_lo < rpm_hi:
         raise CliError(f"--rpm: need 0 < LO < HI, got {args.rpm!r}")
     program = Program.load(args.program)
-    n1, n2 = segment_band(program, args.segment, rpm_lo, rpm_hi)
+    with options_named(segment="--segment"):
+        n1, n2 = segment_band(program, args.segment, rpm_lo, rpm_hi)
     new, result = design_segment(
         program, args.segment, rpm_lo, rpm_hi, objective=args.objective,
         caps=Caps(args.max_ca, args.max_jerk), knots=args.knots, seed=args.seed,
@@ -110,6 +119,12 @@ def run(args) -> int:
     from ..laws import save
     from ..sweep import ct_curve
 
+    check_damping(args.damping)
+    for option, value in (("--knots", args.knots), ("--steps", args.steps)):
+        if value < 1:
+            raise CliError(f"{option}: must be at least 1, got {value}")
+    with options_named(max_ca="--max-ca", max_jerk="--max-jerk"):
+        D.Caps(args.max_ca, args.max_jerk)  # the caps checked before any work
     out = output_dir(args.out)
     if args.program:
         return _run_program(args, out)
@@ -120,12 +135,13 @@ def run(args) -> int:
     if args.n is not None and not args.n > 0:
         raise CliError(f"--n: period ratio must be positive, got {args.n}")
     band = _band(args.band) if args.band else None
-    if args.objective == "residual":
-        objective = (D.MaxResidual(*band, damping=args.damping) if band
-                     else D.Residual(args.n, damping=args.damping))
-    else:
-        objective = (D.MaxCaCt(*band, damping=args.damping) if band
-                     else D.CaCt(args.n, damping=args.damping))
+    with options_named("--band" if band else "--n"):
+        if args.objective == "residual":
+            objective = (D.MaxResidual(*band, damping=args.damping) if band
+                         else D.Residual(args.n, damping=args.damping))
+        else:
+            objective = (D.MaxCaCt(*band, damping=args.damping) if band
+                         else D.CaCt(args.n, damping=args.damping))
     caps = D.Caps(args.max_ca, args.max_jerk)
     steps = args.steps
     n1, n2 = band if band else (0.8 * args.n, 1.2 * args.n)

@@ -7,10 +7,17 @@ fundamental, with the largest constraint drift of the run.
 
 from __future__ import annotations
 
-import argparse
 import math
 
-from ._common import CliError, add_format, dump_json, output_dir
+from ._common import (
+    LAW_HELP,
+    CliError,
+    add_format,
+    dump_json,
+    law_of,
+    options_named,
+    output_dir,
+)
 
 _TURNS = 3
 
@@ -20,11 +27,9 @@ def register(subparsers) -> None:
         "follower",
         help="flexible swinging roller follower: deflection spectra",
         description=__doc__.replace("``", ""),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--law", required=True, metavar="NAME",
-                        help="rise and fall law: any name `camjax laws` lists, an alias such as "
-                        "modsine, scca:A,B,C or poly:K")
+                        help=f"rise and fall law: {LAW_HELP}")
     parser.add_argument("--omega", type=float, default=320.0, help="cam speed, rad/s (default 320)")
     parser.add_argument("--length", type=float, default=98.0, help="rod length l, mm (default 98)")
     parser.add_argument("--radius", type=float, default=5.0, help="rod section radius, mm (default 5)")
@@ -43,28 +48,25 @@ def register(subparsers) -> None:
 
 
 def _model(args):
-    from .. import laws
     from ..models import SwingingFollower
 
-    try:
-        law = laws.get(args.law)
-    except (KeyError, ValueError) as error:
-        raise CliError(f"--law: {error}") from None
+    law = law_of(args.law)
     for name in ("omega", "length", "radius", "roller_mass", "rise"):
         value = getattr(args, name)
         if not (math.isfinite(value) and value > 0):
             raise CliError(f"--{name.replace('_', '-')}: must be a positive number, got {value}")
-    return SwingingFollower(
-        rise=law,
-        fall=law,
-        omega=args.omega,
-        length=args.length * 1e-3,
-        rod_radius=args.radius * 1e-3,
-        roller_mass=args.roller_mass * 1e-3,
-        total_swing=args.rise,
-        modes=args.modes,
-        axial_modes=args.axial_modes,
-    )
+    with options_named(total_swing="--rise", modes="--modes", axial_modes="--axial-modes"):
+        return SwingingFollower(
+            rise=law,
+            fall=law,
+            omega=args.omega,
+            length=args.length * 1e-3,
+            rod_radius=args.radius * 1e-3,
+            roller_mass=args.roller_mass * 1e-3,
+            total_swing=args.rise,
+            modes=args.modes,
+            axial_modes=args.axial_modes,
+        )
 
 
 def follower_report(model, law_name: str) -> tuple[dict, object]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from ._common import CliError
+from ._common import CliError, output_dir
 
 
 def register(sub) -> None:
@@ -39,6 +39,14 @@ def run(args) -> int:
             raise CliError(f"--process-id must be in 0..{args.num_processes - 1}")
         distributed.initialize(args.coordinator, args.num_processes, args.process_id)
     spec = distributed.load_spec(args.spec)  # after initialize: building laws starts JAX
+    output_dir(str(spec.output), f"{args.spec}: output")  # writable, before any work
+    if args.devices is not None:
+        import jax
+
+        count = jax.local_device_count()
+        if not 1 <= args.devices <= count:
+            raise CliError(f"--devices: must be between 1 and the {count} local device(s), "
+                           f"got {args.devices}")
     path = distributed.run_distributed(spec, devices=args.devices)
     if path is not None:
         print(f"wrote {path} ({len(spec.laws)} laws x {spec.period_ratio.size} period ratios "

@@ -10,7 +10,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..sdof import default_resolution, dwell_peak, mode_gain, motion_grid, propagate
+from ..sdof import (
+    MAX_GRID_INTERVALS,
+    default_resolution,
+    dwell_peak,
+    mode_gain,
+    motion_grid,
+    propagate,
+)
 from ._residual import _modulus, _residual_components, residual
 
 EVALUATION_SAMPLES = 2000
@@ -28,6 +35,18 @@ def _power_mean(values, p):
 def _band(n1: float, n2: float, what: str) -> None:
     if not (math.isfinite(n1) and math.isfinite(n2) and 0 < n1 < n2):
         raise ValueError(f"{what}: band must satisfy 0 < n1 < n2, got [{n1}, {n2}]")
+
+
+def _training_resolution(max_period_ratio: float, name: str) -> int:
+    """The Ca*Ct training grid for period ratios up to ``max_period_ratio``, or a
+    ``ValueError`` (before any work) where it would pass ``MAX_GRID_INTERVALS``."""
+    resolution = _TRAINING_OVERSAMPLING * default_resolution(max_period_ratio)
+    if resolution > MAX_GRID_INTERVALS:
+        largest = MAX_GRID_INTERVALS * 0.5 / (2 * math.pi * _TRAINING_OVERSAMPLING)
+        raise ValueError(f"{name}: period ratio {max_period_ratio:g} needs a training grid of "
+                         f"{resolution:,} intervals; the limit is {MAX_GRID_INTERVALS:,} (period "
+                         f"ratios up to about {largest:,.0f})")
+    return resolution
 
 
 def _check_common(weight: float, damping: float, name: str) -> None:
@@ -181,7 +200,7 @@ def _payload_acceleration(law, period_ratios, damping):
     h/T^2) on a grid ``_TRAINING_OVERSAMPLING`` times finer than the default (so sampled
     peaks fall within 0.2% of the true ones), and the dwell peak's complex amplitude."""
     n = np.atleast_1d(np.asarray(period_ratios, dtype=float))
-    grid = motion_grid(law, _TRAINING_OVERSAMPLING * default_resolution(float(n.max())))
+    grid = motion_grid(law, _training_resolution(float(n.max()), "Ca*Ct"))
     omega = 2 * np.pi * n
 
     def one(w):
@@ -212,6 +231,7 @@ class CaCt(AbstractObjective):
         _check_common(self.weight, self.damping, "CaCt")
         if not (math.isfinite(self.period_ratio) and self.period_ratio > 0):
             raise ValueError(f"CaCt: period ratio must be positive, got {self.period_ratio}")
+        _training_resolution(self.period_ratio, "CaCt")
 
     def features(self, law):
         return _payload_acceleration(law, [self.period_ratio], self.damping)
@@ -243,6 +263,7 @@ class MaxCaCt(AbstractObjective):
     def __check_init__(self):
         _check_common(self.weight, self.damping, "MaxCaCt")
         _band(self.n1, self.n2, "MaxCaCt")
+        _training_resolution(self.n2, "MaxCaCt")
         if self.samples < 2:
             raise ValueError(f"MaxCaCt: samples must be at least 2, got {self.samples}")
 

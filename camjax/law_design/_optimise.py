@@ -12,8 +12,8 @@ import numpy as np
 import optax
 from tqdm.auto import tqdm
 
-from ..laws import AbstractMotionLaw, BoundaryPolynomial, BSplineLaw, CorrectedPolynomial
-from ..laws import get as get_law
+from .. import checks
+from ..laws import AbstractMotionLaw, BoundaryPolynomial, BSplineLaw, CorrectedPolynomial, as_law
 from ._caps import CapError, Caps, _describe, _fine_checks, _restore
 from ._objectives import AbstractObjective
 from ._residual import dense_tau
@@ -161,7 +161,7 @@ def design(
     if not (len(sharpness) == 2 and 1.0 <= sharpness[0] <= sharpness[1]):
         raise ValueError(f"sharpness must be two increasing exponents >= 1, got {sharpness}")
     knots = int(knots)
-    start_law = get_law(initial) if isinstance(initial, str) else initial
+    start_law = as_law(initial, "initial")
     if isinstance(start_law, BoundaryPolynomial | CorrectedPolynomial):
         base = start_law if isinstance(start_law, BoundaryPolynomial) else start_law.base
         same_size = (isinstance(start_law, CorrectedPolynomial) and start_law.spline_degree == degree
@@ -179,9 +179,12 @@ def design(
             return BSplineLaw(start.coefficients + to_coefficients @ theta, degree)
 
     def features(theta):
-        law = law_of(theta)
-        acceleration = law.a(dense_tau(law)) if caps.max_ca is None else jnp.zeros(())
-        return [o.features(law) for o in objectives], caps.features(law), acceleration
+        # The optimiser's own coefficients: no runtime checks (host callbacks) in its
+        # programs; a step gone NaN is the optimiser's failure, caught where it reports.
+        with checks.checked_outside():
+            law = law_of(theta)
+            acceleration = law.a(dense_tau(law)) if caps.max_ca is None else jnp.zeros(())
+            return [o.features(law) for o in objectives], caps.features(law), acceleration
 
     linear = _linearised(features, knots)
 

@@ -9,6 +9,7 @@ from ._io import load as load
 from ._io import save as save
 from ._io import to_dict as to_dict
 from ._polynomial import PolynomialLaw as PolynomialLaw
+from ._registry import as_law as as_law
 from ._registry import get as get
 from ._registry import names as names
 from ._registry import standard_laws as standard_laws

@@ -55,6 +55,8 @@ def from_dict(data: dict) -> AbstractMotionLaw:
         raise ValueError(f"unsupported camjax law version {data.get('version')!r}")
     kind = data.get("kind")
     if kind == "named":
+        if not isinstance(data.get("name"), str):
+            raise ValueError("named law description lacks its 'name'")
         return get(data["name"])
     if kind == "corrected-polynomial":
         try:
@@ -86,10 +88,21 @@ def save(law: AbstractMotionLaw, path) -> Path:
 
 
 def load(path) -> AbstractMotionLaw:
-    """Read a law written by :func:`save`."""
+    """Read a law written by :func:`save`; a ``ValueError`` naming the file if it cannot."""
     path = Path(path)
     try:
-        data = json.loads(path.read_text())
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ValueError(f"{path}: no such law file") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a camjax law file (JSON text), it is not UTF-8") from None
+    except OSError as error:
+        raise ValueError(f"{path}: cannot read the law file ({error.strerror})") from None
+    try:
+        data = json.loads(text)
     except json.JSONDecodeError as error:
         raise ValueError(f"{path}: not valid JSON ({error})") from None
-    return from_dict(data)
+    try:
+        return from_dict(data)
+    except (ValueError, TypeError) as error:
+        raise ValueError(f"{path}: {error}") from None

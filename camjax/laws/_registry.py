@@ -95,3 +95,13 @@ def get(name: str) -> AbstractMotionLaw:
     valid = ", ".join(names() + sorted(_ALIASES) + ["scca:A,B,C", "poly:K"] + list(_IN_MOTION)
                       + ["polynomial5:V0,A0,V1,A1", "polynomial7:V0,A0,J0,V1,A1,J1"])
     raise ValueError(f"unknown law {name!r}; valid names: {valid}")
+
+
+def as_law(law, what: str = "law") -> AbstractMotionLaw:
+    """``law`` itself, or the law that a name gives (``get``): how every public function
+    that takes a motion law reads it, so that ``ct_curve("cycloidal", ...)`` works."""
+    if isinstance(law, AbstractMotionLaw):
+        return law
+    if isinstance(law, str):
+        return get(law)
+    raise TypeError(f"{what} must be a camjax motion law or a law name, got {type(law).__name__}")

@@ -15,10 +15,11 @@ from __future__ import annotations
 
 import math
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
+from .. import checks
 from .._custom_types import Breakpoints, LawValues
 from ._base import AbstractMotionLaw, is_concrete, require, static_breakpoints
 
@@ -73,6 +74,27 @@ def _half_rise(tau, a, b, c):
     return tuple(pick(i) for i in range(4)), s_half, v3
 
 
+FRACTIONS_RULE = "SCCA fractions must be finite and non-negative with 0 < a + b + c <= 1"
+
+
+def _require_valid(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> None:
+    """``ValueError`` naming the first invalid set of concrete fractions (any shape)."""
+    total = a + b + c
+    finite = np.isfinite(a) & np.isfinite(b) & np.isfinite(c)
+    for ok, rule in (
+        (finite, "SCCA fractions must be finite"),
+        (np.minimum(np.minimum(a, b), c) >= 0, "SCCA fractions must be non-negative"),
+    ):
+        if not np.all(ok):
+            i = np.flatnonzero(~ok.ravel())[0]
+            x, y, z = (float(v.ravel()[i]) for v in (a, b, c))
+            require(False, f"{rule}, got a={x}, b={y}, c={z}")
+    ok = (total > 0) & (total <= 1 + 1e-12)
+    if not np.all(ok):
+        bad = float(total.ravel()[np.flatnonzero(~ok.ravel())[0]])
+        require(False, f"SCCA fractions must satisfy 0 < a + b + c <= 1, got a + b + c = {bad}")
+
+
 def _fraction(value) -> jax.Array:
     return jnp.asarray(value, dtype=float)
 
@@ -85,25 +107,26 @@ class SCCA(AbstractMotionLaw):
     stored as float arrays whatever is passed, so all SCCA laws share compiled programs.
     """
 
-    sine: jax.Array = eqx.field(converter=_fraction)
-    constant: jax.Array = eqx.field(converter=_fraction)
-    cosine: jax.Array = eqx.field(converter=_fraction)
+    sine: jax.Array
+    constant: jax.Array
+    cosine: jax.Array
+
+    def __init__(self, sine, constant, cosine):
+        fractions = tuple(_fraction(x) for x in (sine, constant, cosine))
+        if not is_concrete(*fractions):
+            # Traced (built inside jit, vmap or grad): the computation that uses the law
+            # raises FRACTIONS_RULE when it runs with invalid fractions.  A law built
+            # concrete and passed into a compiled function is checked here once, not there.
+            a, b, c = fractions
+            total = a + b + c
+            valid = (jnp.minimum(jnp.minimum(a, b), c) >= 0) & (total > 0) & (total <= 1 + 1e-12)
+            fractions = checks.guard(fractions, ~valid, FRACTIONS_RULE)  # NaN fails them all
+        self.sine, self.constant, self.cosine = fractions
 
     def __check_init__(self):
-        if is_concrete(self.sine, self.constant, self.cosine) and jnp.ndim(self.sine) == 0:
-            a, b, c = (float(x) for x in self.fractions)
-            require(
-                all(math.isfinite(x) for x in (a, b, c)),
-                f"SCCA fractions must be finite, got a={a}, b={b}, c={c}",
-            )
-            require(
-                min(a, b, c) >= 0,
-                f"SCCA fractions must be non-negative, got a={a}, b={b}, c={c}",
-            )
-            require(
-                0 < a + b + c <= 1 + 1e-12,
-                f"SCCA fractions must satisfy 0 < a + b + c <= 1, got a + b + c = {a + b + c}",
-            )
+        if is_concrete(self.sine, self.constant, self.cosine):
+            a, b, c = (np.asarray(x, dtype=float) for x in self.fractions)
+            _require_valid(*np.broadcast_arrays(a, b, c))
 
     @property
     def fractions(self):
@@ -129,13 +152,13 @@ class SCCA(AbstractMotionLaw):
     @property
     def peak_acceleration(self):
         """The amplitude ``A`` (= Ca) that makes the rise end at ``s = 1``."""
-        _, s_half, _ = _half_rise(jnp.zeros(()), self.sine, self.constant, self.cosine)
+        _, s_half, _ = _half_rise(jnp.zeros(()), *self.fractions)
         return 0.5 / s_half
 
     def rise(self, tau) -> LawValues:
         first = tau <= 0.5
         m = jnp.where(first, tau, 1.0 - tau)
-        (s, v, acc, jerk), s_half, _ = _half_rise(m, self.sine, self.constant, self.cosine)
+        (s, v, acc, jerk), s_half, _ = _half_rise(m, *self.fractions)
         amp = 0.5 / s_half
         s = jnp.where(first, amp * s, 1.0 - amp * s)
         acc = jnp.where(first, acc, -acc)
@@ -154,7 +177,7 @@ class SCCA(AbstractMotionLaw):
 
     @property
     def Cv(self):
-        _, s_half, v_half = _half_rise(jnp.zeros(()), self.sine, self.constant, self.cosine)
+        _, s_half, v_half = _half_rise(jnp.zeros(()), *self.fractions)
         return 0.5 * v_half / s_half
 
     @property

@@ -9,8 +9,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import checks
 from .._custom_types import Breakpoints, LawValues
 from ._base import AbstractMotionLaw, is_concrete, require
+
+COEFFICIENTS_RULE = "BSplineLaw coefficients must be finite (got NaN or inf)"
 
 
 @functools.lru_cache(maxsize=64)
@@ -102,6 +105,16 @@ class BSplineLaw(AbstractMotionLaw):
     degree: int = eqx.field(static=True, default=5)
     zero_jerk: bool = eqx.field(static=True, default=False)
 
+    def __init__(self, coefficients, degree: int = 5, zero_jerk: bool = False):
+        if not is_concrete(coefficients):
+            # Built from traced coefficients (inside jit, vmap or grad): the computation
+            # that uses the law raises when it runs with one that is not finite.
+            coefficients = checks.guard(
+                coefficients, ~jnp.all(jnp.isfinite(coefficients)), COEFFICIENTS_RULE)
+        self.coefficients = coefficients
+        self.degree = degree
+        self.zero_jerk = zero_jerk
+
     def __check_init__(self):
         require(
             isinstance(self.degree, int) and 3 <= self.degree <= 9,
@@ -119,7 +132,7 @@ class BSplineLaw(AbstractMotionLaw):
         if is_concrete(self.coefficients):
             require(
                 bool(np.all(np.isfinite(np.asarray(self.coefficients)))),
-                "BSplineLaw coefficients must be finite (got NaN or inf)",
+                COEFFICIENTS_RULE,
             )
 
     @property

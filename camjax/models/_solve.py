@@ -9,7 +9,7 @@ import jax
 
 from .. import checks
 from ..errors import raise_if_failed
-from ..laws import AbstractMotionLaw
+from ..laws import AbstractMotionLaw, as_law
 from ..registry import model_class_names
 from ._base import AbstractMachineModel, AbstractModel, Response
 
@@ -35,7 +35,7 @@ def _program(model: AbstractModel):
 
 
 def solve(
-    law: AbstractMotionLaw | None,
+    law: AbstractMotionLaw | str | None,
     model: AbstractModel,
     *,
     dwell: float = 1.0,
@@ -52,7 +52,7 @@ def solve(
     ``camjax.models.SpringMassOptions``); an unknown one is a ``ValueError``.
 
     Args:
-        law: the rise (followed by a dwell).  For ``SwingingFollower``, ``None`` keeps
+        law: the rise (followed by a dwell), or its name (``"cycloidal"``).  For ``SwingingFollower``, ``None`` keeps
             the model's own rise and fall laws; a law replaces both.
         model: the scene, with its parameters.
         dwell: dwell after the rise, in motion periods.
@@ -66,7 +66,8 @@ def solve(
         SolverError: the solution failed (with ``throw=True``).
     """
     opts, arguments = _arguments(law, model, dwell, method, options)
-    response = _program(model)(*arguments)
+    with checks.as_value_errors():
+        response = _program(model)(*arguments)
     if throw:
         reached = response.stats.get("reached")
         where = f" (reached tau = {float(reached):.6g})" if reached is not None else ""
@@ -83,8 +84,7 @@ def _arguments(law, model, dwell, method, options):
     if not isinstance(model, AbstractModel):
         raise TypeError(f"model must be a camjax model ({model_class_names()}), "
                         f"got {type(model).__name__}")
-    if law is not None and not isinstance(law, AbstractMotionLaw):
-        raise TypeError(f"law must be a camjax motion law, got {type(law).__name__}")
+    law = None if law is None else as_law(law)
     if law is None and not isinstance(model, AbstractMachineModel):
         raise TypeError(f"{type(model).__name__} needs a motion law (law is None)")
     opts = model.options(method, dwell, **options)

@@ -28,7 +28,7 @@ import jax.numpy as jnp
 from .. import checks
 from ..checks import require
 from ..errors import RESULTS
-from ..laws import AbstractMotionLaw
+from ..laws import AbstractMotionLaw, as_law
 from ..sdof import (
     MAX_GRID_INTERVALS,
     MotionGrid,
@@ -226,20 +226,64 @@ def batch_metrics(law, period_ratio, damping, options: SpringMassOptions):
     return chunked_map(one, period_ratio, grid.nodes.shape[0])
 
 
-def torsion_factor(law, period_ratio, damping=0.0, *, dwell=1.0, resolution=1024):
+TRACED_RESOLUTION = 1024
+"""Grid of ``torsion_factor`` and ``residual_vibration`` for a traced period ratio when no
+``resolution`` is given (a concrete one sizes its own grid, ``default_resolution``)."""
+MAX_PHASE_STEP = 1.0
+"""Largest ``w h`` (radians of vibration per interval) that ``torsion_factor`` and
+``residual_vibration`` accept on a grid the caller chose (twice the default's step: peak
+refinement error near 1e-7 relative); past it the refined peak is not to be trusted."""
+
+
+def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
+    """Metrics of the exact path on a grid sized to the period ratio, or refused.
+
+    A concrete period ratio gets ``default_resolution(n)`` (refused above
+    ``MAX_GRID_INTERVALS``); a traced one gets ``resolution`` (``TRACED_RESOLUTION`` if
+    ``None``), and a period ratio past what that grid resolves raises, when the
+    computation runs, instead of returning a wrong number.
+    """
+    law = as_law(law)
+    model = SpringMass(period_ratio, damping)  # concrete values checked here
+    if resolution is None and model._option_scale() is None:
+        resolution = TRACED_RESOLUTION
+    options = model.options("exact", dwell, resolution=resolution)
+    limit = options.resolution * MAX_PHASE_STEP / (2 * math.pi)
+    n = checks.ensure(
+        checks.positive(model.period_ratio, "period ratio"),  # this check first
+        lambda v: v <= limit,
+        f"period ratio must be at most {limit:.4g} on a grid of resolution "
+        f"{options.resolution} (give resolution >= {2 * math.pi / MAX_PHASE_STEP:.3g} n)",
+    )
+    model = dataclasses.replace(model, period_ratio=n).with_array_leaves()
+    with checks.as_value_errors():
+        return _compiled_metrics(law, model, options, checks.is_concrete(law, model))
+
+
+@eqx.filter_jit
+def _compiled_metrics(law, model: SpringMass, options: SpringMassOptions, checked: bool):
+    # One program per law type and grid size: eagerly, the path runs op by op.  Inside a
+    # caller's jit it is inlined.  ``checked``: every input was checked concretely.
+    with checks.checked_outside(checked):
+        return response_metrics(law, model, options)
+
+
+def torsion_factor(law, period_ratio, damping=0.0, *, dwell=1.0, resolution=None):
     """Ct of the exact path, jittable and differentiable in every argument's leaves.
 
-    A non-positive or NaN period ratio, or damping outside ``[0, 1)``, raises even under
-    ``jit``, ``vmap`` and ``grad``.
+    ``law`` is a motion law or its name.  A concrete period ratio sizes the grid
+    (``resolution=None``); a traced one (inside ``jit``, ``vmap``, ``grad``) uses
+    ``resolution`` (default ``TRACED_RESOLUTION``).  A non-positive or NaN period ratio, one
+    past what the grid resolves, damping outside ``[0, 1)`` or invalid law parameters
+    raise, even under ``jit``, ``vmap`` and ``grad``.
     """
-    options = SpringMassOptions(dwell=dwell, resolution=resolution)
-    return response_metrics(law, SpringMass(period_ratio, damping), options).ct
+    return _exact_metrics(law, period_ratio, damping, dwell, resolution).ct
 
 
-def residual_vibration(law, period_ratio, damping=0.0, *, resolution=1024):
-    """Residual vibration R (units of Ca) of the exact path, jittable and differentiable."""
-    options = SpringMassOptions(resolution=resolution)
-    return response_metrics(law, SpringMass(period_ratio, damping), options).residual
+def residual_vibration(law, period_ratio, damping=0.0, *, resolution=None):
+    """Residual vibration R (units of Ca) of the exact path, jittable and differentiable;
+    the law, grid and checks as in ``torsion_factor``."""
+    return _exact_metrics(law, period_ratio, damping, 1.0, resolution).residual
 
 
 # --- physical inputs ------------------------------------------------------------------

@@ -166,6 +166,10 @@ def _check_follower(f: Follower) -> None:
             raise ValueError("follower.pivot_mm: the pivot must lie outside the base circle "
                              "(pivot_mm > base_radius_mm) for its face to touch it")
     if f.kind == "swinging-roller":
+        for name in ("arm_mm", "pivot_mm"):
+            if getattr(f, name) is None:
+                raise ValueError(f"follower.{name} is missing: a swinging-roller follower needs "
+                                 "arm_mm and pivot_mm")
         arm = _positive(f.arm_mm, "follower.arm_mm")
         pivot = _positive(f.pivot_mm, "follower.pivot_mm")
         rp = f.base_radius_mm + f.roller_radius_mm
@@ -256,7 +260,9 @@ class Program:
         """Read a program TOML file (law files named in it are relative to it)."""
         path = Path(path)
         try:
-            text = path.read_text()
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise ValueError(f"{path}: not a program file (TOML text), it is not UTF-8") from None
         except OSError as error:
             raise ValueError(f"{path}: cannot read the program file ({error.strerror})") from None
         try:
@@ -460,9 +466,9 @@ def _law(i: int, name, base: Path | None) -> AbstractMotionLaw:
         if not path.exists():
             raise ValueError(f"segment {i}: law file {str(path)!r} not found")
         try:
-            return laws.load(path)
-        except (ValueError, KeyError, TypeError) as error:
-            raise ValueError(f"segment {i}: law file {str(path)!r}: {error}") from None
+            return laws.load(path)  # its errors name the file
+        except ValueError as error:
+            raise ValueError(f"segment {i}: law file {error}") from None
     try:
         return laws.get(name)
     except ValueError as error:

@@ -1,0 +1,333 @@
+"""Input a user may give: grids sized to the period ratio, law parameters checked even
+traced, law names and law files wherever a law is taken, and one-line errors that name the
+file, the key or the user's own option."""
+
+import json
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import camjax
+from camjax import laws
+from camjax.cli import build_parser, main
+from camjax.cli._common import split_law_specs
+from camjax.models import SpringMass
+
+MODSINE = laws.get("modsine")
+FRACTIONS_RULE = "SCCA fractions must be finite and non-negative with 0 < a + b + c <= 1"
+
+
+@pytest.fixture(autouse=True)
+def _no_user_cache(monkeypatch):
+    monkeypatch.setenv("CAMJAX_CACHE_DIR", "off")
+
+
+# --- grids sized to the period ratio ------------------------------------------------------
+
+
+def test_torsion_factor_at_a_high_period_ratio_agrees_with_ct_curve():
+    """A fixed 1024-interval grid gave Ct = 4.04 here; the sweep's sized grid gives 1.00."""
+    curve = camjax.ct_curve(MODSINE, [80000.0], damping=0.02)
+    assert float(camjax.torsion_factor(MODSINE, 80000.0, 0.02)) == pytest.approx(
+        curve.ct[0], rel=1e-9)
+    assert curve.ct[0] == pytest.approx(1.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("n", [3.3, 41.0])
+def test_residual_vibration_agrees_with_ct_curve(n):
+    curve = camjax.ct_curve(MODSINE, [n], damping=0.02)
+    assert float(camjax.residual_vibration(MODSINE, n, 0.02)) == pytest.approx(
+        curve.residual[0], rel=1e-9)
+
+
+def test_a_period_ratio_past_the_largest_grid_is_refused():
+    with pytest.raises(ValueError, match=r"period ratio 1e\+06 needs a grid of .* the limit is"):
+        camjax.torsion_factor(MODSINE, 1e6)
+
+
+def test_a_grid_too_coarse_for_a_concrete_period_ratio_is_refused():
+    message = ("period ratio must be at most 40.74 on a grid of resolution 256 (give resolution "
+               ">= 6.28 n), got 200")
+    with pytest.raises(ValueError) as error:
+        camjax.residual_vibration(MODSINE, 200.0, resolution=256)
+    assert str(error.value) == message
+
+
+@pytest.mark.parametrize("transform", ["jit", "vmap", "grad"])
+def test_a_traced_period_ratio_past_the_grid_raises_instead_of_a_number(transform):
+    def ct(n):
+        return camjax.torsion_factor(MODSINE, n)
+
+    with pytest.raises(Exception, match=r"period ratio must be at most 163\b"):
+        if transform == "vmap":
+            jax.vmap(ct)(jnp.array([5.0, 1e6]))
+        else:
+            getattr(jax, transform)(ct)(1e6)
+
+
+def test_a_ca_ct_objective_past_the_largest_training_grid_is_refused():
+    from camjax import law_design
+
+    with pytest.raises(ValueError, match=r"^MaxCaCt: period ratio 30000 needs a training grid"):
+        law_design.MaxCaCt(1.0, 30000.0)
+    law_design.MaxCaCt(1.0, 20000.0)  # within the limit
+
+
+def test_gradient_at_the_traced_default_grid_matches_finite_differences():
+    n, h = 6.4, 1e-4
+    exact = float(jax.grad(lambda x: camjax.torsion_factor(MODSINE, x, 0.02))(n))
+    fd = (float(camjax.torsion_factor(MODSINE, n + h, 0.02))
+          - float(camjax.torsion_factor(MODSINE, n - h, 0.02))) / (2 * h)
+    assert exact == pytest.approx(fd, rel=1e-5)
+
+
+# --- law parameters checked when traced ---------------------------------------------------
+
+
+def _residual_of_fractions(f):
+    return camjax.residual_vibration(laws.SCCA(*f), 6.4)
+
+
+@pytest.mark.parametrize("fractions", [[0.5, 0.5, 0.5], [-0.1, 0.6, 0.5], [np.nan, 0.0, 0.5],
+                                       [0.0, 0.0, 0.0]])
+def test_invalid_scca_fractions_raise_concrete_jit_and_grad(fractions):
+    f = np.array(fractions)
+    with pytest.raises(ValueError, match="SCCA fractions must"):
+        laws.SCCA(*f)
+    with pytest.raises(Exception, match=FRACTIONS_RULE.replace("+", r"\+")):
+        jax.jit(_residual_of_fractions)(f)
+    with pytest.raises(Exception, match=FRACTIONS_RULE.replace("+", r"\+")):
+        jax.grad(_residual_of_fractions)(f)
+
+
+def test_invalid_scca_fractions_raise_under_vmap_and_in_a_stack():
+    rows = np.array([[0.25, 0.0, 0.75], [0.5, 0.5, 0.5]])
+    with pytest.raises(Exception, match=FRACTIONS_RULE.replace("+", r"\+")):
+        jax.vmap(_residual_of_fractions)(rows)
+    with pytest.raises(ValueError, match="0 < a \\+ b \\+ c <= 1, got a \\+ b \\+ c = 1.5"):
+        laws.SCCA(*rows.T)  # concrete, stacked
+
+
+def test_valid_traced_fractions_give_the_concrete_value():
+    f = np.array([0.25, 0.0, 0.75])
+    assert float(jax.jit(_residual_of_fractions)(f)) == pytest.approx(
+        float(_residual_of_fractions(f)), rel=1e-9)
+
+
+def test_a_traced_spline_coefficient_that_is_not_finite_raises():
+    start = laws.BSplineLaw.fit(laws.get("cycloidal"), 6)
+    coefficients = np.asarray(start.coefficients).copy()
+
+    def ca(c):
+        return laws.BSplineLaw(c).Ca
+
+    assert float(jax.jit(ca)(coefficients)) == pytest.approx(float(start.Ca), rel=1e-9)
+    coefficients[2] = np.nan
+    with pytest.raises(Exception, match="BSplineLaw coefficients must be finite"):
+        jax.jit(ca)(coefficients)
+
+
+# --- law names wherever a law is taken ----------------------------------------------------
+
+
+def test_public_functions_take_law_names():
+    n = [2.0, 5.5]
+    by_law = camjax.ct_curve(laws.get("cycloidal"), n)
+    assert np.array_equal(camjax.ct_curve("cycloidal", n).ct, by_law.ct)
+    curves = camjax.ct_curves(["cycloidal", "scca:0.25,0,0.75"], n)
+    assert list(curves) == ["cycloidal", "modified-sine"]
+    assert np.array_equal(curves["cycloidal"].ct, by_law.ct)
+    response = camjax.solve("modsine", SpringMass(5.5))
+    assert float(response.metrics.ct) == pytest.approx(
+        float(camjax.torsion_factor("modsine", 5.5)), rel=1e-9)
+    impact = camjax.models.kinematic_impact("cycloidal", 0.05, 2.0)
+    assert float(impact.impact_velocity) == float(
+        camjax.models.kinematic_impact(laws.get("cycloidal"), 0.05, 2.0).impact_velocity)
+    with pytest.raises(ValueError, match="unknown law 'nope'"):
+        camjax.torsion_factor("nope", 3.0)
+    with pytest.raises(TypeError, match="law must be a camjax motion law or a law name, got int"):
+        camjax.ct_curve(3, n)
+
+
+# --- errors under a caller's jit ----------------------------------------------------------
+
+
+def test_a_traced_check_reads_as_docs_conventions_says():
+    """camjax's entry points traced by grad alone: a one-line ValueError.  Under a caller's
+    ``equinox.filter_jit`` and ``jax.jit`` the message is on the line docs/conventions.md
+    names (JAX writes the rest of the report)."""
+    bad = np.array([0.5, 0.5, 0.5])
+    with pytest.raises(ValueError) as error:
+        jax.grad(_residual_of_fractions)(bad)
+    assert str(error.value) == FRACTIONS_RULE
+    with pytest.raises(ValueError) as error:
+        jax.grad(lambda n: camjax.torsion_factor(MODSINE, n))(1e6)
+    assert str(error.value).splitlines()[0].startswith("period ratio must be at most 163")
+    with pytest.raises(eqx.EquinoxRuntimeError) as error:
+        eqx.filter_jit(_residual_of_fractions)(bad)
+    assert f"equinox.EquinoxRuntimeError: {FRACTIONS_RULE}" in str(error.value).splitlines()
+    with pytest.raises(Exception) as error:
+        jax.jit(_residual_of_fractions)(bad)
+    assert f"_EquinoxRuntimeError: {FRACTIONS_RULE}" in str(
+        error.value).splitlines()
+
+
+# --- the command line ---------------------------------------------------------------------
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_law_specs_split_at_commas_but_keep_scca_fractions():
+    assert split_law_specs("scca:0.25,0,0.75") == ["scca:0.25,0,0.75"]
+    assert split_law_specs("cycloidal,modsine") == ["cycloidal", "modsine"]
+    assert split_law_specs("scca:0.3,0.2,0.5,poly:4,cycloidal") == [
+        "scca:0.3,0.2,0.5", "poly:4", "cycloidal"]
+    assert split_law_specs("law.json, cycloidal") == ["law.json", "cycloidal"]
+
+
+def test_ct_takes_scca_fractions_and_a_law_file_beside_named_laws(capsys, tmp_path):
+    spline = laws.BSplineLaw.fit(laws.get("cycloidal"), 6)
+    path = laws.save(spline, tmp_path / "law.json")
+    code, out, err = run(capsys, "ct", "--law", "scca:0.3,0.2,0.5", "--law", "cycloidal",
+                         "--law", path, "--n", "2,5.5", "--format", "json")
+    assert code == 0, err
+    data = json.loads(out)["laws"]
+    assert list(data) == ["scca:0.3,0.2,0.5", "cycloidal", "bspline:6"]
+    expected = camjax.ct_curve(laws.SCCA(0.3, 0.2, 0.5), [2.0, 5.5])
+    np.testing.assert_allclose(data["scca:0.3,0.2,0.5"]["ct"], expected.ct, rtol=1e-12)
+    np.testing.assert_allclose(data["bspline:6"]["ct"], camjax.ct_curve(spline, [2.0, 5.5]).ct,
+                               rtol=1e-12)
+
+
+def test_backlash_takes_scca_fractions(capsys):
+    code, out, err = run(capsys, "backlash", "--law", "scca:0.3,0.2,0.5,cycloidal", "--bk", "0.05",
+                         "--dn", "2", "--format", "json")
+    assert code == 0, err
+    assert list(json.loads(out)["laws"]) == ["scca:0.3,0.2,0.5", "cycloidal"]
+
+
+def test_every_option_with_a_default_states_it_in_help():
+    """Each option entry of every subcommand's help (a line starting ``  -`` and its
+    continuation lines) states the default, if the option has one."""
+    parser = build_parser()
+    commands = parser._subparsers._group_actions[0].choices
+    for name, sub in commands.items():
+        entries: dict[str, str] = {}
+        option = None
+        for line in sub.format_help().split("options:")[-1].splitlines():
+            if line.startswith("  -"):
+                option = line.split()[0].rstrip(",")
+                entries[option] = ""
+            if option is not None:
+                entries[option] += " " + line.strip()
+        for action in sub._actions:
+            if not action.option_strings or action.default in (None, False, "==SUPPRESS=="):
+                continue
+            entry = entries[action.option_strings[0]]
+            assert "default" in entry, f"camjax {name} {action.option_strings[0]}: {entry}"
+
+
+def test_bench_takes_scca_fractions_beside_a_named_law():
+    from camjax.cli._common import laws_of
+
+    args = build_parser().parse_args(["bench", "--law", "scca:0.3,0.2,0.5", "--law", "cycloidal"])
+    assert list(laws_of(args)) == ["scca:0.3,0.2,0.5", "cycloidal"]
+
+
+def _spec(tmp_path, body: str, name: str = "spec.toml"):
+    path = tmp_path / name
+    path.write_text(body)
+    return path
+
+
+GOOD_SPEC = 'output = "{out}"\n[period_ratio]\nvalues = [1.0]\n[laws]\nnames = ["cycloidal"]\n'
+
+
+def _program(tmp_path, follower: str):
+    text = (camjax.program.example_path().read_text().split("[follower]")[0]
+            + "[follower]\n" + follower)
+    path = tmp_path / "p.toml"
+    path.write_text(text)
+    return path
+
+
+SWINGING = ('kind = "swinging-roller"\nmass_kg = 1.5\nstiffness_n_per_mm = 2000\n'
+            'damping_ratio = 0.05\nspring_rate_n_per_mm = 10\npreload_n = 300\n'
+            'base_radius_mm = 40\nroller_radius_mm = 12\npivot_mm = 120\n')
+
+
+def _cases(tmp_path):
+    binary = tmp_path / "binary.toml"
+    binary.write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe")
+    law_file = tmp_path / "bad.json"
+    law_file.write_bytes(b"\xff\xfe\x00")
+    a_file = tmp_path / "file"
+    a_file.write_text("x")
+    spec_damping = _spec(tmp_path, 'damping = "abc"\n' + GOOD_SPEC.format(out=tmp_path / "o"))
+    twice = tmp_path / "twice.toml"
+    twice.write_text(GOOD_SPEC.format(out=tmp_path / "o").replace(
+        '"cycloidal"]', '"cycloidal", "cycloid"]'))
+    unwritable = tmp_path / "unwritable.toml"
+    unwritable.write_text(GOOD_SPEC.format(out=a_file / "sub"))
+    return [
+        (("program", binary),
+         f"camjax program: error: {binary}: not a program file (TOML text), it is not UTF-8"),
+        (("program", _program(tmp_path, SWINGING)),
+         f"camjax program: error: {tmp_path / 'p.toml'}: follower.arm_mm is missing: a "
+         "swinging-roller follower needs arm_mm and pivot_mm"),
+        (("ct", "--law", law_file, "--n", "2"),
+         f"camjax ct: error: --law: {law_file}: not a camjax law file (JSON text), it is not UTF-8"),
+        (("sweep", spec_damping),
+         f"camjax sweep: error: {spec_damping}: damping must be a number, got 'abc'"),
+        (("sweep", twice),
+         f"camjax sweep: error: {twice}: spec lists the law cycloidal twice (laws.names and the "
+         "SCCA grid together must name each law once)"),
+        (("sweep", unwritable),
+         f"camjax sweep: error: {unwritable}: output: cannot write to directory "
+         f"'{a_file / 'sub'}' (Not a directory)"),
+        (("design", "--n", "3", "--damping", "1.2", "--out", tmp_path / "d"),
+         "camjax design: error: --damping: damping ratio must be in [0, 1) (an underdamped "
+         "payload), got 1.2"),
+        (("design", "--n", "3", "--max-ca", "3", "--out", tmp_path / "d"),
+         "camjax design: error: --max-ca = 3.0 is infeasible: every rise has Ca >= 4 (the "
+         "parabolic law's bound)"),
+        (("design", "--band", "1:30000", "--objective", "ca-ct", "--out", tmp_path / "d"),
+         "camjax design: error: --band: period ratio 30000 needs a training grid of 1,508,096 "
+         "intervals; the limit is 1,048,576 (period ratios up to about 20,861)"),
+        (("sweep", _spec(tmp_path, GOOD_SPEC.format(out=tmp_path / "o"), "good.toml"), "--devices",
+          "0"),
+         "camjax sweep: error: --devices: must be between 1 and the "
+         f"{jax.local_device_count()} local device(s), got 0"),
+        (("ct", "--n", "2", "--method", "rk99"),
+         "camjax ct: error: --method: unknown method 'rk99' for SpringMass; valid methods: "
+         + ", ".join(SpringMass.methods)),
+        (("follower", "--law", "cycloidal", "--rise", "10"),
+         "camjax follower: error: --rise must be in (0, pi/2) rad, got 10.0"),
+        (("follower", "--law", "cycloidal", "--modes", "0"),
+         "camjax follower: error: --modes must be an integer 1..12, got 0"),
+        (("ct", "--law", "scca:0.5,0.5,0.5", "--n", "2"),
+         "camjax ct: error: --law: SCCA fractions must satisfy 0 < a + b + c <= 1, got "
+         "a + b + c = 1.5"),
+        (("ct", "--n", "2", "--model", "two-mass:-1,1"),
+         "camjax ct: error: K must be positive and finite, got -1"),
+        *[((*argv, "--out", out), f"camjax {argv[0]}: error: --out: cannot write to directory "
+           f"'{out}' ({reason})")
+          for argv in (("ct", "--n", "2"), ("backlash", "--bk", "0.1", "--dn", "1"),
+                       ("program",), ("follower", "--law", "cycloidal"),
+                       ("design", "--n", "3"))
+          for out, reason in ((a_file / "sub", "Not a directory"),
+                              ("/proc/x", "No such file or directory"))],
+    ]
+
+
+def test_bad_input_exits_2_with_one_line_naming_the_file_key_or_option(capsys, tmp_path):
+    for argv, message in _cases(tmp_path):
+        code, out, err = run(capsys, *argv)
+        assert (code, out, err.strip()) == (2, "", message), argv
