@@ -75,12 +75,19 @@ def refined_peak(value, widths, left, right):
     to ``1 - cos(w h / 2)``) reorders them, and the true peak may sit in any of them.
     Being dense (no gathers), this is also the fastest form under ``vmap`` on CPU.
     """
+    return jnp.max(interval_peaks(value[:-1], value[1:], widths, left, right))
+
+
+def interval_peaks(start, end, widths, left, right):
+    """``max |f|`` over each interval (``(K,)``), refined as in ``refined_peak``, from the
+    values at its two ends (``start``, ``end``, each ``(K,)``) and the derivatives there;
+    the intervals need not be consecutive (a selection of candidates, say)."""
     scale = widths[:, None] ** jnp.arange(1, HERMITE_ORDER + 1)
-    data = jnp.concatenate([value[:-1, None], left * scale, value[1:, None], right * scale], axis=1)
+    data = jnp.concatenate([start[:, None], left * scale, end[:, None], right * scale], axis=1)
     coefficients = jnp.dot(
         data, jnp.asarray(_HERMITE_TO_MONOMIAL.T), precision=jax.lax.Precision.HIGHEST
     )
-    return jnp.max(_interval_peak(coefficients))
+    return _interval_peak(coefficients)
 
 
 @dataclasses.dataclass(frozen=True)
