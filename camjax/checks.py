@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+from pathlib import Path
 
 import equinox as eqx
 import jax
@@ -129,3 +130,27 @@ def period_ratios(values, *, what: str = "period ratio") -> np.ndarray:
     if np.any(n <= 0):
         raise ValueError(f"{what} must be positive, got {n[n <= 0][0]:g}")
     return n
+
+
+def read_text(path, what: str, form: str) -> str:
+    """The UTF-8 text of the file ``path``, or a one-line ``ValueError`` naming it: missing,
+    unreadable, or not text (``what``: "program file"; ``form``: "TOML")."""
+    path = Path(path)
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ValueError(f"{path}: no such {what}") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a {what} ({form} text), it is not UTF-8") from None
+    except OSError as error:
+        raise ValueError(f"{path}: cannot read the {what} ({error.strerror})") from None
+
+
+def read_toml(path, what: str) -> dict:
+    """The TOML file ``path`` parsed, or a one-line ``ValueError`` naming it (``read_text``)."""
+    import tomllib
+
+    try:
+        return tomllib.loads(read_text(path, what, "TOML"))
+    except tomllib.TOMLDecodeError as error:
+        raise ValueError(f"{path}: not valid TOML ({error})") from None

@@ -48,11 +48,11 @@ import hashlib
 import json
 import os
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
+from .checks import read_toml
 from .laws import SCCA, AbstractMotionLaw, get
 from .sdof import TARGET_PHASE_STEP
 
@@ -111,16 +111,7 @@ class SweepSpec:
 def load_spec(path) -> SweepSpec:
     """Read and check a TOML sweep spec; ``ValueError`` names the file and any problem."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a sweep spec (TOML text), it is not UTF-8") from None
-    except OSError as error:
-        raise ValueError(f"cannot read spec {str(path)!r}: {error.strerror}") from None
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise ValueError(f"{path}: not valid TOML ({error})") from None
+    raw = read_toml(path, "sweep spec")
     try:
         return spec_from_dict(raw, base=path.parent)
     except ValueError as error:

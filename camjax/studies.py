@@ -46,11 +46,12 @@ class Case:
 
 class Timing(NamedTuple):
     """What ``timed`` measured: the value of the first call, its seconds (tracing,
-    compilation and one run) and the best of the warm calls."""
+    compilation and one run), the best and the median of the warm calls."""
 
     value: object
     first_s: float
     best_s: float
+    median_s: float
 
 
 def timed(fn, repeats: int = 5, *, clock=time.perf_counter) -> Timing:
@@ -60,12 +61,12 @@ def timed(fn, repeats: int = 5, *, clock=time.perf_counter) -> Timing:
     start = clock()
     value = jax.block_until_ready(fn())
     first = clock() - start
-    best = math.inf
+    warm = []
     for _ in range(repeats):
         start = clock()
         jax.block_until_ready(fn())
-        best = min(best, clock() - start)
-    return Timing(value, first, best)
+        warm.append(clock() - start)
+    return Timing(value, first, min(warm, default=math.inf), float(np.median(warm)) if warm else math.inf)
 
 
 _COMPILED = {}
@@ -207,7 +208,8 @@ def measure(law, period_ratios, case: Case, reference, *, repeats: int = 2) -> d
     """
     n = jnp.asarray(period_ratios, dtype=float)
     options = case.options.checked(float(jnp.max(n)))
-    (metrics, result, steps), first, warm = timed(lambda: batch_metrics(law, n, 0.0, options), repeats)
+    timing = timed(lambda: batch_metrics(law, n, 0.0, options), repeats)
+    (metrics, result, steps), first, warm = timing.value, timing.first_s, timing.best_s
     ct, residual = np.asarray(metrics.ct), np.asarray(metrics.residual)
     ok = np.asarray(result == RESULTS.successful) & np.isfinite(ct) & np.isfinite(residual)
     ref_ct, ref_residual = reference

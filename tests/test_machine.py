@@ -263,7 +263,7 @@ def test_machine_file_and_cli(tmp_path, capsys):
     (tmp_path / "bad.toml").write_text('[[cam]]\nprogram = "none.toml"\n')
     assert main(["program", str(tmp_path / "bad.toml")]) == 2
     err = capsys.readouterr().err.strip()
-    assert "cam 1: " in err and "cannot read the program file" in err and "\n" not in err
+    assert "cam 1: " in err and "no such program file" in err and "\n" not in err
 
 
 def test_cli_reports_torque_stress_and_geometry_and_keeps_the_example_numbers(tmp_path, capsys):

@@ -8,6 +8,7 @@ from pathlib import Path
 import jax.numpy as jnp
 import numpy as np
 
+from ..checks import read_text
 from ._base import AbstractMotionLaw
 from ._boundary import CorrectedPolynomial
 from ._registry import get
@@ -90,14 +91,7 @@ def save(law: AbstractMotionLaw, path) -> Path:
 def load(path) -> AbstractMotionLaw:
     """Read a law written by :func:`save`; a ``ValueError`` naming the file if it cannot."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ValueError(f"{path}: no such law file") from None
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a camjax law file (JSON text), it is not UTF-8") from None
-    except OSError as error:
-        raise ValueError(f"{path}: cannot read the law file ({error.strerror})") from None
+    text = read_text(path, "camjax law file", "JSON")
     try:
         data = json.loads(text)
     except json.JSONDecodeError as error:

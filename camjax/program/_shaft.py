@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
+from ..checks import read_toml
 from ..metrics import septic_coefficients
 from ._analysis import Report, analyse
 from ._dynamics import SteadyState, check_rpm
@@ -52,12 +52,7 @@ class Machine:
         """Read a machine TOML file (``[machine] name``, ``[[cam]] program, phase_deg``);
         program files are relative to it."""
         path = Path(path)
-        try:
-            data = tomllib.loads(path.read_text())
-        except OSError as error:
-            raise ValueError(f"{path}: cannot read the machine file ({error.strerror})") from None
-        except tomllib.TOMLDecodeError as error:
-            raise ValueError(f"{path}: not valid TOML ({error})") from None
+        data = read_toml(path, "machine file")
         try:
             return cls.from_dict(data, base=path.parent)
         except ValueError as error:

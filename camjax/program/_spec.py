@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from pathlib import Path
 
 import equinox as eqx
@@ -16,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import laws
-from ..checks import is_concrete
+from ..checks import is_concrete, read_toml
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
 from ._motion import END_STATE_KEYS, MATCH, EndState, is_polynomial, joins, resolve_segments
 
@@ -259,16 +258,7 @@ class Program:
     def load(cls, path) -> Program:
         """Read a program TOML file (law files named in it are relative to it)."""
         path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except UnicodeDecodeError:
-            raise ValueError(f"{path}: not a program file (TOML text), it is not UTF-8") from None
-        except OSError as error:
-            raise ValueError(f"{path}: cannot read the program file ({error.strerror})") from None
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as error:
-            raise ValueError(f"{path}: not valid TOML ({error})") from None
+        data = read_toml(path, "program file")
         try:
             return cls.from_dict(data, base=path.parent)
         except ValueError as error:
