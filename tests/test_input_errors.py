@@ -316,7 +316,7 @@ def _cases(tmp_path):
          "camjax ct: error: --law: SCCA fractions must satisfy 0 < a + b + c <= 1, got "
          "a + b + c = 1.5"),
         (("ct", "--n", "2", "--model", "two-mass:-1,1"),
-         "camjax ct: error: K must be positive and finite, got -1"),
+         "camjax ct: error: --model 'two-mass:-1,1': K must be positive and finite, got -1"),
         *[((*argv, "--out", out), f"camjax {argv[0]}: error: --out: cannot write to directory "
            f"'{out}' ({reason})")
           for argv in (("ct", "--n", "2"), ("backlash", "--bk", "0.1", "--dn", "1"),

@@ -203,7 +203,7 @@ def test_cli_refuses_a_huge_period_ratio_and_a_bad_model_before_any_work(capsys)
     assert main(["ct", "--n", "5", "--model", "backlash:0.1"]) == 2
     assert "takes 2 parameter(s)" in capsys.readouterr().err
     assert main(["ct", "--n", "5", "--model", "friction:-1"]) == 2
-    assert "friction must be >= 0" in capsys.readouterr().err
+    assert "--model 'friction:-1': MU must be >= 0" in capsys.readouterr().err
 
 
 def test_only_models_that_ask_compile_their_solve_with_other_xla_options():

@@ -75,11 +75,8 @@ def parse_model(text: str, damping: float):
     except ValueError as error:
         raise CliError(f"--model {text!r}: {error}") from None
     # The API's messages name the model's fields; the user gave the registry's placeholders.
-    with options_named(**{field: placeholder for field, placeholder in entry.parameters}):
-        try:
-            return entry.template(numbers, damping)
-        except ValueError as error:
-            raise ValueError(f"--model {text!r}: {error}") from None
+    with options_named(f"--model {text!r}", **{field: placeholder for field, placeholder in entry.parameters}):
+        return entry.template(numbers, damping)
 
 
 def _fit_or_none(curve):

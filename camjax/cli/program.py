@@ -302,13 +302,12 @@ def run(args) -> int:
 
 def _is_machine(path: Path) -> bool:
     """A file with ``[[cam]]`` or ``[machine]`` tables (unreadable files: left to ``Program.load``)."""
-    import tomllib
-
+    from ..checks import read_toml
     from ..program import is_machine_file
 
     try:
-        return is_machine_file(tomllib.loads(path.read_text()))
-    except (OSError, tomllib.TOMLDecodeError):
+        return is_machine_file(read_toml(path, "program file"))
+    except ValueError:
         return False
 
 
