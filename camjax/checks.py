@@ -119,6 +119,19 @@ def damping_ratio(value, name: str = "damping ratio"):
     return ensure(value, lambda v: (v >= 0) & (v < 1), f"{name} must be in [0, 1) (an underdamped payload)")
 
 
+MAX_PERIOD_RATIOS = 10_000_000
+"""Most period ratios one sweep takes (about 5 minutes per law on two CPU cores, 80 MB
+per metric): a larger request is refused before any work."""
+
+
+def period_ratio_count(count: int, what: str = "period ratios") -> int:
+    """``count`` checked against ``MAX_PERIOD_RATIOS`` (a ``ValueError`` saying what to do)."""
+    if count > MAX_PERIOD_RATIOS:
+        raise ValueError(f"{what}: {count:,} period ratios is more than the {MAX_PERIOD_RATIOS:,} one "
+                         "sweep takes; sweep fewer, or split the range into several runs")
+    return count
+
+
 def period_ratios(values, *, what: str = "period ratio") -> np.ndarray:
     """Concrete period ratios as a non-empty 1-D float array, or a ``ValueError``."""
     try:
@@ -126,6 +139,7 @@ def period_ratios(values, *, what: str = "period ratio") -> np.ndarray:
     except (TypeError, ValueError) as error:
         raise ValueError(f"{what} must be numbers, got {values!r}") from error
     require(n.ndim == 1 and n.size > 0, f"{what} must be a non-empty 1-D list of numbers")
+    period_ratio_count(n.size, f"{what}s")
     require(bool(np.all(np.isfinite(n))), f"{what} must be finite (got NaN or inf)")
     if np.any(n <= 0):
         raise ValueError(f"{what} must be positive, got {n[n <= 0][0]:g}")

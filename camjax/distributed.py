@@ -52,7 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .checks import read_toml
+from .checks import period_ratio_count, read_toml
 from .laws import SCCA, AbstractMotionLaw, get
 from .sdof import TARGET_PHASE_STEP
 
@@ -152,7 +152,8 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
         try:
             n = np.linspace(_number(ratios["start"], "period_ratio.start"),
                             _number(ratios["stop"], "period_ratio.stop"),
-                            _number(ratios["count"], "period_ratio.count", int))
+                            period_ratio_count(_number(ratios["count"], "period_ratio.count", int),
+                                               "period_ratio.count"))
         except KeyError as error:
             raise ValueError(f"[period_ratio] is missing {error.args[0]!r}") from None
     if n.ndim != 1 or n.size == 0 or not np.all(np.isfinite(n)) or np.any(n <= 0):

@@ -67,3 +67,25 @@ def test_gathered_and_multiplied_piece_weights_agree():
         product = sdof.propagate(grid, omega, zeta, gather=False)
         gathered = sdof.propagate(grid, omega, zeta, gather=True)
         assert np.max(np.abs(gathered - product)) <= 1e-13 * np.max(np.abs(product))
+
+
+def test_a_sweep_of_too_many_period_ratios_is_refused_before_any_work(tmp_path, capsys):
+    """--n 1:30:50000000 and a spec's count = 100000000 ran with no progress and no
+    refusal; the API refuses the same (the count is checked before the array is built)."""
+    import numpy as np
+
+    import camjax
+    from camjax.checks import MAX_PERIOD_RATIOS
+
+    assert main(["ct", "--n", "1:30:50000000"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "camjax ct: error: --n: 50,000,000 period ratios is more than the 10,000,000 one sweep "
+        "takes; sweep fewer, or split the range into several runs")
+    spec = tmp_path / "spec.toml"
+    spec.write_text(f'output = "{tmp_path / "out"}"\n[laws]\nnames = ["cycloidal"]\n'
+                    "[period_ratio]\nstart = 1.0\nstop = 30.0\ncount = 100000000\n")
+    assert main(["sweep", str(spec)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "period_ratio.count: 100,000,000 period ratios is more than" in err and "\n" not in err
+    with pytest.raises(ValueError, match="10,000,001 period ratios is more than"):
+        camjax.ct_curve("cycloidal", np.linspace(1.0, 2.0, MAX_PERIOD_RATIOS + 1))

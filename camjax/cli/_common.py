@@ -171,6 +171,11 @@ def parse_range(text: str, what: str):
             raise CliError(f"{what}: COUNT must be an integer, got {parts[2]!r}") from None
         if count < 1:
             raise CliError(f"{what}: COUNT must be at least 1, got {count}")
+        if what == "--n":
+            from ..checks import period_ratio_count
+
+            with options_named():
+                period_ratio_count(count, what)
         if start > stop or (start == stop and count > 1):
             raise CliError(f"{what}: START must be below STOP in START:STOP:COUNT, got {text!r} "
                            "(ranges run upward; give V1,V2,... for another order)")

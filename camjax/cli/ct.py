@@ -25,6 +25,7 @@ from ._common import (
 )
 
 DEFAULT_N = "1:30:1000"
+SECONDS_PER_RATIO = 3e-5  # a warm exact-path curve on two cores (2026-11-25): 25-30 ms per 1000
 SWEPT_MODELS = [m.usage for m in MODELS if m.swept]
 
 
@@ -187,6 +188,10 @@ def run(args) -> int:
     with options_named("--method"):
         model.options(args.method, args.dwell)  # the method named, before any work
     out = output_dir(args.out)
+    minutes = len(selected) * n.size * SECONDS_PER_RATIO / 60
+    if minutes > 0.5:  # said before a long sweep starts (the bar below counts laws)
+        print(f"camjax ct: {len(selected)} law(s) x {n.size:,} period ratios: about {minutes:.0f} "
+              "minute(s) on two CPU cores (the exact path; the other models take longer)", file=sys.stderr)
     curves = {}
     for name, law in tqdm(selected.items(), desc="camjax ct", unit="law", file=sys.stderr,
                           disable=not sys.stderr.isatty()):
