@@ -92,15 +92,8 @@ def septic_coefficients(value, widths, left, right):
     Integrals and products of a sampled signal (a cam's drive torque, its energy) read
     the same interpolant that ``refined_peak`` searches.
     """
-    return interval_septics(value[:-1], value[1:], widths, left, right)
-
-
-def interval_septics(start, end, widths, left, right):
-    """``septic_coefficients`` of intervals given by the values at their two ends
-    (``start``, ``end``, each ``(K,)``): they need not be consecutive (a selection of
-    candidates, say)."""
     scale = widths[:, None] ** jnp.arange(1, HERMITE_ORDER + 1)
-    data = jnp.concatenate([start[:, None], left * scale, end[:, None], right * scale], axis=1)
+    data = jnp.concatenate([value[:-1, None], left * scale, value[1:, None], right * scale], axis=1)
     return jnp.dot(data, jnp.asarray(_HERMITE_TO_MONOMIAL.T), precision=jax.lax.Precision.HIGHEST)
 
 

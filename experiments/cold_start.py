@@ -47,6 +47,7 @@ COMMANDS = {
     "design": ["-m", "camjax", "design", "--objective", "residual", "--band", "6:12",
                "--max-ca", "7.5", "--max-jerk", "100", "--out", "{out}"],
     "follower": ["-m", "camjax", "follower", "--law", "cycloidal"],
+    "program": ["-m", "camjax", "program", "--rpm", "200:1200:101", "--no-flight"],
 }
 
 

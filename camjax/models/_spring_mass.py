@@ -33,10 +33,8 @@ from ..sdof import (
     MAX_GRID_INTERVALS,
     MotionGrid,
     SampledLaw,
-    bounded_peak_in_motion,
     chunked_map,
     default_resolution,
-    dense_peak_in_motion,
     dwell_peak,
     eigenvalue,
     integrate,
@@ -45,7 +43,6 @@ from ..sdof import (
     peak_in_motion,
     propagate,
     residual_of_mode,
-    with_fallback,
 )
 from ..solvers import SOLVERS
 from ._base import AbstractModel, Metrics, Options, Response
@@ -197,11 +194,9 @@ def _mode(law, model, options):
     return grid, q, result, steps
 
 
-def _metrics(q, grid, model: SpringMass, ca, dwell: float, in_motion=None) -> Metrics:
-    """The metrics of mode ``q``; ``in_motion`` (the peak over the rise) if already known."""
+def _metrics(q, grid, model: SpringMass, ca, dwell: float) -> Metrics:
     omega, zeta = model.omega, model.damping
-    if in_motion is None:
-        in_motion = peak_in_motion(q, grid, omega, zeta)
+    in_motion = peak_in_motion(q, grid, omega, zeta)
     in_dwell = dwell_peak(q[-1], omega, zeta, dwell)
     residual = residual_of_mode(q[-1], omega, zeta)
     return Metrics(jnp.maximum(in_motion, in_dwell) / ca, residual / ca, in_motion / ca)
@@ -223,21 +218,12 @@ def batch_metrics(law, period_ratio, damping, options: SpringMassOptions):
     """
     grid = _grid(law, options)
 
-    def one(n, dense: bool):
+    def one(n):
         model = SpringMass(n, damping)  # checked by the caller (ct_curve checks concretely)
         q, result, steps = _mode_at_nodes(law, grid, model, options)
-        if dense:
-            peak, overflow = dense_peak_in_motion(q, grid, model.omega, model.damping), False
-        else:
-            peak, overflow = bounded_peak_in_motion(q, grid, model.omega, model.damping)
-        return (_metrics(q, grid, model, law.Ca, options.dwell, peak), result, steps), overflow
+        return _metrics(q, grid, model, law.Ca, options.dwell), result, steps
 
-    # The peak search refines a few candidate intervals; ratios where more can hold the peak
-    # are redone with every interval refined, chunk by chunk (with_fallback).
-    def chunk(ns):
-        return with_fallback(lambda n: one(n, False), lambda n: one(n, True)[0], ns)
-
-    return chunked_map(chunk, period_ratio, grid.nodes.shape[0], batched=True)
+    return chunked_map(one, period_ratio, grid.nodes.shape[0])
 
 
 TRACED_RESOLUTION = 1024

@@ -18,9 +18,7 @@ studies, and a cam program's turn at machine speed (``camjax.program``):
 """
 
 from ._batch import CHUNK_NODES as CHUNK_NODES
-from ._batch import SPILL as SPILL
 from ._batch import chunked_map as chunked_map
-from ._batch import with_fallback as with_fallback
 from ._grid import GAUSS_POINTS as GAUSS_POINTS
 from ._grid import INTERPOLATION_DEGREE as INTERPOLATION_DEGREE
 from ._grid import MAX_GRID_INTERVALS as MAX_GRID_INTERVALS
@@ -34,15 +32,11 @@ from ._grid import to_monomial as to_monomial
 from ._ode import integrate as integrate
 from ._ode import sdof_term as sdof_term
 from ._ode import vector_field as vector_field
-from ._peaks import PEAK_CANDIDATES as PEAK_CANDIDATES
-from ._peaks import bounded_peak_in_motion as bounded_peak_in_motion
 from ._peaks import deflection_gains as deflection_gains
-from ._peaks import dense_peak_in_motion as dense_peak_in_motion
 from ._peaks import dwell_peak as dwell_peak
 from ._peaks import gain_derivatives as gain_derivatives
 from ._peaks import mode_gain as mode_gain
 from ._peaks import output_jets as output_jets
-from ._peaks import peak_bounds as peak_bounds
 from ._peaks import peak_in_motion as peak_in_motion
 from ._peaks import refined_extremes as refined_extremes
 from ._peaks import refined_max as refined_max
