@@ -1,5 +1,6 @@
 """Flexible swinging follower: beam frequencies, quasi-static deflection, constraints, spectra."""
 
+import json
 import math
 
 import equinox as eqx
@@ -232,3 +233,19 @@ def test_accelerations_through_the_hoisted_jets_equal_the_laws_own_derivatives()
         direct = accelerations(model, q, qdot, t, (model.program, model.program))
         for got, want in zip(accelerations(model, q, qdot, t, None), direct):
             np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-10 * float(jnp.max(jnp.abs(want))))
+
+
+def test_a_deflection_larger_than_the_rod_is_warned_about(capsys):
+    """At 100,000 rad/s the cam outruns the rod's fundamental (0.13 Omega) and the rod
+    deflects by more than its radius: the run reports, and says on stderr that it lies
+    outside the small-deflection beam model."""
+    from camjax.cli import main
+
+    assert main(["follower", "--law", "cycloidal", "--omega", "1e5", "--format", "json"]) == 0
+    captured = capsys.readouterr()
+    report = json.loads(captured.out)
+    deflection = max(report["max_transverse_mm"], report["max_axial_mm"])
+    assert deflection > report["radius_mm"]
+    assert captured.err.strip() == (
+        f"warning: the rod deflects by {deflection:.3g} mm, more than its radius (5 mm): far "
+        "outside the small-deflection beam model; lower --omega or stiffen the rod (--radius, --length)")

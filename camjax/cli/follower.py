@@ -8,6 +8,7 @@ fundamental, with the largest constraint drift of the run.
 from __future__ import annotations
 
 import math
+import sys
 
 from ._common import (
     LAW_HELP,
@@ -113,6 +114,11 @@ def run(args) -> int:
     model = _model(args)
     out = output_dir(args.out)
     report, response = follower_report(model, args.law)
+    deflection = max(report["max_transverse_mm"], report["max_axial_mm"])
+    if deflection > report["radius_mm"]:  # the assumed-modes beam is a small-deflection model
+        print(f"warning: the rod deflects by {deflection:.3g} mm, more than its radius "
+              f"({report['radius_mm']:g} mm): far outside the small-deflection beam model; lower "
+              "--omega or stiffen the rod (--radius, --length)", file=sys.stderr)
     if out is not None:
         dump_json(report, out / "follower.json")
         table = np.column_stack(

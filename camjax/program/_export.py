@@ -140,17 +140,22 @@ def profile(program: Program, points: int = 3600) -> Profile:
     )
 
 
+PRESSURE_ANGLE_COLUMN = "pressure_angle_deg_negative_on_rise"
+"""The CSV's pressure-angle column, named for camjax's sign convention."""
+
+
 def write_csv(prof: Profile, path, *, outer: bool = False) -> Path:
     """One row per cam angle: lift, pitch and profile points, pressure angle, curvature.
 
-    ``pressure_angle_deg`` has camjax's sign: negative on a rise (see ``Profile``).  Under a
+    The pressure-angle column is named for its sign, ``pressure_angle_deg_negative_on_rise``
+    (camjax's: negative on a rise, the opposite of most textbooks; see ``Profile``).  Under a
     flat face: lift, profile point, the cam's radius of curvature and the face position.
     """
     path = Path(path)
     if prof.flat_face:
         return _write_flat_csv(prof, path)
     header = ["theta_deg", "lift_mm", "pitch_x_mm", "pitch_y_mm", "profile_x_mm", "profile_y_mm",
-              "pressure_angle_deg", "pitch_radius_of_curvature_mm", "profile_radius_of_curvature_mm", "undercut"]
+              PRESSURE_ANGLE_COLUMN, "pitch_radius_of_curvature_mm", "profile_radius_of_curvature_mm", "undercut"]
     if outer:
         header += ["outer_x_mm", "outer_y_mm"]
     with path.open("w", newline="") as handle:
@@ -166,7 +171,7 @@ def write_csv(prof: Profile, path, *, outer: bool = False) -> Path:
 
 
 def _write_flat_csv(prof: Profile, path: Path) -> Path:
-    header = ["theta_deg", "lift_mm", "profile_x_mm", "profile_y_mm", "pressure_angle_deg",
+    header = ["theta_deg", "lift_mm", "profile_x_mm", "profile_y_mm", PRESSURE_ANGLE_COLUMN,
               "profile_radius_of_curvature_mm", "face_position_mm"]
     with path.open("w", newline="") as handle:
         writer = csv.writer(handle)
