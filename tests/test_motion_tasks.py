@@ -403,6 +403,40 @@ def test_design_a_segment_in_motion_keeps_its_joins(feed, tmp_path, capsys):
 
     objective = MaxPreload(feed, 4, 500.0, 650.0)
     assert objective.report(law) < 0.5 * objective.report(feed.segments[3].law)  # 94 N from 280 N
-    argv[argv.index("preload")] = "residual"
+    argv[argv.index("preload")] = "ca-ct"
     assert main(argv) == 2
-    assert "segment 4 starts or ends in motion: only the preload objective" in capsys.readouterr().err
+    assert "segment 4 starts or ends in motion: the ca-ct objective measures a rise from rest to rest" \
+        in capsys.readouterr().err
+
+
+def test_the_program_residual_objective_is_the_steady_states_residual(feed):
+    """``MaxProgramResidual`` trains on the residual modes of the whole program: their
+    moduli at the training speeds are the steady state's ``residual_vibration_mm`` there
+    (every dwell and constant-velocity start), and its training value is a smooth maximum
+    of them that tends to the largest as the sharpness grows."""
+    from camjax.program import MaxProgramResidual, SteadyState
+
+    objective = MaxProgramResidual(feed, 4, 500.0, 650.0)
+    law = feed.segments[3].law
+    features = np.asarray(objective.features(law))
+    speeds = objective.speeds()
+    expected = SteadyState(feed, 500.0).summary(speeds).residual_vibration_mm
+    np.testing.assert_allclose(np.hypot(features[0], features[1]), expected, rtol=1e-9, atol=1e-15)
+    top = float(np.max(expected))
+    assert float(objective.value(objective.features(law), 1.0, 2000.0)) == pytest.approx(top, rel=5e-3)
+    assert float(objective.value(objective.features(law), 1.0, 8.0)) < top
+
+
+def test_design_a_segment_in_motion_for_the_least_residual(feed, tmp_path):
+    """``--objective residual`` on the feed cam's reversal lowers the largest residual
+    vibration of the program over the speed range and keeps every join."""
+    from camjax.program import MaxProgramResidual
+
+    argv = ["design", "--program", str(example_path("feed")), "--segment", "4", "--rpm", "500:650",
+            "--objective", "residual", "--knots", "8", "--steps", "100", "--quiet", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    new = Program.load(tmp_path / "program.toml")
+    for before, after in zip(feed.joins(), new.joins()):
+        assert after.state == before.state
+    objective = MaxProgramResidual(feed, 4, 500.0, 650.0)
+    assert objective.report(new.segments[3].law) < objective.report(feed.segments[3].law)

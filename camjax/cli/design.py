@@ -32,7 +32,8 @@ def register(subparsers) -> None:
                         help="what to minimise: residual vibration R (units of Ca) or the peak "
                         "inertia load Ca*Ct (units of h/T^2), worst case over the band; with "
                         "--program also 'preload': the largest preload (N) the whole program "
-                        "needs over the speed range")
+                        "needs over the speed range; for a --segment that starts or ends in "
+                        "motion, 'residual' is the whole program's largest residual vibration (mm)")
     where = parser.add_mutually_exclusive_group()  # one is required unless --program (checked in run)
     where.add_argument("--band", metavar="N1:N2",
                        help="period-ratio band (dimensionless, rise time / natural period)")

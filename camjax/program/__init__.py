@@ -69,11 +69,13 @@ from ._spec import with_law as with_law
 if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
     from ._figures import save_figures as save_figures
     from ._figures import shaft_figures as shaft_figures
+    from ._preload import AbstractProgramObjective as AbstractProgramObjective
     from ._preload import MaxPreload as MaxPreload
+    from ._preload import MaxProgramResidual as MaxProgramResidual
 
 # Loaded on first use: MaxPreload subclasses camjax.law_design's objective (which imports
 # optax) and the figures import matplotlib.
-_LAZY = {"MaxPreload": "._preload", "save_figures": "._figures", "shaft_figures": "._figures"}
+_LAZY = {"AbstractProgramObjective": "._preload", "MaxPreload": "._preload", "MaxProgramResidual": "._preload", "save_figures": "._figures", "shaft_figures": "._figures"}
 
 
 def __getattr__(name):

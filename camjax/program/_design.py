@@ -30,12 +30,13 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
 
     A segment that starts or ends in motion (a polynomial, constant velocity, any law whose
     end velocity is not zero) is designed as a ``CorrectedPolynomial``
-    from the ``BoundaryPolynomial`` of its end states, so every join keeps its state; only
-    ``"preload"`` applies to it (the others measure a rise from rest to rest), and the
-    monotone cap only where that polynomial is monotone.
+    from the ``BoundaryPolynomial`` of its end states, so every join keeps its state; for it
+    ``"residual"`` is the largest residual vibration of the whole program over the speed
+    range (``MaxProgramResidual``: the segment's own rise is not from rest to rest),
+    ``"ca-ct"`` does not apply, and the monotone cap only where that polynomial is monotone.
     """
     from .. import law_design
-    from ._preload import MaxPreload  # imports optax: only when designing
+    from ._preload import MaxPreload, MaxProgramResidual  # import optax: only when designing
 
     n1, n2 = segment_band(program, segment, rpm_lo, rpm_hi)
     f = program.follower
@@ -54,9 +55,11 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     if initial is None:
         initial = seg.law
     else:
-        if objective != "preload":
-            raise ValueError(f"segment {segment} starts or ends in motion: only the preload objective "
-                             f"designs it ({objective} measures a rise from rest to rest)")
+        if objective == "ca-ct":
+            raise ValueError(f"segment {segment} starts or ends in motion: the ca-ct objective "
+                             "measures a rise from rest to rest; use preload or residual")
+        if objective == "residual":
+            goal = MaxProgramResidual(program, segment, float(rpm_lo), float(rpm_hi), damping=zeta)
         base = initial if isinstance(initial, laws.BoundaryPolynomial) else initial.base
         monotone = float(jnp.min(base.v(jnp.linspace(0.0, 1.0, 20001)))) >= -1e-12
         caps = dataclasses.replace(caps, monotone=caps.monotone and monotone)

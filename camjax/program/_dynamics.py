@@ -291,14 +291,21 @@ def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True,
     stress = jnp.sqrt(stress_sq)
     node = jnp.argmax(stress_sq)
     radius = jnp.where(force[node] >= 0, contact.radius_inner[node], contact.radius_outer[node])
-    # Residual vibration in each dwell and constant-velocity segment: distance of the mode
-    # from the steady motion there.  The forcing is beta (y0 + y_s sigma) (no y_ss), whose
-    # particular solution of q_s = lam q + forcing is -beta (y0 + y_s sigma) / lam - beta y_s / lam^2.
-    starts = jnp.asarray(grid.residual_start)
-    q_static = -beta * (y[starts] + ys[starts] / lam) / lam
-    residual = jnp.abs(q[starts] - q_static) / jnp.imag(lam)
+    residual = jnp.abs(residual_modes(grid, q, beta, lam))
     return Cycle(q, accel, force, max_accel, min_force, max_force, residual, torque[0], *figures, stress,
                  stress[node], node, radius, torque[1], torque[2])
+
+
+def residual_modes(grid: CycleGrid, q, beta, lam):
+    """The free vibration at the start of each dwell and constant-velocity segment, as a
+    complex mode over ``w_d`` (mm; its modulus is the residual vibration): the distance of
+    the mode from the steady motion there.  The forcing there is ``beta (y0 + y_s sigma)``
+    (no ``y_ss``), whose particular solution of ``q_s = lam q + forcing`` is
+    ``-beta (y0 + y_s sigma) / lam - beta y_s / lam^2``.  Affine in the lift's samples."""
+    starts = jnp.asarray(grid.residual_start)
+    y, ys = jnp.asarray(grid.lift_nodes)[starts], jnp.asarray(grid.velocity_nodes)[starts]
+    q_static = -beta * (y + ys / lam) / lam
+    return (q[starts] - q_static) / jnp.imag(lam)
 
 
 class SpeedSummary(NamedTuple):

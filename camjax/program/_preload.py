@@ -1,4 +1,5 @@
-"""The ``preload`` design objective: the largest preload a program needs over a speed range.
+"""Program-level design objectives over a speed range: the largest preload the program needs
+(``MaxPreload``) and its largest residual vibration (``MaxProgramResidual``).
 
 Kept apart from ``_design`` because it subclasses ``camjax.law_design``'s objective (which
 imports optax): ``camjax.program`` stays light to import.
@@ -6,13 +7,24 @@ imports optax): ``camjax.program`` stays light to import.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
-from ._dynamics import SteadyState, Train, _cycle, cycle_grid, resolution, with_segment_law
+from ..sdof import eigenvalue
+from ._dynamics import (
+    SteadyState,
+    Train,
+    _cycle,
+    cycle_grid,
+    residual_modes,
+    resolution,
+    with_segment_law,
+)
 from ._jump import even_periods, min_preload_n, scan_speeds
 from ._spec import Program, segment_band, with_law
 
@@ -31,17 +43,23 @@ def _smooth_max(values, p):
     return low + span * jnp.mean(((values - low) / span) ** p) ** (1.0 / p)
 
 
-class MaxPreload(AbstractObjective):
-    """Largest preload the program needs over ``[rpm_lo, rpm_hi]`` with segment ``segment``'s law.
+def _segment_grid(objective, law):
+    """The program with the objective's segment set to ``law`` (traced leaves allowed), its
+    grid and train: the layout comes from a copy of the law with its traced leaves zeroed
+    (concrete, so built eagerly even under a trace), the segment's samples from the law."""
+    # Concrete leaves (a corrected polynomial's base) stay: the program must keep its joins.
+    placeholder = jax.tree.map(lambda x: np.zeros(np.shape(x)) if isinstance(x, jax.core.Tracer) else x, law)
+    program = with_law(objective.program, objective.segment, placeholder)
+    with jax.ensure_compile_time_eval():
+        grid = cycle_grid(program, resolution(program, objective.rpm_lo))
+    return program, with_segment_law(grid, program, objective.segment - 1, law), Train.of(program)
 
-    The required preload at a speed is ``max over the turn of -(k e + c e')`` of the whole
-    program's periodic steady state (vibration carried in from the other segments counts),
-    in N.  Training takes the signed value (it may be negative: contact margin) at the grid
-    nodes of ``speeds`` (8 per natural-frequency cycle gained across the range) and
-    smooths the maximum over speeds and nodes by a power mean of the values shifted to
-    ``[0, 1]``.  The report is ``max(0, .)`` by the program's own steady-state path
-    (``SteadyState``, extrema refined between nodes) on ``EVALUATION_SAMPLES`` speeds.
-    """
+
+class AbstractProgramObjective(AbstractObjective):
+    """An objective on the whole program with segment ``segment``'s (1-based) law, over
+    the speed range ``[rpm_lo, rpm_hi]``: training at ``speeds`` (8 per natural-frequency
+    cycle gained across the range), reports at ``EVALUATION_SAMPLES`` speeds evenly spaced
+    in the period.  Subclasses write ``features``, ``value``, ``report`` and ``label``."""
 
     program: Program = eqx.field(static=True)
     segment: int = eqx.field(static=True)
@@ -52,30 +70,45 @@ class MaxPreload(AbstractObjective):
 
     def __check_init__(self):
         segment_band(self.program, self.segment, self.rpm_lo, self.rpm_hi)
-        if self.program.follower.form_closed:
-            raise ValueError("the preload objective needs a return spring (a force-closed cam)")
         if not self.program.follower.damping_ratio > 0:
-            raise ValueError("the preload objective needs follower.damping_ratio > 0 (a periodic steady state)")
+            raise ValueError(f"the {self.what} objective needs follower.damping_ratio > 0 (a periodic steady state)")
+
+    what: ClassVar[str] = "program"
 
     def speeds(self) -> np.ndarray:
-        """Speeds (rpm) at which training evaluates the required preload."""
+        """Speeds (rpm) at which training evaluates the objective."""
         return scan_speeds(self.program, self.rpm_lo, self.rpm_hi, _SPEEDS_PER_CYCLE)
 
     def evaluation_speeds(self) -> np.ndarray:
         return even_periods(self.rpm_lo, self.rpm_hi, EVALUATION_SAMPLES)
 
+    def evaluation_ratios(self) -> np.ndarray:
+        f_n = self.program.follower.natural_frequency_hz
+        angle = self.program.segments[self.segment - 1].angle_deg
+        return np.sort(f_n * angle / 360.0 * 60.0 / self.evaluation_speeds())
+
+
+class MaxPreload(AbstractProgramObjective):
+    """Largest preload the program needs over ``[rpm_lo, rpm_hi]`` with segment ``segment``'s law.
+
+    The required preload at a speed is ``max over the turn of -(k e + c e')`` of the whole
+    program's periodic steady state (vibration carried in from the other segments counts),
+    in N.  Training takes the signed value (it may be negative: contact margin) at the grid
+    nodes of ``speeds`` and smooths the maximum over speeds and nodes by a power mean of the
+    values shifted to ``[0, 1]``.  The report is ``max(0, .)`` by the program's own
+    steady-state path (``SteadyState``, extrema refined between nodes) on
+    ``EVALUATION_SAMPLES`` speeds.
+    """
+
+    what: ClassVar[str] = "preload"
+
+    def __check_init__(self):
+        if self.program.follower.form_closed:
+            raise ValueError("the preload objective needs a return spring (a force-closed cam)")
+
     def features(self, law):
         """``k e + c e'`` (N) at every grid node and training speed: affine in the law."""
-        # The grid's layout depends only on the law's breakpoints: build it from a copy of
-        # the law with zero leaves, then fill the segment's samples from the (traced) law.
-        # (Evaluated eagerly even under a trace: the placeholder's leaves are concrete.)
-        # Concrete leaves (a corrected polynomial's base) stay: the program must keep its joins.
-        placeholder = jax.tree.map(lambda x: np.zeros(np.shape(x)) if isinstance(x, jax.core.Tracer) else x, law)
-        program = with_law(self.program, self.segment, placeholder)
-        with jax.ensure_compile_time_eval():
-            grid = cycle_grid(program, resolution(program, self.rpm_lo))
-        grid = with_segment_law(grid, program, self.segment - 1, law)
-        train = Train.of(program)
+        _, grid, train = _segment_grid(self, law)
         force = jax.vmap(lambda rpm: _cycle(grid, train, rpm).contact_force_n)(jnp.asarray(self.speeds()))
         return force - train.preload
 
@@ -91,11 +124,52 @@ class MaxPreload(AbstractObjective):
     def report(self, law) -> float:
         return float(np.max(self.required_preload(law)))
 
-    def evaluation_ratios(self) -> np.ndarray:
-        f_n = self.program.follower.natural_frequency_hz
-        angle = self.program.segments[self.segment - 1].angle_deg
-        return np.sort(f_n * angle / 360.0 * 60.0 / self.evaluation_speeds())
-
     @property
     def label(self):
         return f"max preload (N) over [{self.rpm_lo:g}, {self.rpm_hi:g}] rpm"
+
+
+class MaxProgramResidual(AbstractProgramObjective):
+    """Largest residual vibration (mm) of the program over ``[rpm_lo, rpm_hi]`` with segment
+    ``segment``'s law: the free vibration at the start of every dwell and constant-velocity
+    segment of the whole program's periodic steady state (``SpeedReport.residual_vibration_mm``),
+    the objective for a segment that starts or ends in motion, whose own rise is not from
+    rest to rest.  Training smooths the maximum over the training speeds and residual
+    points of ``|mode|``, whose real and imaginary parts are affine in the law; the report
+    is the largest by ``SteadyState`` on ``EVALUATION_SAMPLES`` speeds.
+    """
+
+    what: ClassVar[str] = "residual"
+
+    def __check_init__(self):
+        if not self.program.residual_segments():
+            raise ValueError("the program has no dwell or constant-velocity segment: no residual vibration to design for")
+
+    def features(self, law):
+        """Real and imaginary parts of the residual modes (mm), ``(2, speeds, points)``."""
+        _, grid, train = _segment_grid(self, law)
+
+        def modes(rpm):
+            period = 60.0 / rpm
+            lam = eigenvalue(train.omega_per_turn(rpm), train.zeta)
+            q = _cycle(grid, train, rpm).q
+            return residual_modes(grid, q, train.ks / train.m * period**2, lam)
+
+        z = jax.vmap(modes)(jnp.asarray(self.speeds()))
+        return jnp.stack([jnp.real(z), jnp.imag(z)])
+
+    def value(self, features, ca, sharpness):
+        return _smooth_max(jnp.hypot(features[0], features[1]).ravel(), sharpness)
+
+    def residual_mm(self, law) -> np.ndarray:
+        """Largest residual vibration (mm) at every evaluation speed, by ``SteadyState``."""
+        program = with_law(self.program, self.segment, law)
+        out = SteadyState(program, self.rpm_lo).summary(self.evaluation_speeds())
+        return np.max(out.residual_vibration_mm, axis=1)
+
+    def report(self, law) -> float:
+        return float(np.max(self.residual_mm(law)))
+
+    @property
+    def label(self):
+        return f"max residual vibration (mm) over [{self.rpm_lo:g}, {self.rpm_hi:g}] rpm"
