@@ -1,10 +1,15 @@
-"""One table of every model for the generic tests (as diffrax's ``all_ode_solvers``).
+"""One table of every model for the generic tests (as diffrax's ``all_ode_solvers``), and a
+counter of XLA compilations.
 
 ``EXAMPLES`` holds a small valid instance of every model in ``camjax.models.MODELS`` (a
 test checks the two agree, so a new model cannot miss the generic tests); ``SDOF_LIMITS``
 holds every swept model with its extra physics switched off, which must give the damped
 SDOF's numbers (to the tolerance given; ``None``: a model with no damping to compare).
 """
+
+import contextlib
+
+import jax
 
 from camjax.models import (
     MODELS,
@@ -35,3 +40,21 @@ def all_models(*, swept: bool | None = None):
     cannot, sweep their period ratio)."""
     return [(entry, EXAMPLES[entry.name]()) for entry in MODELS
             if swept is None or entry.swept == swept]
+
+
+@contextlib.contextmanager
+def compiled_programs():
+    """The names of the programs XLA compiles inside the block, from ``jax.monitoring``'s
+    backend-compile events (``jit(_sweep)``, ``jit(_response)``, ...): a test that a call
+    reuses a compiled program asserts that its name is not among them."""
+    names = []
+
+    def listener(event, duration, **kwargs):
+        if event == "/jax/core/compile/backend_compile_duration":
+            names.append(kwargs.get("fun_name"))
+
+    jax.monitoring.register_event_duration_secs_listener(listener)
+    try:
+        yield names
+    finally:
+        jax.monitoring.unregister_event_duration_listener(listener)

@@ -12,8 +12,7 @@ import pytest
 
 import camjax
 from camjax import laws
-from camjax.cli import build_parser, main
-from camjax.cli._common import split_law_specs
+from camjax.cli import build_parser, main, split_law_specs
 from camjax.models import SpringMass
 
 MODSINE = laws.get("modsine")
@@ -235,7 +234,7 @@ def test_every_option_with_a_default_states_it_in_help():
 
 
 def test_bench_takes_scca_fractions_beside_a_named_law():
-    from camjax.cli._common import laws_of
+    from camjax.cli import laws_of
 
     args = build_parser().parse_args(["bench", "--law", "scca:0.3,0.2,0.5", "--law", "cycloidal"])
     assert list(laws_of(args)) == ["scca:0.3,0.2,0.5", "cycloidal"]

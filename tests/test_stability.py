@@ -201,7 +201,7 @@ def _parse(argv):
 
 
 def test_bench_cli_rejects_bad_arguments():
-    with pytest.raises(camjax.cli._common.CliError, match="--law: unknown law 'nonsense'"):
+    with pytest.raises(camjax.cli.CliError, match="--law: unknown law 'nonsense'"):
         bench.run(_parse(["bench", "--law", "nonsense"]))
     with pytest.raises(camjax.cli.CliError, match="--n"):
         bench.run(_parse(["bench", "--n=-1:2:3"]))

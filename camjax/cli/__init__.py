@@ -14,6 +14,8 @@ from ._cache import enable_compilation_cache
 from ._common import CliError as CliError
 from ._common import HelpFormatter
 from ._common import dump_json as dump_json
+from ._common import laws_of as laws_of
+from ._common import split_law_specs as split_law_specs
 
 
 class _Parser(argparse.ArgumentParser):
