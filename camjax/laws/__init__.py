@@ -1,6 +1,7 @@
 """Motion laws: normalised rises ``s(tau)`` with exact derivatives and coefficients."""
 
 from ._base import AbstractMotionLaw as AbstractMotionLaw
+from ._base import AbstractSearchedPeaksLaw as AbstractSearchedPeaksLaw
 from ._boundary import BoundaryPolynomial as BoundaryPolynomial
 from ._boundary import ConstantVelocity as ConstantVelocity
 from ._boundary import CorrectedPolynomial as CorrectedPolynomial

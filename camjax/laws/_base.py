@@ -104,6 +104,27 @@ class AbstractMotionLaw(eqx.Module):
         return dict(zip(("Cv", "Ca", "Cj"), map(float, peaks)))
 
 
+class AbstractSearchedPeaksLaw(AbstractMotionLaw):
+    """A law whose ``Cv``, ``Ca`` and ``Cj`` come from one search over the order of the
+    derivative (splines, boundary polynomials): subclasses write ``peak(order)``."""
+
+    @abc.abstractmethod
+    def peak(self, order: int) -> jax.Array | float:
+        """``max |d^order s / dtau^order|`` over ``[0, 1]``."""
+
+    @property
+    def Cv(self):
+        return self.peak(1)
+
+    @property
+    def Ca(self):
+        return self.peak(2)
+
+    @property
+    def Cj(self):
+        return self.peak(3)
+
+
 @eqx.filter_jit
 def _compiled_evaluate(law: AbstractMotionLaw, tau: jax.Array) -> LawValues:
     return law._evaluate(tau)

@@ -19,7 +19,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._custom_types import Breakpoints, LawValues
-from ._base import AbstractMotionLaw, is_concrete, polynomial_peaks, require
+from ._base import (
+    AbstractMotionLaw,
+    AbstractSearchedPeaksLaw,
+    is_concrete,
+    polynomial_peaks,
+    require,
+)
 from ._spline import BSplineLaw, max_abs_piecewise
 
 DEGREES = (5, 7)
@@ -54,7 +60,7 @@ def _number(value):
     return value if isinstance(value, jax.Array) else np.asarray(value, dtype=float)
 
 
-class BoundaryPolynomial(AbstractMotionLaw):
+class BoundaryPolynomial(AbstractSearchedPeaksLaw):
     """The polynomial of degree 5 or 7 from 0 to 1 that meets given end states.
 
     Degree 5 meets velocity ``v`` and acceleration ``a`` at both ends; degree 7 also the
@@ -114,22 +120,10 @@ class BoundaryPolynomial(AbstractMotionLaw):
     def breakpoints(self) -> Breakpoints:
         return ()
 
-    def _peak(self, order: int):
+    def peak(self, order: int):
         if is_concrete(self):
             return polynomial_peaks(self._numpy_derivative(order))
         return max_abs_piecewise(lambda t: self.rise(t)[order], np.array([0.0, 1.0]), 64)
-
-    @property
-    def Cv(self):
-        return self._peak(1)
-
-    @property
-    def Ca(self):
-        return self._peak(2)
-
-    @property
-    def Cj(self):
-        return self._peak(3)
 
     def peak_coefficients(self) -> dict[str, float]:
         if is_concrete(self):
@@ -174,7 +168,7 @@ class ConstantVelocity(AbstractMotionLaw):
         return 0.0, 1.0
 
 
-class CorrectedPolynomial(AbstractMotionLaw):
+class CorrectedPolynomial(AbstractSearchedPeaksLaw):
     """A ``BoundaryPolynomial`` plus a B-spline correction that keeps its end states.
 
     ``s = base(tau) + sum_i c_i B_i(tau)`` on the clamped uniform basis of a
@@ -206,18 +200,6 @@ class CorrectedPolynomial(AbstractMotionLaw):
     def breakpoints(self) -> Breakpoints:
         return self._spline(self.coefficients).breakpoints()
 
-    def _peak(self, order: int):
+    def peak(self, order: int):
         edges = np.array([0.0, *self.breakpoints(), 1.0])
         return max_abs_piecewise(lambda t: self.rise(t)[order], edges)
-
-    @property
-    def Cv(self):
-        return self._peak(1)
-
-    @property
-    def Ca(self):
-        return self._peak(2)
-
-    @property
-    def Cj(self):
-        return self._peak(3)

@@ -11,7 +11,7 @@ import numpy as np
 
 from .. import checks
 from .._custom_types import Breakpoints, LawValues
-from ._base import AbstractMotionLaw, is_concrete, require
+from ._base import AbstractMotionLaw, AbstractSearchedPeaksLaw, is_concrete, require
 
 COEFFICIENTS_RULE = "BSplineLaw coefficients must be finite (got NaN or inf)"
 
@@ -91,7 +91,7 @@ def max_abs_piecewise(f, edges: np.ndarray, samples_per_piece: int = 32) -> jax.
     return jnp.maximum(jnp.abs(f(x_best)), jnp.abs(f(jax.lax.stop_gradient(grid[k]))))
 
 
-class BSplineLaw(AbstractMotionLaw):
+class BSplineLaw(AbstractSearchedPeaksLaw):
     """A rise ``s(tau) = sum_i c_i B_i(tau)`` on a clamped, uniform B-spline basis.
 
     The first three control points are 0 and the last three are 1, so ``s(0) = 0``,
@@ -178,20 +178,8 @@ class BSplineLaw(AbstractMotionLaw):
     def breakpoints(self) -> Breakpoints:
         return tuple(float(x) for x in np.unique(self.knots)[1:-1])
 
-    def _peak(self, order: int) -> jax.Array:
+    def peak(self, order: int) -> jax.Array:
         return _peak(self, order)
-
-    @property
-    def Cv(self):
-        return self._peak(1)
-
-    @property
-    def Ca(self):
-        return self._peak(2)
-
-    @property
-    def Cj(self):
-        return self._peak(3)
 
     @classmethod
     def fit(
