@@ -1,5 +1,5 @@
-"""One table of every model for the generic tests (as diffrax's ``all_ode_solvers``), and a
-counter of XLA compilations.
+"""One table of every model for the generic tests (as diffrax's ``all_ode_solvers``), the
+programs the program tests share, and a record of XLA compilations.
 
 ``EXAMPLES`` holds a small valid instance of every model in ``camjax.models.MODELS`` (a
 test checks the two agree, so a new model cannot miss the generic tests); ``SDOF_LIMITS``
@@ -11,6 +11,7 @@ import contextlib
 
 import jax
 
+from camjax import laws
 from camjax.models import (
     MODELS,
     Backlash,
@@ -33,6 +34,21 @@ SDOF_LIMITS = {
     "backlash": (Backlash(1.0, 0.5, 20.0, 0.05), 1e-7),  # dn holds it on the flank
     "two-mass": (TwoMass(1.0, 1.0, 0.0), None),  # m = 0: a rigid camshaft
 }
+
+
+FOLLOWER = dict(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0, damping_ratio=0.05,
+                spring_rate_n_per_mm=10.0, preload_n=300.0, base_radius_mm=40.0, roller_radius_mm=12.0)
+"""The program tests' follower (a ``camjax.program.Follower``'s fields)."""
+
+
+def two_cycloids(**follower):
+    """Rise 20 mm (cycloidal, 100 deg), dwell 80, return (cycloidal, 100), dwell 80, with
+    ``FOLLOWER`` updated by ``follower``."""
+    from camjax.program import Follower, Program, Segment
+
+    law = laws.get("cycloidal")
+    return Program("two-cycloids", (Segment(100, 20.0, law), Segment(80), Segment(100, -20.0, law), Segment(80)),
+                   Follower(**{**FOLLOWER, **follower}))
 
 
 def all_models(*, swept: bool | None = None):

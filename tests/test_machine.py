@@ -9,6 +9,7 @@ import tomllib
 
 import numpy as np
 import pytest
+from helpers import FOLLOWER
 from scipy.integrate import quad
 
 from camjax import laws
@@ -30,9 +31,6 @@ from camjax.program import (
     shape,
 )
 from camjax.sdof import deflection_gains
-
-FOLLOWER = dict(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0, damping_ratio=0.05,
-                spring_rate_n_per_mm=10.0, preload_n=300.0, base_radius_mm=40.0, roller_radius_mm=12.0)
 
 
 @pytest.fixture(scope="module")

@@ -10,6 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import FOLLOWER
 from scipy.integrate import solve_ivp
 
 from camjax import laws
@@ -24,9 +25,6 @@ from camjax.program import (
     node_contact_force,
     profile,
 )
-
-FOLLOWER = dict(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0, damping_ratio=0.05,
-                spring_rate_n_per_mm=10.0, preload_n=300.0, base_radius_mm=40.0, roller_radius_mm=12.0)
 
 
 def hermite_coefficients(degree, start, end):

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import FOLLOWER, two_cycloids
 from scipy.integrate import solve_ivp
 
 import camjax
@@ -26,16 +27,6 @@ from camjax.program import (
     with_law,
     write_dxf,
 )
-
-FOLLOWER = dict(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0, damping_ratio=0.05,
-                spring_rate_n_per_mm=10.0, preload_n=300.0, base_radius_mm=40.0, roller_radius_mm=12.0)
-
-
-def two_cycloids(**follower) -> Program:
-    """Rise 20 mm (cycloidal, 100 deg), dwell 80, return (cycloidal, 100), dwell 80."""
-    law = laws.get("cycloidal")
-    return Program("two-cycloids", (Segment(100, 20.0, law), Segment(80), Segment(100, -20.0, law), Segment(80)),
-                   Follower(**{**FOLLOWER, **follower}))
 
 
 def cycloid_lift(theta_deg):
