@@ -80,11 +80,11 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     if gather is None:
         gather = grid.piece_width.shape[0] > _DENSE_PIECES
     if not gather:
+        # Real and imaginary parts side by side in one product each: XLA would otherwise
+        # evaluate psi's series once for each part.
         weights = psi(z).reshape(-1)  # (P * 6,): every piece's weights
-        forcing = grid.piece_forcing()
-        kick = (forcing @ weights.real + 1j * (forcing @ weights.imag)) * grid.widths
-        selector = grid.piece_selector()
-        factor = selector @ step.real + 1j * (selector @ step.imag)
+        kick = _complex_product(grid.piece_forcing(), weights) * grid.widths
+        factor = _complex_product(grid.piece_selector(), step)
     else:
         kick = jnp.sum(grid.forcing * psi(z)[grid.piece], axis=1) * grid.widths
         factor = step[grid.piece]
@@ -93,7 +93,10 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     pad = n_blocks * _BLOCK - n_intervals
     kick = jnp.pad(kick, (0, pad)).reshape(n_blocks, _BLOCK)
     growth = jnp.cumprod(jnp.pad(factor, (0, pad), constant_values=1.0).reshape(n_blocks, _BLOCK), axis=1)
-    inside = growth * jnp.cumsum(kick / growth, axis=1)
+    # kick / growth as a product with 1 / growth built from a real reciprocal: XLA's
+    # complex division (scaled against overflow) was the kernel's costliest operation on CPU.
+    inverse = 1.0 / (growth.real**2 + growth.imag**2)
+    inside = growth * jnp.cumsum(kick * jax.lax.complex(growth.real * inverse, -growth.imag * inverse), axis=1)
 
     def carry(q, block):
         block_growth, block_end = block
@@ -106,6 +109,12 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     if start is not None:  # the free vibration from the start, exactly
         q = q + start * jnp.exp(lam * (grid.nodes - grid.nodes[0]))
     return q
+
+
+def _complex_product(real_matrix, vector):
+    """``real_matrix @ vector`` for a complex ``vector``, as one real product."""
+    parts = real_matrix @ jnp.stack([vector.real, vector.imag], axis=-1)
+    return jax.lax.complex(parts[..., 0], parts[..., 1])
 
 
 def periodic_propagate(grid: MotionGrid, omega, zeta) -> jax.Array:
