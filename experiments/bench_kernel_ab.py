@@ -1,12 +1,13 @@
-"""A/B the exact kernel's propagation against another git revision's, in one process.
+"""A/B the exact kernel's propagation and batching against another git revision's, in one
+process.
 
 The warm time of a whole-curve kernel moves by up to 1.5x between processes on a shared
-machine, which hides changes of a few percent.  This loads ``camjax/sdof/_step.py`` of
-``--baseline`` (a git revision) beside the working tree's, builds the same 1000-ratio
-kernel (propagation, refined peak, dwell, residual) on each, checks that they agree, and
-times them in turn.
+machine, which hides changes of a few percent.  This loads ``camjax/sdof/_step.py`` and
+``_batch.py`` of ``--baseline`` (a git revision) beside the working tree's, builds the same
+1000-ratio kernel (propagation, refined peak, dwell, residual) on each, checks that they
+agree, and times them in turn.
 
-    python experiments/bench_kernel_ab.py --baseline 6dcd6bb [--repeats 15]
+    python experiments/bench_kernel_ab.py --baseline 6dcd6bb [--n-max 30] [--repeats 15]
 """
 
 from __future__ import annotations
@@ -28,21 +29,21 @@ from camjax.sdof import SampledLaw, chunked_map, dwell_peak, peak_in_motion, res
 from camjax.sdof import _step as current
 
 
-def baseline_module(revision: str):
-    """``camjax/sdof/_step.py`` at ``revision``, imported as a stand-alone module."""
+def baseline_module(revision: str, name: str):
+    """``camjax/sdof/<name>.py`` at ``revision``, imported as a stand-alone module."""
     root = Path(__file__).resolve().parents[1]
-    source = subprocess.run(["git", "show", f"{revision}:camjax/sdof/_step.py"], cwd=root,
+    source = subprocess.run(["git", "show", f"{revision}:camjax/sdof/{name}.py"], cwd=root,
                             check=True, capture_output=True, text=True).stdout
     source = source.replace("from ._grid import", "from camjax.sdof._grid import")
-    path = Path(tempfile.mkdtemp()) / "baseline_step.py"
+    path = Path(tempfile.mkdtemp()) / f"baseline{name}.py"
     path.write_text(source)
-    spec = importlib.util.spec_from_file_location("baseline_step", path)
+    spec = importlib.util.spec_from_file_location(f"baseline{name}", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
 
 
-def kernel(propagate, sampled: SampledLaw):
+def kernel(propagate, chunked_map, sampled: SampledLaw):
     grid = sampled.grid
 
     def one(n):
@@ -57,15 +58,20 @@ def kernel(propagate, sampled: SampledLaw):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--baseline", required=True, help="git revision to compare against")
+    parser.add_argument("--n-max", type=float, default=30.0, help="ratios in [1, N_MAX]")
     parser.add_argument("--repeats", type=int, default=15)
     args = parser.parse_args()
-    variants = {"baseline": baseline_module(args.baseline).propagate, "current": current.propagate}
-    n = jnp.linspace(1.0, 30.0, 1000)
-    options = SpringMassOptions().checked(30.0)
+    variants = {
+        "baseline": (baseline_module(args.baseline, "_step").propagate,
+                     baseline_module(args.baseline, "_batch").chunked_map),
+        "current": (current.propagate, chunked_map),
+    }
+    n = jnp.linspace(1.0, args.n_max, 1000)
+    options = SpringMassOptions().checked(args.n_max)
     times = {key: [] for key in variants}
     for name in ("cycloidal", "modified-sine", "poly4567"):
         sampled = SampledLaw.of(laws.as_law(name), options.resolution, 8)
-        fns = {key: kernel(p, sampled) for key, p in variants.items()}
+        fns = {key: kernel(*parts, sampled) for key, parts in variants.items()}
         out = {key: jax.block_until_ready(f(n)) for key, f in fns.items()}
         peak = float(jnp.max(jnp.abs(out["current"][0] - out["baseline"][0]) / out["baseline"][0]))
         residual = float(jnp.max(jnp.abs(out["current"][1] - out["baseline"][1])))

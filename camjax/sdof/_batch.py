@@ -5,7 +5,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-CHUNK_NODES = 65536
+CHUNK_NODES = 131072
 """Grid nodes (batch members x nodes per member) that ``chunked_map`` vmaps over at once."""
 
 
