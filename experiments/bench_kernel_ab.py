@@ -35,7 +35,7 @@ def baseline_module(revision: str, name: str):
     source = subprocess.run(["git", "show", f"{revision}:camjax/sdof/{name}.py"], cwd=root,
                             check=True, capture_output=True, text=True).stdout
     source = source.replace("from ._grid import", "from camjax.sdof._grid import")
-    path = Path(tempfile.mkdtemp()) / f"baseline{name}.py"
+    path = Path(tempfile.mkdtemp(prefix="camjax-ab-")) / f"baseline{name}.py"
     path.write_text(source)
     spec = importlib.util.spec_from_file_location(f"baseline{name}", path)
     module = importlib.util.module_from_spec(spec)
@@ -43,16 +43,23 @@ def baseline_module(revision: str, name: str):
     return module
 
 
-def kernel(propagate, chunked_map, sampled: SampledLaw):
+def kernel(propagate, chunked_map, sampled: SampledLaw, zeta: float = 0.0, gather=None):
     grid = sampled.grid
 
     def one(n):
         w = 2 * jnp.pi * n
-        q = propagate(grid, w, 0.0)
-        peak = jnp.maximum(peak_in_motion(q, grid, w, 0.0), dwell_peak(q[-1], w, 0.0, 1.0))
-        return peak, residual_of_mode(q[-1], w, 0.0)
+        q = propagate(grid, w, zeta, gather=gather)
+        peak = jnp.maximum(peak_in_motion(q, grid, w, zeta), dwell_peak(q[-1], w, zeta, 1.0))
+        return peak, residual_of_mode(q[-1], w, zeta)
 
     return jax.jit(lambda n: chunked_map(one, n, grid.nodes.shape[0]))
+
+
+def difference(outputs) -> tuple[float, float]:
+    """Largest relative difference of the peaks and absolute of the residuals."""
+    (peak, residual), (base_peak, base_residual) = outputs["current"], outputs["baseline"]
+    return (float(jnp.max(jnp.abs(peak - base_peak) / base_peak)),
+            float(jnp.max(jnp.abs(residual - base_residual))))
 
 
 def main() -> None:
@@ -71,18 +78,24 @@ def main() -> None:
     times = {key: [] for key in variants}
     for name in ("cycloidal", "modified-sine", "poly4567"):
         sampled = SampledLaw.of(laws.as_law(name), options.resolution, 8)
+        # Agreement: undamped, damped, and with each interval's weights gathered (the path
+        # of a program's turn).
+        for zeta, gather in ((0.0, None), (0.05, None), (0.2, None), (0.05, True)):
+            out = {key: kernel(*parts, sampled, zeta, gather)(n) for key, parts in variants.items()}
+            peak, residual = difference(out)
+            print(f"{name}, damping {zeta}{', gathered' if gather else ''}: peak differs by "
+                  f"{peak:.1e} (relative), residual by {residual:.1e}")
         fns = {key: kernel(*parts, sampled) for key, parts in variants.items()}
-        out = {key: jax.block_until_ready(f(n)) for key, f in fns.items()}
-        peak = float(jnp.max(jnp.abs(out["current"][0] - out["baseline"][0]) / out["baseline"][0]))
-        residual = float(jnp.max(jnp.abs(out["current"][1] - out["baseline"][1])))
-        print(f"{name}: peak differs by {peak:.1e} (relative), residual by {residual:.1e}")
-        for _ in range(args.repeats):
-            for key, f in fns.items():
+        for f in fns.values():
+            jax.block_until_ready(f(n))
+        for repeat in range(args.repeats):  # in turn, each first as often as the other
+            for key in (list(fns) if repeat % 2 == 0 else list(fns)[::-1]):
                 start = time.perf_counter()
-                jax.block_until_ready(f(n))
+                jax.block_until_ready(fns[key](n))
                 times[key].append(time.perf_counter() - start)
     for key, values in times.items():
-        print(f"{key:9s} median {1e3 * np.median(values):.2f} ms over {len(values)} runs")
+        print(f"{key:9s} median {1e3 * np.median(values):.2f} ms over {len(values)} runs "
+              f"(undamped)")
     print(f"baseline / current: {np.median(times['baseline']) / np.median(times['current']):.3f}")
 
 

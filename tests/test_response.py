@@ -285,7 +285,8 @@ def test_psi_matches_its_integral_on_both_branches():
     weights = np.tile(w / 16, 8)
     z = np.concatenate([(np.linspace(-6, 0.5, 14)[:, None]
                          + 1j * np.linspace(-9, 9, 19)[None, :]).ravel(),
-                        [0j, 1e-9j, 1.999j, 2.001j, -1.999 + 0j, 3.0 + 0j]])
+                        [0j, 1e-9j, 0.999j, 1.001j, -0.999j, -1.001j, 0.999 + 0j,
+                         1.001 + 0j, -0.999 + 0j, -1.001 + 0j, 3.0 + 0j]])
     reference = np.stack([(weights * np.exp(np.outer(z, 1 - s)) * s**m).sum(1)
                           for m in range(6)], axis=-1)
     got = np.asarray(psi(jnp.asarray(z)))

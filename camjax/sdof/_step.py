@@ -10,7 +10,7 @@ Over an interval of width ``h`` on which ``a`` is the polynomial ``sum_m c_m sig
 
 ``psi_m`` comes from its Taylor series for ``|z| < 1`` (18 terms: truncation below
 1e-17) and from the upward recurrence ``psi_m = (m psi_(m-1) - 1) / z`` above, whose
-rounding grows by at most ``5!`` at ``|z| = 1`` (below 1e-13 relative).  Default grids keep
+rounding grows by at most ``5!`` at ``|z| = 1`` (about 2e-13 relative).  Default grids keep
 ``|z| = w h`` at most 0.5, so the series is the path that runs; it is the propagation's
 largest cost per period ratio, hence the short radius (18 terms instead of the 25 a radius
 of 2 needs made the kernel 1.08x faster over n <= 30).
@@ -55,10 +55,13 @@ def eigenvalue(omega, zeta):
     return -zeta * omega + 1j * omega * jnp.sqrt(1.0 - zeta**2)
 
 
-_BLOCK = 4
-"""Intervals per block of the propagation's scan.  Measured in one process (2-core CPU,
-``experiments/bench_kernel_ab.py``): blocks of 1, 2 or 4 are equally fast and 1.17x faster
-than 32, whose cumulative products and sums XLA computes as windowed reductions."""
+_CPU_BLOCK = 4
+"""Intervals per block of the propagation's scan on CPU.  Measured in one process (2-core
+CPU, 2026-11-25): blocks of 1, 2 or 4 are equally fast and 1.15-1.19x faster than 32 over
+n <= 30 and n <= 100, since XLA computes a block's cumulative products and sums as windowed
+reductions there.  Other backends keep ``_BLOCK`` (a longer scan costs a launch per step
+on a GPU; not measured)."""
+_BLOCK = 32
 _DENSE_PIECES = 64  # above this many pieces, gather each interval's weights
 
 
@@ -67,7 +70,7 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     at the first node).  ``gather`` picks how each interval finds its piece's weights
     (``None``: by a matrix product up to 64 pieces, by a gather above; the same numbers).
 
-    The recurrence ``q_(k+1) = E_k q_k + F_k`` runs in blocks of ``_BLOCK`` intervals: inside a
+    The recurrence ``q_(k+1) = E_k q_k + F_k`` runs in blocks of a few intervals: inside a
     block, ``q = G cumsum(F / G)`` with ``G`` the running product of the step factors
     (vectorised, and bounded since a block is short); a scan then carries the state
     from block to block.
@@ -92,11 +95,12 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     else:
         kick = jnp.sum(grid.forcing * psi(z)[grid.piece], axis=1) * grid.widths
         factor = step[grid.piece]
+    block = _CPU_BLOCK if jax.default_backend() == "cpu" else _BLOCK
     n_intervals = kick.shape[0]
-    n_blocks = -(-n_intervals // _BLOCK)
-    pad = n_blocks * _BLOCK - n_intervals
-    kick = jnp.pad(kick, (0, pad)).reshape(n_blocks, _BLOCK)
-    growth = jnp.cumprod(jnp.pad(factor, (0, pad), constant_values=1.0).reshape(n_blocks, _BLOCK), axis=1)
+    n_blocks = -(-n_intervals // block)
+    pad = n_blocks * block - n_intervals
+    kick = jnp.pad(kick, (0, pad)).reshape(n_blocks, block)
+    growth = jnp.cumprod(jnp.pad(factor, (0, pad), constant_values=1.0).reshape(n_blocks, block), axis=1)
     # kick / growth as a product with 1 / growth built from a real reciprocal: XLA's
     # complex division (scaled against overflow) was the kernel's costliest operation on CPU.
     inverse = 1.0 / (growth.real**2 + growth.imag**2)
