@@ -75,7 +75,9 @@ _COMPILED = {}
 def _compiled_acceleration(law):
     """The law's acceleration as a compiled scalar function (what a scipy user would call)."""
     if law.name not in _COMPILED:
-        _COMPILED[law.name] = jax.jit(law.a)
+        # A closure, not ``jax.jit(law.a)``: jit would hash the law as a static ``self``,
+        # and a law holding its parameters in arrays is not hashable.
+        _COMPILED[law.name] = jax.jit(lambda t: law.a(t))
     return _COMPILED[law.name]
 
 

@@ -255,3 +255,15 @@ def test_gradient_through_diffrax_matches_exact_path():
 
     exact = jax.grad(lambda n: camjax.residual_vibration(CYCLOIDAL, n))(3.3)
     assert float(jax.grad(residual_tsit5)(3.3)) == pytest.approx(float(exact), rel=1e-6)
+
+
+def test_scipy_reference_agrees_with_the_exact_path_on_an_scca_law():
+    """The studies' scipy peer (``solve_ivp`` on the law's compiled acceleration) runs on a
+    law that holds its parameters in arrays (an SCCA) and agrees with the exact path."""
+    from camjax import laws
+
+    law = laws.SCCA(0.25, 0.5, 0.25)
+    ct, residual, evaluations = studies.scipy_reference(law, 4.3, "DOP853", 1e-10)
+    exact = response_metrics(law, camjax.SpringMass(4.3), SpringMassOptions().checked(4.3))
+    assert evaluations > 0
+    np.testing.assert_allclose([ct, residual], [exact.ct, exact.residual], rtol=1e-7)
