@@ -1,9 +1,10 @@
-"""A/B the exact kernel's propagation and batching against another git revision's, in one
-process.
+"""A/B the exact kernel (propagation, batching, peak search) against another git revision's,
+in one process.
 
 The warm time of a whole-curve kernel moves by up to 1.5x between processes on a shared
-machine, which hides changes of a few percent.  This loads ``camjax/sdof/_step.py`` and
-``_batch.py`` of ``--baseline`` (a git revision) beside the working tree's, builds the same
+machine, which hides changes of a few percent.  This loads ``camjax/sdof/_step.py``,
+``_batch.py`` and ``_peaks.py`` of ``--baseline`` (a git revision) beside the working tree's
+(``camjax.metrics`` is shared), builds the same
 1000-ratio kernel (propagation, refined peak, dwell, residual) on each, checks that they
 agree, and times them in turn.
 
@@ -34,7 +35,7 @@ def baseline_module(revision: str, name: str):
     root = Path(__file__).resolve().parents[1]
     source = subprocess.run(["git", "show", f"{revision}:camjax/sdof/{name}.py"], cwd=root,
                             check=True, capture_output=True, text=True).stdout
-    source = source.replace("from ._grid import", "from camjax.sdof._grid import")
+    source = source.replace("from ._", "from camjax.sdof._").replace("from ..", "from camjax.")
     path = Path(tempfile.mkdtemp(prefix="camjax-ab-")) / f"baseline{name}.py"
     path.write_text(source)
     spec = importlib.util.spec_from_file_location(f"baseline{name}", path)
@@ -43,7 +44,8 @@ def baseline_module(revision: str, name: str):
     return module
 
 
-def kernel(propagate, chunked_map, sampled: SampledLaw, zeta: float = 0.0, gather=None):
+def kernel(propagate, chunked_map, peak_in_motion, sampled: SampledLaw, zeta: float = 0.0,
+           gather=None):
     grid = sampled.grid
 
     def one(n):
@@ -70,8 +72,9 @@ def main() -> None:
     args = parser.parse_args()
     variants = {
         "baseline": (baseline_module(args.baseline, "_step").propagate,
-                     baseline_module(args.baseline, "_batch").chunked_map),
-        "current": (current.propagate, chunked_map),
+                     baseline_module(args.baseline, "_batch").chunked_map,
+                     baseline_module(args.baseline, "_peaks").peak_in_motion),
+        "current": (current.propagate, chunked_map, peak_in_motion),
     }
     n = jnp.linspace(1.0, args.n_max, 1000)
     options = SpringMassOptions().checked(args.n_max)
