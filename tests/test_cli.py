@@ -1,6 +1,7 @@
 """The core commands: output shapes, files written, and exit status 2 on bad input."""
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -196,3 +197,29 @@ def test_the_executable_ends_early_without_losing_output_or_exit_status(capsys, 
         done = subprocess.run([sys.executable, "-m", "camjax", *argv], capture_output=True,
                               text=True, env=env, timeout=300)
         assert done.returncode == status, (argv, done.stderr)
+
+
+@pytest.mark.parametrize("argv, expected", [
+    (["ct", "--out", "d"], True),
+    (["program", "feed"], True),
+    (["ct", "--n", "1:30:200000"], False),  # a long sweep keeps XLA's default emitters
+    (["ct", "--n=1:30:200000"], False),
+    (["sweep", "spec.toml"], False),
+    (["bench"], False),
+])
+def test_short_commands_compile_with_the_classic_cpu_emitters(monkeypatch, argv, expected):
+    from camjax.cli import _compile_for_one_run
+
+    monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=1")
+    _compile_for_one_run(argv)
+    flags = os.environ["XLA_FLAGS"]
+    assert ("--xla_cpu_use_fusion_emitters=false" in flags) == expected
+    assert flags.startswith("--xla_force_host_platform_device_count=1")
+
+
+def test_a_users_emitter_flag_wins(monkeypatch):
+    from camjax.cli import _compile_for_one_run
+
+    monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_use_fusion_emitters=true")
+    _compile_for_one_run(["ct"])
+    assert os.environ["XLA_FLAGS"] == "--xla_cpu_use_fusion_emitters=true"

@@ -25,7 +25,7 @@ from ._common import (
 )
 
 DEFAULT_N = "1:30:1000"
-SECONDS_PER_RATIO = 3e-5  # a warm exact-path curve on two cores (2026-11-25): 25-30 ms per 1000
+SECONDS_PER_RATIO = 1.5e-5  # a warm exact-path curve on two cores (2026-11-25): 9-15 ms per 1000
 SWEPT_MODELS = [m.usage for m in MODELS if m.swept]
 
 
