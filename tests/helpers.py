@@ -10,6 +10,7 @@ SDOF's numbers (to the tolerance given; ``None``: a model with no damping to com
 import contextlib
 
 import jax
+import numpy as np
 
 from camjax import laws
 from camjax.models import (
@@ -74,3 +75,37 @@ def compiled_programs():
         yield names
     finally:
         jax.monitoring.unregister_event_duration_listener(listener)
+
+
+def scipy_periodic_deflection(follower, rpm, lift, edges_deg, times):
+    """Periodic deflection ``e, e'`` (m, m/s) of a cam program's physical SDOF at ``times``
+    (s, within one turn), by scipy shooting: one turn from three starts, then the fixed point.
+
+    ``follower`` is a ``camjax.program.Follower``; ``lift(theta_deg)`` gives the lift (mm) and
+    its first two derivatives in degrees, whose second jumps only at ``edges_deg`` (0 to 360),
+    where each solve restarts.
+    """
+    from scipy.integrate import solve_ivp
+
+    m, k, ks, c = follower.mass_kg, follower.stiffness, follower.spring_rate, follower.damping
+    rate = 360.0 * rpm / 60.0  # deg/s
+
+    def rhs(t, z):
+        y, _, ddy = lift(rate * t)
+        return [z[1], 1e-3 * (ddy * rate**2 + ks / m * y) - c / m * z[1] - (k + ks) / m * z[0]]
+
+    def run(z0, t_eval=None):
+        edges = np.asarray(edges_deg, float) / rate
+        z, out = np.asarray(z0, float), []
+        for a, b in zip(edges[:-1], edges[1:]):
+            sol = solve_ivp(rhs, (a, b), z, method="DOP853", rtol=1e-12, atol=1e-16, dense_output=True)
+            if t_eval is not None:
+                inside = t_eval[(t_eval >= a) & (t_eval < b)]
+                if inside.size:
+                    out.append(sol.sol(inside))
+            z = sol.y[:, -1]
+        return z, (np.concatenate(out, axis=1) if out else None)
+
+    b, _ = run([0.0, 0.0])
+    monodromy = np.column_stack([run(e)[0] - b for e in ([1.0, 0.0], [0.0, 1.0])])
+    return run(np.linalg.solve(np.eye(2) - monodromy, b), times)[1]

@@ -10,8 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import FOLLOWER
-from scipy.integrate import solve_ivp
+from helpers import FOLLOWER, scipy_periodic_deflection
 
 from camjax import laws
 from camjax.cli import main
@@ -254,30 +253,8 @@ def numpy_lift(program):
 
 def scipy_periodic(program, rpm, times):
     """Periodic deflection e, e' (m, m/s) of the physical ODE by scipy shooting."""
-    f = program.follower
-    m, k, ks, c = f.mass_kg, f.stiffness, f.spring_rate, f.damping
-    rate = 360.0 * rpm / 60.0
     lift, edges_deg = numpy_lift(program)
-
-    def rhs(t, z):
-        y, _, ddy = lift(rate * t)
-        return [z[1], 1e-3 * (ddy * rate**2 + ks / m * y) - c / m * z[1] - (k + ks) / m * z[0]]
-
-    def run(z0, t_eval=None):
-        edges = edges_deg / rate
-        z, out = np.asarray(z0, float), []
-        for a, b in zip(edges[:-1], edges[1:]):
-            sol = solve_ivp(rhs, (a, b), z, method="DOP853", rtol=1e-12, atol=1e-16, dense_output=True)
-            if t_eval is not None:
-                inside = t_eval[(t_eval >= a) & (t_eval < b)]
-                if inside.size:
-                    out.append(sol.sol(inside))
-            z = sol.y[:, -1]
-        return z, (np.concatenate(out, axis=1) if out else None)
-
-    b, _ = run([0.0, 0.0])
-    monodromy = np.column_stack([run(e)[0] - b for e in ([1.0, 0.0], [0.0, 1.0])])
-    return run(np.linalg.solve(np.eye(2) - monodromy, b), times)[1]
+    return scipy_periodic_deflection(program.follower, rpm, lift, edges_deg, times)
 
 
 def test_feed_steady_state_and_constant_velocity_residual_match_scipy(feed):

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import FOLLOWER, two_cycloids
+from helpers import FOLLOWER, scipy_periodic_deflection, two_cycloids
 from scipy.integrate import solve_ivp
 
 import camjax
@@ -98,33 +98,11 @@ def test_start_up_converges_to_the_periodic_steady_state(cam, solver):
 
 
 def _shooting(program, rpm, times):
-    """Periodic deflection by scipy: one cycle from three starts, then the fixed point."""
-    f = program.follower
-    m, k, ks, c = f.mass_kg, f.stiffness, f.spring_rate, f.damping
-    period = 60.0 / rpm
-    rate = 360.0 / period  # deg/s
+    """Periodic deflection of ``two_cycloids`` by scipy shooting."""
+    def lift(theta):
+        return tuple(x[0] for x in cycloid_lift(np.array([theta])))
 
-    def rhs(t, z):
-        y, _, ddy = cycloid_lift(np.array([rate * t]))
-        forcing = 1e-3 * (ddy[0] * rate**2 + ks / m * y[0])
-        return [z[1], forcing - c / m * z[1] - (k + ks) / m * z[0]]
-
-    def run(z0, t_eval=None):
-        edges = np.array([0, 100, 180, 280, 360]) / rate
-        z = np.asarray(z0, float)
-        out = []
-        for a, b in zip(edges[:-1], edges[1:]):  # piece by piece: y'' jumps at segment ends
-            sol = solve_ivp(rhs, (a, b), z, method="DOP853", rtol=1e-12, atol=1e-16, dense_output=True)
-            inside = np.asarray([]) if t_eval is None else t_eval[(t_eval >= a) & (t_eval < b)]
-            if inside.size:
-                out.append(sol.sol(inside))
-            z = sol.y[:, -1]
-        return z, (np.concatenate(out, axis=1) if out else None)
-
-    b, _ = run([0.0, 0.0])
-    monodromy = np.column_stack([run(e)[0] - b for e in ([1.0, 0.0], [0.0, 1.0])])
-    z0 = np.linalg.solve(np.eye(2) - monodromy, b)
-    return run(z0, times)[1]
+    return scipy_periodic_deflection(program.follower, rpm, lift, [0, 100, 180, 280, 360], times)
 
 
 def test_periodic_steady_state_matches_a_scipy_shooting_solve(cam, solver):
