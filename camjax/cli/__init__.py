@@ -41,11 +41,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, *, one_run: bool = False) -> int:
+    """Run one ``camjax`` command; ``one_run``: this process runs nothing else (the
+    executable), so XLA may be set up for it (:func:`_compile_for_one_run`)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     enable_compilation_cache()
     try:
+        if one_run:
+            _compile_for_one_run(args)
         return args.func(args) or 0
     except (CliError, ValueError) as error:
         print(f"camjax {args.command}: error: {error}", file=sys.stderr)
@@ -69,11 +73,10 @@ def command() -> None:
       it then ends the process.  Every file a command writes is closed before it returns.
     """
     gc.set_threshold(10_000, 10, 10)
-    _compile_for_one_run(sys.argv[1:])
     status = {"code": 1}  # an exception that escapes main exits with 1, as Python's would
     atexit.register(_end_process, status)
     try:
-        status["code"] = main()
+        status["code"] = main(one_run=True)
     except SystemExit as stop:  # argparse's --help and usage errors
         code = stop.code
         status["code"] = code if isinstance(code, int) else (0 if code is None else 1)
@@ -91,22 +94,20 @@ LONG_CT_SWEEP = 100_000
 """Period ratios from which ``camjax ct`` is a long sweep and keeps XLA's default emitters."""
 
 
-def _compile_for_one_run(argv: list[str]) -> None:
-    """XLA's classic CPU fusion emitters for a short command.
+def _compile_for_one_run(args: argparse.Namespace) -> None:
+    """XLA's classic CPU fusion emitters for a short command (``args``, parsed).
 
     They compile camjax's programs in about half the time and run them about 1.2x slower
     (the exact kernel, 2026-11-25): a cold ``camjax ct`` took 0.86x, ``camjax program``
     0.69x and ``camjax design`` 0.77x the time with them.  A flag the user set in
     ``XLA_FLAGS`` wins; it must be set before JAX starts its CPU backend, as here.
     """
-    command = next((arg for arg in argv if not arg.startswith("-")), None)
-    if command not in SHORT_COMMANDS:
+    if args.command not in SHORT_COMMANDS:
         return
-    if command == "ct":
-        n = next((argv[i + 1] for i, arg in enumerate(argv[:-1]) if arg == "--n"), "")
-        n = next((arg.split("=", 1)[1] for arg in argv if arg.startswith("--n=")), n)
-        count = n.rsplit(":", 1)[-1] if n.count(":") == 2 else str(n.count(",") + 1)
-        if count.isdigit() and int(count) >= LONG_CT_SWEEP:
+    if args.command == "ct":
+        from ._common import parse_range
+
+        if parse_range(args.n, "--n").size >= LONG_CT_SWEEP:
             return
     flags = os.environ.get("XLA_FLAGS", "")
     if "xla_cpu_use_fusion_emitters" not in flags:
