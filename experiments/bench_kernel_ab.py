@@ -3,8 +3,8 @@ in one process.
 
 The warm time of a whole-curve kernel moves by up to 1.5x between processes on a shared
 machine, which hides changes of a few percent.  This loads ``camjax/sdof/_step.py``,
-``_batch.py`` and ``_peaks.py`` of ``--baseline`` (a git revision) beside the working tree's
-(``camjax.metrics`` is shared), builds the same
+``_batch.py`` and ``_peaks.py`` of ``--baseline`` (a git revision), with the
+``camjax/metrics.py`` they refine peaks with, beside the working tree's, builds the same
 1000-ratio kernel (propagation, refined peak, dwell, residual) on each, checks that they
 agree, and times them in turn.
 
@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -31,15 +32,19 @@ from camjax.sdof import _step as current
 
 
 def baseline_module(revision: str, name: str):
-    """``camjax/sdof/<name>.py`` at ``revision``, imported as a stand-alone module."""
+    """``camjax/sdof/<name>.py`` (or ``camjax/<name>.py`` for ``metrics``) at ``revision``,
+    imported as a stand-alone module; the sdof modules import the baseline's metrics."""
     root = Path(__file__).resolve().parents[1]
-    source = subprocess.run(["git", "show", f"{revision}:camjax/sdof/{name}.py"], cwd=root,
+    path = "camjax/metrics.py" if name == "metrics" else f"camjax/sdof/{name}.py"
+    source = subprocess.run(["git", "show", f"{revision}:{path}"], cwd=root,
                             check=True, capture_output=True, text=True).stdout
+    source = source.replace("from ..metrics import", "from baselinemetrics import")
     source = source.replace("from ._", "from camjax.sdof._").replace("from ..", "from camjax.")
     path = Path(tempfile.mkdtemp(prefix="camjax-ab-")) / f"baseline{name}.py"
     path.write_text(source)
     spec = importlib.util.spec_from_file_location(f"baseline{name}", path)
     module = importlib.util.module_from_spec(spec)
+    sys.modules[f"baseline{name}"] = module
     spec.loader.exec_module(module)
     return module
 
@@ -70,6 +75,7 @@ def main() -> None:
     parser.add_argument("--n-max", type=float, default=30.0, help="ratios in [1, N_MAX]")
     parser.add_argument("--repeats", type=int, default=15)
     args = parser.parse_args()
+    baseline_module(args.baseline, "metrics")
     variants = {
         "baseline": (baseline_module(args.baseline, "_step").propagate,
                      baseline_module(args.baseline, "_batch").chunked_map,

@@ -9,9 +9,10 @@ Hermite peak refinement (``camjax.metrics.refined_peak``) needs at every interva
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 
-from ..metrics import refined_peak
+from ..metrics import bernstein_bound, hermite_data, peak_search, refined_peak
 from ._grid import MotionGrid
 from ._step import eigenvalue
 
@@ -31,40 +32,75 @@ def deflection_gains(omega, zeta):
 def gain_derivatives(gain, lam, q, one_sided):
     """First three time derivatives of ``Re(gain q)`` at nodes with mode ``q`` (``(K,)``),
     from one-sided forcing ``(a, a', a'')`` (``(K, 3)``, ``MotionGrid.one_sided``)."""
-    return _mode_terms(gain, lam, q) + _forcing_terms(gain, lam, one_sided)
+    return jnp.stack(_jet_columns(gain, lam, q, one_sided), axis=1)
 
 
-def _mode_terms(gain, lam, q):
-    """``Re(gain lam^j q)`` for ``j = 1, 2, 3`` (``(K, 3)``): the part of the derivatives
-    that the mode carries.  With ``q' = lam q + a``, the j-th derivative of ``gain q`` is
+def _jet_columns(gain, lam, q, one_sided):
+    """The three derivatives of ``gain_derivatives`` as separate arrays: the mode's part
+    ``Re(gain lam^j q)`` plus the forcing's, real since ``(a, a', a'')`` are (complex
+    arithmetic on every node costs the kernel a fifth of its time on CPU).  With
+    ``q' = lam q + a``, the j-th derivative of ``gain q`` is
     ``gain (lam^j q + lam^(j-1) a + ... + a^(j-1))``."""
-    return jnp.real(q[:, None] * (gain * jnp.stack([lam, lam**2, lam**3])))
-
-
-def _forcing_terms(gain, lam, one_sided):
-    """The forcing's part of the derivatives (``(K, 3)``): real, since the one-sided
-    ``(a, a', a'')`` are, and only ``Re(gain lam^k)`` multiplies them (complex
-    arithmetic on every node costs the kernel a fifth of its time on CPU)."""
-    g0, g1, g2 = jnp.real(gain), jnp.real(gain * lam), jnp.real(gain * lam**2)
+    g = _jet_gains(gain, lam)
     a, da, dda = one_sided[:, 0], one_sided[:, 1], one_sided[:, 2]
-    return jnp.stack([g0 * a, g1 * a + g0 * da, g2 * a + g1 * da + g0 * dda], axis=1)
+    re, im = jnp.real(q), jnp.imag(q)
+    mode = [g[2 * j] * re - g[2 * j + 1] * im for j in range(1, 4)]
+    return (mode[0] + g[0] * a, mode[1] + g[2] * a + g[0] * da,
+            mode[2] + g[4] * a + g[2] * da + g[0] * dda)
+
+
+def _jet_gains(gain, lam):
+    """Real and imaginary parts of ``gain lam^j``, ``j = 0..3``, as eight real scalars.
+
+    Kept apart from the per-node arithmetic (an optimisation barrier): fused into it, XLA
+    recomputed these complex products for every node."""
+    parts = []
+    for j in range(4):
+        parts += [jnp.real(gain * lam**j), jnp.imag(gain * lam**j)]
+    return jax.lax.optimization_barrier(parts)
 
 
 def output_jets(gain, q, grid: MotionGrid, omega, zeta):
     """``Re(gain q)`` at the nodes and its derivatives at both ends of every interval
-    (``(values, left, right)``, the arguments of ``refined_peak`` after the widths); the
-    mode's part is computed once per node and shared by the intervals on either side."""
+    (``(values, left, right)``, the arguments of ``refined_peak`` after the widths)."""
+    values, left, right = _output_columns(gain, q, grid, omega, zeta)
+    return values, jnp.stack(left, axis=1), jnp.stack(right, axis=1)
+
+
+def _output_columns(gain, q, grid: MotionGrid, omega, zeta):
+    """``output_jets`` with each derivative a separate array: the bound of every interval
+    reads them in one pass without storing them."""
     lam = eigenvalue(omega, zeta)
     left, right = grid.one_sided()
-    carried = _mode_terms(gain, lam, q)
-    return (jnp.real(gain * q), carried[:-1] + _forcing_terms(gain, lam, left),
-            carried[1:] + _forcing_terms(gain, lam, right))
+    g = _jet_gains(gain, lam)
+    values = g[0] * jnp.real(q) - g[1] * jnp.imag(q)
+    return values, _jet_columns(gain, lam, q[:-1], left), _jet_columns(gain, lam, q[1:], right)
 
 
 def peak_in_motion(q, grid: MotionGrid, omega, zeta):
-    """Max ``|x''|`` over the grid's span: ``x'' = Re(K q)`` at the nodes, refined between."""
-    values, left, right = output_jets(mode_gain(omega, zeta), q, grid, omega, zeta)
-    return refined_peak(values, grid.widths, left, right)
+    """Max ``|x''|`` over the grid's span: ``x'' = Re(K q)`` at the nodes, refined between.
+
+    Every interval's bound comes from the jets in one pass; the intervals the search
+    refines recompute theirs from the mode at their ends, so the jets of all intervals
+    are never stored.
+    """
+    gain, lam = mode_gain(omega, zeta), eigenvalue(omega, zeta)
+    values, left, right = _output_columns(gain, q, grid, omega, zeta)
+    one_left, one_right = grid.one_sided()
+    widths = grid.widths
+
+    law = jnp.concatenate([widths[:, None], one_left, one_right], axis=1)
+
+    def hermite_of(index):
+        ends = q[jnp.concatenate([index, index + 1])].reshape(2, -1)
+        rows = law[index]
+        return hermite_data(jnp.real(gain * ends[0]), rows[:, 0],
+                            gain_derivatives(gain, lam, ends[0], rows[:, 1:4]),
+                            gain_derivatives(gain, lam, ends[1], rows[:, 4:]),
+                            jnp.real(gain * ends[1]))
+
+    return peak_search(bernstein_bound(values, widths, left, right), hermite_of,
+                       jnp.max(jnp.abs(values)))
 
 
 def refined_max(values, widths, left, right):

@@ -1,0 +1,110 @@
+"""The refined peak's search against refining every interval (the dense answer)."""
+
+from math import comb
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from camjax.metrics import (
+    PEAK_GROUP,
+    _HERMITE_TO_MONOMIAL,
+    bernstein_bound,
+    interval_peaks,
+    refined_peak,
+    septic_coefficients,
+)
+
+
+def sampled(f, t):
+    """Values and one-sided jets ``(value, widths, left, right)`` of ``f`` (JAX-traceable)
+    at the nodes ``t``: what ``refined_peak`` takes."""
+    d1 = jax.vmap(jax.grad(f))
+    d2 = jax.vmap(jax.grad(jax.grad(f)))
+    d3 = jax.vmap(jax.grad(jax.grad(jax.grad(f))))
+    jets = jnp.stack([d1(t), d2(t), d3(t)], axis=1)
+    return jax.vmap(f)(t), jnp.diff(t), jets[:-1], jets[1:]
+
+
+def dense_peak(value, widths, left, right):
+    """Every interval's septic refined: what the search must reproduce."""
+    return jnp.max(interval_peaks(septic_coefficients(value, widths, left, right)))
+
+
+SIGNALS = {
+    # one crest among many smaller ones
+    "single crest": lambda t: jnp.exp(-((t - 0.37) ** 2) / 0.01) * jnp.cos(40 * t),
+    # crests of equal height everywhere: every group is a candidate
+    "equal crests": lambda t: jnp.cos(2 * jnp.pi * 9.5 * t),
+    # a broad crest, and three sharp ones a little lower whose bounds rank first
+    "sharp and broad": lambda t: jnp.exp(-((t - 0.8) ** 2) / 0.005) + 0.999 * sum(
+        jnp.exp(-((t - c) ** 2) / 4e-4) for c in (0.1033, 0.3017, 0.5051)),
+    # a plateau with a small ripple (a constant-acceleration piece at a high period ratio)
+    "plateau": lambda t: 1.0 + 1e-3 * jnp.sin(2 * jnp.pi * 14.3 * t),
+    # monotone: the peak is a node
+    "monotone": lambda t: jnp.exp(2 * t) - 3.0,
+    # the largest magnitude is negative
+    "negative": lambda t: -2.0 * jnp.sin(3.1 * t) ** 3 + 0.3 * t,
+}
+
+
+@pytest.mark.parametrize("name", sorted(SIGNALS))
+@pytest.mark.parametrize("intervals", [1, 5, PEAK_GROUP, 3 * PEAK_GROUP + 5, 200])
+def test_search_equals_refining_every_interval(name, intervals):
+    """Equal to rounding (the search returns a node's own value where the dense form
+    evaluates the septic there); an interval missed would cost far more."""
+    t = jnp.linspace(0.0, 1.0, intervals + 1) ** 1.1  # unequal widths
+    args = sampled(SIGNALS[name], t)
+    np.testing.assert_allclose(refined_peak(*args), dense_peak(*args), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(jax.jit(refined_peak)(*args), dense_peak(*args), rtol=1e-12, atol=0)
+
+
+def test_search_under_vmap_rows_needing_different_rounds():
+    """Rows of one batch need one group (a single crest) or all of them (equal crests)."""
+    t = jnp.linspace(0.0, 1.0, 97)
+    rows = [sampled(lambda x, w=w: jnp.cos(w * x) * jnp.exp(-decay * x), t)
+            for w in (7.0, 60.0, 200.0) for decay in (0.0, 3.0)]
+    batch = jax.tree.map(lambda *x: jnp.stack(x), *rows)
+    expected = jnp.stack([dense_peak(*row) for row in rows])
+    np.testing.assert_allclose(jax.vmap(refined_peak)(*batch), expected, rtol=1e-12, atol=0)
+
+
+def test_gradient_is_the_dense_maximums():
+    t = jnp.linspace(0.0, 1.0, 41)
+
+    def peak(p, fn):
+        return fn(*sampled(lambda x: jnp.sin(p * x) + 0.2 * x, t))
+
+    for p in (2.5, 13.0):
+        search = jax.grad(peak)(p, refined_peak)
+        dense = jax.grad(peak)(p, dense_peak)
+        step = 1e-6
+        central = (peak(p + step, refined_peak) - peak(p - step, refined_peak)) / (2 * step)
+        np.testing.assert_allclose(search, dense, rtol=1e-12)
+        np.testing.assert_allclose(search, central, rtol=1e-7)
+
+
+def test_bernstein_bound_is_the_largest_bernstein_coefficient_and_bounds_the_septic():
+    rng = np.random.default_rng(3)
+    value = rng.normal(size=51)
+    widths = rng.uniform(0.01, 0.1, size=50)
+    left, right = rng.normal(size=(50, 3)) * 30, rng.normal(size=(50, 3)) * 30
+    monomial = np.asarray(septic_coefficients(value, widths, left, right))
+    to_bernstein = np.array([[comb(i, j) / comb(7, j) if j <= i else 0.0 for j in range(8)]
+                             for i in range(8)])
+    expected = np.abs(monomial @ to_bernstein.T).max(axis=1)
+    bound = np.asarray(bernstein_bound(value, widths, left.T, right.T))
+    np.testing.assert_allclose(bound, expected, rtol=1e-12)
+    sigma = np.linspace(0.0, 1.0, 2001)
+    dense = np.abs(np.polynomial.polynomial.polyval(sigma, monomial.T)).max(axis=1)
+    assert np.all(dense <= bound * (1 + 1e-12))
+    assert _HERMITE_TO_MONOMIAL.shape == (8, 8)
+
+
+def test_nan_anywhere_gives_nan():
+    args = sampled(SIGNALS["single crest"], jnp.linspace(0.0, 1.0, 30))
+    for which, index in ((0, 7), (2, 4), (3, 20)):
+        broken = list(args)
+        broken[which] = broken[which].at[index].set(jnp.nan)
+        assert np.isnan(refined_peak(*broken)), (which, index)
