@@ -88,6 +88,8 @@ def refined_peak(value, widths, left, right):
 
 PEAK_GROUP = 8
 """Intervals that ``peak_search`` refines together (a group's bound is its intervals' largest)."""
+PEAK_GROUPS_PER_STEP = 2
+"""Groups that each step of ``peak_search`` refines."""
 
 
 def peak_search(bound, hermite_of, largest_sample):
@@ -124,7 +126,7 @@ def peak_search(bound, hermite_of, largest_sample):
     def refine_next(state):
         best, winner, location, open_bound = state
         chosen = []
-        for _ in range(min(2, groups)):
+        for _ in range(min(PEAK_GROUPS_PER_STEP, groups)):
             chosen.append(jnp.argmax(open_bound))
             open_bound = jnp.where(jnp.arange(groups) == chosen[-1], -jnp.inf, open_bound)
         # The last group overlaps the one before it when the size is not a multiple.

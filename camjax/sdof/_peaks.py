@@ -63,18 +63,17 @@ def _jet_gains(gain, lam):
 def output_jets(gain, q, grid: MotionGrid, omega, zeta):
     """``Re(gain q)`` at the nodes and its derivatives at both ends of every interval
     (``(values, left, right)``, the arguments of ``refined_peak`` after the widths)."""
-    values, left, right = _output_columns(gain, q, grid, omega, zeta)
+    values, left, right = _output_columns(gain, eigenvalue(omega, zeta), q, *grid.one_sided())
     return values, jnp.stack(left, axis=1), jnp.stack(right, axis=1)
 
 
-def _output_columns(gain, q, grid: MotionGrid, omega, zeta):
-    """``output_jets`` with each derivative a separate array: the bound of every interval
-    reads them in one pass without storing them."""
-    lam = eigenvalue(omega, zeta)
-    left, right = grid.one_sided()
+def _output_columns(gain, lam, q, one_left, one_right):
+    """``output_jets`` with each derivative a separate array (from the grid's one-sided
+    forcing): the bound of every interval reads them in one pass without storing them."""
     g = _jet_gains(gain, lam)
     values = g[0] * jnp.real(q) - g[1] * jnp.imag(q)
-    return values, _jet_columns(gain, lam, q[:-1], left), _jet_columns(gain, lam, q[1:], right)
+    return (values, _jet_columns(gain, lam, q[:-1], one_left),
+            _jet_columns(gain, lam, q[1:], one_right))
 
 
 def peak_in_motion(q, grid: MotionGrid, omega, zeta):
@@ -85,10 +84,8 @@ def peak_in_motion(q, grid: MotionGrid, omega, zeta):
     are never stored.
     """
     gain, lam = mode_gain(omega, zeta), eigenvalue(omega, zeta)
-    values, left, right = _output_columns(gain, q, grid, omega, zeta)
-    one_left, one_right = grid.one_sided()
-    widths = grid.widths
-
+    widths, (one_left, one_right) = grid.widths, grid.one_sided()
+    values, left, right = _output_columns(gain, lam, q, one_left, one_right)
     law = jnp.concatenate([widths[:, None], one_left, one_right], axis=1)
 
     def hermite_of(index):
