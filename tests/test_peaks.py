@@ -1,4 +1,5 @@
-"""The refined peak's search against refining every interval (the dense answer)."""
+"""The bounded peak search (``camjax.metrics.peak_search``) against refining every interval
+(``refined_peak``, the dense answer)."""
 
 from math import comb
 
@@ -9,9 +10,10 @@ import pytest
 
 from camjax.metrics import (
     PEAK_GROUP,
-    _HERMITE_TO_MONOMIAL,
     bernstein_bound,
+    hermite_data,
     interval_peaks,
+    peak_search,
     refined_peak,
     septic_coefficients,
 )
@@ -30,6 +32,21 @@ def sampled(f, t):
 def dense_peak(value, widths, left, right):
     """Every interval's septic refined: what the search must reproduce."""
     return jnp.max(interval_peaks(septic_coefficients(value, widths, left, right)))
+
+
+def bounded_peak(value, widths, left, right):
+    """``peak_search`` on the arguments of ``refined_peak``."""
+    def hermite_of(index):
+        return hermite_data(value[index], widths[index], left[index], right[index],
+                            value[index + 1])
+
+    return peak_search(bernstein_bound(value, widths, left.T, right.T), hermite_of,
+                       jnp.max(jnp.abs(value)))
+
+
+def test_refined_peak_is_the_dense_answer():
+    args = sampled(lambda t: jnp.sin(7 * t) + 0.1 * t, jnp.linspace(0.0, 1.0, 21))
+    np.testing.assert_array_equal(refined_peak(*args), dense_peak(*args))
 
 
 SIGNALS = {
@@ -56,18 +73,18 @@ def test_search_equals_refining_every_interval(name, intervals):
     evaluates the septic there); an interval missed would cost far more."""
     t = jnp.linspace(0.0, 1.0, intervals + 1) ** 1.1  # unequal widths
     args = sampled(SIGNALS[name], t)
-    np.testing.assert_allclose(refined_peak(*args), dense_peak(*args), rtol=1e-12, atol=0)
-    np.testing.assert_allclose(jax.jit(refined_peak)(*args), dense_peak(*args), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(bounded_peak(*args), dense_peak(*args), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(jax.jit(bounded_peak)(*args), dense_peak(*args), rtol=1e-12, atol=0)
 
 
 def test_search_under_vmap_rows_needing_different_rounds():
     """Rows of one batch need one group (a single crest) or all of them (equal crests)."""
     t = jnp.linspace(0.0, 1.0, 97)
-    rows = [sampled(lambda x, w=w: jnp.cos(w * x) * jnp.exp(-decay * x), t)
+    rows = [sampled(lambda x, w=w, decay=decay: jnp.cos(w * x) * jnp.exp(-decay * x), t)
             for w in (7.0, 60.0, 200.0) for decay in (0.0, 3.0)]
     batch = jax.tree.map(lambda *x: jnp.stack(x), *rows)
     expected = jnp.stack([dense_peak(*row) for row in rows])
-    np.testing.assert_allclose(jax.vmap(refined_peak)(*batch), expected, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(jax.vmap(bounded_peak)(*batch), expected, rtol=1e-12, atol=0)
 
 
 def test_gradient_is_the_dense_maximums():
@@ -77,10 +94,10 @@ def test_gradient_is_the_dense_maximums():
         return fn(*sampled(lambda x: jnp.sin(p * x) + 0.2 * x, t))
 
     for p in (2.5, 13.0):
-        search = jax.grad(peak)(p, refined_peak)
+        search = jax.grad(peak)(p, bounded_peak)
         dense = jax.grad(peak)(p, dense_peak)
         step = 1e-6
-        central = (peak(p + step, refined_peak) - peak(p - step, refined_peak)) / (2 * step)
+        central = (peak(p + step, bounded_peak) - peak(p - step, bounded_peak)) / (2 * step)
         np.testing.assert_allclose(search, dense, rtol=1e-12)
         np.testing.assert_allclose(search, central, rtol=1e-7)
 
@@ -99,7 +116,6 @@ def test_bernstein_bound_is_the_largest_bernstein_coefficient_and_bounds_the_sep
     sigma = np.linspace(0.0, 1.0, 2001)
     dense = np.abs(np.polynomial.polynomial.polyval(sigma, monomial.T)).max(axis=1)
     assert np.all(dense <= bound * (1 + 1e-12))
-    assert _HERMITE_TO_MONOMIAL.shape == (8, 8)
 
 
 def test_nan_anywhere_gives_nan():
@@ -107,4 +123,34 @@ def test_nan_anywhere_gives_nan():
     for which, index in ((0, 7), (2, 4), (3, 20)):
         broken = list(args)
         broken[which] = broken[which].at[index].set(jnp.nan)
-        assert np.isnan(refined_peak(*broken)), (which, index)
+        assert np.isnan(bounded_peak(*broken)), (which, index)
+
+
+@pytest.mark.parametrize("damping", [0.0, 0.2])
+def test_sdof_peak_in_motion_bounded_equals_dense(monkeypatch, damping):
+    """The Ct kernel's two searches (``camjax.sdof.set_peak_search``) agree, on a law with
+    a plateau (many equal crests) and one without, across n in [1, 60]."""
+    from camjax import laws
+    from camjax.sdof import _peaks, motion_grid, peak_in_motion, propagate
+
+    n = jnp.linspace(1.0, 60.0, 97)
+    for name in ("modified-trapezoid", "poly4567"):
+        grid = motion_grid(laws.as_law(name), 768)
+
+        def peaks(kind, grid=grid):
+            monkeypatch.setitem(_peaks._peak_search, "kind", kind)
+
+            def one(x):
+                w = 2 * jnp.pi * x
+                return peak_in_motion(propagate(grid, w, damping), grid, w, damping)
+
+            return jax.jit(jax.vmap(one))(n)
+
+        np.testing.assert_allclose(peaks("bounded"), peaks("dense"), rtol=1e-12, atol=0)
+
+
+def test_set_peak_search_refuses_an_unknown_kind():
+    from camjax.sdof import set_peak_search
+
+    with pytest.raises(ValueError, match="peak search must be one of"):
+        set_peak_search("fast")

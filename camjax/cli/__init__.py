@@ -95,12 +95,15 @@ LONG_CT_SWEEP = 100_000
 
 
 def _compile_for_one_run(args: argparse.Namespace) -> None:
-    """XLA's classic CPU fusion emitters for a short command (``args``, parsed).
+    """XLA's classic CPU fusion emitters, and the dense peak search, for a short command
+    (``args``, parsed).
 
-    They compile camjax's programs in about half the time and run them about 1.2x slower
-    (the exact kernel, 2026-11-25): a cold ``camjax ct`` took 0.86x, ``camjax program``
-    0.69x and ``camjax design`` 0.77x the time with them.  A flag the user set in
-    ``XLA_FLAGS`` wins; it must be set before JAX starts its CPU backend, as here.
+    The emitters compile camjax's programs in about half the time and run them about 1.2x
+    slower (the exact kernel, 2026-11-25): a cold ``camjax ct`` took 0.86x, ``camjax
+    program`` 0.69x and ``camjax design`` 0.77x the time with them.  A flag the user set in
+    ``XLA_FLAGS`` wins; it must be set before JAX starts its CPU backend, as here.  The
+    bounded peak search (``camjax.sdof.set_peak_search``) runs a sweep 1.8x faster but
+    made a cold ``camjax ct`` 1.17x slower to compile (2026-11-25).
     """
     if args.command not in SHORT_COMMANDS:
         return
@@ -109,6 +112,9 @@ def _compile_for_one_run(args: argparse.Namespace) -> None:
 
         if parse_range(args.n, "--n").size >= LONG_CT_SWEEP:
             return
+    from ..sdof import set_peak_search
+
+    set_peak_search("dense")
     flags = os.environ.get("XLA_FLAGS", "")
     if "xla_cpu_use_fusion_emitters" not in flags:
         os.environ["XLA_FLAGS"] = f"{flags} --xla_cpu_use_fusion_emitters=false".strip()

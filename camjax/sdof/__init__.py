@@ -11,8 +11,8 @@ studies, and a cam program's turn at machine speed (``camjax.program``):
 - the exact step over the grid from rest or a given state (``propagate``), the periodic
   steady state (``periodic_propagate``) and the exact state between nodes
   (``mode_between``);
-- outputs ``Re(G q)`` and their refined peaks (``peak_in_motion``, ``refined_extremes``),
-  the dwell's peak and the residual vibration;
+- outputs ``Re(G q)`` and their refined peaks (``peak_in_motion``, bounded or dense:
+  ``set_peak_search``; ``refined_extremes``), the dwell's peak and the residual vibration;
 - the same equation through diffrax (``integrate``, ``sdof_term``);
 - one chunked vmap for batches (``chunked_map``).
 """
@@ -42,6 +42,7 @@ from ._peaks import refined_extremes as refined_extremes
 from ._peaks import refined_max as refined_max
 from ._peaks import residual_amplitude as residual_amplitude
 from ._peaks import residual_of_mode as residual_of_mode
+from ._peaks import set_peak_search as set_peak_search
 from ._step import eigenvalue as eigenvalue
 from ._step import mode_between as mode_between
 from ._step import periodic_propagate as periodic_propagate
