@@ -132,7 +132,7 @@ def peak_search(bound, hermite_of, largest_sample):
         # The last group overlaps the one before it when the size is not a multiple.
         first = jnp.minimum(jnp.stack(chosen) * group_size, size - group_size)
         index = (first[:, None] + jnp.arange(group_size)).reshape(-1)
-        peaks, where = _peak_and_location(coefficients(index))
+        peaks, where = _peak_and_location(jax.lax.stop_gradient(coefficients(index)))
         top = jnp.argmax(peaks)  # a NaN first: then it wins, and the answer is NaN
         better = (peaks[top] > best) | jnp.isnan(peaks[top])
         return (jnp.where(better, peaks[top], best), jnp.where(better, index[top], winner),

@@ -98,7 +98,9 @@ def test_gradient_is_the_dense_maximums():
         dense = jax.grad(peak)(p, dense_peak)
         step = 1e-6
         central = (peak(p + step, bounded_peak) - peak(p - step, bounded_peak)) / (2 * step)
+        forward = jax.jvp(lambda x: peak(x, bounded_peak), (p,), (1.0,))[1]
         np.testing.assert_allclose(search, dense, rtol=1e-12)
+        np.testing.assert_allclose(forward, dense, rtol=1e-12)
         np.testing.assert_allclose(search, central, rtol=1e-7)
 
 
