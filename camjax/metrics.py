@@ -87,9 +87,10 @@ def refined_peak(value, widths, left, right):
 
 
 PEAK_GROUP = 8
-"""Intervals that ``peak_search`` refines together (a group's bound is its intervals' largest)."""
-PEAK_GROUPS_PER_STEP = 2
-"""Groups that each step of ``peak_search`` refines."""
+"""Intervals per group of ``peak_search``'s bounds: each step looks at the groups' largest
+bounds first, then at the intervals of the groups it picked."""
+PEAK_INTERVALS_PER_STEP = 4
+"""Intervals that each step of ``peak_search`` refines, the best of one group each."""
 
 
 def peak_search(bound, hermite_of, largest_sample):
@@ -103,17 +104,18 @@ def peak_search(bound, hermite_of, largest_sample):
             need not exist on every interval at once.
         largest_sample: ``max |f|`` over the nodes.
 
-    Groups of ``PEAK_GROUP`` intervals are refined (nine samples, then Newton's method on
-    the septic), two at a time, best bound first, until no bound beats the best value:
-    the standard laws rarely need more than two groups, where refining every interval
-    would cost most of the exact path's time.  An interval left alone cannot hold a
-    larger value, so the answer is that of refining every interval.  The search carries
-    no gradient: the answer is the septic of the winning interval at the location found
-    (or the largest sample), and so is its gradient.
+    Each step refines (nine samples, then Newton's method on the septic) the interval of
+    largest bound in each of the ``PEAK_INTERVALS_PER_STEP`` groups of ``PEAK_GROUP``
+    whose bounds are largest, until no bound beats the best value.  The standard laws
+    need one step at most ratios; plateaus (equal crests) a few.  An interval left alone
+    cannot hold a larger value, so the answer is that of refining every interval.  The
+    search carries no gradient: the answer is the septic of the winning interval at the
+    location found (or the largest sample), and so is its gradient.
     """
     size = bound.shape[0]
     group_size = min(PEAK_GROUP, size)
     groups = -(-size // group_size)
+    picks = min(PEAK_INTERVALS_PER_STEP, groups)
     matrix = jnp.asarray(_HERMITE_TO_MONOMIAL.T)
 
     def coefficients(index):
@@ -125,24 +127,27 @@ def peak_search(bound, hermite_of, largest_sample):
 
     def refine_next(state):
         best, winner, location, open_bound = state
+        by_group = open_bound.reshape(groups, group_size)
+        group_bound = jnp.max(by_group, axis=1)
         chosen = []
-        for _ in range(min(PEAK_GROUPS_PER_STEP, groups)):
-            chosen.append(jnp.argmax(open_bound))
-            open_bound = jnp.where(jnp.arange(groups) == chosen[-1], -jnp.inf, open_bound)
-        # The last group overlaps the one before it when the size is not a multiple.
-        first = jnp.minimum(jnp.stack(chosen) * group_size, size - group_size)
-        index = (first[:, None] + jnp.arange(group_size)).reshape(-1)
-        peaks, where = _peak_and_location(jax.lax.stop_gradient(coefficients(index)))
+        for _ in range(picks):
+            chosen.append(jnp.argmax(group_bound))
+            group_bound = jnp.where(jnp.arange(groups) == chosen[-1], -jnp.inf, group_bound)
+        chosen = jnp.stack(chosen)
+        index = chosen * group_size + jnp.argmax(by_group[chosen], axis=1)
+        refined = (jnp.arange(groups * group_size) == index[:, None]).any(axis=0)
+        peaks, where = _peak_and_location(
+            jax.lax.stop_gradient(coefficients(jnp.minimum(index, size - 1))))
         top = jnp.argmax(peaks)  # a NaN first: then it wins, and the answer is NaN
         better = (peaks[top] > best) | jnp.isnan(peaks[top])
         return (jnp.where(better, peaks[top], best), jnp.where(better, index[top], winner),
-                jnp.where(better, where[top], location), open_bound)
+                jnp.where(better, where[top], location),
+                jnp.where(refined, -jnp.inf, open_bound))
 
     # A bound a few ulp high keeps rounding from leaving out an interval that ties.
     bound = jax.lax.stop_gradient(jnp.where(jnp.isnan(bound), jnp.inf, bound * (1 + 1e-14)))
     padded = jnp.pad(bound, (0, groups * group_size - size), constant_values=-jnp.inf)
-    start = (jax.lax.stop_gradient(largest_sample), jnp.zeros((), int), jnp.zeros(()),
-             jnp.max(padded.reshape(groups, group_size), axis=1))
+    start = (jax.lax.stop_gradient(largest_sample), jnp.zeros((), int), jnp.zeros(()), padded)
     _, winner, location, _ = jax.lax.while_loop(unfinished, refine_next, start)
     found = _polynomial(coefficients(winner[None])[0], location)[0]
     return jnp.maximum(jnp.abs(found), largest_sample)
