@@ -110,7 +110,8 @@ def peak_search(bound, hermite_of, largest_sample):
     need one step at most ratios; plateaus (equal crests) a few.  An interval left alone
     cannot hold a larger value, so the answer is that of refining every interval.  The
     search carries no gradient: the answer is the septic of the winning interval at the
-    location found (or the largest sample), and so is its gradient.
+    location found (or the largest sample), and so is its gradient (the dense maximum's,
+    but for exact ties, where it goes to the first).
     """
     size = bound.shape[0]
     group_size = min(PEAK_GROUP, size)
@@ -130,14 +131,13 @@ def peak_search(bound, hermite_of, largest_sample):
         by_group = open_bound.reshape(groups, group_size)
         group_bound = jnp.max(by_group, axis=1)
         chosen = []
-        for _ in range(picks):
+        for _ in range(picks):  # once few groups are open, some are picked twice: harmless
             chosen.append(jnp.argmax(group_bound))
             group_bound = jnp.where(jnp.arange(groups) == chosen[-1], -jnp.inf, group_bound)
         chosen = jnp.stack(chosen)
         index = chosen * group_size + jnp.argmax(by_group[chosen], axis=1)
         refined = (jnp.arange(groups * group_size) == index[:, None]).any(axis=0)
-        peaks, where = _peak_and_location(
-            jax.lax.stop_gradient(coefficients(jnp.minimum(index, size - 1))))
+        peaks, where = _peak_and_location(jax.lax.stop_gradient(coefficients(index)))
         top = jnp.argmax(peaks)  # a NaN first: then it wins, and the answer is NaN
         better = (peaks[top] > best) | jnp.isnan(peaks[top])
         return (jnp.where(better, peaks[top], best), jnp.where(better, index[top], winner),
@@ -145,9 +145,11 @@ def peak_search(bound, hermite_of, largest_sample):
                 jnp.where(refined, -jnp.inf, open_bound))
 
     # A bound a few ulp high keeps rounding from leaving out an interval that ties.
-    bound = jax.lax.stop_gradient(jnp.where(jnp.isnan(bound), jnp.inf, bound * (1 + 1e-14)))
+    slack = 1 + 64 * jnp.finfo(bound.dtype).eps
+    bound = jax.lax.stop_gradient(jnp.where(jnp.isnan(bound), jnp.inf, bound * slack))
     padded = jnp.pad(bound, (0, groups * group_size - size), constant_values=-jnp.inf)
-    start = (jax.lax.stop_gradient(largest_sample), jnp.zeros((), int), jnp.zeros(()), padded)
+    start = (jax.lax.stop_gradient(largest_sample), jnp.zeros((), int),
+             jnp.zeros((), largest_sample.dtype), padded)
     _, winner, location, _ = jax.lax.while_loop(unfinished, refine_next, start)
     found = _polynomial(coefficients(winner[None])[0], location)[0]
     return jnp.maximum(jnp.abs(found), largest_sample)

@@ -75,7 +75,7 @@ def main() -> None:
     parser.add_argument("--n-max", type=float, default=30.0, help="ratios in [1, N_MAX]")
     parser.add_argument("--repeats", type=int, default=15)
     args = parser.parse_args()
-    baseline_module(args.baseline, "metrics")
+    baseline_module(args.baseline, "metrics")  # registered for the baseline's _peaks
     variants = {
         "baseline": (baseline_module(args.baseline, "_step").propagate,
                      baseline_module(args.baseline, "_batch").chunked_map,

@@ -102,8 +102,9 @@ def _compile_for_one_run(args: argparse.Namespace) -> None:
     slower (the exact kernel, 2026-11-25): a cold ``camjax ct`` took 0.86x, ``camjax
     program`` 0.69x and ``camjax design`` 0.77x the time with them.  A flag the user set in
     ``XLA_FLAGS`` wins; it must be set before JAX starts its CPU backend, as here.  The
-    bounded peak search (``camjax.sdof.set_peak_search``) runs a sweep 1.8x faster but
-    made a cold ``camjax ct`` 1.17x slower to compile (2026-11-25).
+    bounded peak search (``camjax.sdof.set_peak_search``) runs a sweep's kernel 1.7-1.9x
+    faster warm, but its first version made a cold ``camjax ct`` run 1.17x slower
+    (2026-11-25).
     """
     if args.command not in SHORT_COMMANDS:
         return
@@ -112,12 +113,12 @@ def _compile_for_one_run(args: argparse.Namespace) -> None:
 
         if parse_range(args.n, "--n").size >= LONG_CT_SWEEP:
             return
-    from ..sdof import set_peak_search
-
-    set_peak_search("dense")
     flags = os.environ.get("XLA_FLAGS", "")
     if "xla_cpu_use_fusion_emitters" not in flags:
         os.environ["XLA_FLAGS"] = f"{flags} --xla_cpu_use_fusion_emitters=false".strip()
+    from ..sdof import set_peak_search
+
+    set_peak_search("dense")
 
 
 def _end_process(status: dict) -> None:

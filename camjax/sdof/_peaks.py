@@ -83,14 +83,17 @@ _peak_search = {"kind": "bounded"}
 def set_peak_search(kind: str) -> None:
     """How ``peak_in_motion`` (every Ct and residual sweep's peak) refines between nodes:
     ``"bounded"`` (default: ``camjax.metrics.peak_search``, only the intervals that can
-    hold the peak; 1.8-2.2x faster warm, its program larger to compile) or ``"dense"``
-    (``camjax.metrics.refined_peak``, every interval).  Both give the same answer.  It
-    applies to programs traced afterwards: the ``camjax`` command picks ``"dense"`` for its
-    short commands, whose time is mostly compilation.
+    hold the peak; a sweep's kernel 1.7-1.9x faster warm, its program larger to compile)
+    or ``"dense"`` (``camjax.metrics.refined_peak``, every interval).  Both give the same
+    answer.  Set it before the first sweep: JAX's caches are cleared, so programs traced
+    before are traced again.  The ``camjax`` command picks ``"dense"`` for its short
+    commands, whose time is mostly compilation.
     """
     if kind not in PEAK_SEARCHES:
         raise ValueError(f"peak search must be one of {PEAK_SEARCHES}, got {kind!r}")
-    _peak_search["kind"] = kind
+    if kind != _peak_search["kind"]:
+        _peak_search["kind"] = kind
+        jax.clear_caches()
 
 
 def peak_in_motion(q, grid: MotionGrid, omega, zeta):
