@@ -102,9 +102,8 @@ def _compile_for_one_run(args: argparse.Namespace) -> None:
     slower (the exact kernel, 2026-11-25): a cold ``camjax ct`` took 0.86x, ``camjax
     program`` 0.69x and ``camjax design`` 0.77x the time with them.  A flag the user set in
     ``XLA_FLAGS`` wins; it must be set before JAX starts its CPU backend, as here.  The
-    bounded peak search (``camjax.sdof.set_peak_search``) runs a sweep's kernel 1.7-1.9x
-    faster warm, but its first version made a cold ``camjax ct`` run 1.17x slower
-    (2026-11-25).
+    dense peak search (``camjax.sdof.set_peak_search``) compiles a smaller program than
+    the bounded one, which pays only when a program runs many times (docs/performance.md).
     """
     if args.command not in SHORT_COMMANDS:
         return
