@@ -257,7 +257,7 @@ def main() -> None:
     )
 
     n = np.linspace(1.0, args.n_max, args.n_count)
-    cases = [] if args.level == "none" else study_cases(args.level)
+    cases = [] if args.level == "none" else study_cases(args.level, args.n_max)
     cases += [Case(f"exact res={int(r)}", "exact", SpringMassOptions(resolution=int(r)))
               for r in args.resolutions.split(",") if r.strip()]
     rows, checks = [], {}

@@ -295,3 +295,49 @@ def test_psi_matches_its_integral_on_both_branches():
     real_reference = np.stack([(weights * np.exp(np.outer(real, 1 - s)) * s**m).sum(1)
                                for m in range(6)], axis=-1)
     np.testing.assert_allclose(np.asarray(psi(jnp.asarray(real))), real_reference, rtol=1e-12)
+
+
+@pytest.mark.parametrize("damping", [0.0, 0.05, 0.2, 0.9])
+def test_resolved_propagation_equals_the_per_piece_psi_path(damping):
+    """The exact path's law-only series kicks (``resolved=True``) against the per-piece
+    ``psi`` kicks, up to the largest ``w h`` a grid may carry (``MAX_PHASE_STEP``): a
+    polynomial, an SCCA with pieces of very different widths (short ones at 1e-3), and an
+    SCCA laid out from traced breakpoints (eight pieces, some of zero width)."""
+    from camjax.sdof import MAX_PHASE_STEP, SampledLaw, motion_grid, propagate
+
+    grids = [SampledLaw.of(laws.get("poly4567"), 192).grid,
+             SampledLaw.of(laws.SCCA(0.002, 0.996, 0.002), 192).grid,
+             jax.jit(lambda f: motion_grid(laws.SCCA(*f), 192))(jnp.array([0.3, 0.0, 0.7]))]
+    for grid in grids:
+        widest = float(jnp.max(grid.piece_width))
+        for fraction in (1e-3, 0.3, 1.0):
+            w = fraction * MAX_PHASE_STEP / widest
+            exact = propagate(grid, w, damping)
+            fast = propagate(grid, w, damping, resolved=True)
+            scale = float(jnp.max(jnp.abs(exact)))
+            assert float(jnp.max(jnp.abs(fast - exact))) <= 1e-13 * scale
+
+
+def test_a_sweep_on_a_grid_too_coarse_is_refused_before_any_work():
+    """A grid of w h > 1 at the largest ratio would give untrusted refined peaks: refused
+    at the sweep (and the solve) with the grid that would do, as a traced ratio is."""
+    message = (r"period ratio must be at most 40\.74 on a grid of resolution 256 \(give "
+               r"resolution >= 6\.28 n\), got 50")
+    with pytest.raises(ValueError, match=message):
+        camjax.ct_curve("cycloidal", [1.0, 50.0], resolution=256)
+    with pytest.raises(ValueError, match=message):
+        camjax.solve("cycloidal", camjax.SpringMass(50.0), resolution=256)
+    camjax.ct_curve("cycloidal", [1.0, 40.0], resolution=256)  # within it
+
+
+def test_raw_options_with_a_traced_ratio_past_the_grid_raise_when_run():
+    """Options built without ``checked`` and a traced period ratio: the exact path checks
+    the ratio against the grid when it runs, never returning a number from it."""
+    options = camjax.models.SpringMassOptions(resolution=64)
+
+    def ct(n):
+        return response_metrics(laws.Cycloidal(), camjax.SpringMass(n), options).ct
+
+    assert np.isfinite(float(jax.jit(ct)(10.0)))
+    with pytest.raises(Exception, match=r"period ratio must be at most 10\.19 on a grid of resolution 64"):
+        jax.block_until_ready(jax.jit(ct)(11.0))

@@ -5,6 +5,8 @@ The study itself is :mod:`camjax.studies`; this module parses and prints.
 
 from __future__ import annotations
 
+import sys
+
 from ._common import (
     RANGE_METAVAR,
     CliError,
@@ -48,7 +50,12 @@ def run(args) -> int:
         raise CliError("--n: period ratios must be positive")
     if args.repeats < 1:
         raise CliError(f"--repeats: must be at least 1, got {args.repeats}")
-    rows = run_study(list(selected.values()), n, study_cases(args.level), repeats=args.repeats)
+    cases = study_cases(args.level, float(n.max()))
+    left_out = [case.label for case in study_cases(args.level) if case not in cases]
+    if left_out:
+        print(f"left out for period ratios up to {n.max():g} (a grid too coarse, w h > 1 per "
+              f"interval): {', '.join(left_out)}", file=sys.stderr)
+    rows = run_study(list(selected.values()), n, cases, repeats=args.repeats)
     best = default_method(rows)
     if args.format == "json":
         print(dump_json({"rows": rows, "default_method": best, "accuracy_goal": ACCURACY_GOAL}))

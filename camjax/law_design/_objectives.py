@@ -204,7 +204,7 @@ def _payload_acceleration(law, period_ratios, damping):
     omega = 2 * np.pi * n
 
     def one(w):
-        q = propagate(grid, w, damping)
+        q = propagate(grid, w, damping, resolved=True)  # w h <= 0.5 / oversampling
         return jnp.real(mode_gain(w, damping) * q), jnp.stack([q[-1].real, q[-1].imag])
 
     return jax.vmap(one)(jnp.asarray(omega))

@@ -31,6 +31,7 @@ from ..errors import RESULTS
 from ..laws import AbstractMotionLaw, as_law
 from ..sdof import (
     MAX_GRID_INTERVALS,
+    MAX_PHASE_STEP,
     MotionGrid,
     SampledLaw,
     chunked_map,
@@ -91,7 +92,20 @@ class SpringMassOptions(Options):
         require(self.steps is None or int(self.steps) >= 1,
                 f"steps must be a positive integer, got {self.steps}")
         require(int(self.max_steps) >= 1, f"max_steps must be positive, got {self.max_steps}")
-        return dataclasses.replace(base, resolution=int(resolution))
+        options = dataclasses.replace(base, resolution=int(resolution))
+        require(max_period_ratio is None or max_period_ratio <= options.largest_period_ratio(),
+                f"{options.too_coarse()}, got {max_period_ratio or 0:g}")
+        return options
+
+    def largest_period_ratio(self) -> float:
+        """The largest period ratio that this grid resolves (``w h <= MAX_PHASE_STEP``)."""
+        return self.resolution * MAX_PHASE_STEP / (2 * math.pi)
+
+    def too_coarse(self) -> str:
+        """The error for a period ratio past ``largest_period_ratio``."""
+        return (f"period ratio must be at most {self.largest_period_ratio():.4g} on a grid of "
+                f"resolution {self.resolution} (give resolution >= "
+                f"{2 * math.pi / MAX_PHASE_STEP:.3g} n)")
 
 
 class SpringMassResponse(Response):
@@ -180,7 +194,7 @@ def _mode_at_nodes(law, grid, model: SpringMass, options: SpringMassOptions):
     or its diffrax path."""
     omega, zeta = model.omega, model.damping
     if options.method == "exact":
-        q = propagate(grid, omega, zeta)
+        q = propagate(grid, omega, zeta, resolved=True)  # _resolved, or the sweep's checks
         ok = jnp.all(jnp.isfinite(q))
         return q, RESULTS.where(ok, RESULTS.successful, RESULTS.nonfinite), grid.piece.size
     return integrate(law, grid, omega, zeta, method=options.method, steps=options.steps,
@@ -188,8 +202,20 @@ def _mode_at_nodes(law, grid, model: SpringMass, options: SpringMassOptions):
                      use_jump_ts=options.use_jump_ts)
 
 
+def _resolved(model: SpringMass, options: SpringMassOptions) -> SpringMass:
+    """``model`` with its period ratio checked against the grid's ``MAX_PHASE_STEP``, which
+    the exact propagation and every refined peak need (concretely now, traced when the
+    computation runs; a sweep checks its ratios concretely before, ``checked_outside``)."""
+    if options.resolution is None:
+        return model
+    n = checks.ensure(model.period_ratio, lambda v: v <= options.largest_period_ratio(),
+                      options.too_coarse())
+    return dataclasses.replace(model, period_ratio=n)
+
+
 def _mode(law, model, options):
     grid = _grid(law, options)
+    model = _resolved(model, options)
     q, result, steps = _mode_at_nodes(law, grid, model, options)
     return grid, q, result, steps
 
@@ -219,7 +245,7 @@ def batch_metrics(law, period_ratio, damping, options: SpringMassOptions):
     grid = _grid(law, options)
 
     def one(n):
-        model = SpringMass(n, damping)  # checked by the caller (ct_curve checks concretely)
+        model = _resolved(SpringMass(n, damping), options)  # ct_curve checks concretely
         q, result, steps = _mode_at_nodes(law, grid, model, options)
         return _metrics(q, grid, model, law.Ca, options.dwell), result, steps
 
@@ -229,10 +255,6 @@ def batch_metrics(law, period_ratio, damping, options: SpringMassOptions):
 TRACED_RESOLUTION = 1024
 """Grid of ``torsion_factor`` and ``residual_vibration`` for a traced period ratio when no
 ``resolution`` is given (a concrete one sizes its own grid, ``default_resolution``)."""
-MAX_PHASE_STEP = 1.0
-"""Largest ``w h`` (radians of vibration per interval) that ``torsion_factor`` and
-``residual_vibration`` accept on a grid the caller chose (twice the default's step: peak
-refinement error near 1e-7 relative); past it the refined peak is not to be trusted."""
 
 
 def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
@@ -248,14 +270,7 @@ def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
     if resolution is None and model._option_scale() is None:
         resolution = TRACED_RESOLUTION
     options = model.options("exact", dwell, resolution=resolution)
-    limit = options.resolution * MAX_PHASE_STEP / (2 * math.pi)
-    n = checks.ensure(
-        checks.positive(model.period_ratio, "period ratio"),  # this check first
-        lambda v: v <= limit,
-        f"period ratio must be at most {limit:.4g} on a grid of resolution "
-        f"{options.resolution} (give resolution >= {2 * math.pi / MAX_PHASE_STEP:.3g} n)",
-    )
-    model = dataclasses.replace(model, period_ratio=n).with_array_leaves()
+    model = model.with_array_leaves()
     with checks.as_value_errors():
         return _compiled_metrics(law, model, options, checks.is_concrete(law, model))
 

@@ -22,6 +22,7 @@ from ._batch import chunked_map as chunked_map
 from ._grid import GAUSS_POINTS as GAUSS_POINTS
 from ._grid import INTERPOLATION_DEGREE as INTERPOLATION_DEGREE
 from ._grid import MAX_GRID_INTERVALS as MAX_GRID_INTERVALS
+from ._grid import MAX_PHASE_STEP as MAX_PHASE_STEP
 from ._grid import TARGET_PHASE_STEP as TARGET_PHASE_STEP
 from ._grid import MotionGrid as MotionGrid
 from ._grid import SampledLaw as SampledLaw

@@ -48,6 +48,13 @@ TARGET_PHASE_STEP = 0.5
 """Largest ``w * h`` (radians of vibration per interval) the default resolution allows."""
 
 
+MAX_PHASE_STEP = 1.0
+"""Largest ``w * h`` the exact SDOF path accepts on a grid the caller chose (twice the
+default's step: peak refinement error near 1e-7 relative).  Past it the refined peak is not
+to be trusted, and the propagation's series (``propagate(resolved=True)``) not exact: a
+sweep refuses such a grid before any work, a traced period ratio raises when it runs."""
+
+
 def default_resolution(max_period_ratio: float, phase_step: float = TARGET_PHASE_STEP) -> int:
     """Intervals per unit of tau that keep ``w h <= phase_step`` (a multiple of 64).
 

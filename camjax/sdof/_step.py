@@ -72,10 +72,14 @@ _BLOCK = 32
 _DENSE_PIECES = 64  # above this many pieces, gather each interval's weights
 
 
-def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = None) -> jax.Array:
+def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = None,
+              resolved: bool = False) -> jax.Array:
     """Complex mode ``q`` at every node of ``grid``, starting from rest (or from ``q0``
     at the first node).  ``gather`` picks how each interval finds its piece's weights
     (``None``: by a matrix product up to 64 pieces, by a gather above; the same numbers).
+    ``resolved``: the caller guarantees ``w h <= MAX_PHASE_STEP`` on every interval (the
+    SDOF's exact path refuses coarser grids); the kicks then come from one law-only
+    matrix (``_resolved_kicks``), with no per-piece ``psi``.
 
     The recurrence ``q_(k+1) = E_k q_k + F_k`` runs in blocks of a few intervals: inside a
     block, ``q = G cumsum(F / G)`` with ``G`` the running product of the step factors
@@ -93,7 +97,10 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     # grows as intervals x pieces, so the weights are gathered instead.
     if gather is None:
         gather = grid.piece_width.shape[0] > _DENSE_PIECES
-    if not gather:
+    if resolved:
+        kick = _resolved_kicks(grid, lam)
+        factor = step[grid.piece] if gather else _complex_product(grid.piece_selector(), step)
+    elif not gather:
         # Real and imaginary parts side by side in one product each: XLA would otherwise
         # evaluate psi's series once for each part.
         weights = psi(z).reshape(-1)  # (P * 6,): every piece's weights
@@ -124,6 +131,26 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     if start is not None:  # the free vibration from the start, exactly
         q = q + start * jnp.exp(lam * (grid.nodes - grid.nodes[0]))
     return q
+
+
+def _resolved_kicks(grid: MotionGrid, lam) -> jax.Array:
+    """Every interval's kick ``h sum_m c_m psi_m(lam h)`` through ``psi``'s series
+    reassociated: ``sum_t (lam H)^t D_t`` with ``H`` the widest interval and the law-only
+    ``D_t = h (h / H)^t sum_m c_m s_(m,t)``.  One real product of ``(K, 19)`` with the
+    powers of one complex number replaces the per-piece ``psi`` and the piece selection
+    (1.2-1.3x faster for a whole 1000-ratio kernel on CPU).  Needs ``|lam H| <= 1``,
+    where the series (19 terms) is exact to double precision; both factors stay below 1,
+    so float32 neither overflows nor underflows.
+    """
+    widths = grid.widths
+    widest = jnp.max(grid.piece_width)
+    terms = np.arange(_SERIES_TERMS + 1)
+    law_only = (grid.forcing @ _SERIES) * (widths[:, None] * (widths / widest)[:, None] ** terms)
+    z = lam * widest
+    powers = [jnp.ones_like(z)]
+    for _ in range(_SERIES_TERMS):
+        powers.append(powers[-1] * z)
+    return _complex_product(law_only, jnp.stack(powers))
 
 
 def _complex_product(real_matrix, vector):
