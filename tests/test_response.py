@@ -341,3 +341,23 @@ def test_raw_options_with_a_traced_ratio_past_the_grid_raise_when_run():
     assert np.isfinite(float(jax.jit(ct)(10.0)))
     with pytest.raises(Exception, match=r"period ratio must be at most 10\.19 on a grid of resolution 64"):
         jax.block_until_ready(jax.jit(ct)(11.0))
+
+
+def test_sampled_laws_are_kept_by_value_and_the_oldest_dropped():
+    """``SampledLaw.of`` returns the kept sampling for a law of equal values (a law named
+    again is a new object), samples anew for other values, resolution or padding, and
+    keeps no more than ``SAMPLED_LAWS_KEPT``."""
+    from camjax.sdof import SampledLaw, _grid
+
+    first = SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256)
+    assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256) is first
+    other = SampledLaw.of(laws.SCCA(0.3, 0.2, 0.5), 256)
+    assert other is not first and not np.allclose(other.grid.forcing, first.grid.forcing)
+    assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 320) is not first
+    assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256, 16) is not first
+    for i in range(_grid.SAMPLED_LAWS_KEPT):
+        SampledLaw.of(laws.SCCA(0.1 + 0.001 * i, 0.0, 0.5), 128)
+    assert len(_grid._SAMPLED) == _grid.SAMPLED_LAWS_KEPT
+    again = SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256)
+    assert again is not first
+    np.testing.assert_array_equal(again.grid.forcing, first.grid.forcing)
