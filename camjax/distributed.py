@@ -24,7 +24,7 @@ Spec file (TOML)::
     damping = [0.0, 0.05]
     laws_per_chunk = 64
     dwell = 1.0                    # optional
-    phase_step = 0.5               # optional: largest w h of the exact path's grid (below)
+    phase_step = 1.0               # optional: largest w h of the exact path's grid (below)
     [period_ratio]
     start = 1.0
     stop = 30.0
@@ -36,9 +36,9 @@ Spec file (TOML)::
 
 The exact path runs each band of period ratios on a grid of its own
 (``camjax.sweep.resolution_bands``), sized so that the vibration turns by at most
-``phase_step`` radians per interval: the default 0.5 is ``ct_curve``'s (results equal
-to 2e-10 relative); 0.8 makes a sweep over [1, 30] about 1.4x faster and stays within
-1e-8 of it.
+``phase_step`` radians per interval: the default 1.0 is ``ct_curve``'s and the largest the
+exact path accepts (``camjax.sdof.MAX_PHASE_STEP``); a smaller step gives a finer grid, to
+check a sweep against.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ import numpy as np
 
 from .checks import period_ratio_count, read_toml
 from .laws import SCCA, AbstractMotionLaw, get
-from .sdof import TARGET_PHASE_STEP
+from .sdof import MAX_PHASE_STEP
 
 METRICS = ("ct", "residual", "peak_in_motion")
 _KEYS = {"output", "method", "damping", "laws_per_chunk", "dwell", "period_ratio", "laws",
@@ -91,7 +91,7 @@ class SweepSpec:
     method: str = "exact"
     dwell: float = 1.0
     laws_per_chunk: int = 64
-    phase_step: float = TARGET_PHASE_STEP
+    phase_step: float = MAX_PHASE_STEP
     fingerprint: str = ""
 
     @property
@@ -183,11 +183,11 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
     if not isinstance(method, str):
         raise ValueError(f"method must be a method name (a string), got {method!r}")
     dwell = _number(raw.get("dwell", 1.0), "dwell")
-    phase_step = _number(raw.get("phase_step", TARGET_PHASE_STEP), "phase_step")
+    phase_step = _number(raw.get("phase_step", MAX_PHASE_STEP), "phase_step")
     if not 0.0 < phase_step <= 1.0:
         raise ValueError(f"phase_step must be in (0, 1] (radians per grid interval), got {phase_step}")
     what = json.dumps([names, n.tolist(), damping, method, dwell, per_chunk]
-                      + ([phase_step] if phase_step != TARGET_PHASE_STEP else []))
+                      + ([phase_step] if phase_step != MAX_PHASE_STEP else []))
     return SweepSpec(
         output=Path(base) / raw["output"], laws=tuple(laws), period_ratio=n, damping=damping,
         method=method, dwell=dwell, laws_per_chunk=per_chunk, phase_step=phase_step,

@@ -3,18 +3,18 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-HERMITE_ORDER = 3
-"""Derivatives matched at each end of an interval: a septic Hermite interpolant."""
 
-
+@functools.cache
 def _hermite_matrix(order: int) -> np.ndarray:
-    """Monomial coefficients on ``sigma in [0, 1]`` from ``f, f', ..., f^(order)`` at 0 and 1."""
+    """Monomial coefficients on ``sigma in [0, 1]`` from ``f, f', ..., f^(order)`` at 0 and 1
+    (the interpolant of degree ``2 order + 1``: a septic for order 3)."""
     degree = 2 * order + 1
     basis = np.polynomial.Polynomial.basis
     rows = [
@@ -25,7 +25,6 @@ def _hermite_matrix(order: int) -> np.ndarray:
     return np.linalg.inv(np.array(rows))
 
 
-_HERMITE_TO_MONOMIAL = _hermite_matrix(HERMITE_ORDER)
 
 
 def _polynomial(c, x):
@@ -73,10 +72,12 @@ def refined_peak(value, widths, left, right):
         value: ``(K + 1,)`` samples of a continuous signal ``f`` at the nodes.
         widths: ``(K,)`` interval widths.
         left, right: ``(K, 3)`` first three derivatives of ``f`` at each interval's left
-            and right end, as limits from inside the interval (``f`` may kink at nodes).
+            and right end, as limits from inside the interval (``f`` may kink at nodes);
+            ``(K, 5)``, five derivatives, give an interpolant of degree 11 instead.
 
     Every interval gets a septic Hermite interpolant (error about ``(w h)^8 / 1e7`` for a
-    vibration of angular frequency ``w``) whose maximum is polished by Newton's method.
+    vibration of angular frequency ``w``; of degree 11: ``(w h)^12 / 2e12``) whose maximum
+    is polished by Newton's method.
     All intervals, not only those next to the largest samples: where many crests are
     nearly equal (a long rise at a high period ratio) the sampling loss between nodes (up
     to ``1 - cos(w h / 2)``) reorders them, and the true peak may sit in any of them.
@@ -98,13 +99,15 @@ def peak_search(bound, hermite_of, largest_sample):
     where its bound says it could beat the best value found so far.
 
     Args:
-        bound: ``(K,)`` upper bounds of ``|p|`` on each interval (``bernstein_bound``).
+        bound: ``(K,)`` upper bounds of ``|f|`` on each interval (``bernstein_bound``).
         hermite_of: ``index -> (len(index), 8)`` Hermite data (``hermite_data``) of those
             intervals, computed only for the intervals refined: the signal's derivatives
-            need not exist on every interval at once.
+            need not exist on every interval at once.  Data of a higher order (``2 order +
+            2`` columns, derivatives up to ``order`` at each end) gives a Hermite
+            interpolant of degree ``2 order + 1`` instead of the septic.
         largest_sample: ``max |f|`` over the nodes.
 
-    Each step refines (nine samples, then Newton's method on the septic) the interval of
+    Each step refines (nine samples, then Newton's method on the interpolant) the interval of
     largest bound in each of the ``PEAK_INTERVALS_PER_STEP`` groups of ``PEAK_GROUP``
     whose bounds are largest, until no bound beats the best value.  The standard laws
     need one step at most ratios; plateaus (equal crests) a few.  An interval left alone
@@ -117,10 +120,11 @@ def peak_search(bound, hermite_of, largest_sample):
     group_size = min(PEAK_GROUP, size)
     groups = -(-size // group_size)
     picks = min(PEAK_INTERVALS_PER_STEP, groups)
-    matrix = jnp.asarray(_HERMITE_TO_MONOMIAL.T)
 
     def coefficients(index):
-        return jnp.dot(hermite_of(index), matrix, precision=jax.lax.Precision.HIGHEST)
+        data = hermite_of(index)
+        matrix = jnp.asarray(_hermite_matrix(data.shape[-1] // 2 - 1).T)
+        return jnp.dot(data, matrix, precision=jax.lax.Precision.HIGHEST)
 
     def unfinished(state):
         best, _, _, open_bound = state
@@ -181,11 +185,15 @@ def bernstein_bound(value, widths, left, right):
 def hermite_data(value, widths, left, right, right_value=None):
     """``(K, 8)``: each interval's septic Hermite data in ``sigma`` (``t = t_k + sigma
     h_k``): the value and first three derivatives at ``sigma = 0``, then at ``sigma = 1``
-    (``value`` holds the ``K + 1`` node values, or the left ends' with ``right_value``)."""
+    (``value`` holds the ``K + 1`` node values, or the left ends' with ``right_value``);
+    ``(K, 2 m + 2)`` for ``m`` derivatives in ``left`` and ``right``."""
     if right_value is None:
         value, right_value = value[:-1], value[1:]
     h = widths[:, None]
-    scale = jnp.concatenate([h, h * h, h * h * h], axis=1)  # not a power: pow is exp(log)
+    scale = [h]
+    for _ in range(left.shape[1] - 1):
+        scale.append(scale[-1] * h)  # not a power: pow is exp(log)
+    scale = jnp.concatenate(scale, axis=1)
     return jnp.concatenate([value[:, None], left * scale, right_value[:, None], right * scale],
                            axis=1)
 
@@ -199,12 +207,14 @@ def interval_peaks(coefficients):
 
 def septic_coefficients(value, widths, left, right):
     """``(K, 8)`` monomial coefficients in ``sigma`` (``t = t_k + sigma h_k``) of each
-    interval's septic Hermite interpolant, from the arguments of ``refined_peak``.
+    interval's septic Hermite interpolant, from the arguments of ``refined_peak`` (``(K,
+    12)``, degree 11, from five derivatives).
 
     Integrals and products of a sampled signal (a cam's drive torque, its energy) read
     the same interpolant that ``refined_peak`` searches.
     """
-    return jnp.dot(hermite_data(value, widths, left, right), jnp.asarray(_HERMITE_TO_MONOMIAL.T),
+    matrix = jnp.asarray(_hermite_matrix(left.shape[1]).T)
+    return jnp.dot(hermite_data(value, widths, left, right), matrix,
                    precision=jax.lax.Precision.HIGHEST)
 
 

@@ -14,7 +14,7 @@ from . import checks
 from .errors import RESULTS, mark_failures, raise_if_failed, result_names
 from .laws import AbstractMotionLaw, as_law
 from .models import AbstractMachineModel, AbstractModel, SpringMass
-from .sdof import TARGET_PHASE_STEP, default_resolution
+from .sdof import MAX_PHASE_STEP, default_resolution
 from .sharding import shard_batch
 
 STACK_FROM = 8
@@ -100,7 +100,7 @@ def sweep_law_stack(laws, period_ratios, template: AbstractModel, options, *, de
                        batched_argnums=0, devices=devices)
 
 
-def resolution_bands(period_ratios, options, *, phase_step: float = TARGET_PHASE_STEP
+def resolution_bands(period_ratios, options, *, phase_step: float = MAX_PHASE_STEP
                      ) -> list[tuple[np.ndarray, object]]:
     """Groups of the period ratios that each get the default grid of their own largest.
 
@@ -127,7 +127,7 @@ def resolution_bands(period_ratios, options, *, phase_step: float = TARGET_PHASE
 
 
 def sweep_banded(sweep, laws, period_ratios, template: AbstractModel, options, *, devices=None,
-                 phase_step: float = TARGET_PHASE_STEP):
+                 phase_step: float = MAX_PHASE_STEP):
     """``sweep`` (:func:`sweep_metrics` or :func:`sweep_law_stack`) run band by band of
     :func:`resolution_bands`, each band at its own grid, reassembled along the ratio axis
     (the last) in the order of ``period_ratios``.

@@ -86,19 +86,24 @@ def main() -> None:
                      baseline_module(args.baseline, "_peaks").peak_in_motion),
         "current": (current.propagate, chunked_map, peak_in_motion),
     }
+    # Each kernel on its own revision's default grid for the SDOF path (the baseline's:
+    # ``default_resolution`` at its default phase step; the working tree's: the options').
+    resolutions = {"baseline": baseline_module(args.baseline, "_grid").default_resolution(args.n_max),
+                   "current": SpringMassOptions().checked(args.n_max).resolution}
+    print(f"grids: {resolutions}")
     n = jnp.linspace(1.0, args.n_max, 1000)
-    options = SpringMassOptions().checked(args.n_max)
     times = {key: [] for key in variants}
     for name in ("cycloidal", "modified-sine", "poly4567"):
-        sampled = SampledLaw.of(laws.as_law(name), options.resolution, 8)
+        sampled = {key: SampledLaw.of(laws.as_law(name), resolutions[key], 8) for key in variants}
         # Agreement: undamped, damped, and with each interval's weights gathered (the path
         # of a program's turn).
         for zeta, gather in ((0.0, None), (0.05, None), (0.2, None), (0.05, True)):
-            out = {key: kernel(*parts, sampled, zeta, gather)(n) for key, parts in variants.items()}
+            out = {key: kernel(*parts, sampled[key], zeta, gather)(n)
+                   for key, parts in variants.items()}
             peak, residual = difference(out)
             print(f"{name}, damping {zeta}{', gathered' if gather else ''}: peak differs by "
                   f"{peak:.1e} (relative), residual by {residual:.1e}")
-        fns = {key: kernel(*parts, sampled) for key, parts in variants.items()}
+        fns = {key: kernel(*parts, sampled[key]) for key, parts in variants.items()}
         for f in fns.values():
             jax.block_until_ready(f(n))
         for repeat in range(args.repeats):  # in turn, each first as often as the other

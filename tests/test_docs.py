@@ -77,7 +77,7 @@ def test_the_extending_page_runs(capsys):
     exec(compile(code, "docs/extending.md", "exec"), namespace)
     out = capsys.readouterr().out
     differences = [float(x) for x in re.findall(r"difference from [^:]*: (\S+)", out)]
-    assert len(differences) == 2 and max(differences) < 1e-12
+    assert len(differences) == 2 and max(differences) < 5e-12  # rounding of two formulas
     ct = float(re.search(r"Ct at n = 6.4: (\S+)", out).group(1))
     import camjax
 

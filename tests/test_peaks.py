@@ -137,7 +137,7 @@ def test_sdof_peak_in_motion_bounded_equals_dense(monkeypatch, damping):
 
     n = jnp.linspace(1.0, 60.0, 97)
     for name in ("modified-trapezoid", "poly4567"):
-        grid = motion_grid(laws.as_law(name), 768)
+        grid = motion_grid(laws.as_law(name), 384)  # the SDOF path's step: w h <= 1 at n = 60
 
         def peaks(kind, grid=grid):
             monkeypatch.setitem(_peaks._peak_search, "kind", kind)
@@ -156,3 +156,87 @@ def test_set_peak_search_refuses_an_unknown_kind():
 
     with pytest.raises(ValueError, match="peak search must be one of"):
         set_peak_search("fast")
+
+
+@pytest.mark.parametrize("damping", [0.0, 0.1])
+def test_sdof_peak_at_the_grid_step_against_septics_eight_times_finer(damping):
+    """The SDOF path's refinement (degree 11 on its grid, ``w h <= MAX_PHASE_STEP``)
+    against the septic refinement (three derivatives, ``refined_peak``) on a grid eight
+    times finer (``w h <= 1/8``: error about 6e-15), both searches, n in [0.5, 60]: laws
+    whose forcing both grids interpolate to 1e-13 or exactly."""
+    from camjax import laws
+    from camjax.metrics import refined_peak
+    from camjax.sdof import (
+        MAX_PHASE_STEP,
+        _peaks,
+        default_resolution,
+        mode_gain,
+        motion_grid,
+        output_jets,
+        peak_in_motion,
+        propagate,
+    )
+
+    n = jnp.linspace(0.5, 60.0, 41)
+    resolution = default_resolution(60.0, MAX_PHASE_STEP)
+    for name in ("poly4567", "cycloidal", "modified-trapezoid", "harmonic"):
+        law = laws.as_law(name)
+        grid, fine = motion_grid(law, resolution), motion_grid(law, 8 * resolution)
+
+        def reference(x, fine=fine):
+            w = 2 * jnp.pi * x
+            q = propagate(fine, w, damping)
+            values, left, right = output_jets(mode_gain(w, damping), q, fine, w, damping)
+            return refined_peak(values, fine.widths, left, right)
+
+        expected = np.asarray(jax.jit(jax.vmap(reference))(n))
+        for kind in ("bounded", "dense"):
+            _peaks.set_peak_search(kind)
+            try:
+                got = jax.jit(jax.vmap(lambda x, grid=grid: peak_in_motion(
+                    propagate(grid, 2 * jnp.pi * x, damping, resolved=True), grid,
+                    2 * jnp.pi * x, damping)))(n)
+            finally:
+                _peaks.set_peak_search("bounded")
+            np.testing.assert_allclose(np.asarray(got), expected, rtol=1e-11, atol=0,
+                                       err_msg=f"{name}, {kind}")
+
+
+def test_one_sided_derivatives_are_the_interpolants():
+    """``MotionGrid.one_sided(5)``: the forcing polynomial's derivatives 0..4 at each end,
+    against NumPy's derivatives of the same polynomial; the default three are its first
+    columns."""
+    from numpy.polynomial import polynomial
+
+    from camjax import laws
+    from camjax.sdof import motion_grid
+
+    grid = motion_grid(laws.SCCA(0.3, 0.1, 0.6), 64)
+    left, right = (np.asarray(x) for x in grid.one_sided(5))
+    c, h = np.asarray(grid.forcing), np.asarray(grid.widths)
+    for k in (0, 17, 40, c.shape[0] - 1):
+        for j in range(5):
+            derivative = polynomial.polyder(c[k], j) if j else c[k]
+            assert left[k, j] == pytest.approx(polynomial.polyval(0.0, derivative) / h[k]**j, rel=1e-12)
+            assert right[k, j] == pytest.approx(polynomial.polyval(1.0, derivative) / h[k]**j, rel=1e-12)
+    three = grid.one_sided()
+    np.testing.assert_array_equal(np.asarray(three[0]), left[:, :3])
+    np.testing.assert_array_equal(np.asarray(three[1]), right[:, :3])
+
+
+@pytest.mark.parametrize("damping", [0.0, 0.3])
+def test_half_steps_are_the_exact_state_between_nodes(damping):
+    """The mode half-way across every interval (the series step) against ``mode_between``
+    (the per-piece ``psi`` step, on the host), at ``w h`` up to 1."""
+    from camjax import laws
+    from camjax.sdof import eigenvalue, half_steps, mode_between, motion_grid, propagate
+
+    grid = motion_grid(laws.SCCA(0.002, 0.5, 0.498), 256)
+    w = 2 * np.pi * 40.0  # w h = 0.98 on the widest interval
+    lam = eigenvalue(w, damping)
+    q = propagate(grid, w, damping)
+    middles = half_steps(q[:-1], grid.forcing, grid.widths, jnp.max(grid.piece_width), lam)
+    t = np.asarray(grid.nodes[:-1] + grid.widths / 2)
+    expected = mode_between(grid, np.asarray(q), complex(lam), t)
+    scale = float(jnp.max(jnp.abs(q)))
+    assert np.max(np.abs(np.asarray(middles) - expected)) <= 1e-13 * scale

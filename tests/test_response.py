@@ -361,3 +361,24 @@ def test_sampled_laws_are_kept_by_value_and_the_oldest_dropped():
     again = SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256)
     assert again is not first
     np.testing.assert_array_equal(again.grid.forcing, first.grid.forcing)
+
+
+def test_response_between_nodes_matches_scipy():
+    """``solve``'s samples half-way between the grid's nodes (the exact middle states)
+    and at the nodes, against scipy's DOP853 at tight tolerance, on the default grid."""
+    law, n, zeta = laws.Cycloidal(), 7.3, 0.05
+    w = 2 * math.pi * n
+    response = camjax.solve(law, camjax.SpringMass(n, zeta))
+    tau = np.asarray(response.tau)
+    rise = tau <= 1.0
+    nodes, middles = tau[rise][0::2], tau[rise][1::2]
+    np.testing.assert_allclose(middles, (nodes[:-1] + nodes[1:]) / 2, rtol=1e-14)
+    assert nodes.size - 1 >= camjax.models.SpringMassOptions().checked(n).resolution
+
+    def rhs(t, y):
+        return [y[1], float(law.a(t)) - w * w * y[0] - 2 * zeta * w * y[1]]
+
+    sol = solve_ivp(rhs, (0, 1), [0.0, 0.0], method="DOP853", rtol=1e-12, atol=1e-14,
+                    t_eval=tau[rise])
+    np.testing.assert_allclose(np.asarray(response.deflection)[rise], sol.y[0],
+                               rtol=0, atol=1e-10 * np.max(np.abs(sol.y[0])))

@@ -38,6 +38,7 @@ from ..sdof import (
     default_resolution,
     dwell_peak,
     eigenvalue,
+    half_steps,
     integrate,
     mode_gain,
     motion_grid,
@@ -59,7 +60,7 @@ class SpringMassOptions(Options):
         resolution: grid intervals per unit tau; ``None`` picks one from the largest
             period ratio (``default_resolution``).
         rtol, atol: tolerances of adaptive diffrax solvers.
-        steps: step count of fixed-step diffrax solvers over the rise (default: the
+        steps: step count of fixed-step diffrax solvers over the rise (default: twice the
             grid's interval count).
         max_steps: step limit of diffrax solvers; reaching it is an error.
         use_jump_ts: stop adaptive diffrax solvers at the law's breakpoints.
@@ -79,13 +80,13 @@ class SpringMassOptions(Options):
             self.resolution is not None or max_period_ratio is not None,
             "give resolution= when the period ratio is traced (the grid's size is static)",
         )
-        resolution = self.resolution or default_resolution(max_period_ratio)
+        resolution = self.resolution or default_resolution(max_period_ratio, MAX_PHASE_STEP)
         require(int(resolution) >= 8, f"resolution must be at least 8 intervals, got {resolution}")
         require(
             int(resolution) <= MAX_GRID_INTERVALS,
             f"period ratio {max_period_ratio or 0:g} needs a grid of {int(resolution):,} intervals "
             f"per rise; the limit is {MAX_GRID_INTERVALS:,} (period ratios up to about "
-            f"{MAX_GRID_INTERVALS * 0.5 / (2 * math.pi):,.0f} at the default resolution)",
+            f"{MAX_GRID_INTERVALS * MAX_PHASE_STEP / (2 * math.pi):,.0f} at the default resolution)",
         )
         for label, value in (("rtol", self.rtol), ("atol", self.atol)):
             require(math.isfinite(value) and value > 0, f"{label} must be positive, got {value}")
@@ -145,10 +146,15 @@ class SpringMass(AbstractModel):
         metrics = _metrics(q, grid, model, law.Ca, options.dwell)
         omega, zeta = model.omega, model.damping
         lam = eigenvalue(omega, zeta)
-        dwell_samples = max(1, math.ceil(options.dwell * options.resolution))
+        # Sampled at the nodes and, exactly, half-way between (w h / 2 <= 0.5: a smooth
+        # curve to plot), and as densely over the dwell.
+        middles = half_steps(q[:-1], grid.forcing, grid.widths, jnp.max(grid.piece_width), lam)
+        q_rise = jnp.concatenate([jnp.stack([q[:-1], middles], axis=1).reshape(-1), q[-1:]])
+        t_rise = jnp.stack([grid.nodes[:-1], grid.nodes[:-1] + grid.widths / 2], axis=1)
+        dwell_samples = max(1, math.ceil(options.dwell * 2 * options.resolution))
         t_dwell = jnp.linspace(0.0, options.dwell, dwell_samples + 1)[1:]
-        q_all = jnp.concatenate([q, q[-1] * jnp.exp(lam * t_dwell)])
-        tau = jnp.concatenate([grid.nodes, 1.0 + t_dwell])
+        q_all = jnp.concatenate([q_rise, q[-1] * jnp.exp(lam * t_dwell)])
+        tau = jnp.concatenate([t_rise.reshape(-1), grid.nodes[-1:], 1.0 + t_dwell])
         return SpringMassResponse(
             tau=tau,
             payload_acceleration=jnp.real(mode_gain(omega, zeta) * q_all),

@@ -46,25 +46,31 @@ def to_monomial(samples):
     return samples @ jnp.asarray(_TO_MONOMIAL.T)
 
 TARGET_PHASE_STEP = 0.5
-"""Largest ``w * h`` (radians of vibration per interval) the default resolution allows."""
+"""Largest ``w * h`` (radians of vibration per interval) that a refined peak's septic spans
+(refinement error below 4e-10 relative): the default step of a grid whose peaks are refined
+interval by interval (a cam program's turn, the training grid of a design)."""
 
 
 MAX_PHASE_STEP = 1.0
-"""Largest ``w * h`` the exact SDOF path accepts on a grid the caller chose (twice the
-default's step: peak refinement error near 1e-7 relative).  Past it the refined peak is not
-to be trusted, and the propagation's series (``propagate(resolved=True)``) not exact: a
-sweep refuses such a grid before any work, a traced period ratio raises when it runs."""
+"""The exact SDOF path's grid: ``w h`` at most this, by default and on any grid a caller
+chooses.  Its peaks are refined by interpolants of degree 11 (``peak_in_motion``: within
+5e-13 at this step) and its propagation's series (``propagate(resolved=True)``) is exact up
+to it.  A sweep refuses a coarser grid before any work, a traced period ratio raises when
+it runs."""
 
 
 def default_resolution(max_period_ratio: float, phase_step: float = TARGET_PHASE_STEP) -> int:
     """Intervals per unit of tau that keep ``w h <= phase_step`` (a multiple of 64).
 
-    The step bounds the peak-refinement error near ``(w h)^8 / 1e7`` (4e-10 relative at
-    the default 0.5); node values are exact at any resolution.  Rounding to multiples of
-    64 limits recompilation across nearby requests.
+    The step bounds the error of a septic peak refinement near ``(w h)^8 / 1e7`` (4e-10
+    relative at the default 0.5; the SDOF path's grid, at ``MAX_PHASE_STEP``, refines by
+    degree 11 instead); node values are exact at any resolution.  Rounding to multiples
+    of 64 limits recompilation across nearby requests.
     """
     needed = 2 * math.pi * max_period_ratio / phase_step
     return max(128, 64 * math.ceil(needed / 64))
+
+
 
 
 class MotionGrid(NamedTuple):
@@ -98,21 +104,24 @@ class MotionGrid(NamedTuple):
         rows = self.piece_selector()[:, :, None] * self.forcing[:, None, :]
         return rows.reshape(self.forcing.shape[0], -1)
 
-    def one_sided(self) -> tuple[jax.Array, jax.Array]:
-        """Acceleration, jerk and snap at both ends of every interval.
+    def one_sided(self, derivatives: int = 3) -> tuple[jax.Array, jax.Array]:
+        """Acceleration and its next ``derivatives - 1`` derivatives (jerk, snap, ...) at
+        both ends of every interval.
 
-        Returns ``(left, right)``, each ``(K, 3)``, taken from the interval's own
+        Returns ``(left, right)``, each ``(K, derivatives)``, taken from the interval's own
         interpolant: limits from inside the interval, right even where the law jumps.
         """
         c = self.forcing
         h = self.widths
         h = jnp.where(h > 0, h, 1.0)[:, None]
         powers = np.arange(INTERPOLATION_DEGREE + 1)
-        scale = h ** np.arange(3)
-        left = c[:, :3] * np.array([1.0, 1.0, 2.0]) / scale
-        right = jnp.stack(
-            [c.sum(1), (c * powers).sum(1), (c * powers * (powers - 1)).sum(1)], axis=1
-        ) / scale
+        falling = np.array([[math.perm(int(m), j) for m in powers] for j in range(derivatives)])
+        scale = [jnp.ones_like(h)]
+        for _ in range(derivatives - 1):
+            scale.append(scale[-1] * h)  # not a power: pow is exp(log)
+        scale = jnp.concatenate(scale, axis=1)
+        left = c[:, :derivatives] * np.diag(falling[:, :derivatives]) / scale
+        right = (c @ falling.T) / scale
         return left, right
 
 

@@ -46,7 +46,8 @@ def integrate(law, grid: MotionGrid, omega, zeta, *, method: str, steps: int | N
     """Complex mode at the grid's nodes by the diffrax solver ``method``, its result code
     and the steps taken.
 
-    A fixed-step solver (``steps`` steps over the rise, default one per grid interval)
+    A fixed-step solver (``steps`` steps over the rise, default two per grid interval: the
+    SDOF grid's ``w h <= 1`` halved, as its peaks are refined)
     whose numerical free vibration grows past ``MAX_FREE_VIBRATION_GROWTH`` is refused
     (``unstable_fixed_step``); every solution must keep ``|q| <= Ca`` at the nodes (its
     physical bound for ``zeta >= 0``) or is refused (``invariant_violated``).  A refused
@@ -54,7 +55,7 @@ def integrate(law, grid: MotionGrid, omega, zeta, *, method: str, steps: int | N
     """
     import diffrax
 
-    steps = steps or grid.piece.size
+    steps = steps or 2 * grid.piece.size
     if method in FIXED_STEP_SOLVERS:
         controller, dt0 = diffrax.ConstantStepSize(), 1.0 / steps
     else:

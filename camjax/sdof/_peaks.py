@@ -36,26 +36,26 @@ def gain_derivatives(gain, lam, q, one_sided):
 
 
 def _jet_columns(gain, lam, q, one_sided):
-    """The three derivatives of ``gain_derivatives`` as separate arrays: the mode's part
-    ``Re(gain lam^j q)`` plus the forcing's, real since ``(a, a', a'')`` are (complex
-    arithmetic on every node costs the kernel a fifth of its time on CPU).  With
-    ``q' = lam q + a``, the j-th derivative of ``gain q`` is
+    """The derivatives of ``gain_derivatives`` as separate arrays, as many as ``one_sided``
+    has columns: the mode's part ``Re(gain lam^j q)`` plus the forcing's, real since
+    ``(a, a', a'', ...)`` are (complex arithmetic on every node costs the kernel a fifth of
+    its time on CPU).  With ``q' = lam q + a``, the j-th derivative of ``gain q`` is
     ``gain (lam^j q + lam^(j-1) a + ... + a^(j-1))``."""
-    g = _jet_gains(gain, lam)
-    a, da, dda = one_sided[:, 0], one_sided[:, 1], one_sided[:, 2]
+    order = one_sided.shape[1]
+    g = _jet_gains(gain, lam, order)
     re, im = jnp.real(q), jnp.imag(q)
-    mode = [g[2 * j] * re - g[2 * j + 1] * im for j in range(1, 4)]
-    return (mode[0] + g[0] * a, mode[1] + g[2] * a + g[0] * da,
-            mode[2] + g[4] * a + g[2] * da + g[0] * dda)
+    return tuple(g[2 * j] * re - g[2 * j + 1] * im
+                 + sum(g[2 * (j - 1 - i)] * one_sided[:, i] for i in range(j))
+                 for j in range(1, order + 1))
 
 
-def _jet_gains(gain, lam):
-    """Real and imaginary parts of ``gain lam^j``, ``j = 0..3``, as eight real scalars.
+def _jet_gains(gain, lam, order: int = 3):
+    """Real and imaginary parts of ``gain lam^j``, ``j = 0..order``, as real scalars.
 
     Kept apart from the per-node arithmetic (an optimisation barrier): fused into it, XLA
     recomputed these complex products for every node."""
     parts = []
-    for j in range(4):
+    for j in range(order + 1):
         parts += [jnp.real(gain * lam**j), jnp.imag(gain * lam**j)]
     return jax.lax.optimization_barrier(parts)
 
@@ -96,31 +96,46 @@ def set_peak_search(kind: str) -> None:
         jax.clear_caches()
 
 
+REFINED_DERIVATIVES = 5
+"""Derivatives at each end of the interpolant ``peak_in_motion`` refines: degree 11, within
+``(w h)^12 / 2e12`` (5e-13) of the response at the SDOF grid's ``w h <= MAX_PHASE_STEP``."""
+BOUND_SLACK = 1e-6
+"""What every interval's bound is raised by, as a fraction of the largest: the bounds come
+from the septic over each interval (three derivatives, cheaper than five), within about
+1e-7 of the vibration's amplitude at ``w h <= 1``, which no interval's bound falls far
+short of."""
+
+
 def peak_in_motion(q, grid: MotionGrid, omega, zeta):
     """Max ``|x''|`` over the grid's span: ``x'' = Re(K q)`` at the nodes, refined between
-    (``set_peak_search``).
+    (``set_peak_search``) by an interpolant of degree 11 on each interval.
 
-    The bounded search takes every interval's bound from the jets in one pass; the
-    intervals it refines recompute theirs from the mode at their ends, so the jets of all
-    intervals are never stored.
+    The bounded search takes every interval's bound from the septic (three derivatives per
+    end) in one pass over the jets; only the intervals it refines get their five
+    derivatives, from the mode at their ends, so no interval's jets are stored.  The dense
+    search refines every interval.
     """
     gain, lam = mode_gain(omega, zeta), eigenvalue(omega, zeta)
-    widths, (one_left, one_right) = grid.widths, grid.one_sided()
-    values, left, right = _output_columns(gain, lam, q, one_left, one_right)
+    widths = grid.widths
+    one_left, one_right = grid.one_sided(REFINED_DERIVATIVES)
     if _peak_search["kind"] == "dense":
+        values, left, right = _output_columns(gain, lam, q, one_left, one_right)
         return refined_peak(values, widths, jnp.stack(left, axis=1), jnp.stack(right, axis=1))
+    values, left, right = _output_columns(gain, lam, q, one_left[:, :3], one_right[:, :3])
+    bound = bernstein_bound(values, widths, left, right)
+    bound = bound + BOUND_SLACK * jnp.max(bound)
     law = jnp.concatenate([widths[:, None], one_left, one_right], axis=1)
+    ends = REFINED_DERIVATIVES + 1
 
     def hermite_of(index):
-        ends = q[jnp.concatenate([index, index + 1])].reshape(2, -1)
         rows = law[index]
-        return hermite_data(jnp.real(gain * ends[0]), rows[:, 0],
-                            gain_derivatives(gain, lam, ends[0], rows[:, 1:4]),
-                            gain_derivatives(gain, lam, ends[1], rows[:, 4:]),
-                            jnp.real(gain * ends[1]))
+        start, end = q[jnp.concatenate([index, index + 1])].reshape(2, -1)
+        return hermite_data(jnp.real(gain * start), rows[:, 0],
+                            gain_derivatives(gain, lam, start, rows[:, 1:ends]),
+                            gain_derivatives(gain, lam, end, rows[:, ends:]),
+                            jnp.real(gain * end))
 
-    return peak_search(bernstein_bound(values, widths, left, right), hermite_of,
-                       jnp.max(jnp.abs(values)))
+    return peak_search(bound, hermite_of, jnp.max(jnp.abs(values)))
 
 
 def refined_max(values, widths, left, right):

@@ -79,7 +79,7 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     (``None``: by a matrix product up to 64 pieces, by a gather above; the same numbers).
     ``resolved``: the caller guarantees ``w h <= MAX_PHASE_STEP`` on every interval (the
     SDOF's exact path refuses coarser grids); the kicks then come from one law-only
-    matrix (``_resolved_kicks``), with no per-piece ``psi``.
+    matrix (``_series_kicks``), with no per-piece ``psi``.
 
     The recurrence ``q_(k+1) = E_k q_k + F_k`` runs in blocks of a few intervals: inside a
     block, ``q = G cumsum(F / G)`` with ``G`` the running product of the step factors
@@ -98,7 +98,7 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     if gather is None:
         gather = grid.piece_width.shape[0] > _DENSE_PIECES
     if resolved:
-        kick = _resolved_kicks(grid, lam)
+        kick = _series_kicks(grid.forcing, grid.widths, jnp.max(grid.piece_width), lam)
         factor = step[grid.piece] if gather else _complex_product(grid.piece_selector(), step)
     elif not gather:
         # Real and imaginary parts side by side in one product each: XLA would otherwise
@@ -133,24 +133,36 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     return q
 
 
-def _resolved_kicks(grid: MotionGrid, lam) -> jax.Array:
-    """Every interval's kick ``h sum_m c_m psi_m(lam h)`` through ``psi``'s series
-    reassociated: ``sum_t (lam H)^t D_t`` with ``H`` the widest interval and the law-only
-    ``D_t = h (h / H)^t sum_m c_m s_(m,t)``.  One real product of ``(K, 19)`` with the
-    powers of one complex number replaces the per-piece ``psi`` and the piece selection
-    (1.2-1.3x faster for a whole 1000-ratio kernel on CPU).  Needs ``|lam H| <= 1``,
-    where the series (19 terms) is exact to double precision; both factors stay below 1,
-    so float32 neither overflows nor underflows.
+def _series_kicks(forcing, widths, widest, lam) -> jax.Array:
+    """Kicks ``h sum_m c_m psi_m(lam h)`` of intervals of ``widths`` with forcing rows
+    ``forcing``, through ``psi``'s series reassociated: ``sum_t (lam H)^t D_t`` with
+    ``H = widest`` and the law-only ``D_t = h (h / H)^t sum_m c_m s_(m,t)``.  One real
+    product of ``(K, 19)`` with the powers of one complex number replaces the per-piece
+    ``psi`` and the piece selection (1.2-1.3x faster for a whole 1000-ratio kernel on CPU).
+    Needs ``|lam H| <= 1`` and ``widths <= H``: the series (19 terms) is then exact to
+    double precision, and both factors stay below 1, so float32 neither overflows nor
+    underflows.
     """
-    widths = grid.widths
-    widest = jnp.max(grid.piece_width)
     terms = np.arange(_SERIES_TERMS + 1)
-    law_only = (grid.forcing @ _SERIES) * (widths[:, None] * (widths / widest)[:, None] ** terms)
+    law_only = (forcing @ _SERIES) * (widths[:, None] * (widths / widest)[:, None] ** terms)
     z = lam * widest
     powers = [jnp.ones_like(z)]
     for _ in range(_SERIES_TERMS):
         powers.append(powers[-1] * z)
     return _complex_product(law_only, jnp.stack(powers))
+
+
+_HALF_POWERS = 0.5 ** np.arange(INTERPOLATION_DEGREE + 1)
+"""``c * _HALF_POWERS``: an interval's forcing coefficients on its first half, in the half's
+own ``sigma``."""
+
+
+def half_steps(q_start, forcing, widths, widest, lam) -> jax.Array:
+    """The mode half-way across intervals (forcing rows ``(n, 6)``, ``widths`` ``(n,)``),
+    exactly, from the mode at their starts: half a step of ``propagate``, on a grid whose
+    widest interval is ``widest`` and resolved (``|lam| widest <= MAX_PHASE_STEP``)."""
+    kicks = _series_kicks(forcing * _HALF_POWERS, widths / 2, widest, lam)
+    return jnp.exp(lam * (widths / 2)) * q_start + kicks
 
 
 def _complex_product(real_matrix, vector):
