@@ -56,14 +56,6 @@ def run_sweeps(args, work: Path, runs_path: Path) -> None:
     import jax
 
     from camjax import distributed
-    from camjax.sdof import set_peak_search
-
-    # At the atlas's coarse phase step (128 intervals per rise below n = 20) refining every
-    # interval is cheap, and the face's plateau laws keep the bounded search's loop
-    # running: the dense search swept the undamped face 1.15x faster than the bounded
-    # search's first version (2026-11-25; docs/performance.md).
-    if args.phase_step >= 1.0:
-        set_peak_search("dense")
 
     grids = {"face": {"scca_step": args.face_step, "scca_face": True},
              "family": {"scca_step": args.family_step, "scca_face": False}}
