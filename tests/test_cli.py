@@ -247,3 +247,20 @@ def test_a_users_emitter_flag_wins(monkeypatch):
     monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_use_fusion_emitters=true")
     _compile_for_one_run(build_parser().parse_args(["ct"]))
     assert os.environ["XLA_FLAGS"] == "--xla_cpu_use_fusion_emitters=true"
+
+
+def test_a_failed_solve_inside_a_command_is_one_line_not_a_traceback(capsys, monkeypatch):
+    """A command whose solve fails (here a real unstable fixed-step solve in place of the
+    follower's run) ends with one line naming the command and exit code 1."""
+    from camjax.cli import follower
+
+    def failing(args):
+        camjax.solve("cycloidal", camjax.SpringMass(50.0), method="euler", steps=100)
+        return 0
+
+    monkeypatch.setattr(follower, "run", failing)
+    code, out, err = run(capsys, "follower", "--law", "cycloidal")
+    assert code == 1 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("camjax follower: error: ")
+    assert "unstable" in lines[0] or "fixed-step" in lines[0]

@@ -54,6 +54,15 @@ def main(argv: list[str] | None = None, *, one_run: bool = False) -> int:
     except (CliError, ValueError) as error:
         print(f"camjax {args.command}: error: {error}", file=sys.stderr)
         return 2
+    except RuntimeError as error:
+        from ..errors import SolverError  # not at the top: --help stays free of JAX
+
+        if not isinstance(error, SolverError):
+            raise
+        # A solve the command needed failed (a sweep's failed ratios are named by the
+        # commands that can leave them out, as ``ct`` does): no result, one line.
+        print(f"camjax {args.command}: error: {error}", file=sys.stderr)
+        return 1
 
 
 def command() -> None:
