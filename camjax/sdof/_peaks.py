@@ -98,7 +98,9 @@ def set_peak_search(kind: str) -> None:
 
 REFINED_DERIVATIVES = 5
 """Derivatives at each end of the interpolant ``peak_in_motion`` refines: degree 11, within
-``(w h)^12 / 2e12`` (5e-13) of the response at the SDOF grid's ``w h <= MAX_PHASE_STEP``."""
+``(w h)^12 / 2e12`` (5e-13) of the response at the SDOF grid's ``w h <= MAX_PHASE_STEP``.
+In single precision the fifth derivative's rounding costs more than the septic's
+``(w h)^8 / 1e7`` (1e-7 there): float32 refines septics (three)."""
 BOUND_SLACK = 1e-6
 """What every interval's bound is raised by, as a fraction of the largest: the bounds come
 from the septic over each interval (three derivatives, cheaper than five), within about
@@ -117,7 +119,8 @@ def peak_in_motion(q, grid: MotionGrid, omega, zeta):
     """
     gain, lam = mode_gain(omega, zeta), eigenvalue(omega, zeta)
     widths = grid.widths
-    one_left, one_right = grid.one_sided(REFINED_DERIVATIVES)
+    double = jnp.finfo(jnp.result_type(q)).bits >= 64
+    one_left, one_right = grid.one_sided(REFINED_DERIVATIVES if double else 3)
     if _peak_search["kind"] == "dense":
         values, left, right = _output_columns(gain, lam, q, one_left, one_right)
         return refined_peak(values, widths, jnp.stack(left, axis=1), jnp.stack(right, axis=1))
@@ -125,7 +128,7 @@ def peak_in_motion(q, grid: MotionGrid, omega, zeta):
     bound = bernstein_bound(values, widths, left, right)
     bound = bound + BOUND_SLACK * jnp.max(bound)
     law = jnp.concatenate([widths[:, None], one_left, one_right], axis=1)
-    ends = REFINED_DERIVATIVES + 1
+    ends = one_left.shape[1] + 1
 
     def hermite_of(index):
         rows = law[index]
