@@ -86,9 +86,13 @@ def main() -> None:
                      baseline_module(args.baseline, "_peaks").peak_in_motion),
         "current": (current.propagate, chunked_map, peak_in_motion),
     }
-    # Each kernel on its own revision's default grid for the SDOF path (the baseline's:
-    # ``default_resolution`` at its default phase step; the working tree's: the options').
-    resolutions = {"baseline": baseline_module(args.baseline, "_grid").default_resolution(args.n_max),
+    # Each kernel on its own revision's default grid for the SDOF path: the working tree's
+    # from its options; a baseline's at ``MAX_PHASE_STEP`` if its peaks are refined by
+    # degree 11 (``REFINED_DERIVATIVES``, from 12aff92), else at its default step (0.5).
+    base_grid, base_peaks = baseline_module(args.baseline, "_grid"), variants["baseline"][2]
+    step = (base_grid.MAX_PHASE_STEP if hasattr(sys.modules[base_peaks.__module__],
+                                                "REFINED_DERIVATIVES") else base_grid.TARGET_PHASE_STEP)
+    resolutions = {"baseline": base_grid.default_resolution(args.n_max, step),
                    "current": SpringMassOptions().checked(args.n_max).resolution}
     print(f"grids: {resolutions}")
     n = jnp.linspace(1.0, args.n_max, 1000)
