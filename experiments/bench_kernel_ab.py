@@ -98,7 +98,8 @@ def main() -> None:
     n = jnp.linspace(1.0, args.n_max, 1000)
     times = {key: [] for key in variants}
     for name in ("cycloidal", "modified-sine", "poly4567"):
-        sampled = {key: SampledLaw.of(laws.as_law(name), resolutions[key], 8) for key in variants}
+        samplers = {"baseline": base_grid.SampledLaw, "current": SampledLaw}  # each its layout
+        sampled = {key: samplers[key].of(laws.as_law(name), resolutions[key], 8) for key in variants}
         # Agreement: undamped, damped, and with each interval's weights gathered (the path
         # of a program's turn).
         for zeta, gather in ((0.0, None), (0.05, None), (0.2, None), (0.05, True)):

@@ -214,9 +214,9 @@ def test_measure_reports_errors_against_the_reference():
     reference = (np.zeros(3), np.asarray([cycloidal_residual(x) for x in n]) / 1.0)
     row = studies.measure(CYCLOIDAL, n, case, (reference[0], reference[1] / 1.0), repeats=1)
     curve = camjax.ct_curve(CYCLOIDAL, n, resolution=64)
-    # The grid has the resolution's intervals plus one per law piece: an SCCA law inside
+    # The grid has the resolution's intervals plus two per law piece: an SCCA law inside
     # jit has seven traced breakpoints, so eight pieces (some of zero width).
-    assert row["failed"] == 0 and row["steps_max"] == 64 + 8
+    assert row["failed"] == 0 and row["steps_max"] == 64 + 2 * 8
     assert row["residual_error"] == pytest.approx(np.max(np.abs(curve.residual - reference[1])), abs=1e-12)
     # R of the cycloidal law is in units of Ca = 2 pi: the closed form above is in those units too
     assert row["residual_error"] < 1e-6
