@@ -58,7 +58,8 @@ class SpringMassOptions(Options):
         method: ``"exact"`` or a diffrax solver name (``camjax.solvers.SOLVERS``).
         dwell: dwell after the rise, in motion periods.
         resolution: grid intervals per unit tau; ``None`` picks one from the largest
-            period ratio (``default_resolution``).
+            period ratio (``default_resolution`` at ``MAX_PHASE_STEP``: ``w h <= 1``).
+            A coarser one than that is refused.
         rtol, atol: tolerances of adaptive diffrax solvers.
         steps: step count of fixed-step diffrax solvers over the rise (default: twice the
             grid's interval count).
@@ -266,7 +267,7 @@ TRACED_RESOLUTION = 1024
 def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
     """Metrics of the exact path on a grid sized to the period ratio, or refused.
 
-    A concrete period ratio gets ``default_resolution(n)`` (refused above
+    A concrete period ratio gets the default grid (``SpringMassOptions``; refused above
     ``MAX_GRID_INTERVALS``); a traced one gets ``resolution`` (``TRACED_RESOLUTION`` if
     ``None``), and a period ratio past what that grid resolves raises, when the
     computation runs, instead of returning a wrong number.
