@@ -25,8 +25,6 @@ def _hermite_matrix(order: int) -> np.ndarray:
     return np.linalg.inv(np.array(rows))
 
 
-
-
 def _polynomial(c, x):
     """Value, first and second derivative of ``sum_m c[..., m] x^m`` (Horner)."""
     p = dp = ddp = jnp.zeros_like(x)

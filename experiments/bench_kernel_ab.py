@@ -80,18 +80,18 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=15)
     args = parser.parse_args()
     baseline_module(args.baseline, "metrics")  # registered for the baseline's _peaks
+    base_grid, base_peaks = (baseline_module(args.baseline, name) for name in ("_grid", "_peaks"))
     variants = {
         "baseline": (baseline_module(args.baseline, "_step").propagate,
                      baseline_module(args.baseline, "_batch").chunked_map,
-                     baseline_module(args.baseline, "_peaks").peak_in_motion),
+                     base_peaks.peak_in_motion),
         "current": (current.propagate, chunked_map, peak_in_motion),
     }
     # Each kernel on its own revision's default grid for the SDOF path: the working tree's
     # from its options; a baseline's at ``MAX_PHASE_STEP`` if its peaks are refined by
     # degree 11 (``REFINED_DERIVATIVES``, from 12aff92), else at its default step (0.5).
-    base_grid, base_peaks = baseline_module(args.baseline, "_grid"), variants["baseline"][2]
-    step = (base_grid.MAX_PHASE_STEP if hasattr(sys.modules[base_peaks.__module__],
-                                                "REFINED_DERIVATIVES") else base_grid.TARGET_PHASE_STEP)
+    step = (base_grid.MAX_PHASE_STEP if hasattr(base_peaks, "REFINED_DERIVATIVES")
+            else base_grid.TARGET_PHASE_STEP)
     resolutions = {"baseline": base_grid.default_resolution(args.n_max, step),
                    "current": SpringMassOptions().checked(args.n_max).resolution}
     print(f"grids: {resolutions}")

@@ -73,8 +73,6 @@ def default_resolution(max_period_ratio: float, phase_step: float = TARGET_PHASE
     return max(128, 64 * math.ceil(needed / 64))
 
 
-
-
 class MotionGrid(NamedTuple):
     """Nodes over ``[0, 1]`` and the interpolated forcing on each interval.
 
