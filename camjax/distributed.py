@@ -214,7 +214,7 @@ def _compute_chunk(spec: SweepSpec, chunk, devices) -> dict[str, np.ndarray]:
     import jax.numpy as jnp
 
     from .errors import raise_if_failed
-    from .sweep import ct_curves, prepare_sweep, sweep_banded, sweep_law_stack
+    from .sweep import ct_curves, prepare_sweep, stacked_ca, sweep_banded, sweep_law_stack
 
     d, start = chunk
     laws = list(spec.laws[start:start + spec.laws_per_chunk])
@@ -235,7 +235,7 @@ def _compute_chunk(spec: SweepSpec, chunk, devices) -> dict[str, np.ndarray]:
                         lambda i: f"{options.method} sweep at period ratio {ratios[i]:g} "
                         f"(law {laws[i // spec.period_ratio.size].name})",
                         out["ct"].reshape(-1), out["residual"].reshape(-1))
-        out["ca"] = np.asarray(jax.vmap(lambda law: law.Ca)(stacked))[:count]
+        out["ca"] = np.asarray(stacked_ca(stacked))[:count]
         return out
     curves = ct_curves(laws, spec.period_ratio, damping=spec.damping[d], method=spec.method,
                        dwell=spec.dwell, devices=devices)
