@@ -6,7 +6,10 @@ median of ``--repeats`` warm calls, with the per-law time.  Run it in two checko
 compare revisions (one process each, in turn; the machine's speed drifts between
 processes, so repeat the pair).
 
-    python experiments/bench_scca_laws.py [--laws 256] [--repeats 3]
+    python experiments/bench_scca_laws.py [--laws 256] [--repeats 3] [--devices 1]
+
+``--devices``: CPU devices (``camjax.sharding.use_cpu_cores``; default one per core), over
+which ``ct_curves`` splits the stack.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ import numpy as np
 
 import camjax
 from camjax import distributed
+from camjax.sharding import use_cpu_cores
 
 
 def main() -> None:
@@ -25,7 +29,9 @@ def main() -> None:
     parser.add_argument("--laws", type=int, default=256)
     parser.add_argument("--count", type=int, default=1000, help="period ratios in [1, 30]")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--devices", type=int, help="CPU devices (default: one per core)")
     args = parser.parse_args()
+    devices = use_cpu_cores(args.devices)
     face = distributed.scca_grid(0.01, face=True)
     picked = np.unique(np.linspace(0, len(face) - 1, args.laws).astype(int))
     chosen = {face[i].name: face[i] for i in picked}
@@ -39,7 +45,7 @@ def main() -> None:
         camjax.ct_curves(chosen, n)
         warm.append(time.perf_counter() - start)
     median = float(np.median(warm))
-    print(f"{len(chosen)} SCCA laws x {n.size} ratios: first call {first:.2f} s, warm "
+    print(f"{len(chosen)} SCCA laws x {n.size} ratios, {devices} CPU device(s): first call {first:.2f} s, warm "
           f"median {median:.2f} s ({1e3 * median / len(chosen):.2f} ms per law; runs "
           + ", ".join(f"{t:.2f}" for t in warm) + ")")
 

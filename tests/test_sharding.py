@@ -1,5 +1,6 @@
-"""Sharded sweeps equal single-device ones (4 forced host devices, in a subprocess): Ct
-curves, law stacks, the design's band evaluation and the program speed sweep."""
+"""Sharded sweeps equal single-device ones (4 host devices from ``use_cpu_cores``, in a
+subprocess): Ct curves, law stacks, the design's band evaluation and the program speed
+sweep."""
 
 import os
 import subprocess
@@ -11,14 +12,15 @@ import jax
 import numpy as np
 import pytest
 
-from camjax.sharding import batch_size, resolve_devices, shard_batch
+from camjax.sharding import batch_size, resolve_devices, shard_batch, use_cpu_cores
 
 ROOT = Path(__file__).resolve().parents[1]
 
 SCRIPT = textwrap.dedent(
     """
-    import os
-    os.environ["XLA_FLAGS"] = "--xla_force_host_platform_device_count=4"
+    import camjax
+    from camjax.sharding import use_cpu_cores
+    assert use_cpu_cores(4) == 4  # before JAX starts
     import jax
     import numpy as np
     from camjax import laws
@@ -48,10 +50,12 @@ SCRIPT = textwrap.dedent(
     for first in (1, 0):
         many = ct_curve(law, n[first:], devices=4, **options)
         errors[f"tsit5-{4 - first}"] = worst(single_tsit5, many, first)
-    family = [SCCA(a, 0.0, 1.0 - a) for a in (0.1, 0.3, 0.5, 0.7, 0.9)]  # 5 laws on 4 devices
+    # 9 laws: one stacked call (more than STACK_FROM), on 4 devices
+    family = [SCCA(a, 0.0, 1.0 - a) for a in np.linspace(0.1, 0.9, 9)]
     n = np.linspace(1.0, 6.0, 6)
     one, many = ct_curves(family, n, devices=1), ct_curves(family, n, devices=4)
     errors["scca-stack"] = max(worst(one[k], many[k]) for k in one)
+    errors["scca-stack-ca"] = max(abs(many[law.name].ca - float(law.Ca)) for law in family)
     # the design's band evaluation (Ca*Ct over a band: 7 ratios on 4 devices) against the
     # single-device curve (the same exact path through ct_curve)
     loads = peak_loads(law, single.period_ratio[1:], devices=4)
@@ -83,6 +87,19 @@ def test_sharded_sweeps_equal_single_device():
                           text=True, timeout=600)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-4000:]
     assert "ERRORS" in done.stdout
+
+
+def test_use_cpu_cores_checks_and_defers_to_xla_flags(monkeypatch):
+    started = len(jax.devices("cpu"))
+    monkeypatch.delenv("XLA_FLAGS", raising=False)
+    assert use_cpu_cores(started) == started  # what JAX already has: nothing to change
+    with pytest.raises(RuntimeError, match="before any JAX computation"):
+        use_cpu_cores(started + 1)
+    for bad in (0, -2, 1.5, "2", True):
+        with pytest.raises(ValueError, match="count must be a positive integer"):
+            use_cpu_cores(bad)
+    monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=7")
+    assert use_cpu_cores(3) == 7  # the user's flag wins, JAX's config is left alone
 
 
 def test_resolve_devices():

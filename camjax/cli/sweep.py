@@ -18,7 +18,8 @@ def register(sub) -> None:
     )
     parser.add_argument("spec", metavar="SPEC", help="TOML spec file")
     parser.add_argument("--devices", type=int, metavar="K",
-                        help="local devices to split each chunk over (default: all)")
+                        help="local devices to split each chunk over (default: all; on a CPU, "
+                        "a single-process run has one device per core)")
     parser.add_argument("--coordinator", metavar="HOST:PORT",
                         help="coordinator of a multi-process run (process 0's address)")
     parser.add_argument("--num-processes", type=int, metavar="P", help="processes in the run")
@@ -38,6 +39,10 @@ def run(args) -> int:
         if all(given) and not 0 <= args.process_id < args.num_processes:
             raise CliError(f"--process-id must be in 0..{args.num_processes - 1}")
         distributed.initialize(args.coordinator, args.num_processes, args.process_id)
+    else:  # one process: a CPU device per core, each chunk split over them
+        from ..sharding import use_cpu_cores
+
+        use_cpu_cores()
     spec = distributed.load_spec(args.spec)  # after initialize: building laws starts JAX
     output_dir(str(spec.output), f"{args.spec}: output")  # writable, before any work
     if args.devices is not None:
