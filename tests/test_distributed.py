@@ -183,6 +183,20 @@ def test_two_processes_merge_to_the_one_process_result(tmp_path, uninterrupted):
     assert "wrote" in logs[0][1]
 
 
+def test_cli_one_process_sweeps_on_a_device_per_core(tmp_path, uninterrupted):
+    path = _spec(tmp_path)
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_PLATFORMS": "cpu"}
+    env.pop("XLA_FLAGS", None)
+    done = subprocess.run([sys.executable, "-m", "camjax", "sweep", str(path)], env=env,
+                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    cores = len(os.sched_getaffinity(0))
+    assert f"on {cores} local device(s)" in done.stderr
+    with np.load(tmp_path / "out" / "sweep.npz") as merged:
+        for key in ("ct", "residual", "peak_in_motion", "ca"):
+            np.testing.assert_allclose(merged[key], uninterrupted[key], rtol=0, atol=1e-12)
+
+
 def test_cli_bad_spec_is_one_line_exit_2(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_PLATFORMS": "cpu"}
     bad = tmp_path / "bad.toml"

@@ -42,7 +42,10 @@ def run(args) -> int:
     else:  # one process: a CPU device per core, each chunk split over them
         from ..sharding import use_cpu_cores
 
-        use_cpu_cores()
+        try:
+            use_cpu_cores()
+        except RuntimeError:  # JAX already started (main() called from Python): keep its devices
+            pass
     spec = distributed.load_spec(args.spec)  # after initialize: building laws starts JAX
     output_dir(str(spec.output), f"{args.spec}: output")  # writable, before any work
     if args.devices is not None:
@@ -54,6 +57,9 @@ def run(args) -> int:
                            f"got {args.devices}")
     path = distributed.run_distributed(spec, devices=args.devices)
     if path is not None:
+        import jax
+
+        used = args.devices or jax.local_device_count()
         print(f"wrote {path} ({len(spec.laws)} laws x {spec.period_ratio.size} period ratios "
-              f"x {len(spec.damping)} damping ratios)", file=sys.stderr)
+              f"x {len(spec.damping)} damping ratios, on {used} local device(s))", file=sys.stderr)
     return 0
