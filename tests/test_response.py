@@ -363,6 +363,40 @@ def test_sampled_laws_are_kept_by_value_and_the_oldest_dropped():
     np.testing.assert_array_equal(again.grid.forcing, first.grid.forcing)
 
 
+def test_sampling_refuses_too_few_pieces_and_names_what_cannot_be_sampled():
+    from camjax.sdof import SampledLaw
+
+    law = laws.SCCA(0.2, 0.3, 0.3)  # with a constant-velocity part: 8 pieces
+    with pytest.raises(ValueError, match="has 8 pieces, more than 4"):
+        SampledLaw.of(law, 128, 4)
+    SampledLaw.of(law, 128, 8)  # kept: a later refusal does not hit the kept sampling
+    with pytest.raises(ValueError, match="has 8 pieces, more than 4"):
+        SampledLaw.of(law, 128, 4)
+    assert SampledLaw.padded_pieces(law) == 8
+    assert SampledLaw.padded_pieces(laws.get("cycloidal")) == 8
+    assert SampledLaw.padded_pieces("cycloidal") is None  # not a law object
+    seen = []
+    jax.jit(lambda a: seen.append(SampledLaw.padded_pieces(laws.SCCA(a, 0.3, 0.3))) or a)(0.2)
+    assert seen == [None]  # traced breakpoints
+
+
+def test_the_default_template_is_kept_and_bad_options_refused_every_time():
+    from camjax.sweep import prepare_sweep
+
+    for _ in range(2):
+        with pytest.raises(ValueError, match="damping"):
+            prepare_sweep([1.0, 2.0], damping=1.5)
+        with pytest.raises(ValueError, match="resolution must be at least 8"):
+            prepare_sweep([1.0, 2.0], resolution=4)
+    _, template, options = prepare_sweep([1.0, 2.0], damping=0.1)
+    _, again, same = prepare_sweep(np.array([1.0, 1.5, 2.0]), damping=0.1)
+    assert again is template and same is options  # the same first and largest ratio
+    _, _, finer = prepare_sweep([1.0, 2.0], damping=0.1, resolution=256)
+    assert finer.resolution == 256 != options.resolution
+    _, other, _ = prepare_sweep([1.0, 2.0], damping=0.2)
+    assert float(other.damping) == 0.2
+
+
 def test_response_between_nodes_matches_scipy():
     """``solve``'s samples half-way between the grid's nodes (the exact middle states)
     and at the nodes, against scipy's DOP853 at tight tolerance, on the default grid."""

@@ -179,10 +179,12 @@ class SpringMass(AbstractModel):
         """On the exact path, the law's grid as data (``SampledLaw``), padded to as many
         pieces as any law in ``like`` needs: every standard law (and a designed spline
         beside them) then sweeps in one compiled program."""
-        if options.method != "exact" or not SampledLaw.accepts(law):
+        if options.method != "exact":
             return law
-        group = [x for x in (law, *like) if SampledLaw.accepts(x)]
-        return SampledLaw.of(law, options.resolution, max(map(SampledLaw.padded_pieces, group)))
+        pieces = [SampledLaw.padded_pieces(x) for x in (law, *like)]
+        if pieces[0] is None:
+            return law
+        return SampledLaw.of(law, options.resolution, max(p for p in pieces if p is not None))
 
 
 # --- the two paths ------------------------------------------------------------------

@@ -231,14 +231,14 @@ class SampledLaw(eqx.Module):
         The last ``SAMPLED_LAWS_KEPT`` samplings are kept, keyed by the law's values: a
         warm ``ct_curve`` of a law swept before skips its sampling (0.6 ms of about 6).
         """
-        breakpoints = law.breakpoints()
         pieces = pieces or cls.padded_pieces(law)
-        if pieces < len(breakpoints) + 1:
-            raise ValueError(f"{law.name} has {len(breakpoints) + 1} pieces, more than {pieces}")
         key = (_value_key(law), int(resolution), pieces)
-        if key in _SAMPLED:
+        if key in _SAMPLED:  # checked when it was sampled
             _SAMPLED.move_to_end(key)
             return _SAMPLED[key]
+        breakpoints = law.breakpoints()
+        if pieces < len(breakpoints) + 1:
+            raise ValueError(f"{law.name} has {len(breakpoints) + 1} pieces, more than {pieces}")
         grid, times = _layout(breakpoints, resolution, pieces)
         forcing, ca = _sample(law, times)  # one small program per law type, not per value
         grid = grid._replace(piece=jnp.asarray(grid.piece, dtype=jnp.int32), forcing=forcing)
@@ -248,14 +248,15 @@ class SampledLaw(eqx.Module):
         return sampled
 
     @staticmethod
-    def padded_pieces(law: AbstractMotionLaw) -> int:
-        """The law's piece count rounded up to a multiple of ``PIECE_BLOCK``."""
-        return PIECE_BLOCK * -(-(len(law.breakpoints()) + 1) // PIECE_BLOCK)
-
-    @staticmethod
-    def accepts(law) -> bool:
-        """Whether ``law`` can be sampled: a motion law whose breakpoints are fixed."""
-        return isinstance(law, AbstractMotionLaw) and isinstance(law.breakpoints(), tuple)
+    def padded_pieces(law: AbstractMotionLaw) -> int | None:
+        """The law's piece count rounded up to a multiple of ``PIECE_BLOCK``, or ``None`` if
+        it cannot be sampled (not a motion law, or its breakpoints traced)."""
+        if not isinstance(law, AbstractMotionLaw):
+            return None
+        breakpoints = law.breakpoints()
+        if not isinstance(breakpoints, tuple):
+            return None
+        return PIECE_BLOCK * -(-(len(breakpoints) + 1) // PIECE_BLOCK)
 
 
 SAMPLED_LAWS_KEPT = 32
