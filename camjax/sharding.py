@@ -10,9 +10,11 @@ result, so callers see exactly the single-device answer.
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from collections.abc import Sequence
+from pathlib import Path
 
 import equinox as eqx
 import jax
@@ -26,39 +28,71 @@ AXIS = "batch"
 _HOST_DEVICES_FLAG = re.compile(r"--xla_force_host_platform_device_count=(\d+)")
 
 
+def available_cores(cpu_max: Path = Path("/sys/fs/cgroup/cpu.max")) -> int:
+    """CPU cores this process may use: its affinity mask, within a cgroup's CPU quota
+    (``cpu_max``: a container limited to 2 CPUs on a 64-core host has 2)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    cores = cores or 1
+    try:
+        quota, period = Path(cpu_max).read_text().split()[:2]
+        if quota != "max":
+            cores = min(cores, max(1, math.ceil(int(quota) / int(period))))
+    except (OSError, ValueError):
+        pass
+    return cores
+
+
 def use_cpu_cores(count: int | None = None) -> int:
     """Give JAX one CPU device per core (or ``count`` devices), so that sweeps split their
     batch over the cores (``shard_batch``) instead of running on one device.
 
     One CPU device already spreads some of its work over the cores, but a sweep of many
     laws ran 1.3x faster split over two devices on a 2-core machine (``camjax.ct_curves``
-    of 256 SCCA laws x 1000 ratios, 2026-11-26).  The device count is fixed when JAX
-    starts: call this right after ``import camjax``, before any computation.  A count
-    already set in ``XLA_FLAGS`` (``--xla_force_host_platform_device_count=N``) wins.
-    Returns the number of CPU devices JAX will have.
+    of 256 SCCA laws x 1000 ratios, 2026-11-26, commit 40f1535).  The device count is
+    fixed when JAX starts (building a law or any array starts it): call this right after
+    ``import camjax``.  A count the user set already wins: ``XLA_FLAGS``
+    (``--xla_force_host_platform_device_count=N``), ``JAX_NUM_CPU_DEVICES`` or JAX's
+    ``jax_num_cpu_devices``.  ``count`` defaults to ``available_cores()``.  Returns the
+    number of CPU devices JAX has (or will have).
 
     Raises:
         ValueError: ``count`` is not a positive integer.
         RuntimeError: JAX has already started with another device count.
     """
     if count is None:
-        count = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+        count = available_cores()
     if isinstance(count, bool) or not isinstance(count, int | np.integer) or count < 1:
         raise ValueError(f"count must be a positive integer (CPU devices), got {count!r}")
-    given = _HOST_DEVICES_FLAG.search(os.environ.get("XLA_FLAGS", ""))
-    if given:
-        return int(given.group(1))
+    if not _started():
+        given = _HOST_DEVICES_FLAG.search(os.environ.get("XLA_FLAGS", ""))
+        if given:
+            return int(given.group(1))
+        if jax.config.jax_num_cpu_devices > 0:
+            return int(jax.config.jax_num_cpu_devices)
+        try:
+            jax.config.update("jax_num_cpu_devices", int(count))
+            return int(count)
+        except RuntimeError:  # started after all (``_started`` could not tell)
+            pass
+    started = len(jax.devices("cpu"))
+    if started != count:
+        raise RuntimeError(
+            f"JAX has already started with {started} CPU device(s); call "
+            "camjax.sharding.use_cpu_cores before any JAX computation (right after "
+            "import), or set XLA_FLAGS=--xla_force_host_platform_device_count="
+            f"{count} before Python starts")
+    return started
+
+
+def _started() -> bool:
+    """Whether JAX's backends have started (its CPU device count is then fixed); ``False``
+    where this JAX cannot say (``use_cpu_cores`` then learns it from JAX's refusal)."""
     try:
-        jax.config.update("jax_num_cpu_devices", int(count))
-    except RuntimeError:
-        started = len(jax.devices("cpu"))
-        if started != count:
-            raise RuntimeError(
-                f"JAX has already started with {started} CPU device(s); call "
-                "camjax.sharding.use_cpu_cores before any JAX computation (right after "
-                "import), or set XLA_FLAGS=--xla_force_host_platform_device_count="
-                f"{count} before Python starts") from None
-    return int(count)
+        from jax._src import xla_bridge
+
+        return bool(xla_bridge.backends_are_initialized())
+    except (ImportError, AttributeError):
+        return False
 
 
 def resolve_devices(devices=None) -> list:

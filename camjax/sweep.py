@@ -86,7 +86,8 @@ def _sweep_stack(laws, template: AbstractModel, period_ratios, options):
 @eqx.filter_jit
 def stacked_ca(laws) -> jax.Array:
     """``Ca`` of every law of a stack (laws on axis 0 of every leaf), in one compiled call
-    (law by law, eagerly, it runs op by op: 0.1 ms a law)."""
+    (law by law, eagerly, it runs op by op: 0.1 ms a law; compiled once per stack size,
+    as the stack's sweep is)."""
     return jax.vmap(lambda law: jnp.asarray(law.Ca, float))(laws)
 
 
@@ -172,15 +173,20 @@ def prepare_sweep(period_ratios, model=None, damping=0.0, method=None, dwell=1.0
     """Checked period ratios, the model template (array leaves) and its static options."""
     n = checks.period_ratios(period_ratios)
     if model is None:  # the default model: its template and options depend on numbers alone
+        key = _typed((damping, method, dwell, *sorted(solver_options.items())))
         try:
-            key = (damping, method, dwell, float(n[0]), float(n.max()),
-                   tuple(sorted(solver_options.items())))
             hash(key)
-        except TypeError:  # an unhashable option: checked (and refused) below
+        except TypeError:  # an array or other unhashable value: built (and checked) anew
             key = None
         if key is not None:
-            return (n, *_default_template(*key))
+            return (n, *_default_template(key, float(n[0]), float(n.max())))
     return (n, *_template_and_options(model, damping, method, dwell, n[0], n.max(), solver_options))
+
+
+def _typed(values) -> tuple:
+    """``values`` with their types, so that equal numbers of other types (``1e5`` and
+    ``100000``, ``True`` and ``1``) are kept apart: the checks tell them apart."""
+    return tuple((type(v), _typed(v) if isinstance(v, tuple) else v) for v in values)
 
 
 def _template_and_options(model, damping, method, dwell, first, largest, solver_options):
@@ -190,10 +196,14 @@ def _template_and_options(model, damping, method, dwell, first, largest, solver_
 
 
 @functools.lru_cache(maxsize=16)
-def _default_template(damping, method, dwell, first, largest, solver_options):
-    """The default model's template and options, kept: a warm ``ct_curve`` spent 0.25 ms
-    building them."""
-    return _template_and_options(None, damping, method, dwell, first, largest, dict(solver_options))
+def _default_template(key, first, largest):
+    """The default model's template and options for ``prepare_sweep``'s typed ``key``, kept
+    (a warm ``ct_curve`` spent 0.3-0.5 ms building them).  Built as concrete arrays even
+    when called while tracing (a ``ct_curve`` inside ``jit``), so that no tracer is kept."""
+    damping, method, dwell = (value for _, value in key[:3])
+    options = {name: value for _, ((_, name), (_, value)) in key[3:]}
+    with jax.ensure_compile_time_eval():
+        return _template_and_options(None, damping, method, dwell, first, largest, options)
 
 
 def _curve(law, n, template, options, metrics, result, throw: bool, ca=None) -> CtCurve:

@@ -372,12 +372,38 @@ def test_sampling_refuses_too_few_pieces_and_names_what_cannot_be_sampled():
     SampledLaw.of(law, 128, 8)  # kept: a later refusal does not hit the kept sampling
     with pytest.raises(ValueError, match="has 8 pieces, more than 4"):
         SampledLaw.of(law, 128, 4)
-    assert SampledLaw.padded_pieces(law) == 8
+    assert SampledLaw.padded_pieces(law) == 8 == SampledLaw.pieces_if_sampled(law)
     assert SampledLaw.padded_pieces(laws.get("cycloidal")) == 8
-    assert SampledLaw.padded_pieces("cycloidal") is None  # not a law object
+    assert SampledLaw.pieces_if_sampled("cycloidal") is None  # not a law object
+    assert not SampledLaw.accepts("cycloidal")
+    with pytest.raises(ValueError, match="cannot be sampled"):
+        SampledLaw.of("cycloidal", 128)
     seen = []
-    jax.jit(lambda a: seen.append(SampledLaw.padded_pieces(laws.SCCA(a, 0.3, 0.3))) or a)(0.2)
-    assert seen == [None]  # traced breakpoints
+
+    def traced(a):  # a law built from a traced fraction has traced breakpoints
+        law = laws.SCCA(a, 0.3, 0.3)
+        seen.append((SampledLaw.pieces_if_sampled(law), SampledLaw.accepts(law)))
+        with pytest.raises(ValueError, match="cannot be sampled"):
+            SampledLaw.of(law, 128)
+        return a
+
+    jax.jit(traced)(0.2)
+    assert seen == [(None, False)]
+
+
+def test_a_stack_of_boundary_polynomials_has_each_laws_exact_ca():
+    """Nine degree-7 laws sweep as one stack, whose Ca is taken traced; the first has two
+    nearly equal crests of |a| (6.27686 at 0.304, 6.27043 at 0.732), where refining only
+    the best sample found the lower one."""
+    family = [laws.get(f"polynomial7:0.5,{a:g},0,0.2,0,0") for a in np.linspace(-3, -2.2, 9)]
+    n = np.linspace(1.0, 5.0, 7)
+    curves = camjax.ct_curves(family, n)
+    for law in family:
+        exact = law.peak_coefficients()["Ca"]  # roots of the polynomial's derivative
+        assert curves[law.name].ca == pytest.approx(exact, rel=1e-12)
+    assert family[0].peak_coefficients()["Ca"] == pytest.approx(6.27686, abs=1e-5)
+    alone = camjax.ct_curve(family[0], n)
+    np.testing.assert_allclose(curves[family[0].name].ca_ct, alone.ca_ct, rtol=1e-10)
 
 
 def test_the_default_template_is_kept_and_bad_options_refused_every_time():
@@ -395,6 +421,18 @@ def test_the_default_template_is_kept_and_bad_options_refused_every_time():
     assert finer.resolution == 256 != options.resolution
     _, other, _ = prepare_sweep([1.0, 2.0], damping=0.2)
     assert float(other.damping) == 0.2
+    # A refused float must not stand in for the equal integer, nor the reverse.
+    with pytest.raises(ValueError, match="max_steps must be a positive integer"):
+        prepare_sweep([1.0, 2.0], method="tsit5", max_steps=2.5)
+    assert prepare_sweep([1.0, 2.0], method="tsit5", max_steps=1e5)[2].max_steps == 100_000
+    assert isinstance(prepare_sweep([1.0, 2.0], method="tsit5", max_steps=100_000)[2].max_steps, int)
+    # A first call while tracing (refused later: a curve is concrete) keeps no tracer.
+    with pytest.raises(jax.errors.TracerArrayConversionError):
+        jax.jit(lambda a: camjax.ct_curve(laws.SCCA(a, 0.0, 1.0 - a), [1.0, 2.0],
+                                          dwell=1.25).ct)(0.5)
+    _, kept, _ = prepare_sweep([1.0, 2.0], dwell=1.25)
+    assert not isinstance(kept.damping, jax.core.Tracer)
+    assert np.isfinite(camjax.ct_curve("cycloidal", [1.0, 2.0], dwell=1.25).ct).all()
 
 
 def test_response_between_nodes_matches_scipy():

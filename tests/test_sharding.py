@@ -12,7 +12,13 @@ import jax
 import numpy as np
 import pytest
 
-from camjax.sharding import batch_size, resolve_devices, shard_batch, use_cpu_cores
+from camjax.sharding import (
+    available_cores,
+    batch_size,
+    resolve_devices,
+    shard_batch,
+    use_cpu_cores,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -89,17 +95,40 @@ def test_sharded_sweeps_equal_single_device():
     assert "ERRORS" in done.stdout
 
 
-def test_use_cpu_cores_checks_and_defers_to_xla_flags(monkeypatch):
+def test_use_cpu_cores_checks_and_defers_to_the_users_count(monkeypatch):
     started = len(jax.devices("cpu"))
-    monkeypatch.delenv("XLA_FLAGS", raising=False)
     assert use_cpu_cores(started) == started  # what JAX already has: nothing to change
+    monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=7")
+    assert use_cpu_cores(started) == started  # started: the devices JAX has, not the flag's
     with pytest.raises(RuntimeError, match="before any JAX computation"):
         use_cpu_cores(started + 1)
     for bad in (0, -2, 1.5, "2", True):
         with pytest.raises(ValueError, match="count must be a positive integer"):
             use_cpu_cores(bad)
-    monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=7")
-    assert use_cpu_cores(3) == 7  # the user's flag wins, JAX's config is left alone
+    assert use_cpu_cores(np.int64(started)) == started
+    # Before JAX starts, a count the user set wins (a fresh process for each).
+    script = ("from camjax.sharding import use_cpu_cores; n = use_cpu_cores(2); "
+              "import jax; print(n, jax.local_device_count())")
+    for variable, value, expected in (("XLA_FLAGS", "--xla_force_host_platform_device_count=3", "3 3"),
+                                      ("JAX_NUM_CPU_DEVICES", "1", "1 1"), (None, None, "2 2")):
+        env = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_PLATFORMS": "cpu"}
+        env.pop("XLA_FLAGS", None)
+        env.pop("JAX_NUM_CPU_DEVICES", None)
+        if variable:
+            env[variable] = value
+        done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                              text=True, timeout=120)
+        assert done.stdout.split() == expected.split(), done.stderr[-2000:]
+
+
+def test_available_cores_keep_within_a_cgroup_quota(tmp_path):
+    cores = len(os.sched_getaffinity(0))
+    quota = tmp_path / "cpu.max"
+    quota.write_text("150000 100000\n")  # 1.5 CPUs
+    assert available_cores(quota) == min(cores, 2)
+    quota.write_text("max 100000\n")
+    assert available_cores(quota) == cores
+    assert available_cores(tmp_path / "absent") == cores
 
 
 def test_resolve_devices():

@@ -19,7 +19,8 @@ def register(sub) -> None:
     parser.add_argument("spec", metavar="SPEC", help="TOML spec file")
     parser.add_argument("--devices", type=int, metavar="K",
                         help="local devices to split each chunk over (default: all; on a CPU, "
-                        "a single-process run has one device per core)")
+                        "a single-process run has one device per core, as a power of two up "
+                        "to 64)")
     parser.add_argument("--coordinator", metavar="HOST:PORT",
                         help="coordinator of a multi-process run (process 0's address)")
     parser.add_argument("--num-processes", type=int, metavar="P", help="processes in the run")
@@ -40,10 +41,12 @@ def run(args) -> int:
             raise CliError(f"--process-id must be in 0..{args.num_processes - 1}")
         distributed.initialize(args.coordinator, args.num_processes, args.process_id)
     else:  # one process: a CPU device per core, each chunk split over them
-        from ..sharding import use_cpu_cores
+        from ..sharding import available_cores, use_cpu_cores
 
+        # A power of two (at most 64) splits the default chunk of 64 laws without padding.
+        count = min(64, 1 << (available_cores().bit_length() - 1))
         try:
-            use_cpu_cores()
+            use_cpu_cores(count)
         except RuntimeError:  # JAX already started (main() called from Python): keep its devices
             pass
     spec = distributed.load_spec(args.spec)  # after initialize: building laws starts JAX

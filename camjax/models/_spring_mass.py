@@ -91,10 +91,13 @@ class SpringMassOptions(Options):
         )
         for label, value in (("rtol", self.rtol), ("atol", self.atol)):
             require(math.isfinite(value) and value > 0, f"{label} must be positive, got {value}")
-        require(self.steps is None or int(self.steps) >= 1,
+        require(self.steps is None or _whole(self.steps) >= 1,
                 f"steps must be a positive integer, got {self.steps}")
-        require(int(self.max_steps) >= 1, f"max_steps must be positive, got {self.max_steps}")
-        options = dataclasses.replace(base, resolution=int(resolution))
+        require(_whole(self.max_steps) >= 1,
+                f"max_steps must be a positive integer, got {self.max_steps}")
+        options = dataclasses.replace(
+            base, resolution=int(resolution), max_steps=int(self.max_steps),
+            steps=None if self.steps is None else int(self.steps))
         require(max_period_ratio is None or max_period_ratio <= options.largest_period_ratio(),
                 f"{options.too_coarse()}, got {max_period_ratio or 0:g}")
         return options
@@ -108,6 +111,15 @@ class SpringMassOptions(Options):
         return (f"period ratio must be at most {self.largest_period_ratio():.4g} on a grid of "
                 f"resolution {self.resolution} (give resolution >= "
                 f"{2 * math.pi / MAX_PHASE_STEP:.3g} n)")
+
+
+def _whole(value) -> float:
+    """``value`` if it is a whole number (``100000`` or ``1e5``), else 0 (refused)."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return 0
+    return number if number.is_integer() else 0
 
 
 class SpringMassResponse(Response):
@@ -181,7 +193,7 @@ class SpringMass(AbstractModel):
         beside them) then sweeps in one compiled program."""
         if options.method != "exact":
             return law
-        pieces = [SampledLaw.padded_pieces(x) for x in (law, *like)]
+        pieces = [SampledLaw.pieces_if_sampled(x) for x in (law, *like)]
         if pieces[0] is None:
             return law
         return SampledLaw.of(law, options.resolution, max(p for p in pieces if p is not None))

@@ -248,9 +248,23 @@ class SampledLaw(eqx.Module):
         return sampled
 
     @staticmethod
-    def padded_pieces(law: AbstractMotionLaw) -> int | None:
-        """The law's piece count rounded up to a multiple of ``PIECE_BLOCK``, or ``None`` if
-        it cannot be sampled (not a motion law, or its breakpoints traced)."""
+    def padded_pieces(law: AbstractMotionLaw) -> int:
+        """The law's piece count rounded up to a multiple of ``PIECE_BLOCK``."""
+        pieces = SampledLaw.pieces_if_sampled(law)
+        if pieces is None:
+            raise ValueError(f"{getattr(law, 'name', law)!r} cannot be sampled: it is not a motion "
+                             "law with fixed breakpoints")
+        return pieces
+
+    @staticmethod
+    def accepts(law) -> bool:
+        """Whether ``law`` can be sampled: a motion law whose breakpoints are fixed."""
+        return SampledLaw.pieces_if_sampled(law) is not None
+
+    @staticmethod
+    def pieces_if_sampled(law) -> int | None:
+        """``padded_pieces(law)`` if ``law`` can be sampled, else ``None``: one call to the
+        law's breakpoints for both questions."""
         if not isinstance(law, AbstractMotionLaw):
             return None
         breakpoints = law.breakpoints()
