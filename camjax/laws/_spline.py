@@ -64,7 +64,7 @@ def _basis(knots: np.ndarray, degree: int, x: jax.Array) -> jax.Array:
     return basis
 
 
-REFINED_CRESTS = 8
+REFINED_CRESTS = 4
 """Sampled crests of ``|f|`` that ``max_abs_piecewise`` refines: two crests within the
 sampling's loss of each other may swap places once refined."""
 
@@ -84,8 +84,8 @@ def max_abs_piecewise(f, edges: np.ndarray, samples_per_piece: int = 32) -> jax.
     values = jnp.abs(f(grid))
     around = jnp.pad(values, 1, constant_values=-jnp.inf)
     crest = (values >= around[:-2]) & (values >= around[2:])
-    count = min(REFINED_CRESTS, grid.size)
-    _, k = jax.lax.top_k(jax.lax.stop_gradient(jnp.where(crest, values, -jnp.inf)), count)
+    _, k = jax.lax.top_k(jax.lax.stop_gradient(jnp.where(crest, values, -jnp.inf)),
+                         min(REFINED_CRESTS, grid.size))
     lo = grid[jnp.maximum(k - 1, 0)]
     hi = grid[jnp.minimum(k + 1, grid.size - 1)]
     ratio = (np.sqrt(5.0) - 1) / 2
