@@ -104,6 +104,17 @@ def as_value_errors():
         raise ValueError(messages[-1]) from None
 
 
+def positive_integer(value, name: str) -> int:
+    """``value`` as an ``int`` if it is a whole number >= 1 (``100000`` or ``1e5``), else a
+    ``ValueError`` naming ``name`` (a count the solver loops over: a float must not reach it)."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = 0.0
+    require(number.is_integer() and number >= 1, f"{name} must be a positive integer, got {value}")
+    return int(number)
+
+
 def positive(value, name: str):
     """``value`` if every entry is finite and > 0 (period ratios, stiffnesses)."""
     return ensure(value, lambda v: (v > 0) & (v < np.inf), f"{name} must be positive and finite")

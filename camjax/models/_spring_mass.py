@@ -91,13 +91,10 @@ class SpringMassOptions(Options):
         )
         for label, value in (("rtol", self.rtol), ("atol", self.atol)):
             require(math.isfinite(value) and value > 0, f"{label} must be positive, got {value}")
-        require(self.steps is None or _whole(self.steps) >= 1,
-                f"steps must be a positive integer, got {self.steps}")
-        require(_whole(self.max_steps) >= 1,
-                f"max_steps must be a positive integer, got {self.max_steps}")
         options = dataclasses.replace(
-            base, resolution=int(resolution), max_steps=int(self.max_steps),
-            steps=None if self.steps is None else int(self.steps))
+            base, resolution=int(resolution),
+            max_steps=checks.positive_integer(self.max_steps, "max_steps"),
+            steps=None if self.steps is None else checks.positive_integer(self.steps, "steps"))
         require(max_period_ratio is None or max_period_ratio <= options.largest_period_ratio(),
                 f"{options.too_coarse()}, got {max_period_ratio or 0:g}")
         return options
@@ -111,15 +108,6 @@ class SpringMassOptions(Options):
         return (f"period ratio must be at most {self.largest_period_ratio():.4g} on a grid of "
                 f"resolution {self.resolution} (give resolution >= "
                 f"{2 * math.pi / MAX_PHASE_STEP:.3g} n)")
-
-
-def _whole(value) -> float:
-    """``value`` if it is a whole number (``100000`` or ``1e5``), else 0 (refused)."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        return 0
-    return number if number.is_integer() else 0
 
 
 class SpringMassResponse(Response):
