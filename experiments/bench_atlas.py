@@ -45,7 +45,7 @@ def main() -> None:
     from camjax import ct_curve, distributed
     from camjax.laws import SCCA
     from camjax.models import SpringMassOptions, batch_metrics
-    from camjax.sdof import CHUNK_NODES, motion_grid, propagate
+    from camjax.sdof import chunk_nodes, motion_grid, propagate
     from camjax.studies import timed
     from camjax.sweep import prepare_sweep, resolution_bands, sweep_banded, sweep_law_stack
 
@@ -65,7 +65,7 @@ def main() -> None:
         def propagation_only(law, n, resolution=resolution):
             # in chunks of ratios as batch_metrics runs them (the same working set)
             grid = motion_grid(law, resolution)
-            rows = -(-n.size // max(1, CHUNK_NODES // grid.nodes.shape[0]))
+            rows = -(-n.size // max(1, chunk_nodes() // grid.nodes.shape[0]))
             n = jnp.pad(n, (0, (-n.size) % rows), mode="edge").reshape(rows, -1)
             return jax.lax.map(jax.vmap(lambda m: propagate(grid, 2 * jnp.pi * m, 0.0)[-1]), n)
 

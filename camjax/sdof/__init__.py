@@ -14,11 +14,17 @@ studies, and a cam program's turn at machine speed (``camjax.program``):
 - outputs ``Re(G q)`` and their refined peaks (``peak_in_motion``, bounded or dense:
   ``set_peak_search``; ``refined_extremes``), the dwell's peak and the residual vibration;
 - the same equation through diffrax (``integrate``, ``sdof_term``);
-- one chunked vmap for batches (``chunked_map``).
+- one chunked vmap for batches (``chunked_map``), its chunks sized by backend
+  (``chunk_nodes``, ``stack_laws``).
 """
 
+from ._batch import ACCELERATOR_CHUNK_NODES as ACCELERATOR_CHUNK_NODES
+from ._batch import ACCELERATOR_STACK_EVALUATIONS as ACCELERATOR_STACK_EVALUATIONS
 from ._batch import CHUNK_NODES as CHUNK_NODES
+from ._batch import chunk_nodes as chunk_nodes
 from ._batch import chunked_map as chunked_map
+from ._batch import map_in_chunks as map_in_chunks
+from ._batch import stack_laws as stack_laws
 from ._grid import GAUSS_POINTS as GAUSS_POINTS
 from ._grid import INTERPOLATION_DEGREE as INTERPOLATION_DEGREE
 from ._grid import MAX_GRID_INTERVALS as MAX_GRID_INTERVALS

@@ -1,0 +1,69 @@
+"""The engine's chunked batches: chunking changes nothing but speed, on any backend's sizes."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import camjax
+from camjax import distributed
+from camjax.sdof import _batch, chunk_nodes, chunked_map, map_in_chunks, stack_laws
+
+
+def _member(tree):
+    x, y = tree
+    return {"sum": x.sum() + y, "scaled": 2.0 * x}
+
+
+@pytest.mark.parametrize("members", [1, 3, 4, 10, 50])
+def test_map_in_chunks_equals_one_vmap(members):
+    """Ten members in chunks of 1 (a plain map), 3 (padded to 12 and cut), 4, 10 and more
+    than there are: every leaf equals one vmap over the whole batch."""
+    rng = np.random.default_rng(members)
+    batch = (jnp.asarray(rng.normal(size=(10, 5))), jnp.asarray(rng.normal(size=10)))
+    expected = jax.vmap(_member)(batch)
+    got = jax.jit(lambda b: map_in_chunks(_member, b, members))(batch)
+    for key in expected:
+        assert got[key].shape == expected[key].shape
+        np.testing.assert_allclose(got[key], expected[key], rtol=0, atol=1e-15)
+
+
+def test_chunked_map_sizes_chunks_by_nodes():
+    """Chunks of ``chunk // nodes_per_member`` members: the same values whatever the chunk."""
+    x = jnp.linspace(0.0, 1.0, 37)
+    one = lambda v: jnp.sin(v) * v  # noqa: E731
+    for chunk in (1, 64, 1000, 10**6):
+        np.testing.assert_array_equal(chunked_map(one, x, 16, chunk=chunk), jax.vmap(one)(x))
+
+
+def test_sizes_by_backend(monkeypatch):
+    assert jax.default_backend() == "cpu"
+    assert chunk_nodes() == _batch.CHUNK_NODES and stack_laws(1000) == 1
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    assert chunk_nodes() == _batch.ACCELERATOR_CHUNK_NODES
+    assert stack_laws(1000) == _batch.ACCELERATOR_STACK_EVALUATIONS // 1000 == 65
+    assert stack_laws(10**6) == 1
+
+
+def test_accelerator_sizes_give_the_cpu_curves(monkeypatch):
+    """The GPU's sizing (one chunk for a whole curve, a stack's laws vmapped together), run
+    on the CPU: a single curve and a stack of 12 SCCA laws (over the stacking threshold)
+    equal the CPU-sized sweep to rounding."""
+    n = np.linspace(0.5, 30.0, 300)
+    face = distributed.scca_grid(0.1, face=True)[:12]
+    laws = {law.name: law for law in face}
+    single = camjax.ct_curve("modified-sine", n, damping=0.05)
+    stack = camjax.ct_curves(laws, n)
+    jax.clear_caches()
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    monkeypatch.setattr(_batch, "ACCELERATOR_STACK_EVALUATIONS", 5 * n.size)  # 3 chunks of 5, padded
+    try:
+        assert stack_laws(n.size) == 5
+        single_gpu = camjax.ct_curve("modified-sine", n, damping=0.05)
+        stack_gpu = camjax.ct_curves(laws, n)
+    finally:
+        jax.clear_caches()  # no program sized for another backend outlives the test
+    for a, b in [(single, single_gpu), *((stack[k], stack_gpu[k]) for k in laws)]:
+        for metric in ("ct", "residual", "peak_in_motion"):
+            np.testing.assert_allclose(getattr(b, metric), getattr(a, metric), rtol=0, atol=1e-11)
+        assert b.ca == a.ca
