@@ -101,8 +101,8 @@ def mark_failures(result, *values):
     reports them rather than raising (``throw=False``).
 
     An entry that succeeded with a non-finite value becomes ``nonfinite``; every value of
-    a failed entry becomes NaN.  Returns ``(result, values)``: values as float NumPy
-    arrays, batched like ``result`` on their first axis.
+    a failed entry becomes NaN.  Returns ``(result, values)``: the codes and the values
+    as NumPy arrays, batched like ``result`` on their first axis.
     """
     result = promote(result)
     codes = np.atleast_1d(np.asarray(result._value)).copy()
@@ -115,7 +115,9 @@ def mark_failures(result, *values):
     failed = codes != success
     for array in arrays:
         array[failed] = np.nan
-    marked = type(RESULTS.successful)(jnp.asarray(codes), RESULTS)
+    # The codes stay a NumPy array: a device array would cost a transfer per curve (a
+    # wait of up to a millisecond on a GPU, for each of a stack's laws).
+    marked = type(RESULTS.successful)(codes, RESULTS)
     return marked, tuple(arrays)
 
 

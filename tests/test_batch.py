@@ -67,3 +67,11 @@ def test_accelerator_sizes_give_the_cpu_curves(monkeypatch):
         for metric in ("ct", "residual", "peak_in_motion"):
             np.testing.assert_allclose(getattr(b, metric), getattr(a, metric), rtol=0, atol=1e-11)
         assert b.ca == a.ca
+
+
+def test_a_curves_result_codes_stay_on_the_host():
+    """A curve's result codes are a NumPy array: no device transfer per curve (a wait on a
+    GPU, once for each of a stack's laws)."""
+    curve = camjax.ct_curve("cycloidal", np.linspace(1.0, 5.0, 7))
+    assert isinstance(curve.result._value, np.ndarray)
+    assert curve.result_names == ["successful"] * 7 and not curve.failed.any()

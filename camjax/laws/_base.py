@@ -100,7 +100,8 @@ class AbstractMotionLaw(eqx.Module):
 
     def peak_coefficients(self) -> dict[str, float]:
         """``{"Cv", "Ca", "Cj"}`` as Python floats (``inf`` for an acceleration step)."""
-        peaks = _compiled_peaks(self) if is_concrete(self) else (self.Cv, self.Ca, self.Cj)
+        # One transfer for the three (on a GPU each float() of a device value is a wait).
+        peaks = jax.device_get(_compiled_peaks(self)) if is_concrete(self) else (self.Cv, self.Ca, self.Cj)
         return dict(zip(("Cv", "Ca", "Cj"), map(float, peaks)))
 
 
