@@ -7,7 +7,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import quad
 
@@ -133,6 +133,7 @@ fractions = st.tuples(*(st.floats(0, 1) for _ in range(3))).filter(lambda f: 0.0
 
 @settings(max_examples=40, deadline=None)
 @given(fractions)
+@example((1e-12, 0.0, 0.5))  # a sine ramp narrower than the breakpoints' merging distance
 def test_scca_invariants(f):
     law = laws.SCCA(*f)
     tau = jnp.linspace(0, 1, 401)
@@ -145,8 +146,11 @@ def test_scca_invariants(f):
     assert bool(jnp.all(v >= -1e-12))  # monotone rise
     # The peak |a| = Ca is reached at a breakpoint (the end of the sine ramp, the start of
     # the cosine fall, or tau = 0), perhaps only as a one-sided limit where the acceleration
-    # steps; a uniform sample misses it when the plateau is narrow.
-    edges = jnp.asarray([0.0, *law.breakpoints(), 1.0])
+    # steps; a uniform sample misses it when the plateau is narrow.  The pieces' own edges:
+    # ``breakpoints()`` merges an edge within 1e-12 of another (a sine ramp of 1e-12).
+    a_, b_, c_ = f
+    half = (a_ / 2, (a_ + b_) / 2, (a_ + b_ + c_) / 2)
+    edges = jnp.asarray([0.0, *half, 0.5, *(1 - x for x in half), 1.0])
     at_breaks = jnp.abs(law.a(jnp.concatenate([edges - 1e-13, edges, edges + 1e-13])))
     assert float(jnp.max(jnp.abs(a))) <= float(law.Ca) * (1 + 1e-12)
     assert float(jnp.max(at_breaks)) == pytest.approx(float(law.Ca), rel=1e-9)
@@ -226,3 +230,4 @@ def test_scca_gradients_match_finite_differences():
         e = jnp.zeros(3).at[i].set(1e-6)
         fd = (peak_and_value(f0 + e) - peak_and_value(f0 - e)) / 2e-6
         assert float(grad[i]) == pytest.approx(float(fd), rel=1e-6, abs=1e-8)
+
