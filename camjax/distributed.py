@@ -211,17 +211,16 @@ def _compute_chunk(spec: SweepSpec, chunk, devices) -> dict[str, np.ndarray]:
     other mixes go through ``ct_curves``.
     """
     import jax
-    import jax.numpy as jnp
 
     from .errors import raise_if_failed
-    from .sweep import ct_curves, prepare_sweep, stacked_ca, sweep_banded, sweep_law_stack
+    from .sweep import ct_curves, prepare_sweep, stack_of, stacked_ca, sweep_banded, sweep_law_stack
 
     d, start = chunk
     laws = list(spec.laws[start:start + spec.laws_per_chunk])
     structures = {jax.tree.structure(law) for law in laws}
     if len(structures) == 1 and jax.tree.leaves(laws[0]):
         padded = laws + laws[-1:] * (spec.laws_per_chunk - len(laws))
-        stacked = jax.tree.map(lambda *x: jnp.stack(x), *padded)
+        stacked = stack_of(padded)
         n, template, options = prepare_sweep(
             spec.period_ratio, damping=spec.damping[d], method=spec.method, dwell=spec.dwell
         )

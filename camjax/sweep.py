@@ -84,6 +84,18 @@ def _sweep_stack(laws, template: AbstractModel, period_ratios, options):
                              stack_laws(period_ratios.shape[0]))
 
 
+def stack_of(laws) -> AbstractMotionLaw:
+    """Laws of one pytree structure stacked on a new leading axis of every leaf: NumPy where
+    every law holds that leaf on the host (one transfer when the stack is swept, rather
+    than one per law)."""
+    def stack(*leaves):
+        if all(isinstance(x, np.ndarray) for x in leaves):
+            return np.stack(leaves)
+        return jnp.stack(leaves)
+
+    return jax.tree.map(stack, *laws)
+
+
 @eqx.filter_jit
 def stacked_ca(laws) -> jax.Array:
     """``Ca`` of every law of a stack (laws on axis 0 of every leaf), in one compiled call
@@ -323,7 +335,7 @@ def ct_curves(
                                                   like=like)) for m in members]
             cas = [None] * len(members)
         else:
-            stacked = jax.tree.map(lambda *x: jnp.stack(x), *members)
+            stacked = stack_of(members)
             # One transfer out, then NumPy slices (a device array's slice is a dispatch).
             out = jax.device_get(sweep_law_stack(stacked, ratios, template, options, devices=devices))
             batch = [jax.tree.map(lambda x, i=i: x[i], out) for i in range(len(members))]

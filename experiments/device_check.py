@@ -25,7 +25,6 @@ import time
 from pathlib import Path
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 import camjax
@@ -76,7 +75,7 @@ def results(repeats: int) -> tuple[dict, dict]:
     n = np.linspace(1.0, 30.0, 1000)
     first, call = timed(lambda: camjax.ct_curves(laws, n), max(3, repeats // 4))
     ratios, template, options = sweep.prepare_sweep(n)
-    stacked = jax.tree.map(lambda *x: jnp.stack(x), *laws.values())
+    stacked = sweep.stack_of(laws.values())
     _, kernel = timed(lambda: sweep.sweep_law_stack(stacked, ratios, template, options),
                       max(3, repeats // 4))
     curves = camjax.ct_curves(laws, n)

@@ -75,3 +75,19 @@ def test_a_curves_result_codes_stay_on_the_host():
     curve = camjax.ct_curve("cycloidal", np.linspace(1.0, 5.0, 7))
     assert isinstance(curve.result._value, np.ndarray)
     assert curve.result_names == ["successful"] * 7 and not curve.failed.any()
+
+
+def test_a_stack_of_host_laws_stays_on_the_host():
+    """``stack_of``: NumPy leaves where every law holds them on the host (one transfer when
+    swept), JAX where any law holds a device array; the values either way."""
+    from camjax.laws import SCCA
+    from camjax.sweep import stack_of
+
+    host = [SCCA(0.5, 0.0, 0.5), SCCA(1, 0, 0)]
+    stacked = stack_of(host)
+    assert all(isinstance(x, np.ndarray) for x in jax.tree.leaves(stacked))
+    mixed = stack_of([host[0], SCCA(*map(jnp.asarray, (1.0, 0.0, 0.0)))])
+    assert all(isinstance(x, jax.Array) for x in jax.tree.leaves(mixed))
+    for s in (stacked, mixed):
+        np.testing.assert_array_equal(s.sine, [0.5, 1.0])
+        np.testing.assert_array_equal(s.cosine, [0.5, 0.0])

@@ -231,3 +231,14 @@ def test_scca_gradients_match_finite_differences():
         fd = (peak_and_value(f0 + e) - peak_and_value(f0 - e)) / 2e-6
         assert float(grad[i]) == pytest.approx(float(fd), rel=1e-6, abs=1e-8)
 
+
+
+def test_scca_keeps_plain_numbers_on_the_host():
+    """Plain numbers give NumPy float leaves (building, checking and naming a law wait on no
+    device); JAX input stays JAX.  Both name and value the law alike."""
+    host = laws.SCCA(0, 1, 0)  # integers: stored as floats all the same
+    device = laws.SCCA(*map(jnp.asarray, (0.0, 1.0, 0.0)))
+    assert all(isinstance(x, np.ndarray) and x.dtype == np.float64 for x in host.fractions)
+    assert all(isinstance(x, jax.Array) and x.dtype == jnp.float64 for x in device.fractions)
+    assert host.name == device.name == "parabolic"
+    assert float(host.Ca) == float(device.Ca) == pytest.approx(4.0, rel=1e-15)

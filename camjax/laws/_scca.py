@@ -95,8 +95,13 @@ def _require_valid(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> None:
         require(False, f"SCCA fractions must satisfy 0 < a + b + c <= 1, got a + b + c = {bad}")
 
 
-def _fraction(value) -> jax.Array:
-    return jnp.asarray(value, dtype=float)
+def _fraction(value) -> jax.Array | np.ndarray:
+    """A fraction as a float array leaf: NumPy for plain numbers (building, checking and
+    naming a law then waits on no device: on a GPU each wait costs up to a millisecond,
+    and an atlas builds thousands of laws), a float JAX array for JAX arrays and tracers."""
+    if isinstance(value, jax.Array):
+        return jnp.asarray(value, dtype=float)
+    return np.asarray(value, dtype=float)
 
 
 class SCCA(AbstractMotionLaw):
@@ -104,12 +109,13 @@ class SCCA(AbstractMotionLaw):
 
     ``SCCA(a, b, c)`` takes the sine, constant and cosine fractions of MISSION.md.  Valid
     fractions are non-negative, finite, with ``0 < a + b + c <= 1``.  The fractions are
-    stored as float arrays whatever is passed, so all SCCA laws share compiled programs.
+    stored as float arrays whatever is passed (NumPy for plain numbers), so all SCCA laws
+    share compiled programs.
     """
 
-    sine: jax.Array
-    constant: jax.Array
-    cosine: jax.Array
+    sine: jax.Array | np.ndarray
+    constant: jax.Array | np.ndarray
+    cosine: jax.Array | np.ndarray
 
     def __init__(self, sine, constant, cosine):
         fractions = tuple(_fraction(x) for x in (sine, constant, cosine))
