@@ -135,12 +135,16 @@ def resolution_bands(period_ratios, options, *, phase_step: float = MAX_PHASE_ST
 
     Returns ``[(indices into period_ratios, options of the band)]``: each band's options
     are ``options`` with its own resolution (whatever ``options`` held); options of
-    another method (no grid) give one band of every ratio.
+    another method (no grid) give one band of every ratio.  Off the CPU every ratio
+    takes the largest band's grid: a GPU sweeps the finer grid in about the time of the
+    bands, and each band is one more program to compile (6-7 s each on an H200).
     """
     n = np.asarray(period_ratios, dtype=float)
     if getattr(options, "method", None) != "exact" or getattr(options, "resolution", None) is None:
         return [(np.arange(n.size), options)]
     needed = np.asarray([default_resolution(x, phase_step) for x in n])
+    if jax.default_backend() != "cpu":
+        needed = np.full(n.size, needed.max())
     bands = []
     for resolution in np.unique(needed):
         chosen = np.flatnonzero(needed == resolution)

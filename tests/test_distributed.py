@@ -95,6 +95,16 @@ def test_resolution_bands_meet_the_phase_step(step, resolutions):
     assert len(resolution_bands(n, tsit5)) == 1  # grids of the exact path only
 
 
+def test_off_the_cpu_one_band_takes_the_finest_grid(monkeypatch):
+    """On a GPU every ratio takes the largest band's grid (one program to compile), so each
+    still meets the phase step."""
+    n, _, options = prepare_sweep(np.linspace(1.0, 30.0, 1000))
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    [(chosen, band)] = resolution_bands(n, options, phase_step=0.5)
+    np.testing.assert_array_equal(chosen, np.arange(n.size))
+    assert band.resolution == 384 and np.all(2 * np.pi * n / band.resolution <= 0.5)
+
+
 @pytest.mark.slow
 def test_banded_sweep_within_tolerance_of_ct_curve():
     laws = [SCCA(0.5, 0.0, 0.5), SCCA(0.99, 0.0, 0.01), SCCA(0.0, 1.0, 0.0)]
