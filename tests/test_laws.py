@@ -242,3 +242,36 @@ def test_scca_keeps_plain_numbers_on_the_host():
     assert all(isinstance(x, jax.Array) and x.dtype == jnp.float64 for x in device.fractions)
     assert host.name == device.name == "parabolic"
     assert float(host.Ca) == float(device.Ca) == pytest.approx(4.0, rel=1e-15)
+
+
+def test_a_law_is_not_changed_through_the_callers_arrays():
+    """Host leaves are read-only copies: the caller's array, or an in-place operation on
+    the leaf, cannot change a law that was checked when built."""
+    a = np.array([0.5, 0.25])
+    law = laws.SCCA(a, 0.0, np.array([0.5, 0.75]))
+    a[0] = 5.0
+    np.testing.assert_array_equal(law.sine, [0.5, 0.25])
+    with pytest.raises(ValueError, match="read-only"):
+        law.sine += 0.7
+    assert laws.SCCA(0.5, 0.0, 0.5).name == "cycloidal"
+    poly = laws.get("polynomial5:0.5,0,0,0")
+    with pytest.raises(ValueError, match="read-only"):
+        poly.v0[...] = 2.0
+
+
+def test_fractions_holding_tracers_are_traced():
+    """A list that holds tracers (under jit, grad, vmap) becomes a JAX leaf."""
+    def ca(x):
+        return laws.SCCA([x, 0.25], 0.0, [0.5, 0.75]).Ca
+
+    expected = [laws.SCCA(0.4, 0.0, 0.5).Ca, laws.get("modified-sine").Ca]
+    np.testing.assert_allclose(jax.jit(ca)(0.4), expected, rtol=1e-14)
+    h = 1e-6
+    fd = (ca(0.4 + h)[0] - ca(0.4 - h)[0]) / (2 * h)
+    assert float(jax.grad(lambda x: ca(x)[0])(0.4)) == pytest.approx(float(fd), rel=1e-7)
+
+
+@pytest.mark.parametrize("bad", [None, "0.5", "x", 1j])
+def test_fractions_must_be_numbers(bad):
+    with pytest.raises(TypeError, match="SCCA fractions must be a number or an array of numbers"):
+        laws.SCCA(bad, 0.0, 0.5)

@@ -17,6 +17,24 @@ def is_concrete(*values) -> bool:
     return not any(isinstance(v, jax.core.Tracer) for v in jax.tree.leaves(values))
 
 
+def float_leaf(value, what: str = "a law parameter"):
+    """A law parameter as a float array leaf.
+
+    Plain numbers and NumPy arrays become a read-only NumPy copy: building, checking and
+    naming a law then wait on no device (each wait costs up to a millisecond on a GPU),
+    and no array of the caller's can change a checked law afterwards.  Anything holding a
+    JAX array or tracer (a list of them too) becomes a float JAX array.
+    """
+    if any(isinstance(v, jax.Array) for v in jax.tree.leaves(value)):
+        return jnp.asarray(value, dtype=float)
+    kind = np.asarray(value).dtype.kind if value is not None else "O"
+    if kind not in "biuf":
+        raise TypeError(f"{what} must be a number or an array of numbers, got {value!r}")
+    leaf = np.array(value, dtype=float)
+    leaf.setflags(write=False)
+    return leaf
+
+
 def require(condition: bool, message: str) -> None:
     """Raise ``ValueError(message)`` when a concrete validity condition fails."""
     if not bool(condition):

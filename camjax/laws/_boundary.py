@@ -22,6 +22,7 @@ from .._custom_types import Breakpoints, LawValues
 from ._base import (
     AbstractMotionLaw,
     AbstractSearchedPeaksLaw,
+    float_leaf,
     is_concrete,
     polynomial_peaks,
     require,
@@ -54,12 +55,6 @@ def _end_low(degree: int) -> np.ndarray:
     return np.array(rows)
 
 
-def _number(value):
-    """A boundary value as an array leaf: numpy for plain numbers (concrete even when a
-    law is built under a trace), as given for JAX arrays and tracers."""
-    return value if isinstance(value, jax.Array) else np.asarray(value, dtype=float)
-
-
 class BoundaryPolynomial(AbstractSearchedPeaksLaw):
     """The polynomial of degree 5 or 7 from 0 to 1 that meets given end states.
 
@@ -70,12 +65,12 @@ class BoundaryPolynomial(AbstractSearchedPeaksLaw):
     next derivative) for concrete values; under a trace, sampled and polished.
     """
 
-    v0: jax.Array = eqx.field(converter=_number, default=0.0)
-    a0: jax.Array = eqx.field(converter=_number, default=0.0)
-    v1: jax.Array = eqx.field(converter=_number, default=0.0)
-    a1: jax.Array = eqx.field(converter=_number, default=0.0)
-    j0: jax.Array = eqx.field(converter=_number, default=0.0)
-    j1: jax.Array = eqx.field(converter=_number, default=0.0)
+    v0: jax.Array = eqx.field(converter=float_leaf, default=0.0)
+    a0: jax.Array = eqx.field(converter=float_leaf, default=0.0)
+    v1: jax.Array = eqx.field(converter=float_leaf, default=0.0)
+    a1: jax.Array = eqx.field(converter=float_leaf, default=0.0)
+    j0: jax.Array = eqx.field(converter=float_leaf, default=0.0)
+    j1: jax.Array = eqx.field(converter=float_leaf, default=0.0)
     degree: int = eqx.field(static=True, default=5)
 
     def __check_init__(self):

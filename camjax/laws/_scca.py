@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import checks
 from .._custom_types import Breakpoints, LawValues
-from ._base import AbstractMotionLaw, is_concrete, require, static_breakpoints
+from ._base import AbstractMotionLaw, float_leaf, is_concrete, require, static_breakpoints
 
 _PI = math.pi
 
@@ -95,15 +95,6 @@ def _require_valid(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> None:
         require(False, f"SCCA fractions must satisfy 0 < a + b + c <= 1, got a + b + c = {bad}")
 
 
-def _fraction(value) -> jax.Array | np.ndarray:
-    """A fraction as a float array leaf: NumPy for plain numbers (building, checking and
-    naming a law then waits on no device: on a GPU each wait costs up to a millisecond,
-    and an atlas builds thousands of laws), a float JAX array for JAX arrays and tracers."""
-    if isinstance(value, jax.Array):
-        return jnp.asarray(value, dtype=float)
-    return np.asarray(value, dtype=float)
-
-
 class SCCA(AbstractMotionLaw):
     """The SCCA law with fractions ``(sine, constant, cosine)``, differentiable leaves.
 
@@ -118,7 +109,7 @@ class SCCA(AbstractMotionLaw):
     cosine: jax.Array | np.ndarray
 
     def __init__(self, sine, constant, cosine):
-        fractions = tuple(_fraction(x) for x in (sine, constant, cosine))
+        fractions = tuple(float_leaf(x, "SCCA fractions") for x in (sine, constant, cosine))
         if not is_concrete(*fractions):
             # Traced (built inside jit, vmap or grad): the computation that uses the law
             # raises FRACTIONS_RULE when it runs with invalid fractions.  A law built
