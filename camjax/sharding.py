@@ -84,6 +84,13 @@ def use_cpu_cores(count: int | None = None) -> int:
     return started
 
 
+def on_cpu() -> bool:
+    """Whether JAX's default backend is the CPU.  The engine sizes its work by it (chunks,
+    scan blocks, bands of period ratios, compiler options): small for a CPU's cache, large
+    for a GPU.  It follows the default backend, not the devices a call names."""
+    return jax.default_backend() == "cpu"
+
+
 def _started() -> bool:
     """Whether JAX's backends have started (its CPU device count is then fixed); ``False``
     where this JAX cannot say (``use_cpu_cores`` then learns it from JAX's refusal)."""

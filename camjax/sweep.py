@@ -16,7 +16,7 @@ from .errors import RESULTS, mark_failures, raise_if_failed, result_names
 from .laws import AbstractMotionLaw, as_law
 from .models import AbstractMachineModel, AbstractModel, SpringMass
 from .sdof import MAX_PHASE_STEP, default_resolution, map_in_chunks, stack_laws
-from .sharding import shard_batch
+from .sharding import on_cpu, shard_batch
 
 STACK_FROM = 8
 """Laws of one structure are stacked into one mapped call from this many on (fewer are
@@ -81,7 +81,16 @@ def _sweep_stack(laws, template: AbstractModel, period_ratios, options):
     # multiplies the working set and ran 1.4x slower).  A GPU takes several laws at once.
     with checks.checked_outside():
         return map_in_chunks(lambda law: template.sweep(law, period_ratios, options), laws,
-                             stack_laws(period_ratios.shape[0]))
+                             _laws_at_once(template, options, period_ratios.shape[0]))
+
+
+def _laws_at_once(template: AbstractModel, options, ratios: int) -> int:
+    """Laws of a stack swept at once (``camjax.sdof.stack_laws``): bounded by the exact
+    path's grid nodes; one at a time for a model that solves its ratios in turn (lockstep
+    would run every law for the longest)."""
+    if template.sweeps_in_turn(options):
+        return 1
+    return stack_laws(ratios, getattr(options, "resolution", None) or 1)
 
 
 def stack_of(laws) -> AbstractMotionLaw:
@@ -143,7 +152,7 @@ def resolution_bands(period_ratios, options, *, phase_step: float = MAX_PHASE_ST
     if getattr(options, "method", None) != "exact" or getattr(options, "resolution", None) is None:
         return [(np.arange(n.size), options)]
     needed = np.asarray([default_resolution(x, phase_step) for x in n])
-    if jax.default_backend() != "cpu":
+    if not on_cpu():
         needed = np.full(n.size, needed.max())
     bands = []
     for resolution in np.unique(needed):

@@ -9,7 +9,7 @@ result is compared with a reference written on another machine (``--write-refere
 on the CPU) by its largest difference in Ct and residual.
 
 On a backend other than the CPU, ``--configs`` times each pair ``K:E`` of
-``camjax.sdof.ACCELERATOR_CHUNK_NODES = 2**K`` and ``ACCELERATOR_STACK_EVALUATIONS = E``
+``camjax.sdof._batch.ACCELERATOR_CHUNK_NODES = 2**K`` and ``ACCELERATOR_STACK_EVALUATIONS = E``
 (``17:1``: the CPU's chunks, a stack's laws one at a time) in one process (compiled anew for each), with the device's peak memory where it reports one.
 
     python experiments/device_check.py --write-reference ref.npz            # on the CPU

@@ -37,12 +37,34 @@ def test_chunked_map_sizes_chunks_by_nodes():
 
 
 def test_sizes_by_backend(monkeypatch):
-    assert jax.default_backend() == "cpu"
-    assert chunk_nodes() == _batch.CHUNK_NODES and stack_laws(1000) == 1
+    monkeypatch.setattr(jax, "default_backend", lambda: "cpu")
+    assert chunk_nodes() == _batch.CHUNK_NODES and stack_laws(1000, 192) == 1
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
     assert chunk_nodes() == _batch.ACCELERATOR_CHUNK_NODES
-    assert stack_laws(1000) == _batch.ACCELERATOR_STACK_EVALUATIONS // 1000 == 65
+    assert stack_laws(1000, 192) == _batch.ACCELERATOR_STACK_EVALUATIONS // 1000 == 65
     assert stack_laws(10**6) == 1
+    # a fine grid bounds the laws at once by nodes: 2**24 // (1000 * 4096)
+    assert stack_laws(1000, 4096) == 4 and stack_laws(100, 2**20) == 1
+
+
+def test_a_model_that_sweeps_in_turn_takes_its_laws_in_turn(monkeypatch):
+    """Off the CPU a stack of the exact path's laws is vmapped, but a model that solves its
+    ratios one after another (friction's events) keeps its laws in turn too."""
+    from camjax.sweep import _laws_at_once, prepare_sweep
+
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    _, exact, options = prepare_sweep(np.linspace(1.0, 30.0, 1000))
+    assert _laws_at_once(exact, options, 1000) == 65
+    friction = camjax.CoulombFriction(1.0, 0.05)
+    _, template, options = prepare_sweep([1.0, 2.0], model=friction)
+    assert template.sweeps_in_turn(options) and _laws_at_once(template, options, 2) == 1
+
+
+def test_map_in_chunks_refuses_a_ragged_batch():
+    with pytest.raises(ValueError, match="same length"):
+        map_in_chunks(_member, (jnp.zeros((3, 2)), jnp.zeros(4)), 2)
+    with pytest.raises(ValueError, match="leading axis"):
+        map_in_chunks(_member, (jnp.zeros(()), jnp.zeros(4)), 2)
 
 
 def test_accelerator_sizes_give_the_cpu_curves(monkeypatch):

@@ -82,7 +82,8 @@ def test_bad_specs_name_the_problem(tmp_path, text, words):
 
 @pytest.mark.parametrize("step, resolutions", [(0.5, [128, 192, 256, 320, 384]),
                                                 (0.8, [128, 192, 256])])
-def test_resolution_bands_meet_the_phase_step(step, resolutions):
+def test_resolution_bands_meet_the_phase_step(step, resolutions, monkeypatch):
+    monkeypatch.setattr(jax, "default_backend", lambda: "cpu")  # bands are the CPU's
     n, _, options = prepare_sweep(np.linspace(1.0, 30.0, 1000))
     bands = resolution_bands(n, options, phase_step=step)
     assert [o.resolution for _, o in bands] == resolutions

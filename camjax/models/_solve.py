@@ -5,12 +5,12 @@ from __future__ import annotations
 import functools
 
 import equinox as eqx
-import jax
 
 from .. import checks
 from ..errors import raise_if_failed
 from ..laws import AbstractMotionLaw, as_law
 from ..registry import model_class_names
+from ..sharding import on_cpu
 from ._base import AbstractMachineModel, AbstractModel, Response
 
 
@@ -31,7 +31,7 @@ _solve = _compiled(())
 def _program(model: AbstractModel):
     """The jitted solve for ``model``: its ``cpu_compiler_options`` apply on CPU only."""
     options = type(model).cpu_compiler_options
-    return _compiled(options) if options and jax.default_backend() == "cpu" else _solve
+    return _compiled(options) if options and on_cpu() else _solve
 
 
 def solve(

@@ -18,8 +18,6 @@ studies, and a cam program's turn at machine speed (``camjax.program``):
   (``chunk_nodes``, ``stack_laws``).
 """
 
-from ._batch import ACCELERATOR_CHUNK_NODES as ACCELERATOR_CHUNK_NODES
-from ._batch import ACCELERATOR_STACK_EVALUATIONS as ACCELERATOR_STACK_EVALUATIONS
 from ._batch import CHUNK_NODES as CHUNK_NODES
 from ._batch import chunk_nodes as chunk_nodes
 from ._batch import chunked_map as chunked_map

@@ -5,6 +5,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from ..sharding import on_cpu
+
 CHUNK_NODES = 131072
 """Grid nodes (batch members x nodes per member) that ``chunked_map`` vmaps over at once on
 a CPU: a working set that stays in cache."""
@@ -13,26 +15,31 @@ ACCELERATOR_CHUNK_NODES = 2**24
 """The same on a GPU (or any backend other than the CPU), which runs each operation over
 the whole chunk at once: small chunks leave it waiting on launches (on an H200, a
 100,000-ratio curve's kernel took 45 ms in chunks of 2**17 nodes, 5 ms in 2**24, using
-0.5 GiB)."""
+0.5 GiB).  It also bounds the grid nodes of a stack's laws swept at once."""
 
 ACCELERATOR_STACK_EVALUATIONS = 65536
-"""(law, period ratio) pairs of a stack (``camjax.sweep.sweep_law_stack``) swept at once on
-a GPU: 65 laws of 1000 ratios (on an H200, 256 SCCA laws' kernel took 125 ms one law at
-a time, 20 ms 64 at a time, using 0.8 GiB).  A CPU sweeps a stack's laws one at a time (a
-vmap over laws outgrows its cache)."""
+"""(law, period ratio) pairs of a stack swept at once on a GPU: 65 laws of 1000 ratios (on
+an H200, 256 SCCA laws' kernel took 125 ms one law at a time, 20 ms 64 at a time, using
+0.8 GiB)."""
 
 
 def chunk_nodes() -> int:
-    """Grid nodes per chunk for the backend being compiled for (JAX's default backend)."""
-    return CHUNK_NODES if jax.default_backend() == "cpu" else ACCELERATOR_CHUNK_NODES
+    """Grid nodes per chunk of ``chunked_map``: ``CHUNK_NODES`` (131,072) on a CPU,
+    ``camjax.sdof._batch.ACCELERATOR_CHUNK_NODES`` (2**24) on JAX's default backend
+    otherwise (``camjax.sharding.on_cpu``)."""
+    return CHUNK_NODES if on_cpu() else ACCELERATOR_CHUNK_NODES
 
 
-def stack_laws(ratios: int) -> int:
-    """Laws of a stack swept at once, each against ``ratios`` period ratios, on the default
-    backend."""
-    if jax.default_backend() == "cpu":
+def stack_laws(ratios: int, nodes_per_ratio: int = 1) -> int:
+    """Laws of a stack swept at once, each against ``ratios`` period ratios on a grid of
+    ``nodes_per_ratio`` nodes: one on a CPU (a vmap over laws outgrows its cache);
+    otherwise up to ``ACCELERATOR_STACK_EVALUATIONS`` (law, ratio) pairs and
+    ``ACCELERATOR_CHUNK_NODES`` grid nodes at once (in ``camjax.sdof._batch``)."""
+    if on_cpu():
         return 1
-    return max(1, ACCELERATOR_STACK_EVALUATIONS // max(1, int(ratios)))
+    ratios, nodes = max(1, int(ratios)), max(1, int(nodes_per_ratio))
+    return max(1, min(ACCELERATOR_STACK_EVALUATIONS // ratios,
+                      ACCELERATOR_CHUNK_NODES // (ratios * nodes)))
 
 
 def map_in_chunks(one, batch, members: int):
@@ -42,7 +49,11 @@ def map_in_chunks(one, batch, members: int):
     of its last member (always valid input) to equal chunks, so one body compiles, and the
     padding is cut from every output leaf.  One member per chunk is a plain ``lax.map``.
     """
-    size = jax.tree.leaves(batch)[0].shape[0]
+    sizes = {jnp.shape(x)[0] if jnp.ndim(x) else None for x in jax.tree.leaves(batch)}
+    if len(sizes) != 1 or None in sizes:
+        raise ValueError("map_in_chunks: every leaf of the batch needs one leading axis of the "
+                         f"same length, got leading sizes {sorted(map(str, sizes))}")
+    size = sizes.pop()
     members = max(1, min(int(members), size))
     if members == 1:
         return jax.lax.map(one, batch)

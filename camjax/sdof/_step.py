@@ -24,6 +24,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..sharding import on_cpu
 from ._grid import INTERPOLATION_DEGREE, MotionGrid
 
 _SERIES_TERMS = 18
@@ -109,7 +110,7 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     else:
         kick = jnp.sum(grid.forcing * psi(z)[grid.piece], axis=1) * grid.widths
         factor = step[grid.piece]
-    block = _CPU_BLOCK if jax.default_backend() == "cpu" else _BLOCK
+    block = _CPU_BLOCK if on_cpu() else _BLOCK
     n_intervals = kick.shape[0]
     n_blocks = -(-n_intervals // block)
     pad = n_blocks * block - n_intervals
