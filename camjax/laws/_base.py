@@ -10,11 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._custom_types import ArrayLike, Breakpoints, LawValues
-
-
-def is_concrete(*values) -> bool:
-    """True when no value is a JAX tracer, so that Python-side checks can run."""
-    return not any(isinstance(v, jax.core.Tracer) for v in jax.tree.leaves(values))
+from ..checks import is_concrete
 
 
 def float_leaf(value, what: str = "a law parameter"):
@@ -33,12 +29,6 @@ def float_leaf(value, what: str = "a law parameter"):
     leaf = np.array(value, dtype=float)
     leaf.setflags(write=False)
     return leaf
-
-
-def require(condition: bool, message: str) -> None:
-    """Raise ``ValueError(message)`` when a concrete validity condition fails."""
-    if not bool(condition):
-        raise ValueError(message)
 
 
 class AbstractMotionLaw(eqx.Module):

@@ -19,14 +19,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._custom_types import Breakpoints, LawValues
-from ._base import (
-    AbstractMotionLaw,
-    AbstractSearchedPeaksLaw,
-    float_leaf,
-    is_concrete,
-    polynomial_peaks,
-    require,
-)
+from ..checks import is_concrete, require
+from ._base import AbstractMotionLaw, AbstractSearchedPeaksLaw, float_leaf, polynomial_peaks
 from ._spline import BSplineLaw, max_abs_piecewise
 
 DEGREES = (5, 7)

@@ -9,7 +9,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._custom_types import Breakpoints, LawValues
-from ._base import AbstractMotionLaw, polynomial_peaks, require
+from ..checks import require
+from ._base import AbstractMotionLaw, polynomial_peaks
 
 
 def _rise_polynomial(order: int) -> np.ndarray:

@@ -15,7 +15,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._custom_types import ArrayLike, Breakpoints, LawValues
-from ._base import AbstractMotionLaw, is_concrete, require, static_breakpoints
+from ..checks import is_concrete, require
+from ._base import AbstractMotionLaw, static_breakpoints
 
 _QUARTER = math.pi / 2
 

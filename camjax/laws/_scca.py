@@ -21,7 +21,8 @@ import numpy as np
 
 from .. import checks
 from .._custom_types import Breakpoints, LawValues
-from ._base import AbstractMotionLaw, float_leaf, is_concrete, require, static_breakpoints
+from ..checks import is_concrete, require
+from ._base import AbstractMotionLaw, float_leaf, static_breakpoints
 
 _PI = math.pi
 

@@ -11,7 +11,8 @@ import numpy as np
 
 from .. import checks
 from .._custom_types import Breakpoints, LawValues
-from ._base import AbstractMotionLaw, AbstractSearchedPeaksLaw, is_concrete, require
+from ..checks import is_concrete, require
+from ._base import AbstractMotionLaw, AbstractSearchedPeaksLaw
 
 COEFFICIENTS_RULE = "BSplineLaw coefficients must be finite (got NaN or inf)"
 
