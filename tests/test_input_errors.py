@@ -330,3 +330,25 @@ def test_bad_input_exits_2_with_one_line_naming_the_file_key_or_option(capsys, t
     for argv, message in _cases(tmp_path):
         code, out, err = run(capsys, *argv)
         assert (code, out, err.strip()) == (2, "", message), argv
+
+
+def test_solve_checks_a_traced_solution_when_it_runs():
+    """``solve`` with its default ``throw=True`` inside jit, grad and vmap: a good solution
+    gives the numbers of ``throw=False`` (it used to fail converting a tracer to NumPy), and
+    a failed one fails the computation with one message instead of a number."""
+    def ct(a, throw=True, model=None, **options):
+        model = SpringMass(5.0) if model is None else model
+        return camjax.solve(laws.SCCA(a, 0.0, 0.5), model, throw=throw, **options).metrics.ct
+
+    expected = float(ct(0.4))
+    assert float(jax.jit(ct)(0.4)) == pytest.approx(expected, rel=1e-13)
+    assert float(jax.grad(ct)(0.4)) == pytest.approx(float(jax.grad(ct)(0.4, False)), rel=1e-13)
+    np.testing.assert_allclose(jax.vmap(ct)(jnp.array([0.4, 0.4])), expected, rtol=1e-13)
+    friction = camjax.CoulombFriction(1.0, 0.05)
+    with pytest.raises(camjax.SolverError, match="max_steps"):
+        ct(0.4, model=friction, max_steps=3)
+    message = "events solve of CoulombFriction failed or produced non-finite values"
+    for traced in (jax.jit(lambda a: ct(a, model=friction, max_steps=3)),
+                   lambda a: jax.vmap(lambda x: ct(x, model=friction, max_steps=3))(jnp.array([a]))):
+        with pytest.raises(Exception, match=message):
+            traced(0.4)

@@ -5,9 +5,10 @@ from __future__ import annotations
 import functools
 
 import equinox as eqx
+import jax.numpy as jnp
 
 from .. import checks
-from ..errors import raise_if_failed
+from ..errors import RESULTS, promote, raise_if_failed
 from ..laws import AbstractMotionLaw, as_law
 from ..registry import model_class_names
 from ..sharding import on_cpu
@@ -59,6 +60,8 @@ def solve(
         method: solution method (``None``: the model's default).
         throw: raise ``camjax.SolverError`` if the solution failed (default); with
             ``throw=False`` the response comes back with its ``result`` code instead.
+            Traced (inside jit, vmap or grad), the check runs with the computation and
+            fails it with one message (equinox's runtime error inside ``jax.jit``).
 
     Raises:
         TypeError: ``model`` is not a camjax model, or ``law`` not a motion law.
@@ -68,6 +71,15 @@ def solve(
     opts, arguments = _arguments(law, model, dwell, method, options)
     with checks.as_value_errors():
         response = _program(model)(*arguments)
+    if throw and not checks.is_concrete(response.result, response.payload_acceleration):
+        # Traced (the caller's jit, vmap or grad): the check runs with the computation.
+        result = promote(response.result)
+        bad = result._value != RESULTS.successful._value
+        if response.payload_acceleration is not None:
+            bad = bad | ~jnp.all(jnp.isfinite(response.payload_acceleration))
+        return checks.guard(response, bad, f"{opts.method} solve of {type(model).__name__} "
+                            "failed or produced non-finite values (throw=False returns the "
+                            "response with its result code instead)")
     if throw:
         reached = response.stats.get("reached")
         where = f" (reached tau = {float(reached):.6g})" if reached is not None else ""
