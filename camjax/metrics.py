@@ -92,7 +92,15 @@ PEAK_INTERVALS_PER_STEP = 4
 """Intervals that each step of ``peak_search`` refines, the best of one group each."""
 
 
-def peak_search(bound, hermite_of, largest_sample):
+PEAK_TOLERANCE = 1e-11
+"""Relative margin within which ``peak_search`` leaves an interval unrefined: one whose
+bound is at most ``1 + PEAK_TOLERANCE`` times the best value found cannot change the
+answer by more than that.  A bound that is exact for equal crests (an undamped
+constant-acceleration piece: ``camjax.sdof._peaks.plateau_bound``) then closes them
+after the first, where rounding (about 2e-12) would otherwise leave every one open."""
+
+
+def peak_search(bound, hermite_of, largest_sample, tolerance: float = 0.0):
     """``max |p|`` over the intervals of a signal, each interval's septic ``p`` refined only
     where its bound says it could beat the best value found so far.
 
@@ -104,12 +112,15 @@ def peak_search(bound, hermite_of, largest_sample):
             2`` columns, derivatives up to ``order`` at each end) gives a Hermite
             interpolant of degree ``2 order + 1`` instead of the septic.
         largest_sample: ``max |f|`` over the nodes.
+        tolerance: relative margin: an interval whose bound is within it of the best value
+            found is left alone (``PEAK_TOLERANCE`` for bounds that can be exact).
 
     Each step refines (nine samples, then Newton's method on the interpolant) the interval of
     largest bound in each of the ``PEAK_INTERVALS_PER_STEP`` groups of ``PEAK_GROUP``
-    whose bounds are largest, until no bound beats the best value.  The standard laws
-    need one step at most ratios; plateaus (equal crests) a few.  An interval left alone
-    cannot hold a larger value, so the answer is that of refining every interval.  The
+    whose bounds are largest, until no bound beats the best value (by more than
+    ``tolerance``).  The standard laws need one step at most ratios; plateaus (equal
+    crests) a few, or one with bounds exact at their crests.  An interval left alone cannot hold a larger value (by more than
+    ``tolerance``), so the answer is that of refining every interval.  The
     search carries no gradient: the answer is the septic of the winning interval at the
     location found (or the largest sample), and so is its gradient (the dense maximum's,
     but for exact ties, where it goes to the first).
@@ -126,7 +137,7 @@ def peak_search(bound, hermite_of, largest_sample):
 
     def unfinished(state):
         best, _, _, open_bound = state
-        return jnp.max(open_bound) > best
+        return jnp.max(open_bound) > best * (1 + tolerance)
 
     def refine_next(state):
         best, winner, location, open_bound = state

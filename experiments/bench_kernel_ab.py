@@ -9,6 +9,10 @@ machine, which hides changes of a few percent.  This loads ``camjax/sdof/_step.p
 agree, and times them in turn.
 
     python experiments/bench_kernel_ab.py --baseline 6dcd6bb [--n-max 30] [--repeats 15]
+        [--laws cycloidal modified-sine poly4567] [--damping 0.0]
+
+``--laws`` takes any law spec (``parabolic``, ``scca:0.2,0.6,0.2``); ``--damping`` is the
+damping ratio of the timed runs.
 """
 
 from __future__ import annotations
@@ -78,6 +82,8 @@ def main() -> None:
     parser.add_argument("--baseline", required=True, help="git revision to compare against")
     parser.add_argument("--n-max", type=float, default=30.0, help="ratios in [1, N_MAX]")
     parser.add_argument("--repeats", type=int, default=15)
+    parser.add_argument("--laws", nargs="+", default=["cycloidal", "modified-sine", "poly4567"])
+    parser.add_argument("--damping", type=float, default=0.0, help="of the timed runs")
     args = parser.parse_args()
     baseline_module(args.baseline, "metrics")  # registered for the baseline's _peaks
     base_grid, base_peaks = (baseline_module(args.baseline, name) for name in ("_grid", "_peaks"))
@@ -97,7 +103,7 @@ def main() -> None:
     print(f"grids: {resolutions}")
     n = jnp.linspace(1.0, args.n_max, 1000)
     times = {key: [] for key in variants}
-    for name in ("cycloidal", "modified-sine", "poly4567"):
+    for name in args.laws:
         samplers = {"baseline": base_grid.SampledLaw, "current": SampledLaw}  # each its layout
         sampled = {key: samplers[key].of(laws.as_law(name), resolutions[key], 8) for key in variants}
         # Agreement: undamped, damped, and with each interval's weights gathered (the path
@@ -108,7 +114,7 @@ def main() -> None:
             peak, residual = difference(out)
             print(f"{name}, damping {zeta}{', gathered' if gather else ''}: peak differs by "
                   f"{peak:.1e} (relative), residual by {residual:.1e}")
-        fns = {key: kernel(*parts, sampled[key]) for key, parts in variants.items()}
+        fns = {key: kernel(*parts, sampled[key], args.damping) for key, parts in variants.items()}
         for f in fns.values():
             jax.block_until_ready(f(n))
         for repeat in range(args.repeats):  # in turn, each first as often as the other
@@ -118,7 +124,7 @@ def main() -> None:
                 times[key].append(time.perf_counter() - start)
     for key, values in times.items():
         print(f"{key:9s} median {1e3 * np.median(values):.2f} ms over {len(values)} runs "
-              f"(undamped)")
+              f"(damping {args.damping})")
     print(f"baseline / current: {np.median(times['baseline']) / np.median(times['current']):.3f}")
 
 

@@ -10,6 +10,7 @@ import pytest
 
 from camjax.metrics import (
     PEAK_GROUP,
+    PEAK_TOLERANCE,
     bernstein_bound,
     hermite_data,
     interval_peaks,
@@ -131,7 +132,9 @@ def test_nan_anywhere_gives_nan():
 @pytest.mark.parametrize("damping", [0.0, 0.2])
 def test_sdof_peak_in_motion_bounded_equals_dense(monkeypatch, damping):
     """The Ct kernel's two searches (``camjax.sdof.set_peak_search``) agree, on a law with
-    a plateau (many equal crests) and one without, across n in [1, 60]."""
+    a plateau (many equal crests) and one without, across n in [1, 60]: within
+    ``PEAK_TOLERANCE``, by which the bounded search leaves a plateau's equal crests after
+    the first (about 1.5e-12 here)."""
     from camjax import laws
     from camjax.sdof import _peaks, motion_grid, peak_in_motion, propagate
 
@@ -148,7 +151,94 @@ def test_sdof_peak_in_motion_bounded_equals_dense(monkeypatch, damping):
 
             return jax.jit(jax.vmap(one))(n)
 
-        np.testing.assert_allclose(peaks("bounded"), peaks("dense"), rtol=1e-12, atol=0)
+        np.testing.assert_allclose(peaks("bounded"), peaks("dense"), rtol=PEAK_TOLERANCE, atol=0)
+
+
+def _sdof_signal(spec, n, zeta, resolution=192):
+    """A law's grid, and at period ratio ``n`` the payload acceleration's node values and
+    five one-sided derivatives per interval end (``peak_in_motion``'s input, exactly)."""
+    from camjax import laws
+    from camjax.sdof import motion_grid, propagate
+    from camjax.sdof._peaks import _output_columns, eigenvalue, mode_gain
+
+    grid = motion_grid(laws.as_law(spec), resolution)
+    w = 2 * jnp.pi * n
+    q = propagate(grid, w, zeta, resolved=True)
+    values, left, right = _output_columns(mode_gain(w, zeta), eigenvalue(w, zeta), q,
+                                          *grid.one_sided(5))
+    return grid, q, values, jnp.stack(left, axis=1), jnp.stack(right, axis=1)
+
+
+@pytest.mark.parametrize("spec", ["parabolic", "scca:0.2,0.6,0.2", "modified-trapezoid"])
+@pytest.mark.parametrize("zeta", [0.0, 0.05])
+def test_plateau_bound_bounds_every_constant_interval_and_is_exact_at_crests(spec, zeta):
+    """Finite exactly on the intervals of constant acceleration, never below the interval's
+    own maximum (degree 11, refined), and undamped equal to it where a crest lies inside."""
+    from camjax.sdof._peaks import plateau_bound
+
+    for n in (3.7, 17.3, 29.0):
+        grid, _, values, left, right = _sdof_signal(spec, n, zeta)
+        w = 2 * jnp.pi * n
+        bound = np.asarray(plateau_bound(values, left[:, 0], right[:, 0], grid.forcing, w, zeta))
+        exact = np.asarray(interval_peaks(septic_coefficients(values, grid.widths, left, right)))
+        constant = np.all(np.asarray(grid.forcing)[:, 1:] == 0, axis=1)
+        assert constant.sum() >= 20
+        np.testing.assert_array_equal(np.isfinite(bound), constant)
+        # The interpolant's own rounding puts its value at an end up to 1.4e-12 off the
+        # node's: the search's tolerance covers it.
+        assert np.all(bound[constant] >= exact[constant] * (1 - PEAK_TOLERANCE)), n
+        if zeta == 0.0:  # the plateau's highest crest: its bound is its value
+            top = np.argmax(np.where(constant, exact, 0.0))
+            np.testing.assert_allclose(bound[top], exact[top], rtol=PEAK_TOLERANCE)
+
+
+@pytest.mark.parametrize("spec", ["parabolic", "scca:0.2,0.6,0.2"])
+def test_plateaus_close_after_their_first_crest(monkeypatch, spec):
+    """Undamped, the crests of a constant-acceleration piece tie.  With the plateau bound
+    one round of refinement at most settles the peak, against three or four with the
+    Bernstein bounds alone (rounds counted as the search runs); the same answer."""
+    from camjax.sdof import _peaks
+
+    search, plateau_bound = _peaks.peak_search, _peaks.plateau_bound
+
+    def rounds(q, grid, w, bounded):
+        calls = []
+
+        def counted(bound, hermite_of, largest, tolerance=0.0):
+            def hermite(index):
+                jax.debug.callback(lambda: calls.append(1))
+                return hermite_of(index)
+
+            return search(bound, hermite, largest, tolerance)
+
+        monkeypatch.setattr(_peaks, "peak_search", counted)
+        monkeypatch.setattr(_peaks, "plateau_bound", plateau_bound if bounded else
+                            lambda *a: jnp.full_like(plateau_bound(*a), jnp.inf))
+        peak = jax.block_until_ready(_peaks.peak_in_motion(q, grid, w, 0.0))
+        return peak, len(calls) - 1  # the last call evaluates the winner
+
+    for n in (17.3, 29.0):
+        grid, q, values, left, right = _sdof_signal(spec, n, 0.0)
+        dense = jnp.max(interval_peaks(septic_coefficients(values, grid.widths, left, right)))
+        w = 2 * jnp.pi * n
+        (fast, few), (slow, many) = rounds(q, grid, w, True), rounds(q, grid, w, False)
+        assert few <= 1 and many >= 3, (n, few, many)
+        np.testing.assert_allclose([fast, slow], dense, rtol=PEAK_TOLERANCE, atol=0)
+
+
+def test_equal_samples_give_an_exact_constant_with_the_interpolants_gradient():
+    """``to_monomial`` of equal samples is ``(a, 0, ..., 0)`` exactly (NumPy and JAX);
+    its derivatives in the samples stay those of the interpolant."""
+    from camjax.sdof import to_monomial
+    from camjax.sdof._grid import _TO_MONOMIAL
+
+    samples = np.array([[0.3] * 6, [1.0, 1.0, 1.0, 1.0, 1.0, 1.0 + 1e-15], [-7.1] * 6])
+    for result in (to_monomial(samples), np.asarray(to_monomial(jnp.asarray(samples)))):
+        np.testing.assert_array_equal(result[[0, 2]], [[0.3, 0, 0, 0, 0, 0], [-7.1, 0, 0, 0, 0, 0]])
+        np.testing.assert_allclose(result[1], samples[1] @ _TO_MONOMIAL.T, rtol=0, atol=1e-12)
+        assert np.all(result[1][1:] != 0)  # unequal samples: the interpolant as it is
+    jacobian = jax.jacobian(lambda s: to_monomial(s))(jnp.full(6, 0.3))
+    np.testing.assert_allclose(jacobian, _TO_MONOMIAL, rtol=1e-15)
 
 
 def test_set_peak_search_refuses_an_unknown_kind():

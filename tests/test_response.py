@@ -11,6 +11,7 @@ from scipy.integrate import solve_ivp
 
 import camjax
 from camjax import laws
+from camjax.metrics import PEAK_TOLERANCE
 from camjax.models import response_metrics
 
 
@@ -80,7 +81,8 @@ def test_torsion_factor_converges_under_grid_refinement(name):
     values = [camjax.ct_curve(law, n, damping=0.03, resolution=r).ct for r in (512, 1024, 2048)]
     assert np.max(np.abs(values[1] / values[2] - 1)) < 1e-8
     coarse_error = np.max(np.abs(values[0] / values[2] - 1))
-    assert np.max(np.abs(values[1] / values[2] - 1)) <= max(coarse_error, 1e-12)
+    # Down to the peak search's tolerance, below which it does not refine.
+    assert np.max(np.abs(values[1] / values[2] - 1)) <= max(coarse_error, PEAK_TOLERANCE)
 
 
 @pytest.mark.parametrize("name", ["modified-sine", "parabolic", "poly345"])

@@ -42,10 +42,22 @@ request is refused before any work, with what to change."""
 
 def to_monomial(samples):
     """Monomial coefficients in ``sigma`` (``(..., 6)``) of the interpolant through samples
-    at ``GAUSS_POINTS`` (``(..., 6)``); NumPy in, NumPy out, else JAX."""
-    if isinstance(samples, np.ndarray):
-        return samples @ _TO_MONOMIAL.T
-    return samples @ jnp.asarray(_TO_MONOMIAL.T)
+    at ``GAUSS_POINTS`` (``(..., 6)``); NumPy in, NumPy out, else JAX.
+
+    Equal samples (a constant-acceleration piece) give exactly ``(a, 0, 0, 0, 0, 0)``
+    rather than that plus rounding: the peak search recognises such intervals, whose
+    undamped crests are all equal (``camjax.sdof._peaks.plateau_bound``).  Their gradient
+    is the interpolant's.
+    """
+    xp = np if isinstance(samples, np.ndarray) else jnp
+    coefficients = samples @ xp.asarray(_TO_MONOMIAL.T)
+    constant = xp.all(samples == samples[..., :1], axis=-1, keepdims=True)
+    exact = xp.where(np.arange(INTERPOLATION_DEGREE + 1) == 0, samples[..., :1], 0.0)
+    if xp is np:
+        return np.where(constant, exact, coefficients)
+    return coefficients + jax.lax.stop_gradient(jnp.where(constant, exact, coefficients)
+                                                - coefficients)
+
 
 TARGET_PHASE_STEP = 0.5
 """Largest ``w * h`` (radians of vibration per interval) that a refined peak's septic spans

@@ -12,7 +12,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from ..metrics import bernstein_bound, hermite_data, peak_search, refined_peak
+from ..metrics import PEAK_TOLERANCE, bernstein_bound, hermite_data, peak_search, refined_peak
 from ._grid import MotionGrid
 from ._step import eigenvalue
 
@@ -108,13 +108,40 @@ from the septic over each interval (three derivatives, cheaper than five), withi
 short of."""
 
 
+def plateau_bound(values, slope_left, slope_right, forcing, omega, zeta):
+    """``(K,)`` bounds of ``|Re(K q)|`` on the intervals where the forcing is constant
+    (``inf`` elsewhere), exact on those that hold a crest.
+
+    With constant forcing ``a`` the output is ``p + v``: the constant ``p = -Re(K / lambda)
+    a`` and a free vibration ``v = Re(C exp(lambda t))``, whose largest ``|v|`` on the
+    interval is at an end or, if ``v'`` changes sign inside (an interval spans less than
+    half a period), at most its envelope at the start.  Undamped, every crest of a
+    constant-acceleration piece has the same height: the Bernstein bounds of the septics
+    exceed it by a margin, so each crest's interval would be refined; this bound is the
+    crest itself, and the first refined crest closes the others (``PEAK_TOLERANCE``)."""
+    lam = eigenvalue(omega, zeta)
+    # Per-ratio scalars behind a barrier, or XLA recomputes them at every node.
+    static, decay, inverse_frequency = jax.lax.optimization_barrier(
+        (-jnp.real(mode_gain(omega, zeta) / lam), -jnp.real(lam), 1 / jnp.imag(lam)))
+    constant = jnp.all(forcing[:, 1:] == 0, axis=1)
+    p = static * forcing[:, 0]
+    v0, v1 = values[:-1] - p, values[1:] - p
+    envelope = jnp.sqrt(v0**2 + ((slope_left + decay * v0) * inverse_frequency) ** 2)
+    vibration = jnp.where(slope_left * slope_right < 0, envelope,
+                          jnp.maximum(jnp.abs(v0), jnp.abs(v1)))
+    return jnp.where(constant, jnp.abs(p) + vibration, jnp.inf)
+
+
 def peak_in_motion(q, grid: MotionGrid, omega, zeta):
     """Max ``|x''|`` over the grid's span: ``x'' = Re(K q)`` at the nodes, refined between
     (``set_peak_search``) by an interpolant of degree 11 on each interval.
 
     The bounded search takes every interval's bound from the septic (three derivatives per
     end) in one pass over the jets; only the intervals it refines get their five
-    derivatives, from the mode at their ends, so no interval's jets are stored.  The dense
+    derivatives, from the mode at their ends, so no interval's jets are stored.  On
+    intervals of constant forcing the bound is the smaller of that and ``plateau_bound``
+    (exact at crests), so a constant-acceleration piece's equal crests take one round of
+    refinement instead of up to ten: undamped, such laws' kernels run 1.5x faster.  The dense
     search refines every interval.
     """
     gain, lam = mode_gain(omega, zeta), eigenvalue(omega, zeta)
@@ -127,6 +154,13 @@ def peak_in_motion(q, grid: MotionGrid, omega, zeta):
     values, left, right = _output_columns(gain, lam, q, one_left[:, :3], one_right[:, :3])
     bound = bernstein_bound(values, widths, left, right)
     bound = bound + BOUND_SLACK * jnp.max(bound)
+    # Laws without a constant piece skip the plateaus' pass (unbatched over period ratios,
+    # the condition stays a branch under vmap).
+    bound = jax.lax.cond(
+        jnp.any(jnp.all(grid.forcing[:, 1:] == 0, axis=1)),
+        lambda: jnp.minimum(bound, plateau_bound(values, left[0], right[0], grid.forcing,
+                                                 omega, zeta)),
+        lambda: bound)
     law = jnp.concatenate([widths[:, None], one_left, one_right], axis=1)
     ends = one_left.shape[1] + 1
 
@@ -138,7 +172,7 @@ def peak_in_motion(q, grid: MotionGrid, omega, zeta):
                             gain_derivatives(gain, lam, end, rows[:, ends:]),
                             jnp.real(gain * end))
 
-    return peak_search(bound, hermite_of, jnp.max(jnp.abs(values)))
+    return peak_search(bound, hermite_of, jnp.max(jnp.abs(values)), PEAK_TOLERANCE)
 
 
 def refined_max(values, widths, left, right):
