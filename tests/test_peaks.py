@@ -195,8 +195,8 @@ def test_plateau_bound_bounds_every_constant_interval_and_is_exact_at_crests(spe
 @pytest.mark.parametrize("spec", ["parabolic", "scca:0.2,0.6,0.2"])
 def test_plateaus_close_after_their_first_crest(monkeypatch, spec):
     """Undamped, the crests of a constant-acceleration piece tie.  With the plateau bound
-    one round of refinement at most settles the peak, against three or four with the
-    Bernstein bounds alone (rounds counted as the search runs); the same answer."""
+    at most three rounds of refinement settle the peak, against 7-15 with the Bernstein
+    bounds alone (rounds counted as the search runs); the same answer."""
     from camjax.sdof import _peaks
 
     search, plateau_bound = _peaks.peak_search, _peaks.plateau_bound
@@ -222,7 +222,7 @@ def test_plateaus_close_after_their_first_crest(monkeypatch, spec):
         dense = jnp.max(interval_peaks(septic_coefficients(values, grid.widths, left, right)))
         w = 2 * jnp.pi * n
         (fast, few), (slow, many) = rounds(q, grid, w, True), rounds(q, grid, w, False)
-        assert few <= 1 and many >= 3, (n, few, many)
+        assert few <= 3 and many >= 7, (n, few, many)
         np.testing.assert_allclose([fast, slow], dense, rtol=PEAK_TOLERANCE, atol=0)
 
 
