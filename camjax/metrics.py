@@ -90,7 +90,7 @@ PEAK_GROUP = 8
 bounds first, then at the intervals of the groups it picked."""
 PEAK_INTERVALS_PER_STEP = 1
 """Intervals that each step of ``peak_search`` refines, the best of one group each.  One:
-with plateaus' bounds exact (``camjax.sdof._peaks.plateau_bound``), one or two steps
+with plateaus' bounds exact (``camjax.sdof.plateau_bound``), one or two steps
 settle most peaks, and a smaller step ran the kernel 1.03-1.13x faster than four (2-core
 CPU, 2026-11-26)."""
 
@@ -99,7 +99,7 @@ PEAK_TOLERANCE = 1e-11
 """Relative margin within which ``peak_search`` leaves an interval unrefined: one whose
 bound is at most ``1 + PEAK_TOLERANCE`` times the best value found cannot change the
 answer by more than that.  A bound that is exact for equal crests (an undamped
-constant-acceleration piece: ``camjax.sdof._peaks.plateau_bound``) then closes them
+constant-acceleration piece: ``camjax.sdof.plateau_bound``) then closes them
 after the first, where rounding (about 2e-12) would otherwise leave every one open."""
 
 

@@ -12,7 +12,8 @@ studies, and a cam program's turn at machine speed (``camjax.program``):
   steady state (``periodic_propagate``) and the exact state between nodes
   (``mode_between``);
 - outputs ``Re(G q)`` and their refined peaks (``peak_in_motion``, bounded or dense:
-  ``set_peak_search``; ``refined_extremes``), the dwell's peak and the residual vibration;
+  ``set_peak_search``, with ``plateau_bound`` on constant-acceleration intervals;
+  ``refined_extremes``), the dwell's peak and the residual vibration;
 - the same equation through diffrax (``integrate``, ``sdof_term``);
 - one chunked vmap for batches (``chunked_map``), its chunks sized by backend
   (``chunk_nodes``, ``stack_laws``).
@@ -43,6 +44,7 @@ from ._peaks import gain_derivatives as gain_derivatives
 from ._peaks import mode_gain as mode_gain
 from ._peaks import output_jets as output_jets
 from ._peaks import peak_in_motion as peak_in_motion
+from ._peaks import plateau_bound as plateau_bound
 from ._peaks import refined_extremes as refined_extremes
 from ._peaks import refined_max as refined_max
 from ._peaks import residual_amplitude as residual_amplitude

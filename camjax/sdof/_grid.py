@@ -46,7 +46,7 @@ def to_monomial(samples):
 
     Equal samples (a constant-acceleration piece) give exactly ``(a, 0, 0, 0, 0, 0)``
     rather than that plus rounding: the peak search recognises such intervals, whose
-    undamped crests are all equal (``camjax.sdof._peaks.plateau_bound``).  Their gradient
+    undamped crests are all equal (``camjax.sdof.plateau_bound``).  Their gradient
     is the interpolant's.
     """
     xp = np if isinstance(samples, np.ndarray) else jnp
