@@ -126,7 +126,9 @@ def peak_search(bound, hermite_of, largest_sample, tolerance: float = 0.0):
     ``tolerance``), so the answer is that of refining every interval.  The
     search carries no gradient: the answer is the septic of the winning interval at the
     location found (or the largest sample), and so is its gradient (the dense maximum's,
-    but for exact ties, where it goes to the first).
+    but for ties within ``tolerance``, where it goes to the interval refined first: the
+    equal crests of an undamped plateau tie in value, not in their derivatives, so there
+    the derivative in the damping ratio is one crest's, as a kink's can only be).
     """
     size = bound.shape[0]
     group_size = min(PEAK_GROUP, size)

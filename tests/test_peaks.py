@@ -226,6 +226,20 @@ def test_plateaus_close_after_their_first_crest(monkeypatch, spec):
         np.testing.assert_allclose([fast, slow], dense, rtol=PEAK_TOLERANCE, atol=0)
 
 
+def test_plateau_bound_does_not_depend_on_the_signals_scale():
+    """The slopes' product and the envelope's squares underflowed near 1e-160 (the bound
+    fell 9e-6 below the crest); signs and hypot keep it at any scale."""
+    from camjax.sdof._peaks import plateau_bound
+
+    grid, _, values, left, right = _sdof_signal("parabolic", 7.3, 0.0)
+    w = 2 * jnp.pi * 7.3
+    unit = plateau_bound(values, left[:, 0], right[:, 0], grid.forcing, w, 0.0)
+    for scale in (1e-160, 1e-300, 1e150):
+        scaled = plateau_bound(values * scale, left[:, 0] * scale, right[:, 0] * scale,
+                               grid.forcing * scale, w, 0.0)
+        np.testing.assert_allclose(scaled / scale, unit, rtol=1e-13)
+
+
 def test_equal_samples_give_an_exact_constant_with_the_interpolants_gradient():
     """``to_monomial`` of equal samples is ``(a, 0, ..., 0)`` exactly (NumPy and JAX);
     its derivatives in the samples stay those of the interpolant."""
@@ -237,6 +251,9 @@ def test_equal_samples_give_an_exact_constant_with_the_interpolants_gradient():
         np.testing.assert_array_equal(result[[0, 2]], [[0.3, 0, 0, 0, 0, 0], [-7.1, 0, 0, 0, 0, 0]])
         np.testing.assert_allclose(result[1], samples[1] @ _TO_MONOMIAL.T, rtol=0, atol=1e-12)
         assert np.all(result[1][1:] != 0)  # unequal samples: the interpolant as it is
+    huge = np.array([[np.inf] * 6, [1e308] * 6])  # NumPy and JAX alike, no NaN
+    for result in (to_monomial(huge), np.asarray(to_monomial(jnp.asarray(huge)))):
+        np.testing.assert_array_equal(result, [[np.inf, 0, 0, 0, 0, 0], [1e308, 0, 0, 0, 0, 0]])
     jacobian = jax.jacobian(lambda s: to_monomial(s))(jnp.full(6, 0.3))
     np.testing.assert_allclose(jacobian, _TO_MONOMIAL, rtol=1e-15)
 

@@ -50,13 +50,16 @@ def to_monomial(samples):
     is the interpolant's.
     """
     xp = np if isinstance(samples, np.ndarray) else jnp
-    coefficients = samples @ xp.asarray(_TO_MONOMIAL.T)
+    with np.errstate(over="ignore", invalid="ignore"):  # huge samples: inf, as JAX gives
+        coefficients = samples @ xp.asarray(_TO_MONOMIAL.T)
     constant = xp.all(samples == samples[..., :1], axis=-1, keepdims=True)
     exact = xp.where(np.arange(INTERPOLATION_DEGREE + 1) == 0, samples[..., :1], 0.0)
+    snapped = xp.where(constant, exact, coefficients)
     if xp is np:
-        return np.where(constant, exact, coefficients)
-    return coefficients + jax.lax.stop_gradient(jnp.where(constant, exact, coefficients)
-                                                - coefficients)
+        return snapped
+    # Zero in value and the interpolant's in gradient (zero where a sample is not finite).
+    tangent = coefficients - jax.lax.stop_gradient(coefficients)
+    return jax.lax.stop_gradient(snapped) + jnp.where(jnp.isfinite(tangent), tangent, 0.0)
 
 
 TARGET_PHASE_STEP = 0.5

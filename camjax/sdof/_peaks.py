@@ -126,8 +126,9 @@ def plateau_bound(values, slope_left, slope_right, forcing, omega, zeta):
     constant = jnp.all(forcing[:, 1:] == 0, axis=1)
     p = static * forcing[:, 0]
     v0, v1 = values[:-1] - p, values[1:] - p
-    envelope = jnp.sqrt(v0**2 + ((slope_left + decay * v0) * inverse_frequency) ** 2)
-    vibration = jnp.where(slope_left * slope_right < 0, envelope,
+    # hypot and the slopes' signs: no underflow at any scale of the signal.
+    envelope = jnp.hypot(v0, (slope_left + decay * v0) * inverse_frequency)
+    vibration = jnp.where(jnp.sign(slope_left) * jnp.sign(slope_right) < 0, envelope,
                           jnp.maximum(jnp.abs(v0), jnp.abs(v1)))
     return jnp.where(constant, jnp.abs(p) + vibration, jnp.inf)
 
