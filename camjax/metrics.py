@@ -122,9 +122,9 @@ def peak_search(bound, hermite_of, largest_sample, tolerance: float = 0.0):
     largest bound in each of the ``PEAK_INTERVALS_PER_STEP`` groups of ``PEAK_GROUP``
     whose bounds are largest, until no bound beats the best value (by more than
     ``tolerance``).  The standard laws need one step at most ratios; plateaus (equal
-    crests) a few, or one with bounds exact at their crests.  An interval left alone cannot hold a larger value (by more than
-    ``tolerance``), so the answer is that of refining every interval.  The
-    search carries no gradient: the answer is the septic of the winning interval at the
+    crests) a few, or one with bounds exact at their crests.  An interval left alone
+    cannot hold a larger value (by more than ``tolerance``), so the answer is that of
+    refining every interval.  The search carries no gradient: the answer is the septic of the winning interval at the
     location found (or the largest sample), and so is its gradient (the dense maximum's,
     but for ties within ``tolerance``, where it goes to the interval refined first: the
     equal crests of an undamped plateau tie in value, not in their derivatives, so there

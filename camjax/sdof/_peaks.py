@@ -108,6 +108,12 @@ from the septic over each interval (three derivatives, cheaper than five), withi
 short of."""
 
 
+def constant_intervals(forcing):
+    """``(K,)`` whether each interval's forcing (``(K, 6)`` monomial coefficients) is a
+    constant: exactly, since ``to_monomial`` gives equal samples as ``(a, 0, ..., 0)``."""
+    return jnp.all(forcing[:, 1:] == 0, axis=1)
+
+
 def plateau_bound(values, slope_left, slope_right, forcing, omega, zeta):
     """``(K,)`` bounds of ``|Re(K q)|`` on the intervals where the forcing is constant
     (``inf`` elsewhere), exact on those that hold a crest.
@@ -123,7 +129,7 @@ def plateau_bound(values, slope_left, slope_right, forcing, omega, zeta):
     # Per-ratio scalars behind a barrier, or XLA recomputes them at every node.
     static, decay, inverse_frequency = jax.lax.optimization_barrier(
         (-jnp.real(mode_gain(omega, zeta) / lam), -jnp.real(lam), 1 / jnp.imag(lam)))
-    constant = jnp.all(forcing[:, 1:] == 0, axis=1)
+    constant = constant_intervals(forcing)
     p = static * forcing[:, 0]
     v0, v1 = values[:-1] - p, values[1:] - p
     # hypot and the slopes' signs: no underflow at any scale of the signal.
@@ -158,7 +164,7 @@ def peak_in_motion(q, grid: MotionGrid, omega, zeta):
     # Laws without a constant piece skip the plateaus' pass (unbatched over period ratios,
     # the condition stays a branch under vmap).
     bound = jax.lax.cond(
-        jnp.any(jnp.all(grid.forcing[:, 1:] == 0, axis=1)),
+        jnp.any(constant_intervals(grid.forcing)),
         lambda: jnp.minimum(bound, plateau_bound(values, left[0], right[0], grid.forcing,
                                                  omega, zeta)),
         lambda: bound)
