@@ -184,8 +184,9 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
         raise ValueError(f"method must be a method name (a string), got {method!r}")
     dwell = _number(raw.get("dwell", 1.0), "dwell")
     phase_step = _number(raw.get("phase_step", MAX_PHASE_STEP), "phase_step")
-    if not 0.0 < phase_step <= 1.0:
-        raise ValueError(f"phase_step must be in (0, 1] (radians per grid interval), got {phase_step}")
+    if not 0.0 < phase_step <= MAX_PHASE_STEP:
+        raise ValueError(f"phase_step must be in (0, {MAX_PHASE_STEP:g}] (radians per grid "
+                         f"interval), got {phase_step}")
     what = json.dumps([names, n.tolist(), damping, method, dwell, per_chunk]
                       + ([phase_step] if phase_step != MAX_PHASE_STEP else []))
     return SweepSpec(

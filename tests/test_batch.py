@@ -70,7 +70,9 @@ def test_map_in_chunks_refuses_a_ragged_batch():
 def test_accelerator_sizes_give_the_cpu_curves(monkeypatch):
     """The GPU's sizing (one chunk for a whole curve, a stack's laws vmapped together), run
     on the CPU: a single curve and a stack of 12 SCCA laws (over the stacking threshold)
-    equal the CPU-sized sweep to rounding."""
+    equal the CPU-sized sweep to rounding and the peak search's tolerance (an undamped
+    plateau's equal crests may settle on another crest, whose refinement differs by about
+    1e-11 at ``w h`` near ``MAX_PHASE_STEP``)."""
     n = np.linspace(0.5, 30.0, 300)
     face = distributed.scca_grid(0.1, face=True)[:12]
     laws = {law.name: law for law in face}
@@ -87,7 +89,7 @@ def test_accelerator_sizes_give_the_cpu_curves(monkeypatch):
         jax.clear_caches()  # no program sized for another backend outlives the test
     for a, b in [(single, single_gpu), *((stack[k], stack_gpu[k]) for k in laws)]:
         for metric in ("ct", "residual", "peak_in_motion"):
-            np.testing.assert_allclose(getattr(b, metric), getattr(a, metric), rtol=0, atol=1e-11)
+            np.testing.assert_allclose(getattr(b, metric), getattr(a, metric), rtol=1e-11, atol=1e-11)
         assert b.ca == a.ca
 
 

@@ -60,26 +60,26 @@ def test_ct_writes_tables_and_figures(capsys, tmp_path):
 
 
 def test_ct_finishes_a_sweep_with_failed_ratios_and_names_them(capsys, tmp_path):
-    """Heun at the default grid for n <= 20 is stable up to n ~ 10: the ratios past it
-    fail, the sweep goes on, exits 0, and marks them in every output."""
+    """Heun at the default grid for n <= 20 (three steps per interval) is stable up to n ~
+    14: the ratios past it fail, the sweep goes on, exits 0, and marks them in every
+    output."""
     code, _, err = run(capsys, "ct", "--law", "cycloidal", "--method", "heun", "--n", "1:20:12",
                        "--out", str(tmp_path))
     assert code == 0
     warning = [line for line in err.splitlines() if "warning" in line]
     assert warning == [
-        "camjax ct: warning: cycloidal: the solver failed at 6 of 12 period ratios (n = 11.3636, "
-        "13.0909, 14.8182, 16.5455, 18.2727, ...; unstable_fixed_step); their metrics are NaN "
-        "in the output"
+        "camjax ct: warning: cycloidal: the solver failed at 4 of 12 period ratios (n = 14.8182, "
+        "16.5455, 18.2727, 20; unstable_fixed_step); their metrics are NaN in the output"
     ]
     curve = camjax.ct_curve(laws.Cycloidal(), np.linspace(1, 20, 12), method="heun", throw=False)
-    failed = [False] * 6 + [True] * 6
+    failed = [False] * 8 + [True] * 4
     np.testing.assert_array_equal(curve.failed, failed)
     rows = [row.split(",") for row in (tmp_path / "ct.csv").read_text().splitlines()[1:]]
     assert [row[-1] for row in rows] == curve.result_names
     assert [row[2] == "nan" for row in rows] == failed
-    np.testing.assert_allclose([float(row[2]) for row in rows[:6]], curve.ct[:6], rtol=1e-11)
+    np.testing.assert_allclose([float(row[2]) for row in rows[:8]], curve.ct[:8], rtol=1e-11)
     entry = json.loads((tmp_path / "ct.json").read_text())["laws"]["cycloidal"]
-    assert entry["result"] == ["successful"] * 6 + ["unstable_fixed_step"] * 6
+    assert entry["result"] == ["successful"] * 8 + ["unstable_fixed_step"] * 4
     assert [x is None for x in entry["ct"]] == failed
 
 

@@ -72,6 +72,8 @@ def test_scca_grid_counts_and_fractions():
     ('output = "o"\n[period_ratio]\nvalues = [1.0]\n[laws]\nnames = ["nope"]\n', "nope"),
     ('output = "o"\nphase_step = 0\n[period_ratio]\nvalues = [1.0]\n[laws]\n'
      'names = ["cycloidal"]\n', "phase_step"),
+    ('output = "o"\nphase_step = 1.6\n[period_ratio]\nvalues = [1.0]\n[laws]\n'
+     'names = ["cycloidal"]\n', r"phase_step must be in \(0, 1\.5\]"),
 ])
 def test_bad_specs_name_the_problem(tmp_path, text, words):
     path = tmp_path / "spec.toml"
@@ -81,7 +83,7 @@ def test_bad_specs_name_the_problem(tmp_path, text, words):
 
 
 @pytest.mark.parametrize("step, resolutions", [(0.5, [128, 192, 256, 320, 384]),
-                                                (0.8, [128, 192, 256])])
+                                                (0.8, [128, 192, 256]), (1.5, [128])])
 def test_resolution_bands_meet_the_phase_step(step, resolutions, monkeypatch):
     monkeypatch.setattr(jax, "default_backend", lambda: "cpu")  # bands are the CPU's
     n, _, options = prepare_sweep(np.linspace(1.0, 30.0, 1000))

@@ -270,11 +270,11 @@ def test_scipy_reference_agrees_with_the_exact_path_on_an_scca_law():
 
 
 def test_study_cases_leave_out_the_grids_a_range_refuses():
-    """Exact grids coarser than ``w h <= 1`` at the range's largest ratio are not run
+    """Exact grids coarser than ``w h <= MAX_PHASE_STEP`` at the range's largest ratio are not run
     (their refined peaks would not be trusted); every other case is kept."""
     everything = studies.study_cases("medium")
     kept = studies.study_cases("medium", 30.0)
     dropped = [case.label for case in everything if case not in kept]
-    assert dropped == ["exact res=64"]  # 64 < 2 pi 30; 256 resolves n <= 40.7
+    assert dropped == ["exact res=64"]  # 64 resolves n <= 15.3 (w h <= 1.5); 256 n <= 61
     assert [case.label for case in studies.study_cases("medium", 100.0) if case.family == "exact"] == ["exact default"]
     assert studies.study_cases("medium", 5.0) == everything

@@ -261,9 +261,10 @@ def batch_metrics(law, period_ratio, damping, options: SpringMassOptions):
     return chunked_map(one, period_ratio, grid.nodes.shape[0])
 
 
-TRACED_RESOLUTION = 1024
+TRACED_RESOLUTION = 704
 """Grid of ``torsion_factor`` and ``residual_vibration`` for a traced period ratio when no
-``resolution`` is given (a concrete one sizes its own grid, ``default_resolution``)."""
+``resolution`` is given (a concrete one sizes its own grid, ``default_resolution``):
+period ratios up to about 168 (``w h <= MAX_PHASE_STEP``)."""
 
 
 def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:

@@ -98,14 +98,15 @@ def set_peak_search(kind: str) -> None:
 
 REFINED_DERIVATIVES = 5
 """Derivatives at each end of the interpolant ``peak_in_motion`` refines: degree 11, within
-``(w h)^12 / 2e12`` (5e-13) of the response at the SDOF grid's ``w h <= MAX_PHASE_STEP``.
-In single precision the fifth derivative's rounding costs more than the septic's
-``(w h)^8 / 1e7`` (1e-7 there): float32 refines septics (three)."""
-BOUND_SLACK = 1e-6
+``(w h)^12 / 2e12`` of the vibration's amplitude (6.5e-11 at the SDOF grid's ``w h <=
+MAX_PHASE_STEP`` = 1.5; 2e-12 measured on Ct).  In single precision the fifth
+derivative's rounding costs more than the septic's ``(w h)^8 / 1e7`` (2.6e-6 there):
+float32 refines septics (three)."""
+BOUND_SLACK = 1e-5
 """What every interval's bound is raised by, as a fraction of the largest: the bounds come
-from the septic over each interval (three derivatives, cheaper than five), within about
-1e-7 of the vibration's amplitude at ``w h <= 1``, which no interval's bound falls far
-short of."""
+from the septic over each interval (three derivatives, cheaper than five), within
+``(w h)^8 / 1e7`` (2.6e-6 at ``w h = MAX_PHASE_STEP``) of the vibration's amplitude, which
+no interval's bound falls far short of."""
 
 
 def constant_intervals(forcing):
