@@ -67,7 +67,7 @@ def run_sweeps(args, work: Path, runs_path: Path) -> None:
             spec = distributed.spec_from_dict({
                 "output": str(work / key), "damping": [damping],
                 "laws_per_chunk": args.laws_per_chunk, "laws": laws,
-                "phase_step": args.phase_step,
+                **({} if args.phase_step is None else {"phase_step": args.phase_step}),
                 "period_ratio": {"start": 1.0, "stop": 30.0, "count": args.count},
             })
             load_before = os.getloadavg()
@@ -289,9 +289,9 @@ def main() -> None:
     parser.add_argument("--grids", nargs="+", choices=("face", "family"),
                         default=["face", "family"], help="which grids to sweep, in order")
     parser.add_argument("--laws-per-chunk", type=int, default=64)
-    parser.add_argument("--phase-step", type=float, default=1.0,
-                        help="largest w h of the exact path's grid (0.5: ct_curve's; 1.0 "
-                        "stays within 5e-8 of it in Ct, see docs/scca-atlas.md)")
+    parser.add_argument("--phase-step", type=float, default=None,
+                        help="largest w h of the exact path's grid (default: ct_curve's, "
+                        "camjax.sdof.MAX_PHASE_STEP; smaller is finer)")
     parser.add_argument("--no-cache", action="store_true",
                         help="do not use camjax's persistent compilation cache (a cold run)")
     parser.add_argument("--work", type=Path, help="chunk directory (default: under --out)")
