@@ -10,10 +10,12 @@ Over an interval of width ``h`` on which ``a`` is the polynomial ``sum_m c_m sig
 
 ``psi_m`` comes from its Taylor series for ``|z| < 1`` (18 terms: truncation below
 1e-17) and from the upward recurrence ``psi_m = (m psi_(m-1) - 1) / z`` above, whose
-rounding grows by at most ``5!`` at ``|z| = 1`` (about 2e-13 relative).  Default grids keep
-``|z| = w h`` at most 0.5, so the series is the path that runs; it is the propagation's
-largest cost per period ratio, hence the short radius (18 terms instead of the 25 a radius
-of 2 needs made the kernel 1.08x faster over n <= 30).
+rounding grows by at most ``5!`` at ``|z| = 1`` (about 2e-13 relative).  Grids refined
+septic by septic keep ``|z| = w h`` at most 0.5, so the series is the path that runs; it
+is the propagation's largest cost per period ratio, hence the short radius (18 terms
+instead of the 25 a radius of 2 needs made the kernel 1.08x faster over n <= 30).  The SDOF
+path's grid (``w h <= MAX_PHASE_STEP``, 1.5) takes its kicks from one law-only matrix of
+the same series instead (``_series_kicks``).
 """
 
 from __future__ import annotations
