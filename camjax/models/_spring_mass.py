@@ -58,11 +58,11 @@ class SpringMassOptions(Options):
         method: ``"exact"`` or a diffrax solver name (``camjax.solvers.SOLVERS``).
         dwell: dwell after the rise, in motion periods.
         resolution: grid intervals per unit tau; ``None`` picks one from the largest
-            period ratio (``default_resolution`` at ``MAX_PHASE_STEP``: ``w h <= 1``).
+            period ratio (``default_resolution`` at ``MAX_PHASE_STEP``: ``w h <= 1.5``).
             A coarser one than that is refused.
         rtol, atol: tolerances of adaptive diffrax solvers.
-        steps: step count of fixed-step diffrax solvers over the rise (default: twice the
-            grid's interval count).
+        steps: step count of fixed-step diffrax solvers over the rise (default: three
+            times the grid's interval count, ``w h <= 0.5`` per step).
         max_steps: step limit of diffrax solvers; reaching it is an error.
         use_jump_ts: stop adaptive diffrax solvers at the law's breakpoints.
     """
