@@ -24,7 +24,7 @@ Spec file (TOML)::
     damping = [0.0, 0.05]
     laws_per_chunk = 64
     dwell = 1.0                    # optional
-    phase_step = 1.0               # optional: largest w h of the exact path's grid (below)
+    phase_step = 1.5               # optional: largest w h of the exact path's grid (below)
     [period_ratio]
     start = 1.0
     stop = 30.0
@@ -36,7 +36,7 @@ Spec file (TOML)::
 
 The exact path runs each band of period ratios on a grid of its own
 (``camjax.sweep.resolution_bands``), sized so that the vibration turns by at most
-``phase_step`` radians per interval: the default 1.0 is ``ct_curve``'s and the largest the
+``phase_step`` radians per interval: the default 1.5 is ``ct_curve``'s and the largest the
 exact path accepts (``camjax.sdof.MAX_PHASE_STEP``); a smaller step gives a finer grid, to
 check a sweep against.
 """

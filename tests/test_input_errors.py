@@ -48,7 +48,7 @@ def test_a_period_ratio_past_the_largest_grid_is_refused():
 
 
 def test_a_grid_too_coarse_for_a_concrete_period_ratio_is_refused():
-    message = ("period ratio must be at most 61.12 on a grid of resolution 256 (give resolution "
+    message = ("period ratio must be at most 61.11 on a grid of resolution 256 (give resolution "
                ">= 4.19 n), got 200")
     with pytest.raises(ValueError) as error:
         camjax.residual_vibration(MODSINE, 200.0, resolution=256)
@@ -60,7 +60,7 @@ def test_a_traced_period_ratio_past_the_grid_raises_instead_of_a_number(transfor
     def ct(n):
         return camjax.torsion_factor(MODSINE, n)
 
-    with pytest.raises(Exception, match=r"period ratio must be at most 168\.1\b"):
+    with pytest.raises(Exception, match=r"period ratio must be at most 168 "):
         if transform == "vmap":
             jax.vmap(ct)(jnp.array([5.0, 1e6]))
         else:
@@ -164,7 +164,7 @@ def test_a_traced_check_reads_as_docs_conventions_says():
     assert str(error.value) == FRACTIONS_RULE
     with pytest.raises(ValueError) as error:
         jax.grad(lambda n: camjax.torsion_factor(MODSINE, n))(1e6)
-    assert str(error.value).splitlines()[0].startswith("period ratio must be at most 168.1 ")
+    assert str(error.value).splitlines()[0].startswith("period ratio must be at most 168 ")
     with pytest.raises(eqx.EquinoxRuntimeError) as error:
         eqx.filter_jit(_residual_of_fractions)(bad)
     assert f"equinox.EquinoxRuntimeError: {FRACTIONS_RULE}" in str(error.value).splitlines()

@@ -140,7 +140,7 @@ def test_sdof_peak_in_motion_bounded_equals_dense(monkeypatch, damping):
 
     n = jnp.linspace(1.0, 60.0, 97)
     for name in ("modified-trapezoid", "poly4567"):
-        grid = motion_grid(laws.as_law(name), 384)  # the SDOF path's step: w h <= 1 at n = 60
+        grid = motion_grid(laws.as_law(name), 384)  # w h <= 0.98 at n = 60, within the SDOF path's step
 
         def peaks(kind, grid=grid):
             monkeypatch.setitem(_peaks._peak_search, "kind", kind)
@@ -332,21 +332,24 @@ def test_one_sided_derivatives_are_the_interpolants():
 
 
 @pytest.mark.parametrize("damping", [0.0, 0.3])
-def test_half_steps_are_the_exact_state_between_nodes(damping):
-    """The mode half-way across every interval (the series step) against ``mode_between``
-    (the per-piece ``psi`` step, on the host), at ``w h`` up to 1."""
+def test_steps_within_are_the_exact_state_between_nodes(damping):
+    """The mode a third, half and all of the way across every interval (the series step)
+    against ``mode_between`` (the per-piece ``psi`` step, on the host), at ``w h`` up to
+    ``MAX_PHASE_STEP``."""
     from camjax import laws
-    from camjax.sdof import eigenvalue, half_steps, mode_between, motion_grid, propagate
+    from camjax.sdof import eigenvalue, mode_between, motion_grid, propagate, steps_within
 
     grid = motion_grid(laws.SCCA(0.002, 0.5, 0.498), 256)
-    w = 2 * np.pi * 40.0  # w h = 0.98 on the widest interval
+    w = 2 * np.pi * 61.0  # w h = 1.497 on the widest interval
     lam = eigenvalue(w, damping)
     q = propagate(grid, w, damping)
-    middles = half_steps(q[:-1], grid.forcing, grid.widths, jnp.max(grid.piece_width), lam)
-    t = np.asarray(grid.nodes[:-1] + grid.widths / 2)
-    expected = mode_between(grid, np.asarray(q), complex(lam), t)
     scale = float(jnp.max(jnp.abs(q)))
-    assert np.max(np.abs(np.asarray(middles) - expected)) <= 1e-13 * scale
+    for fraction in (1 / 3, 0.5, 1.0):
+        inside = steps_within(q[:-1], grid.forcing, grid.widths, jnp.max(grid.piece_width),
+                              lam, fraction)
+        t = np.asarray(grid.nodes[:-1] + grid.widths * fraction)
+        expected = mode_between(grid, np.asarray(q), complex(lam), t)
+        assert np.max(np.abs(np.asarray(inside) - expected)) <= 1e-13 * scale
 
 
 def test_float32_peaks_refine_septics_and_stay_near_single_precision():

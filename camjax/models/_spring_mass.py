@@ -24,6 +24,7 @@ from typing import ClassVar
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .. import checks
 from ..checks import require
@@ -38,16 +39,20 @@ from ..sdof import (
     default_resolution,
     dwell_peak,
     eigenvalue,
-    half_steps,
     integrate,
     mode_gain,
     motion_grid,
     peak_in_motion,
     propagate,
     residual_of_mode,
+    steps_within,
 )
 from ..solvers import SOLVERS
 from ._base import AbstractModel, Metrics, Options, Response
+
+SAMPLES_PER_INTERVAL = 3
+"""Samples of ``solve``'s time histories per grid interval (the node and two inside), so
+that ``w`` times their spacing is at most ``MAX_PHASE_STEP / 3`` = 0.5: a smooth curve."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -105,9 +110,16 @@ class SpringMassOptions(Options):
 
     def too_coarse(self) -> str:
         """The error for a period ratio past ``largest_period_ratio``."""
-        return (f"period ratio must be at most {self.largest_period_ratio():.4g} on a grid of "
+        return (f"period ratio must be at most {_down(self.largest_period_ratio()):.4g} on a grid of "
                 f"resolution {self.resolution} (give resolution >= "
                 f"{2 * math.pi / MAX_PHASE_STEP:.3g} n)")
+
+
+def _down(value: float, digits: int = 4) -> float:
+    """``value`` rounded down to ``digits`` significant digits: a printed limit that the
+    largest value it admits does not exceed."""
+    scale = 10.0 ** (math.floor(math.log10(value)) - digits + 1)
+    return math.floor(value / scale) * scale
 
 
 class SpringMassResponse(Response):
@@ -147,12 +159,15 @@ class SpringMass(AbstractModel):
         metrics = _metrics(q, grid, model, law.Ca, options.dwell)
         omega, zeta = model.omega, model.damping
         lam = eigenvalue(omega, zeta)
-        # Sampled at the nodes and, exactly, half-way between (w h / 2 <= 0.5: a smooth
-        # curve to plot), and as densely over the dwell.
-        middles = half_steps(q[:-1], grid.forcing, grid.widths, jnp.max(grid.piece_width), lam)
-        q_rise = jnp.concatenate([jnp.stack([q[:-1], middles], axis=1).reshape(-1), q[-1:]])
-        t_rise = jnp.stack([grid.nodes[:-1], grid.nodes[:-1] + grid.widths / 2], axis=1)
-        dwell_samples = max(1, math.ceil(options.dwell * 2 * options.resolution))
+        # Sampled at the nodes and, exactly, at thirds of every interval (w h / 3 <= 0.5:
+        # a smooth curve to plot), and as densely over the dwell.
+        widest = jnp.max(grid.piece_width)
+        inside = [steps_within(q[:-1], grid.forcing, grid.widths, widest, lam, k / SAMPLES_PER_INTERVAL)
+                  for k in range(1, SAMPLES_PER_INTERVAL)]
+        q_rise = jnp.concatenate([jnp.stack([q[:-1], *inside], axis=1).reshape(-1), q[-1:]])
+        t_rise = grid.nodes[:-1, None] + grid.widths[:, None] * (
+            np.arange(SAMPLES_PER_INTERVAL) / SAMPLES_PER_INTERVAL)
+        dwell_samples = max(1, math.ceil(options.dwell * SAMPLES_PER_INTERVAL * options.resolution))
         t_dwell = jnp.linspace(0.0, options.dwell, dwell_samples + 1)[1:]
         q_all = jnp.concatenate([q_rise, q[-1] * jnp.exp(lam * t_dwell)])
         tau = jnp.concatenate([t_rise.reshape(-1), grid.nodes[-1:], 1.0 + t_dwell])

@@ -71,7 +71,7 @@ interval by interval (a cam program's turn, the training grid of a design)."""
 MAX_PHASE_STEP = 1.5
 """The exact SDOF path's grid: ``w h`` at most this, by default and on any grid a caller
 chooses.  Its peaks are refined by interpolants of degree 11 (``peak_in_motion``: within
-``(w h)^12 / 2e12``, 6.5e-11 of the vibration's amplitude at this step; Ct within 4e-12
+``(w h)^12 / 2e12``, 6.5e-11 of the vibration's amplitude at this step; Ct within 1e-11
 measured over n <= 30) and its propagation's series (``propagate(resolved=True)``) is
 exact up to it.  The default grid over n in [1, 30] then has 128 intervals per rise rather
 than 192 at 1.0 (a 1000-ratio kernel 1.4x faster, 2026-11-26).  A sweep refuses a coarser grid before any

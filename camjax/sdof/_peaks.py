@@ -99,7 +99,7 @@ def set_peak_search(kind: str) -> None:
 REFINED_DERIVATIVES = 5
 """Derivatives at each end of the interpolant ``peak_in_motion`` refines: degree 11, within
 ``(w h)^12 / 2e12`` of the vibration's amplitude (6.5e-11 at the SDOF grid's ``w h <=
-MAX_PHASE_STEP`` = 1.5; Ct within 4e-12 measured over n <= 30).  In single precision the fifth
+MAX_PHASE_STEP`` = 1.5; Ct within 1e-11 measured over n <= 30).  In single precision the fifth
 derivative's rounding costs more than the septic's ``(w h)^8 / 1e7`` (2.6e-6 there):
 float32 refines septics (three)."""
 BOUND_SLACK = 1e-5

@@ -162,17 +162,15 @@ def _series_kicks(forcing, widths, widest, lam) -> jax.Array:
     return _complex_product(law_only, jnp.stack(powers))
 
 
-_HALF_POWERS = 0.5 ** np.arange(INTERPOLATION_DEGREE + 1)
-"""``c * _HALF_POWERS``: an interval's forcing coefficients on its first half, in the half's
-own ``sigma``."""
-
-
-def half_steps(q_start, forcing, widths, widest, lam) -> jax.Array:
-    """The mode half-way across intervals (forcing rows ``(n, 6)``, ``widths`` ``(n,)``),
-    exactly, from the mode at their starts: half a step of ``propagate``, on a grid whose
-    widest interval is ``widest`` and resolved (``|lam| widest <= MAX_PHASE_STEP``)."""
-    kicks = _series_kicks(forcing * _HALF_POWERS, widths / 2, widest, lam)
-    return jnp.exp(lam * (widths / 2)) * q_start + kicks
+def steps_within(q_start, forcing, widths, widest, lam, fraction: float) -> jax.Array:
+    """The mode ``fraction`` (in ``(0, 1]``) of the way across intervals (forcing rows
+    ``(n, 6)``, ``widths`` ``(n,)``), exactly, from the mode at their starts: part of a step
+    of ``propagate``, on a grid whose widest interval is ``widest`` and resolved (``|lam|
+    widest <= MAX_PHASE_STEP``).  The forcing on the part, in its own ``sigma``, has the
+    coefficients ``c_m fraction^m``."""
+    powers = fraction ** np.arange(INTERPOLATION_DEGREE + 1)
+    kicks = _series_kicks(forcing * powers, widths * fraction, widest, lam)
+    return jnp.exp(lam * (widths * fraction)) * q_start + kicks
 
 
 def _by_piece(piece, values):
