@@ -33,6 +33,7 @@ from ..laws import AbstractMotionLaw, as_law
 from ..sdof import (
     MAX_GRID_INTERVALS,
     MAX_PHASE_STEP,
+    SUBSTEPS_PER_INTERVAL,
     MotionGrid,
     SampledLaw,
     chunked_map,
@@ -49,10 +50,6 @@ from ..sdof import (
 )
 from ..solvers import SOLVERS
 from ._base import AbstractModel, Metrics, Options, Response
-
-SAMPLES_PER_INTERVAL = 3
-"""Samples of ``solve``'s time histories per grid interval (the node and two inside), so
-that ``w`` times their spacing is at most ``MAX_PHASE_STEP / 3`` = 0.5: a smooth curve."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -159,15 +156,15 @@ class SpringMass(AbstractModel):
         metrics = _metrics(q, grid, model, law.Ca, options.dwell)
         omega, zeta = model.omega, model.damping
         lam = eigenvalue(omega, zeta)
-        # Sampled at the nodes and, exactly, at thirds of every interval (w h / 3 <= 0.5:
-        # a smooth curve to plot), and as densely over the dwell.
+        # Sampled at the nodes and, exactly, at SUBSTEPS_PER_INTERVAL parts of every interval
+        # (w h / 3 <= 0.5: a smooth curve to plot), and as densely over the dwell.
         widest = jnp.max(grid.piece_width)
-        inside = [steps_within(q[:-1], grid.forcing, grid.widths, widest, lam, k / SAMPLES_PER_INTERVAL)
-                  for k in range(1, SAMPLES_PER_INTERVAL)]
+        inside = [steps_within(q[:-1], grid.forcing, grid.widths, widest, lam, k / SUBSTEPS_PER_INTERVAL)
+                  for k in range(1, SUBSTEPS_PER_INTERVAL)]
         q_rise = jnp.concatenate([jnp.stack([q[:-1], *inside], axis=1).reshape(-1), q[-1:]])
         t_rise = grid.nodes[:-1, None] + grid.widths[:, None] * (
-            np.arange(SAMPLES_PER_INTERVAL) / SAMPLES_PER_INTERVAL)
-        dwell_samples = max(1, math.ceil(options.dwell * SAMPLES_PER_INTERVAL * options.resolution))
+            np.arange(SUBSTEPS_PER_INTERVAL) / SUBSTEPS_PER_INTERVAL)
+        dwell_samples = max(1, math.ceil(options.dwell * SUBSTEPS_PER_INTERVAL * options.resolution))
         t_dwell = jnp.linspace(0.0, options.dwell, dwell_samples + 1)[1:]
         q_all = jnp.concatenate([q_rise, q[-1] * jnp.exp(lam * t_dwell)])
         tau = jnp.concatenate([t_rise.reshape(-1), grid.nodes[-1:], 1.0 + t_dwell])

@@ -78,6 +78,12 @@ than 192 at 1.0 (a 1000-ratio kernel 1.4x faster, 2026-11-26).  A sweep refuses 
 work, a traced period ratio raises when it runs."""
 
 
+SUBSTEPS_PER_INTERVAL = math.ceil(MAX_PHASE_STEP / TARGET_PHASE_STEP)
+"""Parts of an interval of the exact SDOF grid that turn the vibration by at most
+``TARGET_PHASE_STEP`` each (three): a fixed-step solver's default steps per interval, and
+``solve``'s samples per interval (a smooth curve to plot)."""
+
+
 def default_resolution(max_period_ratio: float, phase_step: float = TARGET_PHASE_STEP) -> int:
     """Intervals per unit of tau that keep ``w h <= phase_step`` (a multiple of 64).
 

@@ -4,18 +4,12 @@ never pays for its import."""
 
 from __future__ import annotations
 
-import math
-
 import jax.numpy as jnp
 
 from ..errors import RESULTS, promote
 from ..solvers import FIXED_STEP_SOLVERS, MAX_FREE_VIBRATION_GROWTH, free_vibration_growth, solver
-from ._grid import MAX_PHASE_STEP, MotionGrid
+from ._grid import SUBSTEPS_PER_INTERVAL, MotionGrid
 from ._step import eigenvalue
-
-FIXED_STEPS_PER_INTERVAL = math.ceil(MAX_PHASE_STEP / 0.5)
-"""A fixed-step solver's default steps per interval of the SDOF grid: ``w h <= 0.5`` per
-step (three at ``MAX_PHASE_STEP`` = 1.5)."""
 
 BOUND_MARGIN = 1.01
 """Tolerance on the physical bound ``|q| <= Ca`` that an integrated response must keep."""
@@ -52,7 +46,7 @@ def integrate(law, grid: MotionGrid, omega, zeta, *, method: str, steps: int | N
     """Complex mode at the grid's nodes by the diffrax solver ``method``, its result code
     and the steps taken.
 
-    A fixed-step solver (``steps`` steps over the rise, default ``FIXED_STEPS_PER_INTERVAL``
+    A fixed-step solver (``steps`` steps over the rise, default ``SUBSTEPS_PER_INTERVAL``
     per grid interval: ``w h <= 0.5`` on the SDOF grid, as its peaks are refined)
     whose numerical free vibration grows past ``MAX_FREE_VIBRATION_GROWTH`` is refused
     (``unstable_fixed_step``); every solution must keep ``|q| <= Ca`` at the nodes (its
@@ -61,7 +55,7 @@ def integrate(law, grid: MotionGrid, omega, zeta, *, method: str, steps: int | N
     """
     import diffrax
 
-    steps = steps or FIXED_STEPS_PER_INTERVAL * grid.piece.size
+    steps = steps or SUBSTEPS_PER_INTERVAL * grid.piece.size
     if method in FIXED_STEP_SOLVERS:
         controller, dt0 = diffrax.ConstantStepSize(), 1.0 / steps
     else:
