@@ -12,6 +12,7 @@ import jax
 import numpy as np
 import pytest
 
+import camjax
 from camjax.sharding import (
     available_cores,
     batch_size,
@@ -148,3 +149,32 @@ def test_shard_batch_one_device_and_batch_checks():
     assert batch_size({"a": np.zeros((4, 2)), "b": np.ones(4)}) == 4
     with pytest.raises(ValueError, match="common leading axis"):
         batch_size({"a": np.zeros(4), "b": np.ones(3)})
+
+
+def test_sweeps_compile_with_the_cpu_options_only_at_the_top_level():
+    """``sweep_jit``: on CPU a sweep's program compiles with ``CPU_COMPILER_OPTIONS`` (XLA
+    refuses options on a nested jit, so a traced call takes none); the options change no
+    number beyond the peak search's tolerance (``PEAK_TOLERANCE``, 1e-11 relative: rounding
+    may settle a crest in another interval; 7e-13 measured at n = 30)."""
+    from camjax import sharding
+    from camjax.sweep import _sweep, prepare_sweep
+
+    n, template, options = prepare_sweep(np.linspace(1.0, 30.0, 200), damping=0.05)
+    law = template.sweep_law(camjax.laws.get("modified-sine"), options)
+    args = (law, template, jax.numpy.asarray(n), options)
+    on_cpu = jax.default_backend() == "cpu"
+    chosen = sharding.CPU_COMPILER_OPTIONS if on_cpu else ()
+    assert _sweep._program(args) is sharding._filter_jit(_sweep.__wrapped__, chosen)
+    plain = sharding._filter_jit(_sweep.__wrapped__, ())
+    picked = []
+    jax.jit(lambda r: picked.append(_sweep._program((law, template, r, options))) or r)(n)
+    assert picked == [plain]
+    if on_cpu:
+        assert sharding.CPU_COMPILER_OPTIONS == (("xla_cpu_prefer_vector_width", 512),)
+    with_options, without = _sweep(*args)[0], plain(*args)[0]
+    for field in ("ct", "residual", "peak_in_motion"):
+        np.testing.assert_allclose(getattr(with_options, field), getattr(without, field),
+                                   rtol=1e-11, atol=0)
+    # Inside a caller's jit the program is inlined, options or not.
+    inside = jax.jit(lambda r: _sweep(law, template, r, options)[0].ct)(jax.numpy.asarray(n))
+    np.testing.assert_allclose(inside, with_options.ct, rtol=1e-11)

@@ -75,6 +75,29 @@ def test_a_sweep_with_throw_false_marks_the_failed_ratios_only():
     assert both["cycloidal"].result_names == curve.result_names
 
 
+def test_a_stack_with_throw_false_marks_each_laws_failed_ratios():
+    """A stack of laws (over ``STACK_FROM``) where Heun fails at n = 30 only: every law's
+    curve has that ratio NaN with its code and the other as the law's own sweep; with
+    ``throw`` the error names the ratio, the law and the count over the stack."""
+    from camjax.sweep import STACK_FROM
+
+    grid = {"method": "heun", "steps": 200, "resolution": 4096}
+    laws = [camjax.laws.SCCA(a, 1.0 - 2 * a, a) for a in np.linspace(0.05, 0.45, STACK_FROM + 1)]
+    curves = camjax.ct_curves(laws, [2.5, 30.0], throw=False, **grid)
+    assert len(curves) == len(laws)
+    for law in laws[::4]:
+        curve, alone = curves[law.name], camjax.ct_curve(law, [2.5, 30.0], throw=False, **grid)
+        assert curve.name == law.name and curve.ca == pytest.approx(alone.ca, rel=1e-14)
+        assert curve.result_names == alone.result_names == ["successful", "unstable_fixed_step"]
+        for values, own in ((curve.ct, alone.ct), (curve.residual, alone.residual),
+                            (curve.peak_in_motion, alone.peak_in_motion)):
+            assert values[0] == pytest.approx(own[0], rel=1e-12) and np.isnan(values[1])
+    first = laws[0].name.replace(".", r"\.")
+    with pytest.raises(camjax.SolverError, match=rf"period ratio 30, damping 0\) with {first} failed "
+                                                 rf"\(9 of 18 failed\): "):
+        camjax.ct_curves(laws, [2.5, 30.0], **grid)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("model", [
     camjax.models.CoulombFriction(1.0, 0.3),

@@ -104,15 +104,16 @@ LONG_CT_SWEEP = 100_000
 
 
 def _compile_for_one_run(args: argparse.Namespace) -> None:
-    """XLA's classic CPU fusion emitters, and the dense peak search, for a short command
-    (``args``, parsed).
+    """XLA's classic CPU fusion emitters, its own vector width and the dense peak search,
+    for a short command (``args``, parsed).
 
     The emitters compile camjax's programs in about half the time and run them about 1.2x
     slower (the exact kernel, 2026-11-25): a cold ``camjax ct`` took 0.86x, ``camjax
     program`` 0.69x and ``camjax design`` 0.77x the time with them.  A flag the user set in
     ``XLA_FLAGS`` wins; it must be set before JAX starts its CPU backend, as here.  The
     dense peak search (``camjax.sdof.set_peak_search``) compiles a smaller program than
-    the bounded one, which pays only when a program runs many times (docs/performance.md).
+    the bounded one, which pays only when a program runs many times (docs/performance.md);
+    so do the wider vectors of ``camjax.sharding.CPU_COMPILER_OPTIONS``.
     """
     if args.command not in SHORT_COMMANDS:
         return
@@ -125,8 +126,10 @@ def _compile_for_one_run(args: argparse.Namespace) -> None:
     if "xla_cpu_use_fusion_emitters" not in flags:
         os.environ["XLA_FLAGS"] = f"{flags} --xla_cpu_use_fusion_emitters=false".strip()
     from ..sdof import set_peak_search
+    from ..sharding import sweeps_run_once
 
     set_peak_search("dense")
+    sweeps_run_once()
 
 
 def _end_process(status: dict) -> None:
