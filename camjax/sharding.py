@@ -114,32 +114,45 @@ def _filter_jit(fun, options: tuple) -> eqx.Module:
     return eqx.filter_jit(fun, compiler_options=dict(options) or None)
 
 
-class _SweepJit:
-    """``equinox.filter_jit(fun)``, compiled with ``CPU_COMPILER_OPTIONS`` when the default
-    backend is the CPU and the call is not traced (XLA takes options only for a top-level
-    program; inside a caller's ``jit`` the program is inlined): decided at each call."""
+try:  # JAX's own test (private): no trace is running (not inside jit, vmap or grad)
+    from jax._src.core import trace_state_clean as _at_top_level
+except ImportError:  # a JAX without it: every program takes XLA's defaults
+    def _at_top_level() -> bool:
+        return False
 
-    def __init__(self, fun):
+
+class _OptionsJit:
+    """``equinox.filter_jit(fun)``, compiled with ``options()`` when called outside any
+    trace, and with XLA's defaults inside one: XLA takes options only for a top-level
+    program (a caller's ``jit`` inlines this one; JAX refuses options there).  Decided
+    at each call, as the default backend may change."""
+
+    def __init__(self, fun, options):
         functools.update_wrapper(self, fun)
-        self._fun = fun
+        self._fun, self._options = fun, options
 
-    def _program(self, args) -> eqx.Module:
-        top_level = not any(isinstance(x, jax.core.Tracer) for x in jax.tree.leaves(args))
-        return _filter_jit(self._fun, _sweep_options["cpu"] if top_level and on_cpu() else ())
+    def _program(self) -> eqx.Module:
+        return _filter_jit(self._fun, self._options() if _at_top_level() else ())
 
     def __call__(self, *args):
-        return self._program(args)(*args)
+        return self._program()(*args)
 
     def lower(self, *args):
         """The program's ``lower`` (trace and lower without compiling)."""
-        return self._program(args).lower(*args)
+        return self._program().lower(*args)
 
 
-def sweep_jit(fun) -> _SweepJit:
+def sweep_jit(fun) -> _OptionsJit:
     """``equinox.filter_jit`` for the sweeps' programs (and ``shard_batch``'s split of
     them), which run the engine over whole batches: on CPU they compile with
     ``CPU_COMPILER_OPTIONS`` (unless ``sweeps_run_once``)."""
-    return _SweepJit(fun)
+    return _OptionsJit(fun, lambda: _sweep_options["cpu"] if on_cpu() else ())
+
+
+def cpu_options_jit(fun, cpu_options: tuple[tuple[str, object], ...]) -> _OptionsJit:
+    """``equinox.filter_jit`` that compiles with ``cpu_options`` on CPU (a model's
+    ``cpu_compiler_options``, for its ``solve``)."""
+    return _OptionsJit(fun, lambda: cpu_options if on_cpu() else ())
 
 
 def _started() -> bool:

@@ -238,8 +238,8 @@ def _curves(names, laws, n, template, options, metrics, result, throw: bool, cas
     metrics, their codes in ``result``).  ``names``: each law's name, as the caller has it;
     ``cas``: each law's Ca when the caller has them (a stack's, from ``stacked_ca``).
 
-    The checks run once over the whole ``(laws, ratios)`` batch: a stack of 256 laws spent
-    a tenth of its warm ``ct_curves`` on them law by law."""
+    The checks run once over the whole ``(laws, ratios)`` batch: law by law they took 33
+    ms of a 256-law stack's 0.41 s ``ct_curves``, now 20 ms with the curves built."""
     count = len(laws)
     if throw:
         def describe(i):
@@ -348,7 +348,7 @@ def ct_curves(
         names = {key: law.name for key, law in named.items()}
     else:
         named = {law.name: law for law in map(as_law, laws)}
-        names = {key: key for key in named}  # a law's name is computed once (an SCCA's: 0.1 ms)
+        names = {key: key for key in named}  # each name computed once (an SCCA's: 20 us)
     like = [*named.values(), *map(as_law, like)]
     n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)
     groups: dict = {}

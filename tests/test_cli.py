@@ -226,24 +226,30 @@ def test_the_executable_ends_early_without_losing_output_or_exit_status(capsys, 
     (["bench"], False),
 ])
 def test_short_commands_compile_with_the_classic_cpu_emitters(monkeypatch, argv, expected):
-    """... and the dense peak search (cheaper to compile); long ones keep the bounded."""
+    """... and the dense peak search (cheaper to compile) and XLA's own vector width;
+    long ones keep the bounded search and the sweeps' CPU options."""
+    from camjax import sharding
     from camjax.cli import _compile_for_one_run, build_parser
     from camjax.sdof import _peaks
 
     monkeypatch.setitem(_peaks._peak_search, "kind", "bounded")
+    monkeypatch.setitem(sharding._sweep_options, "cpu", sharding.CPU_COMPILER_OPTIONS)
     monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=1")
     _compile_for_one_run(build_parser().parse_args(argv))
     flags = os.environ["XLA_FLAGS"]
     assert ("--xla_cpu_use_fusion_emitters=false" in flags) == expected
     assert flags.startswith("--xla_force_host_platform_device_count=1")
     assert _peaks._peak_search["kind"] == ("dense" if expected else "bounded")
+    assert sharding._sweep_options["cpu"] == (() if expected else sharding.CPU_COMPILER_OPTIONS)
 
 
 def test_a_users_emitter_flag_wins(monkeypatch):
+    from camjax import sharding
     from camjax.cli import _compile_for_one_run, build_parser
     from camjax.sdof import _peaks
 
     monkeypatch.setitem(_peaks._peak_search, "kind", "bounded")
+    monkeypatch.setitem(sharding._sweep_options, "cpu", sharding.CPU_COMPILER_OPTIONS)
     monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_use_fusion_emitters=true")
     _compile_for_one_run(build_parser().parse_args(["ct"]))
     assert os.environ["XLA_FLAGS"] == "--xla_cpu_use_fusion_emitters=true"

@@ -209,17 +209,23 @@ def test_cli_refuses_a_huge_period_ratio_and_a_bad_model_before_any_work(capsys)
 def test_only_models_that_ask_compile_their_solve_with_other_xla_options():
     """``solve`` and ``trace_solve`` pick one jitted program per model class: XLA's defaults
     for every SDOF-family model, the follower's own CPU options for the follower (its
-    spectra under them are checked by the follower's tests)."""
+    spectra under them are checked by the follower's tests), and XLA's defaults for it too
+    inside a caller's ``jit`` (JAX refuses options on a nested program)."""
+    from camjax import sharding
     from camjax.models import SwingingFollower, _solve
 
+    defaults = sharding._filter_jit(_solve._response, ())
     for _, model in all_models(swept=True):
-        assert _solve._program(model) is _solve._solve
+        assert _solve._program(model) is _solve._compiled(())
+        assert _solve._program(model)._program() is defaults
+    own = (("xla_cpu_use_fusion_emitters", False),)
     follower = _solve._program(SwingingFollower())
-    expected = _solve._solve if jax.default_backend() != "cpu" else \
-        _solve._compiled((("xla_cpu_use_fusion_emitters", False),))
-    assert follower is expected
-    if jax.default_backend() == "cpu":
-        assert follower is not _solve._solve
+    assert follower is _solve._compiled(own)
+    on_cpu = jax.default_backend() == "cpu"
+    assert follower._program() is (sharding._filter_jit(_solve._response, own) if on_cpu else defaults)
+    picked = []
+    jax.jit(lambda x: picked.append(follower._program()) or x)(1.0)
+    assert picked == [defaults]
 
 
 def test_the_registry_and_the_test_table_list_the_same_models():

@@ -151,23 +151,24 @@ def test_shard_batch_one_device_and_batch_checks():
         batch_size({"a": np.zeros(4), "b": np.ones(3)})
 
 
-def test_sweeps_compile_with_the_cpu_options_only_at_the_top_level():
+def test_sweeps_compile_with_the_cpu_options_only_at_the_top_level(monkeypatch):
     """``sweep_jit``: on CPU a sweep's program compiles with ``CPU_COMPILER_OPTIONS`` (XLA
-    refuses options on a nested jit, so a traced call takes none); the options change no
+    refuses options on a nested jit, so a call inside a caller's trace takes none); the options change no
     number beyond the peak search's tolerance (``PEAK_TOLERANCE``, 1e-11 relative: rounding
     may settle a crest in another interval; 7e-13 measured at n = 30)."""
     from camjax import sharding
     from camjax.sweep import _sweep, prepare_sweep
 
+    monkeypatch.setitem(sharding._sweep_options, "cpu", sharding.CPU_COMPILER_OPTIONS)
     n, template, options = prepare_sweep(np.linspace(1.0, 30.0, 200), damping=0.05)
     law = template.sweep_law(camjax.laws.get("modified-sine"), options)
     args = (law, template, jax.numpy.asarray(n), options)
     on_cpu = jax.default_backend() == "cpu"
     chosen = sharding.CPU_COMPILER_OPTIONS if on_cpu else ()
-    assert _sweep._program(args) is sharding._filter_jit(_sweep.__wrapped__, chosen)
+    assert _sweep._program() is sharding._filter_jit(_sweep.__wrapped__, chosen)
     plain = sharding._filter_jit(_sweep.__wrapped__, ())
     picked = []
-    jax.jit(lambda r: picked.append(_sweep._program((law, template, r, options))) or r)(n)
+    jax.jit(lambda r: picked.append(_sweep._program()) or r)(n)
     assert picked == [plain]
     if on_cpu:
         assert sharding.CPU_COMPILER_OPTIONS == (("xla_cpu_prefer_vector_width", 512),)

@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import functools
 
-import equinox as eqx
 import jax.numpy as jnp
 
 from .. import checks
 from ..errors import RESULTS, promote, raise_if_failed
 from ..laws import AbstractMotionLaw, as_law
 from ..registry import model_class_names
-from ..sharding import on_cpu
+from ..sharding import cpu_options_jit
 from ._base import AbstractMachineModel, AbstractModel, Response
 
 
@@ -21,18 +20,15 @@ def _response(law, model: AbstractModel, options, checked: bool) -> Response:
 
 
 @functools.cache
-def _compiled(compiler_options: tuple) -> eqx.Module:
-    """The jitted solve, compiled with these XLA options (one wrapper per option set)."""
-    return eqx.filter_jit(_response, compiler_options=dict(compiler_options) or None)
-
-
-_solve = _compiled(())
+def _compiled(cpu_options: tuple):
+    """The jitted solve, compiled on CPU with these XLA options (one program per option
+    set; inside a caller's trace, none: ``camjax.sharding.cpu_options_jit``)."""
+    return cpu_options_jit(_response, cpu_options)
 
 
 def _program(model: AbstractModel):
     """The jitted solve for ``model``: its ``cpu_compiler_options`` apply on CPU only."""
-    options = type(model).cpu_compiler_options
-    return _compiled(options) if options and on_cpu() else _solve
+    return _compiled(type(model).cpu_compiler_options)
 
 
 def solve(
