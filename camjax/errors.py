@@ -121,13 +121,15 @@ def mark_failures(result, *values):
     return marked, tuple(arrays)
 
 
-def raise_if_failed(result, describe, *values) -> None:
+def raise_if_failed(result, describe, *values, entries: str = "") -> None:
     """Raise ``SolverError`` for the first failed batch entry, or a non-finite value.
 
     Args:
         result: a ``RESULTS`` code, scalar or batched.
         describe: ``describe(i)`` names batch entry ``i`` (the model and its parameters).
         values: arrays (batched like ``result``) that must be finite where it succeeded.
+        entries: what the batch's entries are, for the count of failures ("(3 of 8
+            law and ratio pairs failed)"); plain "(3 of 8 failed)" by default.
     """
     result = promote(result)
     i = first_failure(result)
@@ -135,7 +137,7 @@ def raise_if_failed(result, describe, *values) -> None:
         codes = np.atleast_1d(np.asarray(result._value))
         code = jax.tree.map(lambda x: jnp.atleast_1d(x)[i], result)
         count = int(np.sum(codes != np.asarray(RESULTS.successful._value)))
-        of = f" ({count} of {codes.size} failed)" if codes.size > 1 else ""
+        of = f" ({count} of {codes.size}{' ' * bool(entries)}{entries} failed)" if codes.size > 1 else ""
         raise SolverError(f"{describe(i)} failed{of}: {RESULTS[code]}")
     for value in values:
         finite = np.atleast_1d(np.isfinite(np.asarray(value)))

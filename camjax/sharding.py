@@ -95,7 +95,7 @@ def on_cpu() -> bool:
 CPU_COMPILER_OPTIONS: tuple[tuple[str, object], ...] = (("xla_cpu_prefer_vector_width", 512),)
 """XLA options of the sweeps' programs (``sweep_jit``) on CPU: vectors of 512 bits where
 the CPU has them (AVX-512; XLA's default prefers 256).  On a 2-core AVX-512 machine
-(2026-11-26) ``camjax.ct_curves`` of 256 SCCA laws ran 1.08-1.1x faster and a one-law
+(2026-11-26) ``camjax.ct_curves`` of 256 SCCA laws ran 1.05-1.14x faster and a one-law
 curve's kernel 1.05-1.08x, compiled as fast; a CPU without them keeps its widest.
 ``sweeps_run_once`` drops them."""
 _sweep_options = {"cpu": CPU_COMPILER_OPTIONS}
@@ -134,12 +134,12 @@ class _OptionsJit:
     def _program(self) -> eqx.Module:
         return _filter_jit(self._fun, self._options() if _at_top_level() else ())
 
-    def __call__(self, *args):
-        return self._program()(*args)
+    def __call__(self, *args, **kwargs):
+        return self._program()(*args, **kwargs)
 
-    def lower(self, *args):
+    def lower(self, *args, **kwargs):
         """The program's ``lower`` (trace and lower without compiling)."""
-        return self._program().lower(*args)
+        return self._program().lower(*args, **kwargs)
 
 
 def sweep_jit(fun) -> _OptionsJit:
@@ -213,9 +213,9 @@ def _pad(x, extra: int):
     return jax.numpy.concatenate([x, tail], axis=0)
 
 
-@sweep_jit
 def _sharded_call(fn, mesh, args, batched_argnums):
-    """``fn(*args)`` with the ``batched_argnums`` split over ``mesh``, jitted once per shape."""
+    """``fn(*args)`` with the ``batched_argnums`` split over ``mesh`` (jitted by
+    ``_sharded_program``, once per shape)."""
     dynamic, static = eqx.partition(args, eqx.is_array)
     specs = tuple(
         jax.tree.map(lambda _, i=i: PartitionSpec(AXIS) if i in batched_argnums else PartitionSpec(), arg)
@@ -231,6 +231,17 @@ def _sharded_call(fn, mesh, args, batched_argnums):
         body, mesh=mesh, in_specs=tuple(flat_specs), out_specs=PartitionSpec(AXIS),
         check_vma=False,
     )(*leaves)
+
+
+def _no_options() -> tuple:
+    return ()
+
+
+@functools.cache
+def _sharded_program(options) -> _OptionsJit:
+    """``_sharded_call`` jitted with ``options()``: those of ``fn`` when it is an
+    ``_OptionsJit`` (a sweep), so that the split batch compiles as the whole one would."""
+    return _OptionsJit(_sharded_call, options)
 
 
 def shard_batch(fn, *args, batched_argnums=(0,), devices=None):
@@ -262,5 +273,6 @@ def shard_batch(fn, *args, batched_argnums=(0,), devices=None):
         for i, arg in enumerate(args)
     )
     mesh = Mesh(np.asarray(chosen), (AXIS,))
-    out = _sharded_call(fn, mesh, padded, batched_argnums)
+    options = fn._options if isinstance(fn, _OptionsJit) else _no_options
+    out = _sharded_program(options)(fn, mesh, padded, batched_argnums)
     return jax.tree.map(lambda x: x[:size], out)

@@ -232,11 +232,13 @@ def _default_template(key, first, largest):
         return _template_and_options(None, damping, method, dwell, first, largest, options)
 
 
-def _curves(names, laws, n, template, options, metrics, result, throw: bool, cas=None) -> list[CtCurve]:
+def _curves(names, laws, n, template, options, metrics, result, throw: bool, cas=None, *,
+            name_laws: bool = True) -> list[CtCurve]:
     """The curves of laws swept alike (``metrics`` and ``result`` with a leading law axis):
-    raising at the first failed ratio (``throw``), or with the failed ratios marked (NaN
-    metrics, their codes in ``result``).  ``names``: each law's name, as the caller has it;
-    ``cas``: each law's Ca when the caller has them (a stack's, from ``stacked_ca``).
+    raising at the first failed ratio (``throw``; the error names its law with
+    ``name_laws``), or with the failed ratios marked (NaN metrics, their codes in
+    ``result``).  ``names``: each law's name, as the caller has it; ``cas``: each law's Ca
+    when the caller has them (a stack's, from ``stacked_ca``).
 
     The checks run once over the whole ``(laws, ratios)`` batch: law by law they took 33
     ms of a 256-law stack's 0.41 s ``ct_curves``, now 20 ms with the curves built."""
@@ -245,10 +247,11 @@ def _curves(names, laws, n, template, options, metrics, result, throw: bool, cas
         def describe(i):
             law, ratio = divmod(i, n.size)
             return (f"{options.method} solve of {template.with_period_ratio(n[ratio]).describe()}"
-                    + (f" with {names[law]}" if count > 1 else ""))
+                    + (f" with {names[law]}" if name_laws else ""))
 
         raise_if_failed(_flat(result), describe, *(np.reshape(v, -1) for v in
-                                                   (metrics.ct, metrics.residual)))
+                                                   (metrics.ct, metrics.residual)),
+                        entries="law and ratio pairs" if count > 1 else "")
     result, values = mark_failures(_flat(result), *(np.reshape(v, -1) for v in
                                                      (metrics.ct, metrics.residual, metrics.peak_in_motion)))
     ct, residual, peak_in_motion = (v.reshape(count, n.size) for v in values)
@@ -314,7 +317,8 @@ def ct_curve(
     law = as_law(law)
     n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)
     metrics, result = jax.device_get(sweep_metrics(law, n, template, options, devices=devices))
-    return _curves([law.name], [law], n, template, options, *_stacked((metrics, result)), throw)[0]
+    return _curves([law.name], [law], n, template, options, *_stacked((metrics, result)), throw,
+                   name_laws=False)[0]
 
 
 def ct_curves(

@@ -167,6 +167,12 @@ def test_sweeps_compile_with_the_cpu_options_only_at_the_top_level(monkeypatch):
     chosen = sharding.CPU_COMPILER_OPTIONS if on_cpu else ()
     assert _sweep._program() is sharding._filter_jit(_sweep.__wrapped__, chosen)
     plain = sharding._filter_jit(_sweep.__wrapped__, ())
+    # Split over devices, a sweep compiles with the same options; any other function
+    # (a program's speed batch) with XLA's defaults, as it runs on one device.
+    split = sharding._sharded_program(_sweep._options)._program()
+    assert split is sharding._filter_jit(sharding._sharded_call, chosen)
+    assert sharding._sharded_program(sharding._no_options)._program() is \
+        sharding._filter_jit(sharding._sharded_call, ())
     picked = []
     jax.jit(lambda r: picked.append(_sweep._program()) or r)(n)
     assert picked == [plain]

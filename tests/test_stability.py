@@ -94,8 +94,10 @@ def test_a_stack_with_throw_false_marks_each_laws_failed_ratios():
             assert values[0] == pytest.approx(own[0], rel=1e-12) and np.isnan(values[1])
     first = laws[0].name.replace(".", r"\.")
     with pytest.raises(camjax.SolverError, match=rf"period ratio 30, damping 0\) with {first} failed "
-                                                 rf"\(9 of 18 failed\): "):
+                                                 rf"\(9 of 18 law and ratio pairs failed\): "):
         camjax.ct_curves(laws, [2.5, 30.0], **grid)
+    with pytest.raises(camjax.SolverError, match=rf"with {first} failed \(1 of 2 failed\)"):
+        camjax.ct_curves(laws[:1], [2.5, 30.0], **grid)  # a law of its own is named too
 
 
 @pytest.mark.slow
