@@ -114,25 +114,31 @@ def _filter_jit(fun, options: tuple) -> eqx.Module:
     return eqx.filter_jit(fun, compiler_options=dict(options) or None)
 
 
-try:  # JAX's own test (private): no trace is running (not inside jit, vmap or grad)
-    from jax._src.core import trace_state_clean as _at_top_level
-except ImportError:  # a JAX without it: every program takes XLA's defaults
-    def _at_top_level() -> bool:
-        return False
+try:  # JAX's own test (private): no trace is running
+    from jax._src.core import trace_state_clean as _trace_state_clean
+except ImportError:  # a JAX without it
+    _trace_state_clean = None
+
+
+def outside_traces() -> bool | None:
+    """Whether no JAX transformation is tracing (not inside ``jit``, ``vmap``, ``grad``),
+    or ``None`` where this JAX cannot say."""
+    return None if _trace_state_clean is None else bool(_trace_state_clean())
 
 
 class _OptionsJit:
     """``equinox.filter_jit(fun)``, compiled with ``options()`` when called outside any
     trace, and with XLA's defaults inside one: XLA takes options only for a top-level
-    program (a caller's ``jit`` inlines this one; JAX refuses options there).  Decided
-    at each call, as the default backend may change."""
+    program (a caller's ``jit`` inlines this one; JAX refuses options there), and XLA's
+    defaults where JAX cannot say.  Decided at each call, as the default backend may
+    change."""
 
     def __init__(self, fun, options):
         functools.update_wrapper(self, fun)
         self._fun, self._options = fun, options
 
     def _program(self) -> eqx.Module:
-        return _filter_jit(self._fun, self._options() if _at_top_level() else ())
+        return _filter_jit(self._fun, self._options() if outside_traces() else ())
 
     def __call__(self, *args, **kwargs):
         return self._program()(*args, **kwargs)

@@ -16,7 +16,7 @@ from .errors import RESULTS, mark_failures, promote, raise_if_failed, result_nam
 from .laws import AbstractMotionLaw, as_law
 from .models import AbstractMachineModel, AbstractModel, SpringMass
 from .sdof import MAX_PHASE_STEP, default_resolution, map_in_chunks, stack_laws
-from .sharding import on_cpu, shard_batch, sweep_jit
+from .sharding import on_cpu, outside_traces, shard_batch, sweep_jit
 
 STACK_FROM = 8
 """Laws of one structure are stacked into one mapped call from this many on (fewer are
@@ -197,6 +197,11 @@ def _template(model, damping) -> AbstractModel:
 
 def prepare_sweep(period_ratios, model=None, damping=0.0, method=None, dwell=1.0, **solver_options):
     """Checked period ratios, the model template (array leaves) and its static options."""
+    if outside_traces() is False:
+        raise ValueError(
+            "a sweep (ct_curve, ct_curves) runs outside jit, vmap and grad, since its results "
+            "are NumPy arrays; inside them use camjax.torsion_factor or "
+            "camjax.residual_vibration, which trace")
     n = checks.period_ratios(period_ratios)
     if model is None:  # the default model: its template and options depend on numbers alone
         key = _typed((damping, method, dwell, *sorted(solver_options.items())))
@@ -310,7 +315,9 @@ def ct_curve(
         solver_options: the model's static options (e.g. ``resolution``, ``rtol``).
 
     Raises:
-        ValueError: bad input, named.
+        ValueError: bad input, named; or a call inside ``jit``, ``vmap`` or ``grad`` (the
+            curve is NumPy: ``camjax.torsion_factor`` and ``camjax.residual_vibration``
+            trace).
         SolverError: the solver failed at any period ratio (the first is named), with
             ``throw=True``.
     """

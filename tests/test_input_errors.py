@@ -67,6 +67,32 @@ def test_a_traced_period_ratio_past_the_grid_raises_instead_of_a_number(transfor
             getattr(jax, transform)(ct)(1e6)
 
 
+@pytest.mark.parametrize("transform", ["jit", "jit-constant", "vmap", "grad", "eval_shape"])
+@pytest.mark.parametrize("sweep", ["ct_curve", "ct_curves"])
+def test_a_sweep_inside_a_transformation_is_refused_in_one_line(transform, sweep):
+    """``ct_curve`` and ``ct_curves`` return NumPy arrays, so they cannot run inside jit,
+    vmap or grad: one ``ValueError`` naming what traces instead, whether the ratios are
+    traced or constants inside the trace (which failed in JAX's conversion before)."""
+    def ct(n):
+        curves = (camjax.ct_curve(MODSINE, n) if sweep == "ct_curve"
+                  else camjax.ct_curves([MODSINE], n)[MODSINE.name])
+        return curves.ct
+
+    ratios = jnp.array([2.0, 3.0])
+    with pytest.raises(ValueError, match=r"^a sweep \(ct_curve, ct_curves\) runs outside jit, "
+                                         r"vmap and grad.*camjax.torsion_factor"):
+        if transform == "jit-constant":
+            jax.jit(lambda x: x * ct([2.0, 3.0])[0])(1.0)
+        elif transform == "grad":
+            jax.grad(lambda n: ct(n[None])[0])(jnp.array(2.0))
+        elif transform == "eval_shape":
+            jax.eval_shape(ct, ratios)
+        else:
+            getattr(jax, transform)(ct)(ratios if transform == "jit" else ratios[:, None])
+    assert camjax.ct_curve(MODSINE, [2.0]).ct[0] == pytest.approx(
+        float(camjax.torsion_factor(MODSINE, 2.0)), rel=1e-12)
+
+
 def test_a_ca_ct_objective_past_the_largest_training_grid_is_refused():
     from camjax import law_design
 
