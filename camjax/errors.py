@@ -122,7 +122,8 @@ def mark_failures(result, *values):
 
 
 def raise_if_failed(result, describe, *values, entries: str = "") -> None:
-    """Raise ``SolverError`` for the first failed batch entry, or a non-finite value.
+    """Raise ``SolverError`` for the first bad batch entry: a failed one, or a non-finite
+    value where it succeeded (whichever comes first in the batch).
 
     Args:
         result: a ``RESULTS`` code, scalar or batched.
@@ -132,16 +133,19 @@ def raise_if_failed(result, describe, *values, entries: str = "") -> None:
             law and ratio pairs failed)"); plain "(3 of 8 failed)" by default.
     """
     result = promote(result)
-    i = first_failure(result)
-    if i is not None:
-        codes = np.atleast_1d(np.asarray(result._value))
-        code = jax.tree.map(lambda x: jnp.atleast_1d(x)[i], result)
-        count = int(np.sum(codes != np.asarray(RESULTS.successful._value)))
-        of = f" ({count} of {codes.size}{' ' * bool(entries)}{entries} failed)" if codes.size > 1 else ""
-        raise SolverError(f"{describe(i)} failed{of}: {RESULTS[code]}")
+    failed = first_failure(result)
+    nonfinite = None
     for value in values:
         finite = np.atleast_1d(np.isfinite(np.asarray(value)))
         finite = finite.reshape(finite.shape[0], -1).all(axis=1) if finite.ndim > 1 else finite
         if not finite.all():
             i = int(np.flatnonzero(~finite)[0])
-            raise SolverError(f"{describe(i)} produced non-finite values")
+            nonfinite = i if nonfinite is None else min(nonfinite, i)
+    if failed is not None and (nonfinite is None or failed <= nonfinite):
+        codes = np.atleast_1d(np.asarray(result._value))
+        code = jax.tree.map(lambda x: jnp.atleast_1d(x)[failed], result)
+        count = int(np.sum(codes != np.asarray(RESULTS.successful._value)))
+        of = f" ({count} of {codes.size}{' ' * bool(entries)}{entries} failed)" if codes.size > 1 else ""
+        raise SolverError(f"{describe(failed)} failed{of}: {RESULTS[code]}")
+    if nonfinite is not None:
+        raise SolverError(f"{describe(nonfinite)} produced non-finite values")

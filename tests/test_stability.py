@@ -100,6 +100,28 @@ def test_a_stack_with_throw_false_marks_each_laws_failed_ratios():
         camjax.ct_curves(laws[:1], [2.5, 30.0], **grid)  # a law of its own is named too
 
 
+def test_the_first_bad_entry_of_a_batch_is_the_one_named():
+    """``raise_if_failed`` names the first bad entry in batch order, a failure code or a
+    non-finite value where the entry succeeded: a stack's laws are reported in order, as
+    law by law (a failure code later in the batch used to be named first)."""
+    from camjax.errors import RESULTS, raise_if_failed
+
+    ok, failed = int(RESULTS.successful._value), int(RESULTS.max_steps_reached._value)
+
+    def check(codes, values):
+        result = type(RESULTS.successful)(np.asarray(codes), RESULTS)
+        raise_if_failed(result, lambda i: f"entry {i}", np.asarray(values), entries="pairs")
+
+    with pytest.raises(camjax.SolverError, match=r"^entry 0 produced non-finite values$"):
+        check([ok, failed, ok], [np.nan, np.nan, 1.0])
+    with pytest.raises(camjax.SolverError, match=r"^entry 1 failed \(1 of 3 pairs failed\): "
+                                                 r"the maximum number of solver steps"):
+        check([ok, failed, ok], [1.0, np.nan, np.inf])
+    with pytest.raises(camjax.SolverError, match=r"^entry 2 produced non-finite values$"):
+        check([ok, ok, ok], [1.0, 2.0, np.inf])
+    check([ok, ok, ok], [1.0, 2.0, 3.0])  # nothing to raise
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("model", [
     camjax.models.CoulombFriction(1.0, 0.3),
