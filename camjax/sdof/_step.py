@@ -85,8 +85,9 @@ _DENSE_PIECES = 64  # above this many pieces, gather each interval's weights
 def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = None,
               resolved: bool = False) -> jax.Array:
     """Complex mode ``q`` at every node of ``grid``, starting from rest (or from ``q0``
-    at the first node).  ``gather`` picks how each interval finds its piece's weights
-    (``None``: by a matrix product up to 64 pieces, by a gather above; the same numbers).
+    at the first node).  ``gather`` picks how each interval finds its piece's step factor
+    and weights (``None``: up to 64 pieces without a gather, the factors by a chain of
+    selects and the weights by a matrix product; a gather above; the same numbers).
     ``resolved``: the caller guarantees ``w h <= MAX_PHASE_STEP`` on every interval (the
     SDOF's exact path refuses coarser grids); the kicks then come from one law-only
     matrix (``_series_kicks``), with no per-piece ``psi``.
