@@ -46,6 +46,17 @@ def test_ct_json_matches_the_library(capsys):
     assert entry["Ca"] == pytest.approx(5.52796, abs=1e-5) and "Cv" in entry and "Cj" in entry
 
 
+def test_ct_says_the_files_it_wrote_and_writes_to_the_current_directory_for_an_empty_out(
+        capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(capsys, "ct", "--law", "cycloidal", "--n", "2,5", "--out", "")
+    assert code == 0  # two ratios: no envelope to fit, so no Ca*Ct chart
+    assert err.strip() == ("wrote ./: ct.csv, ct.json, torsion_factor_fit.md, ct_curves.png, "
+                           "residual_curves.png")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "ct.csv", "ct.json", "ct_curves.png", "residual_curves.png", "torsion_factor_fit.md"]
+
+
 def test_ct_writes_tables_and_figures(capsys, tmp_path):
     code, out, _ = run(capsys, "ct", "--law", "cycloidal", "--law", "modified-sine",
                        "--n", "1:20:120", "--out", str(tmp_path))

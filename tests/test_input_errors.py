@@ -101,6 +101,23 @@ def test_a_ca_ct_objective_past_the_largest_training_grid_is_refused():
     law_design.MaxCaCt(1.0, 20000.0)  # within the limit
 
 
+def test_residual_objectives_past_the_exact_paths_reach_and_oversized_designs_are_refused():
+    from camjax import law_design
+
+    past = r"period ratio 300000 is past what the exact path reports on \(period ratios up to about 250,329\)$"
+    for make, name in ((lambda: law_design.Residual(3e5), "Residual"),
+                       (lambda: law_design.MaxResidual(10.0, 3e5), "MaxResidual"),
+                       (lambda: law_design.ExpectedResidual(2.9e5, 2.5e3), "ExpectedResidual")):
+        with pytest.raises(ValueError, match=f"^{name}: {past}"):
+            make()
+    law_design.MaxResidual(10.0, 2.5e5)  # within the reach
+    objective = law_design.Residual(3.0)
+    with pytest.raises(ValueError, match=r"^knots must be from 1 to 200 .*got 201$"):
+        law_design.design(objective, knots=201)
+    with pytest.raises(ValueError, match=r"^steps must be from 1 to 1,000,000, got 1000001$"):
+        law_design.design(objective, steps=1_000_001)
+
+
 def test_gradient_at_the_traced_default_grid_matches_finite_differences():
     n, h = 6.4, 1e-4
     exact = float(jax.grad(lambda x: camjax.torsion_factor(MODSINE, x, 0.02))(n))
@@ -326,6 +343,17 @@ def _cases(tmp_path):
         (("design", "--band", "1:30000", "--objective", "ca-ct", "--out", tmp_path / "d"),
          "camjax design: error: --band: period ratio 30000 needs a training grid of 1,508,096 "
          "intervals; the limit is 1,048,576 (period ratios up to about 20,861)"),
+        (("design", "--n", "1e6", "--out", tmp_path / "d"),
+         "camjax design: error: --n: period ratio 1e+06 is past what the exact path reports on "
+         "(period ratios up to about 250,329)"),
+        (("design", "--n", "240000", "--out", tmp_path / "d"),
+         "camjax design: error: --n (compared over 0.8 to 1.2 times it): period ratio 288000 "
+         "needs a grid of 1,206,400 intervals per rise; the limit is 1,048,576 (period ratios "
+         "up to about 250,329 at the default resolution)"),
+        (("design", "--band", "6:12", "--knots", "5000", "--out", tmp_path / "d"),
+         "camjax design: error: --knots: must be from 1 to 200, got 5000"),
+        (("design", "--band", "6:12", "--steps", "100000000000", "--out", tmp_path / "d"),
+         "camjax design: error: --steps: must be from 1 to 1,000,000, got 100000000000"),
         (("sweep", _spec(tmp_path, GOOD_SPEC.format(out=tmp_path / "o"), "good.toml"), "--devices",
           "0"),
          "camjax sweep: error: --devices: must be between 1 and the "

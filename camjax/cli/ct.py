@@ -177,7 +177,7 @@ def run(args) -> int:
 
     from ..sweep import ct_curve
 
-    plotting = import_aside("camjax.plot") if args.out else None  # imports while the sweep compiles
+    plotting = import_aside("camjax.plot") if args.out is not None else None  # imports while the sweep compiles
 
     selected = laws_of(args)
     n = parse_range(args.n, "--n")
@@ -210,10 +210,11 @@ def run(args) -> int:
         (out / "torsion_factor_fit.md").write_text(_fit_report(curves, fits))
         plot.save(plot.ct_curves(curves, dwell=args.dwell), out / "ct_curves.png")
         plot.save(plot.residual_curves(curves), out / "residual_curves.png")
-        if fits:
+        written = ["ct.csv", "ct.json", "torsion_factor_fit.md", "ct_curves.png", "residual_curves.png"]
+        if fits:  # the chart needs a fitted envelope
             plot.save(plot.ca_ct_chart(curves, fits, dwell=args.dwell), out / "ca_ct.png")
-        print(f"wrote {out}/: ct.csv, ct.json, torsion_factor_fit.md, ct_curves.png, "
-              "residual_curves.png, ca_ct.png", file=sys.stderr)
+            written.append("ca_ct.png")
+        print(f"wrote {out}/: {', '.join(written)}", file=sys.stderr)
     if args.format == "json":
         print(dump_json(_json(curves, args, selected)))
     elif args.format == "csv":

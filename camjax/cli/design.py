@@ -118,12 +118,12 @@ def run(args) -> int:
     plotting = import_aside("camjax.plot")  # imports while the design compiles
     from .. import law_design as D
     from ..laws import save
-    from ..sweep import ct_curve
+    from ..sweep import ct_curve, prepare_sweep
 
     check_damping(args.damping)
-    for option, value in (("--knots", args.knots), ("--steps", args.steps)):
-        if value < 1:
-            raise CliError(f"{option}: must be at least 1, got {value}")
+    for option, value, most in (("--knots", args.knots, D.MAX_KNOTS), ("--steps", args.steps, D.MAX_STEPS)):
+        if not 1 <= value <= most:
+            raise CliError(f"{option}: must be from 1 to {most:,}, got {value}")
     with options_named(max_ca="--max-ca", max_jerk="--max-jerk"):
         D.Caps(args.max_ca, args.max_jerk)  # the caps checked before any work
     out = output_dir(args.out)
@@ -147,6 +147,9 @@ def run(args) -> int:
     steps = args.steps
     n1, n2 = band if band else (0.8 * args.n, 1.2 * args.n)
     ratios = np.linspace(n1, n2, D.EVALUATION_SAMPLES)
+    # The comparison's ratios (0.8 to 1.2 times --n), checked before any work.
+    with options_named("--band" if band else "--n (compared over 0.8 to 1.2 times it)"):
+        prepare_sweep(ratios, damping=args.damping)
     # The standard laws' side of the comparison does not depend on the design: it is
     # traced, compiled and run on a thread beside the design (XLA releases the GIL while it
     # compiles and runs, so the two compiles share the machine's cores).

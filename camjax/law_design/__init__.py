@@ -44,6 +44,8 @@ from ._objectives import MaxResidual as MaxResidual
 from ._objectives import Residual as Residual
 from ._objectives import peak_loads as peak_loads
 from ._optimise import DEFAULT_STEPS as DEFAULT_STEPS
+from ._optimise import MAX_KNOTS as MAX_KNOTS
+from ._optimise import MAX_STEPS as MAX_STEPS
 from ._optimise import DesignResult as DesignResult
 from ._optimise import design as design
 from ._optimise import linear_maps as linear_maps

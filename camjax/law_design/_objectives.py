@@ -12,6 +12,7 @@ import numpy as np
 
 from ..sdof import (
     MAX_GRID_INTERVALS,
+    MAX_PHASE_STEP,
     default_resolution,
     dwell_peak,
     mode_gain,
@@ -47,6 +48,15 @@ def _training_resolution(max_period_ratio: float, name: str) -> int:
                          f"{resolution:,} intervals; the limit is {MAX_GRID_INTERVALS:,} (period "
                          f"ratios up to about {largest:,.0f})")
     return resolution
+
+
+def _reported(max_period_ratio: float, name: str) -> None:
+    """A ``ValueError`` (before any work) where the exact path, which reports the design,
+    cannot reach ``max_period_ratio`` (its grid would pass ``MAX_GRID_INTERVALS``)."""
+    if default_resolution(max_period_ratio, MAX_PHASE_STEP) > MAX_GRID_INTERVALS:
+        largest = MAX_GRID_INTERVALS * MAX_PHASE_STEP / (2 * math.pi)
+        raise ValueError(f"{name}: period ratio {max_period_ratio:g} is past what the exact path "
+                         f"reports on (period ratios up to about {largest:,.0f})")
 
 
 def _check_common(weight: float, damping: float, name: str) -> None:
@@ -106,6 +116,7 @@ class Residual(AbstractObjective):
         _check_common(self.weight, self.damping, "Residual")
         if not (math.isfinite(self.period_ratio) and self.period_ratio > 0):
             raise ValueError(f"Residual: period ratio must be positive, got {self.period_ratio}")
+        _reported(self.period_ratio, "Residual")
 
     def features(self, law):
         return _residual_components(law, [self.period_ratio], self.damping)
@@ -136,6 +147,7 @@ class MaxResidual(AbstractObjective):
     def __check_init__(self):
         _check_common(self.weight, self.damping, "MaxResidual")
         _band(self.n1, self.n2, "MaxResidual")
+        _reported(self.n2, "MaxResidual")
         if self.samples < 2:
             raise ValueError(f"MaxResidual: samples must be at least 2, got {self.samples}")
 
@@ -172,6 +184,7 @@ class ExpectedResidual(AbstractObjective):
                 "ExpectedResidual: need std > 0 and mean - 4 std > 0 (n must stay positive), "
                 f"got mean {self.mean}, std {self.std}"
             )
+        _reported(self.mean + 4 * self.std, "ExpectedResidual")
 
     def _rule(self):
         x, w = np.polynomial.hermite_e.hermegauss(self.nodes)

@@ -21,6 +21,13 @@ from ._residual import dense_tau
 DEFAULT_STEPS = 6000
 """Optimiser steps of a design (L-BFGS: 1000 per sharpness stage; a stage that has
 converged hands over early)."""
+MAX_STEPS = 1_000_000
+"""Most optimiser steps a design takes: its history is kept in memory (more is refused
+before any work)."""
+MAX_KNOTS = 200
+"""Most free B-spline coefficients of a design: its linearised features hold one column
+per coefficient and its grid a piece per knot, so memory grows with the square (1000
+knots took 6 GB); more is refused before any work."""
 
 
 class DesignResult(eqx.Module):
@@ -156,8 +163,11 @@ def design(
     objectives = _as_objectives(objective)
     if optimizer not in ("adam", "lbfgs"):
         raise ValueError(f"optimizer must be 'adam' or 'lbfgs', got {optimizer!r}")
-    if int(steps) < 1 or int(knots) < 1:
-        raise ValueError(f"steps and knots must be positive, got steps={steps}, knots={knots}")
+    if not 1 <= int(steps) <= MAX_STEPS:
+        raise ValueError(f"steps must be from 1 to {MAX_STEPS:,}, got {steps}")
+    if not 1 <= int(knots) <= MAX_KNOTS:
+        raise ValueError(f"knots must be from 1 to {MAX_KNOTS} (free coefficients of the "
+                         f"designed spline), got {knots}")
     if not (len(sharpness) == 2 and 1.0 <= sharpness[0] <= sharpness[1]):
         raise ValueError(f"sharpness must be two increasing exponents >= 1, got {sharpness}")
     knots = int(knots)
