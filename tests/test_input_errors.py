@@ -406,3 +406,15 @@ def test_solve_checks_a_traced_solution_when_it_runs():
                    lambda a: jax.vmap(lambda x: ct(x, model=friction, max_steps=3))(jnp.array([a]))):
         with pytest.raises(Exception, match=message):
             traced(0.4)
+
+
+@pytest.mark.parametrize("dtype", [np.float16, np.float32, jnp.float32])
+def test_a_low_precision_period_ratio_or_damping_is_widened_not_computed_in(dtype):
+    """2.5 and 0 are exact in every float type: the result must be the float64 one (the
+    closed form 2n|sin(pi n)| / |n^2 - 1|), concrete and traced alike."""
+    law = camjax.laws.get("cycloidal")
+    exact = 2 * 2.5 * abs(np.sin(np.pi * 2.5)) / abs(2.5**2 - 1)
+    assert float(camjax.residual_vibration(law, dtype(2.5), 0.0)) == pytest.approx(exact, rel=1e-12)
+    assert float(camjax.residual_vibration(law, 2.5, dtype(0.0))) == pytest.approx(exact, rel=1e-12)
+    traced = jax.jit(lambda n: camjax.residual_vibration(law, n, 0.0))(jnp.asarray(2.5, jnp.float32))
+    assert float(traced) == pytest.approx(exact, rel=1e-12)

@@ -158,13 +158,11 @@ class AbstractModel(eqx.Module):
 
     def with_array_leaves(self) -> "AbstractModel":
         """This model with its numeric leaves as float arrays: traced, so one compilation
-        serves every value (Python floats would be static under ``filter_jit``).  A law
-        inside the model keeps its own leaves."""
-        return jax.tree.map(
-            lambda x: jnp.asarray(x, dtype=float) if isinstance(x, float | int) else x,
-            self,
-            is_leaf=lambda x: isinstance(x, AbstractMotionLaw),
-        )
+        serves every value (Python floats would be static under ``filter_jit``), and at
+        JAX's default precision at least (a float16 or float32 value, concrete or traced,
+        is widened: computed in it, R was off by 4e-4 and 6e-8).  A law inside the model
+        keeps its own leaves."""
+        return jax.tree.map(_as_float, self, is_leaf=lambda x: isinstance(x, AbstractMotionLaw))
 
     def with_period_ratio(self, period_ratio) -> "AbstractModel":
         """This model at another period ratio (the template of a sweep)."""
@@ -211,3 +209,14 @@ class AbstractMachineModel(AbstractModel):
     """A model of a whole machine that holds its own cam motion (its rise and fall laws):
     ``camjax.solve(None, model)`` drives it with them, and it has no period-ratio sweep
     (it is not an SDOF-family model)."""
+
+
+def _as_float(x):
+    """A numeric leaf as a float array of at least JAX's default float precision."""
+    if isinstance(x, bool | float | int):
+        return jnp.asarray(x, dtype=float)
+    dtype = getattr(x, "dtype", None)
+    if dtype is not None and jnp.issubdtype(dtype, jnp.floating) and (
+            jnp.finfo(dtype).bits < jnp.finfo(jax.dtypes.canonicalize_dtype(float)).bits):
+        return jnp.asarray(x, dtype=float)
+    return x
