@@ -54,11 +54,16 @@ import numpy as np
 
 from .checks import period_ratio_count, read_toml
 from .laws import SCCA, AbstractMotionLaw, get
-from .sdof import MAX_PHASE_STEP
+from .sdof import MAX_GRID_INTERVALS, MAX_PHASE_STEP, default_resolution
 
 METRICS = ("ct", "residual", "peak_in_motion")
 _KEYS = {"output", "method", "damping", "laws_per_chunk", "dwell", "period_ratio", "laws",
          "phase_step"}
+
+
+MAX_SCCA_LAWS = 1_000_000
+"""Most laws an SCCA grid may hold (the face at a step of 0.001 holds 501,501): a finer
+grid is refused before the laws are built."""
 
 
 def scca_grid(step: float, *, face: bool = False) -> list[SCCA]:
@@ -68,9 +73,15 @@ def scca_grid(step: float, *, face: bool = False) -> list[SCCA]:
     there); otherwise ``0 < a + b + c <= 1`` (the all-zero point is no law).  A step of
     0.01 on the face gives 5151 laws; 0.05 over the family gives 1770.
     """
-    m = round(1.0 / step)
-    if not (step > 0 and abs(m * step - 1.0) < 1e-9):
+    if not step > 0 or 1.0 / step > 10**6:
         raise ValueError(f"scca_step must divide 1 into a whole number of steps, got {step}")
+    m = round(1.0 / step)
+    if not abs(m * step - 1.0) < 1e-9:
+        raise ValueError(f"scca_step must divide 1 into a whole number of steps, got {step}")
+    count = (m + 1) * (m + 2) // 2 if face else (m + 1) * (m + 2) * (m + 3) // 6 - 1
+    if count > MAX_SCCA_LAWS:
+        raise ValueError(f"scca_step {step:g} gives {count:,} SCCA laws; the limit is "
+                         f"{MAX_SCCA_LAWS:,} (a coarser step, or scca_face = true)")
     out = []
     for i in range(m + 1):
         for j in range(m + 1 - i):
@@ -146,6 +157,8 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
     ratios = raw.get("period_ratio")
     if not isinstance(ratios, dict):
         raise ValueError("spec needs [period_ratio] with start/stop/count or values")
+    if "values" in ratios and ratios.keys() & {"start", "stop", "count"}:
+        raise ValueError("[period_ratio] takes either values or start/stop/count, not both")
     if "values" in ratios:
         n = np.asarray(_numbers(ratios["values"], "period_ratio.values"), dtype=float)
     else:
@@ -158,6 +171,9 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
             raise ValueError(f"[period_ratio] is missing {error.args[0]!r}") from None
     if n.ndim != 1 or n.size == 0 or not np.all(np.isfinite(n)) or np.any(n <= 0):
         raise ValueError("period ratios must be a non-empty list of positive finite numbers")
+    if "values" not in ratios and not n[-1] > n[0]:
+        raise ValueError(f"period_ratio.stop must be above period_ratio.start, got start "
+                         f"{n[0]:g}, stop {n[-1]:g}")
     table = raw.get("laws", {})
     names = table.get("names", [])
     if not isinstance(names, list) or not all(isinstance(x, str) for x in names):
@@ -174,6 +190,8 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
         raise ValueError(f"spec lists the law {twice[0]} twice (laws.names and the SCCA grid "
                          "together must name each law once)")
     damping = tuple(_numbers(raw.get("damping", [0.0]), "damping"))
+    if not damping:
+        raise ValueError("damping must name at least one damping ratio, got []")
     if not all(0.0 <= z < 1.0 for z in damping):
         raise ValueError(f"damping ratios must be in [0, 1), got {list(damping)}")
     per_chunk = _number(raw.get("laws_per_chunk", 64), "laws_per_chunk", int)
@@ -187,6 +205,12 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
     if not 0.0 < phase_step <= MAX_PHASE_STEP:
         raise ValueError(f"phase_step must be in (0, {MAX_PHASE_STEP:g}] (radians per grid "
                          f"interval), got {phase_step}")
+    if method == "exact" and default_resolution(n.max(), phase_step) > MAX_GRID_INTERVALS:
+        raise ValueError(
+            f"phase_step {phase_step:g} at period ratio {n.max():g} needs a grid of "
+            f"{default_resolution(n.max(), phase_step):,} intervals per rise; the limit is "
+            f"{MAX_GRID_INTERVALS:,} (phase_step at least "
+            f"{2 * np.pi * n.max() / MAX_GRID_INTERVALS:.3g} there)")
     what = json.dumps([names, n.tolist(), damping, method, dwell, per_chunk]
                       + ([phase_step] if phase_step != MAX_PHASE_STEP else []))
     return SweepSpec(
@@ -237,8 +261,11 @@ def _compute_chunk(spec: SweepSpec, chunk, devices) -> dict[str, np.ndarray]:
                         out["ct"].reshape(-1), out["residual"].reshape(-1))
         out["ca"] = np.asarray(stacked_ca(stacked))[:count]
         return out
+    # One grid at the spec's phase step for every ratio (the default grid meets the default).
+    finer = ({"resolution": default_resolution(spec.period_ratio.max(), spec.phase_step)}
+             if spec.method == "exact" and spec.phase_step != MAX_PHASE_STEP else {})
     curves = ct_curves(laws, spec.period_ratio, damping=spec.damping[d], method=spec.method,
-                       dwell=spec.dwell, devices=devices)
+                       dwell=spec.dwell, devices=devices, **finer)
     out = {k: np.stack([getattr(curves[law.name], k) for law in laws]) for k in METRICS}
     out["ca"] = np.asarray([curves[law.name].ca for law in laws])
     return out

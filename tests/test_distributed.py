@@ -11,6 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+import camjax
 from camjax import distributed
 from camjax.laws import SCCA
 from camjax.sweep import (
@@ -58,6 +59,10 @@ def test_scca_grid_counts_and_fractions():
     assert len(distributed.scca_grid(0.05)) == 1770  # C(23, 3) less the all-zero point
     with pytest.raises(ValueError, match="whole number of steps"):
         distributed.scca_grid(0.3)
+    with pytest.raises(ValueError, match=r"^scca_step 0.0001 gives 166,766,685,000 SCCA laws; "
+                       r"the limit is 1,000,000"):
+        distributed.scca_grid(1e-4)  # refused before the laws are built
+    assert len(distributed.scca_grid(1e-3, face=True)) == 501_501  # within the limit
 
 
 @pytest.mark.parametrize("text, words", [
@@ -74,6 +79,15 @@ def test_scca_grid_counts_and_fractions():
      'names = ["cycloidal"]\n', "phase_step"),
     ('output = "o"\nphase_step = 1.6\n[period_ratio]\nvalues = [1.0]\n[laws]\n'
      'names = ["cycloidal"]\n', r"phase_step must be in \(0, 1\.5\]"),
+    ('output = "o"\nphase_step = 1e-9\n[period_ratio]\nvalues = [1.0, 30.0]\n[laws]\n'
+     'names = ["cycloidal"]\n', r": phase_step 1e-09 at period ratio 30 needs a grid of "
+     r"188,495,559,232 intervals per rise; the limit is 1,048,576 \(phase_step at least 0.00018"),
+    ('output = "o"\ndamping = []\n[period_ratio]\nvalues = [1.0]\n[laws]\n'
+     'names = ["cycloidal"]\n', r": damping must name at least one damping ratio, got \[\]$"),
+    ('output = "o"\n[period_ratio]\nstart = 40\nstop = 30\ncount = 5\n[laws]\n'
+     'names = ["cycloidal"]\n', ": period_ratio.stop must be above period_ratio.start, got start 40, stop 30$"),
+    ('output = "o"\n[period_ratio]\nvalues = [2.0]\nstart = 1\nstop = 3\ncount = 5\n[laws]\n'
+     'names = ["cycloidal"]\n', ": \\[period_ratio\\] takes either values or start/stop/count, not both$"),
 ])
 def test_bad_specs_name_the_problem(tmp_path, text, words):
     path = tmp_path / "spec.toml"
@@ -120,6 +134,23 @@ def test_banded_sweep_within_tolerance_of_ct_curve():
             curve = ct_curve(law, n)
             np.testing.assert_allclose(metrics.ct[i], curve.ct, rtol=tolerance)
             np.testing.assert_allclose(metrics.residual[i], curve.residual, atol=1e-11)
+
+
+def test_a_spec_of_laws_of_several_kinds_sweeps_at_its_phase_step(tmp_path):
+    path = tmp_path / "spec.toml"
+    path.write_text('output = "o"\nphase_step = 0.5\n[period_ratio]\nvalues = [2.0, 7.5, 30.0]\n'
+                    '[laws]\nnames = ["cycloidal", "poly345"]\n')
+    spec = distributed.load_spec(path)
+    distributed.run_sweep(spec, progress=False)
+    with np.load(distributed.merge(spec)) as merged:
+        ct = merged["ct"][0]
+    finer = camjax.ct_curves(["cycloidal", "poly345"], spec.period_ratio, resolution=384)
+    default = camjax.ct_curves(["cycloidal", "poly345"], spec.period_ratio)
+    for i, name in enumerate(("cycloidal", "poly345")):  # the finer grid's numbers, exactly
+        np.testing.assert_array_equal(ct[i], finer[name].ct)
+        np.testing.assert_allclose(ct[i], default[name].ct, rtol=1e-10)
+    assert not all(np.array_equal(ct[i], default[name].ct)
+                   for i, name in enumerate(("cycloidal", "poly345")))
 
 
 def test_merged_sweep_matches_ct_curve(uninterrupted):
