@@ -343,6 +343,11 @@ def _cases(tmp_path):
         (("design", "--band", "1:30000", "--objective", "ca-ct", "--out", tmp_path / "d"),
          "camjax design: error: --band: period ratio 30000 needs a training grid of 1,508,096 "
          "intervals; the limit is 1,048,576 (period ratios up to about 20,861)"),
+        (("ct", "--law", "cycloidal", "--n", "2", "--dwell", "1e4", "--model", "friction:0.1"),
+         "camjax ct: error: dwell 10000 at 1024 samples per rise needs 10,241,024 samples; the "
+         "limit is 1,000,000 (a shorter dwell, or fewer samples)"),
+        (("program", "--points", "1000000"),
+         "camjax program: error: --points: must be from 8 to 100,000, got 1000000"),
         (("design", "--n", "1e6", "--out", tmp_path / "d"),
          "camjax design: error: --n: period ratio 1e+06 is past what the exact path reports on "
          "(period ratios up to about 250,329)"),

@@ -258,13 +258,21 @@ def _write_machine(out: Path, machine, report: dict, rpm, points: int) -> None:
 
 
 def run(args) -> int:
-    from ..program import MAX_TURNS, SETTLED_DEG, Program, SteadyState, analyse, example_path
+    from ..program import (
+        MAX_PROFILE_POINTS,
+        MAX_TURNS,
+        SETTLED_DEG,
+        Program,
+        SteadyState,
+        analyse,
+        example_path,
+    )
 
     rpm = parse_range(args.rpm, "--rpm")
     if not all(r > 0 for r in rpm):
         raise CliError(f"--rpm: speeds must be positive, got {args.rpm!r}")
-    if args.points < 8:
-        raise CliError(f"--points: must be at least 8, got {args.points}")
+    if not 8 <= args.points <= MAX_PROFILE_POINTS:
+        raise CliError(f"--points: must be from 8 to {MAX_PROFILE_POINTS:,}, got {args.points}")
     if args.plot_rpm is not None and not (math.isfinite(args.plot_rpm) and args.plot_rpm >= min(rpm)):
         raise CliError(f"--plot-rpm: must be a speed at or above the lowest --rpm ({min(rpm):g}), "
                        f"got {args.plot_rpm:g}")

@@ -250,11 +250,21 @@ def search_points(law, t_end):
     return jnp.sort(jnp.concatenate([grid, breaks, jnp.ones(1)]))
 
 
+MAX_SAMPLES = 1_000_000
+"""Most samples of one solve over the rise and the dwell (each is a state kept per period
+ratio): more is refused before any work (a dwell of 10,000 rises at 1024 samples per rise
+took 5 GB)."""
+
+
 def sample_times(samples: int, dwell: float):
     """``samples`` equal steps over the rise and as fine over the dwell; ``tau = 1`` is
-    sample ``samples`` exactly (where the residual is read)."""
-    rise = jnp.linspace(0.0, 1.0, samples + 1)
+    sample ``samples`` exactly (where the residual is read).  More than ``MAX_SAMPLES`` in
+    all is a ``ValueError`` naming the dwell and the samples."""
     count = max(1, int(round(samples * dwell)))
+    if samples + count > MAX_SAMPLES:
+        raise ValueError(f"dwell {dwell:g} at {samples} samples per rise needs {samples + count:,} "
+                         f"samples; the limit is {MAX_SAMPLES:,} (a shorter dwell, or fewer samples)")
+    rise = jnp.linspace(0.0, 1.0, samples + 1)
     return jnp.concatenate([rise, 1.0 + jnp.linspace(0.0, dwell, count + 1)[1:]])
 
 

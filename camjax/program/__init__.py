@@ -26,6 +26,7 @@ from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
 from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
+from ._export import MAX_PROFILE_POINTS as MAX_PROFILE_POINTS
 from ._export import Profile as Profile
 from ._export import profile as profile
 from ._export import shape as shape

@@ -103,14 +103,19 @@ def shape(program: Program, theta_deg, side: str = "after"):
     return flat
 
 
+MAX_PROFILE_POINTS = 100_000
+"""Most profile points over a turn (0.0036 degrees apart, far below any machining step):
+more is refused before any work (a million took minutes and 0.75 GB)."""
+
+
 def profile(program: Program, points: int = 3600) -> Profile:
     """Pitch curve and profile at ``points`` cam angles evenly over the turn.
 
     The geometry comes from the lift's derivatives after each angle (``shape``), so a join
     where the acceleration steps gets the next segment's curvature, not an average.
     """
-    if int(points) < 8:
-        raise ValueError(f"points must be at least 8, got {points}")
+    if not 8 <= int(points) <= MAX_PROFILE_POINTS:
+        raise ValueError(f"points must be from 8 to {MAX_PROFILE_POINTS:,}, got {points}")
     theta_deg = np.arange(int(points)) * 360.0 / int(points)
     lift_mm = program.lift(theta_deg)[0]
     cam = shape(program, theta_deg)
