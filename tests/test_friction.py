@@ -167,6 +167,21 @@ def _reference_positions(phases, tau):
     return np.asarray(out)
 
 
+@pytest.mark.parametrize("n, mu", [(5.25, 0.1), (5.25, 0.5), (2.5, 1.0), (2.5, 100.0), (2.5, 1e9)])
+def test_residual_is_the_dwells_first_swing_and_zero_for_a_payload_held(cycloidal, n, mu):
+    """Undamped, R is w^2 times the first slip's amplitude about its shifted centre: the
+    largest |x''| over the dwell's first half period (sampled: 1e-3); a payload held by
+    friction has none (it was the frictionless spring's w^2 |1 - x|: R = 39 at n = 2.5 with
+    the payload never moving)."""
+    response = camjax.solve(cycloidal, CoulombFriction(n, mu), dwell=1.0)
+    tau, acc = np.asarray(response.tau), np.abs(np.asarray(response.payload_acceleration))
+    first_swing = acc[(tau >= 1.0) & (tau <= 1.0 + 0.5 / n)].max() / cycloidal.Ca
+    residual = float(response.metrics.residual)
+    assert residual == pytest.approx(first_swing, rel=1e-3, abs=1e-15)
+    if mu >= 100:  # stuck before the dwell; at 1e9 it never moves
+        assert residual == 0.0 and (mu < 1e9 or float(response.metrics.ct) == 0.0)
+
+
 def test_stick_starting_near_the_end_of_the_rise_matches_scipy_reference():
     """4-5-6-7 polynomial, n = 5.25, mu = 0.3: a stick phase from tau = 0.928 to 0.944,
     where the transmission force w^2 (s - x) ~ 1088 (s - x) is resolved only to ~1e-11,

@@ -201,7 +201,7 @@ class CoulombFriction(AbstractHybridModel):
                 (sol.result == RESULTS.successful) & ~jnp.all(held), RESULTS.invariant_violated, sol.result
             )
             stats = {"steps": sol.steps, "segments": sol.segments, "reached": sol.reached}
-        residual = residual_amplitude(1.0 - x[i_end], -dx[i_end], model.omega, model.damping)
+        residual = _dwell_residual(model, x[i_end], dx[i_end], model._force(1.0, x[i_end], law))
         return FrictionResponse(
             tau=ts,
             payload_acceleration=acc,
@@ -214,6 +214,20 @@ class CoulombFriction(AbstractHybridModel):
             rest_offset=x[-1] - 1.0,
             settled=stuck[-1],
         )
+
+
+def _dwell_residual(model: CoulombFriction, x, dx, force):
+    """``w^2`` times the amplitude of the dwell's first slip, from the state at its start.
+
+    Slipping the way ``s`` (the velocity's sign, or the force's from rest), the payload is
+    a linear oscillator about ``1 - s mu / w^2``, so ``x''`` swings to ``w^2`` times its
+    amplitude about that centre; a payload at rest inside the stick band stays there
+    (zero).  Without friction it is the SDOF's residual."""
+    w, mu = model.omega, model.friction
+    slip = jnp.where(dx != 0, jnp.sign(dx), jnp.sign(force))
+    held = (dx == 0) & (jnp.abs(force) <= mu)
+    amplitude = residual_amplitude(1.0 - x - slip * mu / w**2, -dx, w, model.damping)
+    return jnp.where(held, 0.0, amplitude)
 
 
 def _piecewise_jerk_bound(law):
