@@ -346,6 +346,9 @@ def _cases(tmp_path):
         (("ct", "--law", "cycloidal", "--n", "2", "--dwell", "1e4", "--model", "friction:0.1"),
          "camjax ct: error: dwell 10000 at 1024 samples per rise needs 10,241,024 samples; the "
          "limit is 1,000,000 (a shorter dwell, or fewer samples)"),
+        (("bench", "--law", "cycloidal", "--n", "1:1e5:10"),
+         "camjax bench: error: --n: the reference (the exact path on a grid four times finer "
+         "than w h = 0.5) reaches period ratios up to 20,860, got 100000"),
         (("program", "--points", "1000000"),
          "camjax program: error: --points: must be from 8 to 100,000, got 1000000"),
         (("design", "--n", "1e6", "--out", tmp_path / "d"),

@@ -5,6 +5,7 @@ The study itself is :mod:`camjax.studies`; this module parses and prints.
 
 from __future__ import annotations
 
+import math
 import sys
 
 from ._common import (
@@ -42,12 +43,25 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..studies import ACCURACY_GOAL, default_method, format_table, run_study, study_cases
+    from ..sdof import MAX_GRID_INTERVALS, TARGET_PHASE_STEP
+    from ..studies import (
+        ACCURACY_GOAL,
+        default_method,
+        format_table,
+        reference_resolution,
+        run_study,
+        study_cases,
+    )
 
     selected = laws_of(args, DEFAULT_LAWS)
     n = parse_range(args.n, "--n")
     if (n < 1e-3).any() or n.size < 1:
         raise CliError("--n: period ratios must be positive")
+    if reference_resolution(float(n.max())) > MAX_GRID_INTERVALS:
+        largest = MAX_GRID_INTERVALS / 4 * TARGET_PHASE_STEP / (2 * math.pi)
+        raise CliError(f"--n: the reference (the exact path on a grid four times finer than w h = "
+                       f"{TARGET_PHASE_STEP:g}) "
+                       f"reaches period ratios up to {math.floor(largest):,}, got {n.max():g}")
     if args.repeats < 1:
         raise CliError(f"--repeats: must be at least 1, got {args.repeats}")
     cases = study_cases(args.level, float(n.max()))
