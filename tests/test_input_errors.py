@@ -371,6 +371,8 @@ def _cases(tmp_path):
          + ", ".join(SpringMass.methods)),
         (("follower", "--law", "cycloidal", "--rise", "10"),
          "camjax follower: error: --rise must be in (0, pi/2) rad, got 10.0"),
+        (("follower", "--law", "cycloidal", "--radius", "1000"),
+         "camjax follower: error: --radius must be well below the rod length"),
         (("follower", "--law", "cycloidal", "--modes", "0"),
          "camjax follower: error: --modes must be an integer 1..12, got 0"),
         (("ct", "--law", "scca:0.5,0.5,0.5", "--n", "2"),
@@ -426,3 +428,16 @@ def test_a_low_precision_period_ratio_or_damping_is_widened_not_computed_in(dtyp
     assert float(camjax.residual_vibration(law, 2.5, dtype(0.0))) == pytest.approx(exact, rel=1e-12)
     traced = jax.jit(lambda n: camjax.residual_vibration(law, n, 0.0))(jnp.asarray(2.5, jnp.float32))
     assert float(traced) == pytest.approx(exact, rel=1e-12)
+
+
+@pytest.mark.parametrize("period_ratio, damping, shown", [
+    (np.array([2.0, 3.0]), 0.0, "period_ratio.*got shape \\(2,\\)"),
+    ("5", 0.0, "period_ratio.*got '5'"),
+    (2.0, np.array([0.1, 0.2]), "damping.*got shape \\(2,\\)"),
+    (2 + 0j, 0.0, "period_ratio.*got \\(2\\+0j\\)"),
+])
+def test_torsion_factor_takes_one_number_per_argument(period_ratio, damping, shown):
+    law = camjax.laws.get("cycloidal")
+    for metric in (camjax.torsion_factor, camjax.residual_vibration):
+        with pytest.raises(ValueError, match=f"^{shown}$"):
+            metric(law, period_ratio, damping)

@@ -56,7 +56,8 @@ def _model(args):
         value = getattr(args, name)
         if not (math.isfinite(value) and value > 0):
             raise CliError(f"--{name.replace('_', '-')}: must be a positive number, got {value}")
-    with options_named(total_swing="--rise", modes="--modes", axial_modes="--axial-modes"):
+    with options_named(total_swing="--rise", modes="--modes", axial_modes="--axial-modes",
+                       rod_radius="--radius"):
         return SwingingFollower(
             rise=law,
             fall=law,

@@ -288,6 +288,8 @@ def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
     computation runs, instead of returning a wrong number.
     """
     law = as_law(law)
+    for value, name in ((period_ratio, "period_ratio"), (damping, "damping")):
+        _one_number(value, name)
     model = SpringMass(period_ratio, damping)  # concrete values checked here
     if resolution is None and model._option_scale() is None:
         resolution = TRACED_RESOLUTION
@@ -295,6 +297,19 @@ def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
     model = model.with_array_leaves()
     with checks.as_value_errors():
         return _compiled_metrics(law, model, options, checks.is_concrete(law, model))
+
+
+def _one_number(value, name: str) -> None:
+    """A ``ValueError`` naming ``name`` unless ``value`` is one real number (or a scalar
+    tracer): an array belongs in ``ct_curve`` or under ``jax.vmap``."""
+    try:
+        numeric = jnp.issubdtype(jnp.result_type(value), jnp.number) and not isinstance(value, str)
+    except TypeError:
+        numeric = False
+    if not numeric or jnp.iscomplexobj(value) or jnp.ndim(value) != 0:
+        shown = f"shape {jnp.shape(value)}" if numeric and jnp.ndim(value) else repr(value)
+        raise ValueError(f"{name} must be one real number (for several period ratios use "
+                         f"camjax.ct_curve, or jax.vmap), got {shown}")
 
 
 @eqx.filter_jit
