@@ -81,7 +81,8 @@ def scca_grid(step: float, *, face: bool = False) -> list[SCCA]:
     count = (m + 1) * (m + 2) // 2 if face else (m + 1) * (m + 2) * (m + 3) // 6 - 1
     if count > MAX_SCCA_LAWS:
         raise ValueError(f"scca_step {step:g} gives {count:,} SCCA laws; the limit is "
-                         f"{MAX_SCCA_LAWS:,} (a coarser step, or scca_face = true)")
+                         f"{MAX_SCCA_LAWS:,} (a coarser step"
+                         + (")" if face else ", or scca_face = true)"))
     out = []
     for i in range(m + 1):
         for j in range(m + 1 - i):
@@ -171,8 +172,8 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
             raise ValueError(f"[period_ratio] is missing {error.args[0]!r}") from None
     if n.ndim != 1 or n.size == 0 or not np.all(np.isfinite(n)) or np.any(n <= 0):
         raise ValueError("period ratios must be a non-empty list of positive finite numbers")
-    if "values" not in ratios and not n[-1] > n[0]:
-        raise ValueError(f"period_ratio.stop must be above period_ratio.start, got start "
+    if "values" not in ratios and n[-1] < n[0]:
+        raise ValueError(f"period_ratio.stop must not be below period_ratio.start, got start "
                          f"{n[0]:g}, stop {n[-1]:g}")
     table = raw.get("laws", {})
     names = table.get("names", [])

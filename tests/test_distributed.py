@@ -85,7 +85,7 @@ def test_scca_grid_counts_and_fractions():
     ('output = "o"\ndamping = []\n[period_ratio]\nvalues = [1.0]\n[laws]\n'
      'names = ["cycloidal"]\n', r": damping must name at least one damping ratio, got \[\]$"),
     ('output = "o"\n[period_ratio]\nstart = 40\nstop = 30\ncount = 5\n[laws]\n'
-     'names = ["cycloidal"]\n', ": period_ratio.stop must be above period_ratio.start, got start 40, stop 30$"),
+     'names = ["cycloidal"]\n', ": period_ratio.stop must not be below period_ratio.start, got start 40, stop 30$"),
     ('output = "o"\n[period_ratio]\nvalues = [2.0]\nstart = 1\nstop = 3\ncount = 5\n[laws]\n'
      'names = ["cycloidal"]\n', ": \\[period_ratio\\] takes either values or start/stop/count, not both$"),
 ])
