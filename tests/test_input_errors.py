@@ -104,7 +104,8 @@ def test_a_ca_ct_objective_past_the_largest_training_grid_is_refused():
 def test_residual_objectives_past_the_exact_paths_reach_and_oversized_designs_are_refused():
     from camjax import law_design
 
-    past = r"period ratio 300000 is past what the exact path reports on \(period ratios up to about 250,329\)$"
+    past = (r"period ratio 300000 needs a grid of 1,256,640 intervals per rise; the limit is "
+            r"1,048,576 \(period ratios up to about 250,329 at the default resolution\)$")
     for make, name in ((lambda: law_design.Residual(3e5), "Residual"),
                        (lambda: law_design.MaxResidual(10.0, 3e5), "MaxResidual"),
                        (lambda: law_design.ExpectedResidual(2.9e5, 2.5e3), "ExpectedResidual")):
@@ -352,8 +353,9 @@ def _cases(tmp_path):
         (("program", "--points", "1000000"),
          "camjax program: error: --points: must be from 8 to 100,000, got 1000000"),
         (("design", "--n", "1e6", "--out", tmp_path / "d"),
-         "camjax design: error: --n: period ratio 1e+06 is past what the exact path reports on "
-         "(period ratios up to about 250,329)"),
+         "camjax design: error: --n: period ratio 1e+06 needs a grid of 4,188,800 intervals per "
+         "rise; the limit is 1,048,576 (period ratios up to about 250,329 at the default "
+         "resolution)"),
         (("design", "--n", "240000", "--out", tmp_path / "d"),
          "camjax design: error: --n (compared over 0.8 to 1.2 times it): period ratio 288000 "
          "needs a grid of 1,206,400 intervals per rise; the limit is 1,048,576 (period ratios "

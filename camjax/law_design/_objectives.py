@@ -10,9 +10,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..models import SpringMassOptions
 from ..sdof import (
     MAX_GRID_INTERVALS,
-    MAX_PHASE_STEP,
     default_resolution,
     dwell_peak,
     mode_gain,
@@ -51,12 +51,12 @@ def _training_resolution(max_period_ratio: float, name: str) -> int:
 
 
 def _reported(max_period_ratio: float, name: str) -> None:
-    """A ``ValueError`` (before any work) where the exact path, which reports the design,
-    cannot reach ``max_period_ratio`` (its grid would pass ``MAX_GRID_INTERVALS``)."""
-    if default_resolution(max_period_ratio, MAX_PHASE_STEP) > MAX_GRID_INTERVALS:
-        largest = MAX_GRID_INTERVALS * MAX_PHASE_STEP / (2 * math.pi)
-        raise ValueError(f"{name}: period ratio {max_period_ratio:g} is past what the exact path "
-                         f"reports on (period ratios up to about {largest:,.0f})")
+    """The exact path's own refusal (``SpringMassOptions.checked``), named, where it cannot
+    reach ``max_period_ratio``: it reports the design, so this is checked before any work."""
+    try:
+        SpringMassOptions().checked(max_period_ratio)
+    except ValueError as error:
+        raise ValueError(f"{name}: {error}") from None
 
 
 def _check_common(weight: float, damping: float, name: str) -> None:

@@ -213,7 +213,7 @@ class AbstractMachineModel(AbstractModel):
 
 def _as_float(x):
     """A numeric leaf as a float array of at least JAX's default float precision."""
-    if isinstance(x, bool | float | int):
+    if isinstance(x, float | int):
         return jnp.asarray(x, dtype=float)
     dtype = getattr(x, "dtype", None)
     if dtype is not None and jnp.issubdtype(dtype, jnp.floating) and (
