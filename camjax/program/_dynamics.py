@@ -16,7 +16,7 @@ A speed sweep is one compiled call through the engine's ``chunked_map``.
 
 from __future__ import annotations
 
-import dataclasses
+import functools
 import math
 from typing import NamedTuple
 
@@ -137,7 +137,10 @@ def cycle_grid(program: Program, intervals: int) -> CycleGrid:
         lift[a:b], lift_nodes[a:b] = y0, y0
         if not seg.moving:
             continue
-        tau_gauss, tau_left = (times[a:b] - s0) / f, (left[a:b] - s0) / f
+        # The nodes a..b-1 belong to this segment by index: their local time is clipped
+        # to [0, 1], so a node that rounds a hair before the segment's start reads the
+        # segment's own start (not the dwell before it).
+        tau_gauss, tau_left = (times[a:b] - s0) / f, np.clip((left[a:b] - s0) / f, 0.0, 1.0)
         # One evaluation of the law per segment (eager JAX calls are slow).
         s_all, v_all, a_all = (np.asarray(x) for x in
                                seg.law.evaluate(np.concatenate([tau_gauss.ravel(), tau_left]))[:3])
@@ -173,7 +176,7 @@ def with_segment_law(grid: CycleGrid, program: Program, index: int, law) -> Cycl
     rows = slice(int(grid.segment_start[index]), int(stop))
     s0, f = program.start_deg[index] / 360.0, seg.angle_deg / 360.0
     y0, lift = program.start_lift_mm[index], seg.lift_mm
-    tau_left = (grid.nodes[rows] - s0) / f
+    tau_left = np.clip((grid.nodes[rows] - s0) / f, 0.0, 1.0)  # by index, as in cycle_grid
     h = grid.piece_width[np.asarray(grid.motion.piece)[rows]] / f
     tau_gauss = tau_left[:, None] + h[:, None] * GAUSS_POINTS
     s, v, a, _ = law.evaluate(jnp.asarray(np.concatenate([tau_gauss.ravel(), tau_left])))
@@ -191,25 +194,26 @@ def with_segment_law(grid: CycleGrid, program: Program, index: int, law) -> Cycl
     )
 
 
-@dataclasses.dataclass(frozen=True)
-class Train:
+class Train(NamedTuple):
     """The follower's constants in SI (k, k_s in N/m; c in N s/m): the engine's oscillator
-    in physical units."""
+    in physical units.  A pytree of 0-d arrays: the compiled turn takes it as an argument,
+    so another follower reuses the compiled program."""
 
-    m: float
-    k: float
-    ks: float
-    c: float
-    preload: float
-    omega: float  # sqrt((k + k_s)/m), rad/s
-    zeta: float  # of the whole oscillator: c / (2 m omega)
+    m: np.ndarray
+    k: np.ndarray
+    ks: np.ndarray
+    c: np.ndarray
+    preload: np.ndarray
+    omega: np.ndarray  # sqrt((k + k_s)/m), rad/s
+    zeta: np.ndarray  # of the whole oscillator: c / (2 m omega)
 
     @classmethod
     def of(cls, program: Program) -> Train:
         f = program.follower
         omega = 2 * math.pi * f.natural_frequency_hz
-        return cls(f.mass_kg, f.stiffness, f.spring_rate, f.damping, 0.0 if f.form_closed else f.preload_n,
-                   omega, f.damping / (2 * f.mass_kg * omega))
+        values = (f.mass_kg, f.stiffness, f.spring_rate, f.damping, 0.0 if f.form_closed else f.preload_n,
+                  omega, f.damping / (2 * f.mass_kg * omega))
+        return cls(*(np.asarray(float(v)) for v in values))
 
     def omega_per_turn(self, rpm):
         """The engine's ``w``: radians of vibration per turn at ``rpm``."""
@@ -325,15 +329,110 @@ class SpeedSummary(NamedTuple):
     max_contact_stress_radius_mm: np.ndarray
 
 
-class SteadyState:
-    """A program's periodic steady state, compiled over a speed range.
+SUMMARY_OUTPUTS = ("max_payload_acceleration_m_s2", "min_contact_force_n", "max_contact_force_n",
+                   "residual_vibration_mm", "max_drive_torque_n_m", "rms_drive_torque_n_m",
+                   "mean_drive_torque_n_m", "energy_fluctuation_j", "max_contact_stress_mpa",
+                   "max_contact_stress_node", "max_contact_stress_radius_mm")
+"""The ``Cycle`` fields a speed sweep keeps (``SpeedSummary``'s, after ``rpm``)."""
 
-    Build once per program and slowest speed (which fixes the grid); every call over any
-    batch of speeds is one compiled call through the engine's ``chunked_map`` (a batch's
-    width is padded to a multiple of 16, so that few shapes compile).  The speeds are split
-    over ``devices`` (default: every local device; see ``camjax.sharding.shard_batch``),
-    with results equal to one device's.  A response that is not finite is a
-    ``SolverError`` (``RESULTS.nonfinite``).
+
+def bucket(size: int, minimum: int = 16) -> int:
+    """``size`` rounded up to ``2^k``, ``1.25 2^k``, ``1.5 2^k`` or ``1.75 2^k``: the
+    shapes a compiled program is built for.  An edit that moves a grid's size or a batch's
+    width by a little keeps its shape, so it reuses the compiled program (at most a
+    quarter of the work is padding)."""
+    size = max(int(size), minimum)
+    step = max(1, 2 ** (size.bit_length() - 1) // 4)
+    return step * -(-size // step)
+
+
+class PaddedTurn(NamedTuple):
+    """A turn's grid, follower and contact factors padded to bucketed shapes: the compiled
+    turn's arguments.  The padding is empty intervals (width 0) at the end of the turn in a
+    piece of their own, which carry the mode unchanged and add nothing to any integral;
+    node arrays repeat the closing node."""
+
+    grid: CycleGrid
+    train: Train
+    contact: NodeContact
+
+    @classmethod
+    def of(cls, grid: CycleGrid, train: Train, contact: NodeContact) -> PaddedTurn:
+        intervals = grid.intervals
+        pieces = int(np.asarray(grid.motion.piece_width).size)
+        extra = bucket(intervals, 64) - intervals
+        piece_pad = 8 * -(-(pieces + 1) // 8) - pieces
+
+        def nodes(x):
+            x = np.asarray(x)
+            return np.concatenate([x, np.repeat(x[-1:], extra, axis=0)])
+
+        def rows(x):
+            x = np.asarray(x)
+            return np.concatenate([x, np.zeros((extra, *x.shape[1:]), x.dtype)])
+
+        m = grid.motion
+        motion = m._replace(
+            nodes=nodes(m.nodes),
+            piece=np.concatenate([np.asarray(m.piece), np.full(extra, pieces)]).astype(np.int32),
+            piece_width=np.concatenate([np.asarray(m.piece_width), np.zeros(piece_pad)]),
+            forcing=rows(m.forcing))
+        padded = grid._replace(motion=motion, lift=rows(grid.lift), lift_nodes=nodes(grid.lift_nodes),
+                               velocity_nodes=nodes(grid.velocity_nodes),
+                               segment_start=np.asarray(grid.segment_start, dtype=np.int32),
+                               residual_start=np.asarray(grid.residual_start, dtype=np.int32))
+        return cls(padded, train, NodeContact(*(nodes(x) for x in contact)))
+
+
+SPEED_BLOCK = 32
+"""Speeds per compiled call: every batch of speeds runs in blocks of this width (the last
+padded), so a turn's shape compiles one program whatever the number of speeds."""
+
+
+def _node_arrays_cut(cycle: Cycle, intervals: int) -> Cycle:
+    """A ``Cycle`` of a padded turn cut back to the turn's own nodes and intervals."""
+    nodes = intervals + 1
+    return cycle._replace(
+        q=cycle.q[..., :nodes], payload_acceleration_m_s2=cycle.payload_acceleration_m_s2[..., :nodes],
+        contact_force_n=cycle.contact_force_n[..., :nodes], drive_torque_n_m=cycle.drive_torque_n_m[..., :nodes],
+        contact_stress_mpa=cycle.contact_stress_mpa[..., :nodes],
+        max_contact_stress_node=np.minimum(cycle.max_contact_stress_node, intervals),
+        drive_torque_left=cycle.drive_torque_left[..., :intervals, :],
+        drive_torque_right=cycle.drive_torque_right[..., :intervals, :])
+
+
+@jax.jit
+def _cycles(rpm, turn: PaddedTurn) -> Cycle:
+    """The periodic steady state's whole ``Cycle`` at every speed of a block: one compiled
+    program per shape of the turn, whatever the program's values."""
+    return jax.vmap(lambda r: _cycle(turn.grid, turn.train, r, contact=turn.contact))(rpm)
+
+
+@jax.jit
+def _min_contact_force(rpm, turn: PaddedTurn):
+    """The contact force's minimum over the turn at every speed of a block (the jump's
+    scan and bisection): a smaller program than the whole cycle."""
+    return jax.vmap(lambda r: _cycle(turn.grid, turn.train, r).min_contact_force_n)(rpm)
+
+
+@jax.jit
+def _started_cycle(rpm, turn: PaddedTurn, q_start) -> Cycle:
+    """One turn from the mode ``q_start`` at its start (a start-up's turns)."""
+    return _cycle(turn.grid, turn.train, rpm, q_start=q_start, periodic=False, contact=turn.contact)
+
+
+class SteadyState:
+    """A program's periodic steady state, compiled once per shape.
+
+    Build once per program and slowest speed (which fixes the grid).  The program's values
+    (its grid, forcing, follower and contact factors) are arguments of module-level compiled
+    functions, padded to bucketed shapes (``bucket``), so another program of the same
+    shape, or an edited one, reuses the compiled program in this process and from JAX's
+    persistent cache.  A batch of speeds is one compiled call through the engine's
+    ``chunked_map``, its width padded to a bucket too; the speeds are split over
+    ``devices`` (default: every local device; see ``camjax.sharding.shard_batch``), with
+    results equal to one device's.  A response that is not finite is a ``SolverError``
+    (``RESULTS.nonfinite``).
     """
 
     def __init__(self, program: Program, rpm_min: float, *, devices=None):
@@ -346,66 +445,71 @@ class SteadyState:
         self.devices = resolve_devices(devices)
         self.grid = cycle_grid(program, resolution(program, self.rpm_min))
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
-        nodes = self.grid.nodes.size
-        self._batch = jax.jit(lambda rpm: chunked_map(self._summary, rpm, nodes))
-        # The contact force's minimum alone (the jump's scan and bisection, the preload):
-        # a smaller program to compile than the whole summary.
-        self._min_force = jax.jit(lambda rpm: chunked_map(
-            lambda r: _cycle(self.grid, self.train, r).min_contact_force_n, rpm, nodes))
-        self._one = jax.jit(lambda rpm: _cycle(self.grid, self.train, rpm, contact=self.contact))
-
-    def _summary(self, rpm):
-        c = _cycle(self.grid, self.train, rpm, contact=self.contact)
-        return (c.max_payload_acceleration_m_s2, c.min_contact_force_n, c.max_contact_force_n,
-                c.residual_vibration_mm,
-                c.max_drive_torque_n_m, c.rms_drive_torque_n_m, c.mean_drive_torque_n_m, c.energy_fluctuation_j,
-                c.max_contact_stress_mpa, c.max_contact_stress_node, c.max_contact_stress_radius_mm)
+        self.turn = PaddedTurn.of(self.grid, self.train, self.contact)
 
     def summary(self, rpm) -> SpeedSummary:
         """Refined extrema and residual vibration at every speed in ``rpm``."""
         return self.summary_checked(check_rpm(rpm))
 
     def summary_checked(self, rpm: np.ndarray) -> SpeedSummary:
-        """``summary`` of speeds already checked (``check_rpm``)."""
-        if rpm.min() < self.rpm_min * (1 - 1e-12):
-            raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
-        out = self._sharded(self._batch, rpm)
-        accel, fmin, fmax, *rest = out
+        """``summary`` of speeds already checked (``check_rpm``); the cycles computed on
+        the way are kept for ``cycle`` (the flights read them)."""
+        cycles = self.cycles(rpm)
+        return SpeedSummary(rpm, *(getattr(cycles, name) for name in SUMMARY_OUTPUTS))
+
+    def cycles(self, rpm: np.ndarray) -> Cycle:
+        """The whole ``Cycle`` at every speed of ``rpm`` (checked), stacked on axis 0."""
+        self._check_slowest(rpm)
+        out = _node_arrays_cut(self._blocks(_cycles, rpm), self.grid.intervals)
         raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm",
-                        accel, fmin, fmax, *rest[1:6])
-        return SpeedSummary(rpm, accel, fmin, fmax, *rest)
+                        *(getattr(out, name) for name in SUMMARY_OUTPUTS[:9] if name != "residual_vibration_mm"))
+        self._kept = {float(r): i for i, r in enumerate(rpm)}, out
+        return out
 
     def min_contact_force_n(self, rpm) -> np.ndarray:
-        """``summary(rpm).min_contact_force_n`` alone (the same numbers, less to compile)."""
+        """``summary(rpm).min_contact_force_n`` alone (the same numbers, less to compute)."""
         rpm = check_rpm(rpm)
-        if rpm.min() < self.rpm_min * (1 - 1e-12):
-            raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
-        force = self._sharded(self._min_force, rpm)
+        self._check_slowest(rpm)
+        force = self._blocks(_min_contact_force, rpm)
         raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm", force)
         return force
 
-    def _sharded(self, batch, rpm: np.ndarray):
-        """``batch`` over the speeds, padded to a multiple of 16 and split over the devices."""
-        size = rpm.size
-        # A device per 16 speeds at most: a short batch (a bisection step) stays on one.
-        devices = self.devices[: max(1, min(len(self.devices), size // 16))]
-        width = 16 * -(-size // (16 * len(devices)))
-        padded = np.pad(rpm, (0, len(devices) * width - size), mode="edge")
-        out = shard_batch(batch, jnp.asarray(padded), devices=devices)
-        return jax.tree.map(lambda x: np.asarray(x)[:size], out)
+    def _check_slowest(self, rpm: np.ndarray) -> None:
+        if rpm.min() < self.rpm_min * (1 - 1e-12):
+            raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
 
-    def cycle(self, rpm: float) -> Cycle:
-        """Node series and extrema of the periodic steady state at one speed."""
+    def _blocks(self, program, rpm: np.ndarray):
+        """``program`` over the speeds in blocks of ``SPEED_BLOCK`` (the last padded), each
+        split over the devices; the blocks are dispatched before any is waited for."""
+        size = rpm.size
+        padded = np.pad(rpm, (0, -size % SPEED_BLOCK), mode="edge").reshape(-1, SPEED_BLOCK)
+        # The devices share a block when it splits into equal parts; a short batch (a
+        # bisection step) stays on one device, so one compiled program serves it.
+        devices = self.devices if size >= SPEED_BLOCK and SPEED_BLOCK % len(self.devices) == 0 else self.devices[:1]
+        outs = [shard_batch(program, jnp.asarray(block), self.turn, devices=devices) for block in padded]
+        return jax.tree.map(lambda *x: np.concatenate([np.asarray(v) for v in x])[:size], *outs)
+
+    def cycle(self, rpm: float, q_start=None) -> Cycle:
+        """Node series and extrema of the periodic steady state at one speed (or of the
+        turn from the mode ``q_start`` at its start, if given)."""
         rpm = float(check_rpm(rpm)[0])
-        return jax.tree.map(np.asarray, self._one(rpm))
+        if q_start is None:
+            kept, cycles = getattr(self, "_kept", ({}, None))
+            if rpm not in kept:
+                self._check_slowest(np.array([rpm]))
+                cycles, kept = self._blocks(_cycles, np.array([rpm])), {rpm: 0}
+                cycles = _node_arrays_cut(cycles, self.grid.intervals)
+            return jax.tree.map(lambda x: x[kept[rpm]], cycles)
+        out = _started_cycle(jnp.asarray(rpm), self.turn, jnp.asarray(q_start, dtype=complex))
+        return _node_arrays_cut(jax.tree.map(np.asarray, out), self.grid.intervals)
 
     def lam(self, rpm: float) -> complex:
         """Eigenvalue of the train in turn time (``lambda T``) at ``rpm``."""
-        return complex(eigenvalue(self.train.omega_per_turn(rpm), self.train.zeta))
+        return complex(eigenvalue(float(self.train.omega_per_turn(rpm)), float(self.train.zeta)))
 
     def mode_at(self, q_nodes, rpm: float, s) -> np.ndarray:
         """The complex mode at turn times ``s`` (anywhere, exactly) from its node values."""
-        beta = self.train.ks / self.train.m * (60.0 / rpm) ** 2
+        beta = float(self.train.ks / self.train.m) * (60.0 / rpm) ** 2
         motion = self.grid.with_forcing(np.asarray(self.grid.motion.forcing) + beta * np.asarray(self.grid.lift))
         return mode_between(motion, q_nodes, self.lam(rpm), np.mod(np.atleast_1d(np.asarray(s, dtype=float)), 1.0))
 
@@ -427,17 +531,15 @@ def startup(program: Program, rpm: float, cycles: int, *, steady: SteadyState | 
     turn); the engine's exact step carries the state from turn to turn.
     """
     rpm = float(check_rpm(rpm)[0])
-    grid = steady.grid if steady is not None else cycle_grid(program, resolution(program, rpm))
-    train = Train.of(program)
-    run_cycle = jax.jit(lambda q0: _cycle(grid, train, rpm, q_start=q0, periodic=False))
+    steady = steady or SteadyState(program, rpm)
     s, accel, force = [], [], []
-    q_start = jnp.zeros((), complex)
+    q_start = 0j
     for c in range(int(cycles)):
-        run = run_cycle(q_start)
-        s.append(c + grid.nodes[:-1])
-        accel.append(np.asarray(run.payload_acceleration_m_s2[:-1]))
-        force.append(np.asarray(run.contact_force_n[:-1]))
-        q_start = run.q[-1]
+        run = steady.cycle(rpm, q_start=q_start)
+        s.append(c + steady.grid.nodes[:-1])
+        accel.append(run.payload_acceleration_m_s2[:-1])
+        force.append(run.contact_force_n[:-1])
+        q_start = complex(run.q[-1])
     return np.concatenate(s), np.concatenate(accel), np.concatenate(force)
 
 

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from ..sdof import eigenvalue
+from ..sdof import MotionGrid, mode_between
 from ._dynamics import SteadyState
 
 _BISECTIONS = 4  # rounds of 64-way subdivision: a bracket shrinks by 65^4, ~2e7
@@ -102,31 +102,58 @@ class Flight:
 
 
 class _SteadyState:
-    """Exact contact-held steady state at one speed, in SI, at any time ``t`` (seconds)."""
+    """Exact contact-held steady state at one speed, in SI, at any time ``t`` (seconds).
+
+    The lift is read from the turn's grid (its degree-5 interpolant of ``y`` per interval,
+    the one the steady state was computed from: within 1e-12 of the laws), on the host:
+    the event search calls it many times with a few points each."""
 
     def __init__(self, steady: SteadyState, rpm: float):
         self.steady, self.rpm = steady, rpm
         self.period = 60.0 / rpm
-        train = steady.train
-        self.lam = complex(eigenvalue(train.omega * self.period, train.zeta))
+        self.lam = steady.lam(rpm)
         self.cycle = steady.cycle(rpm)
+        grid = steady.grid
+        self._nodes = np.asarray(grid.nodes)
+        self._widths = np.asarray(grid.piece_width)[np.asarray(grid.motion.piece)]
+        self._lift = np.asarray(grid.lift)
+        beta = float(steady.train.ks / steady.train.m) * self.period**2
+        # NumPy throughout (converted once): the searches call these thousands of times.
+        self._motion = MotionGrid(self._nodes, np.asarray(grid.motion.piece), np.asarray(grid.piece_width),
+                                  np.asarray(grid.motion.forcing) + beta * self._lift)
+        tr = steady.train
+        self._force_gains = (float(tr.preload), float(tr.k), float(tr.c))
+
+    def _at(self, t):
+        """Interval index and local time ``sigma`` of times ``t`` (periodic), by index."""
+        s = np.mod(np.atleast_1d(np.asarray(t, dtype=float)) / self.period, 1.0)
+        k = np.clip(np.searchsorted(self._nodes, s, side="right") - 1, 0, self._widths.size - 1)
+        return k, (s - self._nodes[k]) / self._widths[k]
 
     def lift(self, t):
         """Cam lift (m) and its rate (m/s) at times ``t``."""
-        y, dy, _ = self.steady.program.lift(360.0 * np.atleast_1d(t) / self.period)
-        return 1e-3 * y, 1e-3 * dy * 360.0 / self.period
+        k, sigma = self._at(t)
+        c = self._lift[k]
+        y = c[:, 5]
+        dy = 5 * c[:, 5]
+        for m in range(4, -1, -1):
+            y = y * sigma + c[:, m]
+            if m:
+                dy = dy * sigma + m * c[:, m]
+        return 1e-3 * y, 1e-3 * dy / self._widths[k] / self.period
 
     def deflection(self, t):
         """``e`` (m) and ``e'`` (m/s) of the steady state at times ``t``."""
-        q = self.steady.mode_at(self.cycle.q, self.rpm, np.atleast_1d(t) / self.period)
+        s = np.mod(np.atleast_1d(np.asarray(t, dtype=float)) / self.period, 1.0)
+        q = mode_between(self._motion, self.cycle.q, self.lam, s)
         e = q.imag / self.lam.imag
         e_rate = (q.real + self.lam.real * e) / self.period
         return 1e-3 * e, 1e-3 * e_rate
 
     def contact_force(self, t):
-        tr = self.steady.train
+        preload, k, c = self._force_gains
         e, e_rate = self.deflection(t)
-        return tr.preload + tr.k * e + tr.c * e_rate
+        return preload + k * e + c * e_rate
 
 
 def flights(steady: SteadyState, rpm: float) -> list[Flight]:
@@ -148,9 +175,12 @@ def flights(steady: SteadyState, rpm: float) -> list[Flight]:
     e0, de0 = ss.deflection(t_sep)
     state = (float(y0[0] - e0[0]), float(dy0[0] - de0[0]), float(e0[0]))
     t_end = t_sep + period
-    # After each impact the next separation is the force's first sign change on this fine
-    # sample of the following period, then bisected.
-    samples = np.linspace(0, period, _SAMPLES_PER_INTERVAL * steady.grid.nodes.size)
+    # After each impact the next separation is the force's first sign change on a fine
+    # sample of the following period (``_SAMPLES_PER_INTERVAL`` per grid interval, at
+    # fixed times of the turn, so the steady state's share is computed once), then bisected.
+    count = _SAMPLES_PER_INTERVAL * (steady.grid.nodes.size - 1)
+    step = period / count
+    steady_force = ss.contact_force(step * np.arange(count))
     out = []
     while t_sep < t_end:
         t_i, impact = _fly(steady, ss, t_sep, *state)
@@ -159,7 +189,10 @@ def flights(steady: SteadyState, rpm: float) -> list[Flight]:
             break
         velocity, (x_i, v_i) = impact
         force_after = _contact_after(ss, t_i, x_i, v_i)
-        values = force_after(samples)
+        ticks = np.arange(int(t_i // step) + 1, int(t_i // step) + 1 + count)
+        samples = np.concatenate([[0.0], step * ticks - t_i])
+        values = np.concatenate([force_after(samples[:1]),
+                                 steady_force[ticks % count] + force_after.difference(samples[1:])])
         again = np.flatnonzero(values[1:] < 0)
         stop = again[0] + 1 if again.size else values.size
         out.append(Flight(_angle(t_sep, period), _angle(t_i, period), velocity,
@@ -256,11 +289,15 @@ def _contact_after(ss: _SteadyState, t_i: float, x_i: float, v_i: float):
     tr = ss.steady.train
     qu, lam = _difference_mode(ss, t_i, x_i, v_i)
 
-    def force_after(t):
+    def difference(t):
         z = qu * np.exp(lam * t)
         u = z.imag / lam.imag
-        return ss.contact_force(t_i + t) + tr.k * u + tr.c * (z.real + lam.real * u)
+        return tr.k * u + tr.c * (z.real + lam.real * u)
 
+    def force_after(t):
+        return ss.contact_force(t_i + t) + difference(t)
+
+    force_after.difference = difference  # the free vibration's share alone
     return force_after
 
 
@@ -278,14 +315,22 @@ def _contact_state(ss: _SteadyState, t_i: float, x_i: float, v_i: float, tau: fl
 
 
 def _peak(force_after, samples, values, stop: int) -> float:
-    """Largest contact force from the impact to ``samples[stop]``, polished by golden section."""
+    """Largest contact force from the impact to ``samples[stop]``, polished by zooming: three
+    rounds of 32 samples around the best one (the bracket shrinks 16-fold each), then
+    the vertex of the parabola through the best three (the force is smooth there)."""
     k = int(np.argmax(values[:stop]))
     peak = float(values[k])
     if 0 < k < stop - 1:
         lo, hi = samples[k - 1], samples[k + 1]
-        for _ in range(60):
-            a, b = lo + 0.382 * (hi - lo), lo + 0.618 * (hi - lo)
-            fa, fb = force_after(np.array([a, b]))
-            lo, hi = (a, hi) if fb > fa else (lo, b)
-        peak = max(peak, float(force_after(np.array([0.5 * (lo + hi)]))[0]))
+        for _ in range(3):
+            t = np.linspace(lo, hi, 33)
+            f = force_after(t)
+            j = int(np.clip(np.argmax(f), 1, 31))
+            peak = max(peak, float(f[j]))
+            lo, hi = t[j - 1], t[j + 1]
+        (fa, fb, fc), h = force_after(np.array([lo, 0.5 * (lo + hi), hi])), 0.5 * (hi - lo)
+        curvature = fa - 2 * fb + fc
+        if curvature < 0:
+            vertex = 0.5 * (lo + hi) + 0.5 * h * (fa - fc) / curvature
+            peak = max(peak, float(force_after(np.array([vertex]))[0]))
     return peak

@@ -24,6 +24,10 @@ _ANGLE_TOLERANCE_DEG = 1e-9
 _LIFT_TOLERANCE_MM = 1e-9
 
 
+_JOIN_SNAP_DEG = 1e-9
+"""Angles this close to a join (degrees) are read as the join itself (``Program.lift``)."""
+
+
 @dataclasses.dataclass(frozen=True)
 class Segment:
     """One stretch of the cam turn: a rise or return by ``law`` over ``angle_deg``, or a dwell.
@@ -332,11 +336,19 @@ class Program:
         At a join of two segments the derivatives are the next segment's (``side="after"``)
         or the one ending there (``side="before"``): where the acceleration steps they differ.
         """
+        if side not in ("before", "after"):
+            raise ValueError(f"side must be 'before' or 'after', got {side!r}")
         theta = np.mod(np.asarray(theta_deg, dtype=float), 360.0)
+        # An angle within rounding of a join is that join: the side then decides the
+        # segment, not the last bit of an angle computed elsewhere (a grid node).
+        joins = np.append(self.start_deg, 360.0)
+        above = np.clip(np.searchsorted(joins, theta), 0, joins.size - 1)
+        for join in (joins[above], joins[np.maximum(above - 1, 0)]):
+            theta = np.where(np.abs(theta - join) <= _JOIN_SNAP_DEG, join, theta)
         if side == "before":
             theta = np.where(theta == 0.0, 360.0, theta)
-        elif side != "after":
-            raise ValueError(f"side must be 'before' or 'after', got {side!r}")
+        else:
+            theta = np.where(theta == 360.0, 0.0, theta)
         y, dy, ddy = (np.zeros_like(theta) for _ in range(3))
         for seg, start, y0 in zip(self.segments, self.start_deg, self.start_lift_mm):
             if side == "before":
@@ -347,7 +359,7 @@ class Program:
                 continue
             y[inside] = y0
             if seg.moving:
-                tau = (theta[inside] - start) / seg.angle_deg
+                tau = np.clip((theta[inside] - start) / seg.angle_deg, 0.0, 1.0)
                 s, v, a, _ = (np.asarray(x) for x in seg.law.evaluate(tau))
                 y[inside] += seg.lift_mm * s
                 dy[inside] = seg.lift_mm * v / seg.angle_deg

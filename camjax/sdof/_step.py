@@ -67,6 +67,28 @@ def psi(z: jax.Array) -> jax.Array:
     return jnp.where(small[..., None], series, jnp.stack(terms, axis=-1))
 
 
+def psi_host(z) -> np.ndarray:
+    """``psi`` in NumPy on the host, the same series and recurrence: for root finding on
+    exact values, which calls it many times with a few points (an eager JAX call per
+    point costs far more than the arithmetic)."""
+    z = np.asarray(z, dtype=complex)
+    small = np.abs(z) < _SERIES_RADIUS
+    inside = np.where(small, z, 0.0)
+    powers = np.empty((_SERIES_TERMS + 1, *z.shape), complex)
+    powers[0] = 1.0
+    for k in range(1, _SERIES_TERMS + 1):
+        np.multiply(powers[k - 1], inside, out=powers[k])
+    flat = powers.reshape(_SERIES_TERMS + 1, -1)
+    series = (_SERIES @ flat.real + 1j * (_SERIES @ flat.imag)).T.reshape(*z.shape, -1)
+    if small.all():
+        return series
+    zs = np.where(small, _SERIES_RADIUS, z)
+    terms = [(np.exp(zs) - 1.0) / zs]  # |zs| >= 1: no cancellation
+    for m in range(1, INTERPOLATION_DEGREE + 1):
+        terms.append((m * terms[-1] - 1.0) / zs)
+    return np.where(small[..., None], series, np.stack(terms, axis=-1))
+
+
 def eigenvalue(omega, zeta):
     """``lambda = -zeta w + i w sqrt(1 - zeta^2)`` of the damped oscillator."""
     return -zeta * omega + 1j * omega * jnp.sqrt(1.0 - zeta**2)
@@ -212,7 +234,7 @@ def mode_between(grid: MotionGrid, q_nodes, lam, t) -> np.ndarray:
     k = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, piece.size - 1)
     delta = t - nodes[k]
     h = np.asarray(grid.piece_width)[piece[k]]
-    weights = np.asarray(psi(jnp.asarray(lam * delta)))
+    weights = psi_host(lam * delta)
     powers = (delta / h)[:, None] ** np.arange(INTERPOLATION_DEGREE + 1)
     kick = delta * np.sum(np.asarray(grid.forcing)[k] * powers * weights, axis=1)
     return np.exp(lam * delta) * np.asarray(q_nodes)[k] + kick

@@ -1,0 +1,110 @@
+"""A cam program at the speed of an edit: analyse, edit a lift, analyse again.
+
+For each built-in program (the feed cam and the indexer) in one process: the first
+``analyse`` over ``--rpm`` (compiles), then ``--edits`` edits that keep the program's
+shape (every moving segment's lift scaled by a factor near 1), each analysed with the jump
+speed and the flights, timed (wall) with the number of XLA compilations it caused
+(``jax.monitoring``'s backend-compile events).  ``--baseline DIR`` runs the same
+measurement on another checkout (its code first on ``PYTHONPATH``) in a subprocess of
+the same run, and prints both side by side with their ratios.
+
+    python experiments/bench_program_edit.py [--rpm 300:900:101] [--edits 3] [--baseline DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+PROGRAMS = ("feed", "indexer")
+
+
+def measure(rpm_spec: str, edits: int, programs) -> dict:
+    import dataclasses
+
+    import jax
+    import numpy as np
+
+    import camjax.program as cp
+
+    compiles = []
+    jax.monitoring.register_event_duration_secs_listener(
+        lambda event, duration, **kw: compiles.append(duration)
+        if event == "/jax/core/compile/backend_compile_duration" else None)
+    lo, hi, count = (float(x) for x in rpm_spec.split(":"))
+    rpm = np.linspace(lo, hi, int(count))
+    out = {}
+    for name in programs:
+        program = cp.Program.load(cp.example_path(name))
+        rows = []
+        for k in range(edits + 1):
+            factor = 1.0 + 0.01 * k
+            edited = dataclasses.replace(program, segments=tuple(
+                dataclasses.replace(s, lift_mm=s.lift_mm * factor) if s.moving
+                else s for s in program.segments)) if k else program
+            before = len(compiles)
+            start = time.perf_counter()
+            try:
+                report = cp.analyse(edited, rpm)
+                jump = report.jump_speed_rpm
+            except ValueError as error:  # an edit that breaks a join: keep the first program
+                jump = f"refused: {error}"
+            rows.append({"edit": k, "seconds": time.perf_counter() - start,
+                         "compilations": len(compiles) - before, "jump_speed_rpm": jump})
+        out[name] = rows
+    return out
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rpm", default="300:900:101", help="LO:HI:COUNT (default %(default)s)")
+    parser.add_argument("--edits", type=int, default=3)
+    parser.add_argument("--programs", default=",".join(PROGRAMS))
+    parser.add_argument("--baseline", type=Path, help="another checkout to time in the same run")
+    parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # a child's output
+    args = parser.parse_args(argv)
+    programs = args.programs.split(",")
+    if args.json:
+        print(json.dumps(measure(args.rpm, args.edits, programs)))
+        return 0
+    runs = {}
+    for label, root in (("this", Path(__file__).resolve().parents[1]), ("baseline", args.baseline)):
+        if root is None:
+            continue
+        env = dict(os.environ, PYTHONPATH=str(root))
+        child = subprocess.run([sys.executable, __file__, "--json", "--rpm", args.rpm, "--edits", str(args.edits),
+                                "--programs", args.programs], env=env, capture_output=True, text=True)
+        if child.returncode:
+            print(child.stderr[-2000:], file=sys.stderr)
+            return 1
+        runs[label] = json.loads(child.stdout.strip().splitlines()[-1])
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                            cwd=Path(__file__).parent).stdout.strip()
+    print(f"# analyse over --rpm {args.rpm} with jump speed and flights; commit {commit}, "
+          f"{time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores")
+    print("| program | edit | " + " | ".join(f"{lab} s | {lab} compilations" for lab in runs) +
+          (" | ratio |" if len(runs) == 2 else ""))
+    print("|---" * (2 + 2 * len(runs) + (len(runs) == 2)) + "|")
+    for name in programs:
+        for k in range(args.edits + 1):
+            cells = []
+            for lab in runs:
+                row = runs[lab][name][k]
+                cells += [f"{row['seconds']:.3f}", str(row["compilations"])]
+            ratio = ""
+            if len(runs) == 2:
+                ratio = f" {runs['this'][name][k]['seconds'] / runs['baseline'][name][k]['seconds']:.3f} |"
+            print(f"| {name} | {'first' if k == 0 else k} | " + " | ".join(cells) + " |" + ratio)
+        for lab in runs:
+            jumps = {str(r["jump_speed_rpm"]) for r in runs[lab][name]}
+            print(f"  {lab}: jump speeds {sorted(jumps)}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
