@@ -361,8 +361,8 @@ def natural_frequency(
     )
     for label, value in pairs:
         require(value is not None, f"{label} is missing")
-        require(math.isfinite(value) and value > 0, f"{label} must be positive, got {value}")
-    inert, stiff = pairs[0][1], pairs[1][1]
+        require(_real(value, label) > 0, f"{label} must be positive, got {value}")
+    inert, stiff = float(pairs[0][1]), float(pairs[1][1])
     return math.sqrt(stiff / inert) / (2 * math.pi)
 
 
@@ -372,10 +372,19 @@ def period_ratio(motion_time: float, **physical: float) -> float:
     ``period_ratio(0.05, mass=2.0, stiffness=4e6)`` or
     ``period_ratio(0.05, inertia=0.01, torsional_rigidity=2e4)`` (SI units).
     """
-    require(
-        math.isfinite(motion_time) and motion_time > 0,
-        f"motion_time must be positive, got {motion_time}",
-    )
-    return motion_time * natural_frequency(**physical)
+    require(_real(motion_time, "motion_time") > 0, f"motion_time must be positive, got {motion_time}")
+    return float(motion_time) * natural_frequency(**physical)
+
+
+def _real(value, name: str) -> float:
+    """``value`` as a finite float, or a one-line ``ValueError`` naming ``name`` (a string
+    such as ``"0.05"`` is refused, not read)."""
+    try:
+        number = float(value) if not isinstance(value, str | bytes | bool) else None
+    except (TypeError, ValueError):
+        number = None
+    require(number is not None and math.isfinite(number),
+            f"{name} must be a finite number (SI units), got {value!r}")
+    return number
 
 
