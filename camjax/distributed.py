@@ -17,7 +17,7 @@ pass ``--distributed``).  The output directory must be on a file system every pr
 sees.  After its chunks each process waits at a barrier; process 0 then merges the chunks
 into ``sweep.npz``.
 
-Spec file (TOML)::
+Spec file (TOML; every key, its default and the files written: docs/sweep.md)::
 
     output = "scca-sweep"          # output directory, relative to the spec file
     method = "exact"               # or a diffrax solver name

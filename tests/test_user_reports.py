@@ -2,9 +2,11 @@
 
 import dataclasses
 import math
+import re
 import warnings
+from pathlib import Path
 
-import numpy as np
+import jax
 import pytest
 
 import camjax
@@ -183,3 +185,69 @@ def test_program_command_warns_of_an_implausible_speed_on_one_line(capsys):
     assert len(lines) == 1 and lines[0].startswith("warning: indexer at 100000 rpm: ")
     with pytest.warns(UserWarning, match="the follower cannot follow"):
         analyse(Program.load(example_path()), [1e5], with_flight=False)
+
+
+# --- a traced period ratio past the default grid -----------------------------------------
+
+def test_a_traced_period_ratio_past_the_default_grid_says_which_grid_to_pass():
+    """n = 200 under jit: refused on the traced default grid (704 intervals, n <= 168) with
+    the resolution to pass, 2 pi n / 1.5 per rise; with it, jit gives the concrete call's Ct
+    (two grids, 838 and the concrete 896 intervals: each within the exact path's accuracy,
+    about 1e-11, docs/work-precision.md)."""
+    law = camjax.laws.get("modified-sine")
+    concrete = float(camjax.torsion_factor(law, 200.0))
+    with pytest.raises(Exception, match=r"period ratio must be at most 168 .*: pass resolution >= "
+                       r"4\.19 n, up to 1,048,576 \(n <= 250,329\), such as torsion_factor\(law, n, "
+                       r"resolution=4096\) for n <= 977"):
+        jax.block_until_ready(jax.jit(lambda n: camjax.torsion_factor(law, n))(200.0))
+    needed = math.ceil(2 * math.pi * 200.0 / 1.5)
+    assert needed == 838
+    jitted = jax.jit(lambda n: camjax.torsion_factor(law, n, resolution=needed))(200.0)
+    assert float(jitted) == pytest.approx(concrete, rel=1e-10)
+    assert float(jitted) != pytest.approx(1.0, abs=1e-4)  # Ct of a real response, not a fill
+
+
+# --- docs that mislead -------------------------------------------------------------------
+
+ROOT = Path(__file__).parents[1]
+
+
+def test_the_sweep_page_documents_every_key_and_its_example_loads(tmp_path):
+    page = (ROOT / "docs" / "sweep.md").read_text()
+    for key in distributed._KEYS | {"start", "stop", "count", "values", "names", "scca_step", "scca_face"}:
+        assert f"`{key}`" in page or f"`[{key}]`" in page, key
+    spec = tmp_path / "spec.toml"
+    spec.write_text(re.search(r"```toml\n(.*?)```", page, re.S).group(1))
+    loaded = distributed.load_spec(spec)
+    assert (len(loaded.laws), loaded.period_ratio.size, len(loaded.chunks())) == (2 + 231, 1000, 8)
+    assert "sweep.md" in (ROOT / "mkdocs.yml").read_text()
+    assert "docs/sweep.md" in (ROOT / "README.md").read_text()
+
+
+def test_getting_started_states_the_exact_paths_reach_from_the_code():
+    from camjax.sdof import MAX_GRID_INTERVALS, MAX_PHASE_STEP
+
+    reach = math.floor(MAX_GRID_INTERVALS * MAX_PHASE_STEP / (2 * math.pi))
+    page = (ROOT / "docs" / "getting-started.md").read_text()
+    assert f"n above about {reach:,}" in page and "83,000" not in page
+    with pytest.raises(ValueError, match="needs a grid of"):
+        camjax.ct_curve("cycloidal", [reach + 1.0])
+    install = re.search(r'pip install "jax\[(cuda\d+)\]', page).group(1)
+    assert f"`jax[{install}]` for a CUDA {install[4:]} driver, as below" in page
+
+
+def test_the_program_page_says_which_damping_the_steady_state_needs():
+    page = " ".join((ROOT / "docs" / "program.md").read_text().split())
+    assert "`damping_ratio > 0`" in page
+    program = Program.load(example_path())
+    undamped = dataclasses.replace(program, follower=dataclasses.replace(program.follower, damping_ratio=0.0))
+    with pytest.raises(ValueError, match=r"needs follower\.damping_ratio > 0"):
+        analyse(undamped, [300.0])
+
+
+def test_a_cam_without_phase_deg_is_documented_at_zero(tmp_path):
+    page = " ".join((ROOT / "docs" / "machine.md").read_text().split())
+    assert "without `phase_deg`" in page
+    machine = tmp_path / "m.toml"
+    machine.write_text(f'[machine]\nname = "m"\n\n[[cam]]\nprogram = "{example_path()}"\n')
+    assert camjax.program.Machine.load(machine).cams[0][1] == 0.0
