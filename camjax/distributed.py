@@ -17,7 +17,7 @@ pass ``--distributed``).  The output directory must be on a file system every pr
 sees.  After its chunks each process waits at a barrier; process 0 then merges the chunks
 into ``sweep.npz``.
 
-Spec file (TOML)::
+Spec file (TOML; every key, its default and the files written: docs/sweep.md)::
 
     output = "scca-sweep"          # output directory, relative to the spec file
     method = "exact"               # or a diffrax solver name
@@ -46,6 +46,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -207,11 +208,18 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
         raise ValueError(f"phase_step must be in (0, {MAX_PHASE_STEP:g}] (radians per grid "
                          f"interval), got {phase_step}")
     if method == "exact" and default_resolution(n.max(), phase_step) > MAX_GRID_INTERVALS:
+        # The grid's size depends on the largest ratio and phase_step alone (not on the
+        # chunks): a coarser step helps up to MAX_PHASE_STEP, past that only a smaller stop.
+        needed = 2 * np.pi * n.max() / MAX_GRID_INTERVALS
+        reach = MAX_GRID_INTERVALS * MAX_PHASE_STEP / (2 * np.pi)
+        advice = (f"phase_step at least {_up(needed):g}, at most "
+                  f"{MAX_PHASE_STEP:g}" if needed <= MAX_PHASE_STEP else
+                  f"period ratios up to {math.floor(reach):,} at phase_step {MAX_PHASE_STEP:g}: "
+                  "lower period_ratio.stop (or the largest of values)")
         raise ValueError(
             f"phase_step {phase_step:g} at period ratio {n.max():g} needs a grid of "
             f"{default_resolution(n.max(), phase_step):,} intervals per rise; the limit is "
-            f"{MAX_GRID_INTERVALS:,} (phase_step at least "
-            f"{2 * np.pi * n.max() / MAX_GRID_INTERVALS:.3g} there)")
+            f"{MAX_GRID_INTERVALS:,} ({advice})")
     what = json.dumps([names, n.tolist(), damping, method, dwell, per_chunk]
                       + ([phase_step] if phase_step != MAX_PHASE_STEP else []))
     return SweepSpec(
@@ -219,6 +227,12 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
         method=method, dwell=dwell, laws_per_chunk=per_chunk, phase_step=phase_step,
         fingerprint=hashlib.sha256(what.encode()).hexdigest()[:16],
     )
+
+
+def _up(value: float, digits: int = 3) -> float:
+    """``value`` rounded up to ``digits`` significant digits: a printed bound that admits it."""
+    scale = 10.0 ** (math.floor(math.log10(value)) - digits + 1)
+    return math.ceil(value / scale) * scale
 
 
 def _write_atomic(path: Path, **arrays) -> None:

@@ -48,13 +48,22 @@ class ModelEntry:
         placeholders = ",".join(p for _, p in self.parameters)
         return f"{self.name}:{placeholders}" if placeholders else self.name
 
+    def counted(self, values) -> tuple:
+        """``values`` as a tuple if one for each of ``parameters``, else a ``ValueError``
+        saying which (``backlash takes 2 parameters, BK and DN (backlash:BK,DN), got 1``)."""
+        values = tuple(values)
+        if len(values) != len(self.parameters):
+            names = [p for _, p in self.parameters]
+            listed = ", ".join(names[:-1]) + " and " + names[-1] if len(names) > 1 else "".join(names)
+            count = f"{len(names)} parameter{'' if len(names) == 1 else 's'}"
+            raise ValueError(f"{self.name} takes {count}{', ' + listed if names else ''} "
+                             f"({self.usage}), got {len(values)}")
+        return values
+
     def template(self, values=(), damping: float = 0.0):
         """The model at period ratio 1 with ``values`` for ``parameters`` (a sweep's
         template); ``ValueError`` naming what is wrong."""
-        values = tuple(values)
-        if len(values) != len(self.parameters):
-            raise ValueError(f"{self.name} takes {len(self.parameters)} parameter(s) "
-                             f"({self.usage}), got {len(values)}")
+        values = self.counted(values)
         fields = {field: float(v) for (field, _), v in zip(self.parameters, values)}
         if self.damping:
             fields["damping"] = float(damping)

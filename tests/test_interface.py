@@ -201,7 +201,8 @@ def test_cli_refuses_a_huge_period_ratio_and_a_bad_model_before_any_work(capsys)
     assert main(["ct", "--n", "5", "--model", "bogus:1"]) == 2
     assert "unknown model" in capsys.readouterr().err
     assert main(["ct", "--n", "5", "--model", "backlash:0.1"]) == 2
-    assert "takes 2 parameter(s)" in capsys.readouterr().err
+    assert ("--model 'backlash:0.1': backlash takes 2 parameters, BK and DN (backlash:BK,DN), "
+            "got 1") in capsys.readouterr().err
     assert main(["ct", "--n", "5", "--model", "friction:-1"]) == 2
     assert "--model 'friction:-1': MU must be >= 0" in capsys.readouterr().err
 

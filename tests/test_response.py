@@ -13,6 +13,7 @@ import camjax
 from camjax import laws
 from camjax.metrics import PEAK_TOLERANCE
 from camjax.models import response_metrics
+from camjax.models._spring_mass import TRACED_RESOLUTION
 
 
 def cycloidal_residual(n):
@@ -134,15 +135,22 @@ def test_undamped_torsion_factor_is_max_of_motion_peak_and_residual():
 
 
 def test_batch_equals_python_loop_and_jit_equals_eager():
+    """The batch, the loop, the eager call and the jitted one run one grid each pair (the
+    curve's 128 intervals are every ratio's default here; the jitted call's traced ratio
+    gets TRACED_RESOLUTION, given to the eager call too) but different compiled programs.
+    Those agree to the method's accuracy, not the last bits: the peak search leaves alone
+    an interval within PEAK_TOLERANCE (relative) of the best value, so two programs that
+    round differently may refine different near-equal crests (Ct differed by 1.05e-12 at
+    n = 19.6); R, the end node's mode in closed form, has no search: rounding alone."""
     law = laws.Cycloidal()
     n = np.array([1.1, 2.9, 7.3, 19.6])
     curve = camjax.ct_curve(law, n, damping=0.02)
-    loop = [camjax.solve(law, camjax.SpringMass(x, 0.02)).metrics for x in n]
-    np.testing.assert_allclose(curve.ct, [float(m.ct) for m in loop], rtol=1e-12)
+    loop = [camjax.solve(law, camjax.SpringMass(x, 0.02), resolution=128).metrics for x in n]
+    np.testing.assert_allclose(curve.ct, [float(m.ct) for m in loop], rtol=2 * PEAK_TOLERANCE)
     np.testing.assert_allclose(curve.residual, [float(m.residual) for m in loop], rtol=1e-12)
-    eager = camjax.torsion_factor(law, 7.3, 0.02)
+    eager = camjax.torsion_factor(law, 7.3, 0.02, resolution=TRACED_RESOLUTION)
     jitted = jax.jit(lambda n, zeta: camjax.torsion_factor(law, n, zeta))(7.3, 0.02)
-    assert float(jitted) == pytest.approx(float(eager), rel=1e-13)
+    assert float(jitted) == pytest.approx(float(eager), rel=2 * PEAK_TOLERANCE)
     # With the law traced, its pieces get traced interval counts (another grid, with the
     # same nodes at the breakpoints): the same Ct within the peak refinement's error.
     traced = jax.jit(camjax.torsion_factor)(law, 7.3, 0.02)

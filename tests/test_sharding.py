@@ -33,6 +33,7 @@ SCRIPT = textwrap.dedent(
     from camjax import laws
     from camjax.laws import SCCA
     from camjax.law_design import peak_loads
+    from camjax.metrics import PEAK_TOLERANCE
     from camjax.program import Follower, Program, Segment, SteadyState
     from camjax.sweep import ct_curve, ct_curves
 
@@ -80,9 +81,15 @@ SCRIPT = textwrap.dedent(
     errors["program"] = max(float(np.max(np.abs(x - y) / np.abs(x).max())) for x, y in zip(a, b))
     print("ERRORS", errors)
     assert all(e <= 1e-12 for e in errors.values()), errors
-    # the sharded stack equals each law alone (not just the same program twice)
-    alone = ct_curve(family[1], n, devices=1)
-    assert worst(alone, many[family[1].name]) <= 1e-12
+    # The sharded stack equals each law alone (not just the same program twice): another
+    # compiled program on the same grid, so Ct and the peak agree to the peak search's
+    # PEAK_TOLERANCE (it leaves alone a crest within it of the best), R (no search) to
+    # rounding.
+    alone, stacked = ct_curve(family[1], n, devices=1), many[family[1].name]
+    for key, tolerance in (("ct", 2 * PEAK_TOLERANCE), ("peak_in_motion", 2 * PEAK_TOLERANCE),
+                           ("residual", 1e-12)):
+        a, b = getattr(alone, key), getattr(stacked, key)
+        assert np.max(np.abs(a - b) / np.abs(a)) <= tolerance, (key, a, b)
     """
 )
 

@@ -140,6 +140,20 @@ def options_named(option: str | None = None, /, **names: str):
         raise CliError(text if option is None else f"{option}: {text}") from None
 
 
+@contextlib.contextmanager
+def file_named(path):
+    """A ``ValueError`` raised inside (a check after loading: a cusp under a flat face, a
+    grid too fine, no damping) prefixed with the file ``path``, as the load-time checks
+    prefix theirs; one that names it already passes unchanged."""
+    try:
+        yield
+    except ValueError as error:
+        text = str(error)
+        if text.startswith(f"{path}: "):
+            raise
+        raise ValueError(f"{path}: {text}") from None
+
+
 def parse_float_list(text: str, what: str) -> list[float]:
     """``"1,2.5,4"`` as floats, or a ``CliError`` naming ``what``."""
     try:

@@ -75,6 +75,8 @@ def parse_model(text: str, damping: float):
         entry = models.model_entry(name, swept=True)
     except ValueError as error:
         raise CliError(f"--model {text!r}: {error}") from None
+    with options_named(f"--model {text!r}"):
+        entry.counted(numbers)  # in the registry's words (its model name may be a field's)
     # The API's messages name the model's fields; the user gave the registry's placeholders.
     with options_named(f"--model {text!r}", **{field: placeholder for field, placeholder in entry.parameters}):
         return entry.template(numbers, damping)

@@ -10,11 +10,13 @@ from ._common import (
     CliError,
     check_damping,
     dump_json,
+    file_named,
     import_aside,
     options_named,
     output_dir,
     parse_float_list,
 )
+from .program import is_machine, program_path
 
 DEFAULT_STEPS = 6000
 """The design's own default (``camjax.law_design.DEFAULT_STEPS``; a test checks they agree)."""
@@ -56,7 +58,8 @@ def register(subparsers) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--program", metavar="FILE", help="design one segment of this cam program "
-                        "(with --segment and --rpm; writes DIR/program.toml and the law beside it)")
+                        "(a file, or a built-in example: indexer, feed; with --segment and "
+                        "--rpm; writes DIR/program.toml and the law beside it)")
     parser.add_argument("--segment", type=int, help="segment number (1-based) to design, with --program")
     parser.add_argument("--rpm", metavar="LO:HI", help="speed range in rpm, with --program (maps to the segment's band)")
     parser.set_defaults(func=run)
@@ -74,14 +77,19 @@ def _run_program(args, out) -> int:
     rpm_lo, rpm_hi = (parse_float_list(p, "--rpm")[0] for p in parts)
     if not 0 < rpm_lo < rpm_hi:
         raise CliError(f"--rpm: need 0 < LO < HI, got {args.rpm!r}")
-    program = Program.load(args.program)
-    with options_named(segment="--segment"):
-        n1, n2 = segment_band(program, args.segment, rpm_lo, rpm_hi)
-    new, result = design_segment(
-        program, args.segment, rpm_lo, rpm_hi, objective=args.objective,
-        caps=Caps(args.max_ca, args.max_jerk), knots=args.knots, seed=args.seed,
-        optimizer=args.optimizer, progress=not args.quiet,
-        **({} if args.steps is None else {"steps": args.steps}))
+    path = program_path(args.program)
+    if is_machine(path):
+        raise CliError(f"--program: {path} is a machine file (several cams on one shaft); "
+                       "design takes one cam's program: give the program file of the cam")
+    with file_named(path):
+        program = Program.load(path)
+        with options_named(segment="--segment"):
+            n1, n2 = segment_band(program, args.segment, rpm_lo, rpm_hi)
+        new, result = design_segment(
+            program, args.segment, rpm_lo, rpm_hi, objective=args.objective,
+            caps=Caps(args.max_ca, args.max_jerk), knots=args.knots, seed=args.seed,
+            optimizer=args.optimizer, progress=not args.quiet,
+            **({} if args.steps is None else {"steps": args.steps}))
     path = write_program(new, out)
     (label, value), = result.values.items()
     print(f"segment {args.segment}: band n = {n1:.4g}..{n2:.4g}; {label} = {value:.5g}; wrote {path}")
@@ -126,6 +134,9 @@ def run(args) -> int:
             raise CliError(f"{option}: must be from 1 to {most:,}, got {value}")
     with options_named(max_ca="--max-ca", max_jerk="--max-jerk"):
         D.Caps(args.max_ca, args.max_jerk)  # the caps checked before any work
+    if args.program and (args.band or args.n is not None):
+        raise CliError(f"{'--band' if args.band else '--n'}: not with --program (the segment's "
+                       "band comes from --rpm)")
     out = output_dir(args.out)
     if args.program:
         return _run_program(args, out)

@@ -7,9 +7,10 @@ import io
 import itertools
 import math
 import sys
+import warnings
 from pathlib import Path
 
-from ._common import CliError, add_format, dump_json, output_dir, parse_range
+from ._common import CliError, add_format, dump_json, file_named, output_dir, parse_range
 
 DEFAULT_RPM = "600"
 DEFAULT_SPEED_FLUCTUATION = 0.05  # camjax.program.DEFAULT_SPEED_FLUCTUATION (not imported: JAX loads late)
@@ -265,7 +266,6 @@ def run(args) -> int:
         Program,
         SteadyState,
         analyse,
-        example_path,
     )
 
     rpm = parse_range(args.rpm, "--rpm")
@@ -278,19 +278,19 @@ def run(args) -> int:
                        f"got {args.plot_rpm:g}")
     if not 0 < args.speed_fluctuation < 2:
         raise CliError(f"--speed-fluctuation: must be in (0, 2), got {args.speed_fluctuation:g}")
-    path = Path(args.file) if args.file else example_path()
-    if args.file and args.file.isidentifier() and not path.exists() and example_path(args.file).exists():
-        path = example_path(args.file)  # a built-in example by name
-    if _is_machine(path):
+    path = program_path(args.file)
+    if is_machine(path):
         return _run_machine(args, path, rpm)
-    program = Program.load(path)
-    out = output_dir(args.out)
-    steady = SteadyState(program, float(min(rpm)))
-    report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
-                     speed_fluctuation=args.speed_fluctuation).as_dict()
-    if out is not None:
-        _write_outputs(out, program, steady, report, rpm, args.points, plot_speed(report, args.plot_rpm))
-    for line in validity_warnings(program, report):
+    with file_named(path), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")  # the library's speed warnings, shown below
+        program = Program.load(path)
+        out = output_dir(args.out)
+        steady = SteadyState(program, float(min(rpm)))
+        report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
+                         speed_fluctuation=args.speed_fluctuation).as_dict()
+        if out is not None:
+            _write_outputs(out, program, steady, report, rpm, args.points, plot_speed(report, args.plot_rpm))
+    for line in [*_messages(caught), *validity_warnings(program, report)]:
         print(f"warning: {line}", file=sys.stderr)
     for s in report["speeds"]:
         change = s["impacts_change_deg"]
@@ -308,7 +308,25 @@ def run(args) -> int:
     return 0
 
 
-def _is_machine(path: Path) -> bool:
+def program_path(text: str | None) -> Path:
+    """The program or machine file that FILE (or ``--program``) names: a path, else a
+    built-in example's name (``indexer``, ``feed``); none: the built-in ``indexer``."""
+    from ..program import example_path
+
+    if not text:
+        return example_path()
+    path = Path(text)
+    if text.isidentifier() and not path.exists() and example_path(text).exists():
+        return example_path(text)  # a built-in example by name
+    return path
+
+
+def _messages(caught) -> list[str]:
+    """The text of each warning in ``caught`` (``warnings.catch_warnings``), once each."""
+    return list(dict.fromkeys(str(w.message) for w in caught))
+
+
+def is_machine(path: Path) -> bool:
     """A file with ``[[cam]]`` or ``[machine]`` tables (unreadable files: left to ``Program.load``)."""
     from ..checks import read_toml
     from ..program import is_machine_file
@@ -322,12 +340,16 @@ def _is_machine(path: Path) -> bool:
 def _run_machine(args, path: Path, rpm) -> int:
     from ..program import Machine, analyse_machine
 
-    machine = Machine.load(path)
-    out = output_dir(args.out)
-    report = analyse_machine(machine, rpm, with_flight=not args.no_flight,
-                             speed_fluctuation=args.speed_fluctuation).as_dict()
-    if out is not None:
-        _write_machine(out, machine, report, rpm, args.points)
+    with file_named(path), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        machine = Machine.load(path)
+        out = output_dir(args.out)
+        report = analyse_machine(machine, rpm, with_flight=not args.no_flight,
+                                 speed_fluctuation=args.speed_fluctuation).as_dict()
+        if out is not None:
+            _write_machine(out, machine, report, rpm, args.points)
+    for line in _messages(caught):
+        print(f"warning: {line}", file=sys.stderr)
     if args.format == "json":
         print(dump_json(report))
     elif args.format == "csv":

@@ -14,7 +14,8 @@ def register(sub) -> None:
         description="Compute Ct, residual and peak in motion for every law of a spec file "
         "(named laws and/or an SCCA grid) at every period ratio and damping ratio.  Chunks "
         "are written atomically to the output directory; rerunning the same command "
-        "computes only the missing ones.  The spec format is in camjax.distributed.",
+        "computes only the missing ones.  The spec format (every key, its default, the "
+        "files written) is in docs/sweep.md.",
     )
     parser.add_argument("spec", metavar="SPEC", help="TOML spec file")
     parser.add_argument("--devices", type=int, metavar="K",

@@ -275,8 +275,22 @@ def batch_metrics(law, period_ratio, damping, options: SpringMassOptions):
 
 TRACED_RESOLUTION = 704
 """Grid of ``torsion_factor`` and ``residual_vibration`` for a traced period ratio when no
-``resolution`` is given (a concrete one sizes its own grid, ``default_resolution``):
-period ratios up to about 168 (``w h <= MAX_PHASE_STEP``)."""
+``resolution`` is given (a concrete one sizes its own grid, ``default_resolution``, up to
+``MAX_GRID_INTERVALS``): period ratios up to about 168 (``w h <= MAX_PHASE_STEP``).  A
+grid's size is static under a trace, and one sized for the concrete call's reach (2**20
+intervals, n up to 250,329) took 1.6 s a call and 1.4 GB where this one takes
+milliseconds: past 168 the error says which ``resolution`` to pass."""
+
+
+def _traced_too_coarse() -> str:
+    """The error for a traced period ratio past ``TRACED_RESOLUTION``'s reach: how to pass
+    a grid that reaches further (4.19 intervals per unit of n)."""
+    per_n = 2 * math.pi / MAX_PHASE_STEP
+    return (f"period ratio must be at most {_down(TRACED_RESOLUTION / per_n):.4g} on a traced "
+            f"period ratio's default grid (resolution {TRACED_RESOLUTION}; a concrete one sizes "
+            f"its own): pass resolution >= {per_n:.3g} n, up to {MAX_GRID_INTERVALS:,} "
+            f"(n <= {_down(MAX_GRID_INTERVALS / per_n, 6):,.0f}), such as "
+            f"torsion_factor(law, n, resolution=4096) for n <= {_down(4096 / per_n, 3):.3g}")
 
 
 def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
@@ -293,6 +307,8 @@ def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
     model = SpringMass(period_ratio, damping)  # concrete values checked here
     if resolution is None and model._option_scale() is None:
         resolution = TRACED_RESOLUTION
+        reach = TRACED_RESOLUTION * MAX_PHASE_STEP / (2 * math.pi)  # the grid's own check's
+        model = SpringMass(checks.ensure(period_ratio, lambda v: v <= reach, _traced_too_coarse()), damping)
     options = model.options("exact", dwell, resolution=resolution)
     model = model.with_array_leaves()
     with checks.as_value_errors():
@@ -325,7 +341,8 @@ def torsion_factor(law, period_ratio, damping=0.0, *, dwell=1.0, resolution=None
 
     ``law`` is a motion law or its name.  A concrete period ratio sizes the grid
     (``resolution=None``); a traced one (inside ``jit``, ``vmap``, ``grad``) uses
-    ``resolution`` (default ``TRACED_RESOLUTION``).  A non-positive or NaN period ratio, one
+    ``resolution`` (default ``TRACED_RESOLUTION``, n up to 168; pass at least 4.19 n for a
+    larger one, such as ``resolution=4096`` for n up to 977).  A non-positive or NaN period ratio, one
     past what the grid resolves, damping outside ``[0, 1)`` or invalid law parameters
     raise, even under ``jit``, ``vmap`` and ``grad``.
     """
@@ -361,8 +378,8 @@ def natural_frequency(
     )
     for label, value in pairs:
         require(value is not None, f"{label} is missing")
-        require(math.isfinite(value) and value > 0, f"{label} must be positive, got {value}")
-    inert, stiff = pairs[0][1], pairs[1][1]
+        require(_real(value, label) > 0, f"{label} must be positive, got {value}")
+    inert, stiff = float(pairs[0][1]), float(pairs[1][1])
     return math.sqrt(stiff / inert) / (2 * math.pi)
 
 
@@ -372,10 +389,19 @@ def period_ratio(motion_time: float, **physical: float) -> float:
     ``period_ratio(0.05, mass=2.0, stiffness=4e6)`` or
     ``period_ratio(0.05, inertia=0.01, torsional_rigidity=2e4)`` (SI units).
     """
-    require(
-        math.isfinite(motion_time) and motion_time > 0,
-        f"motion_time must be positive, got {motion_time}",
-    )
-    return motion_time * natural_frequency(**physical)
+    require(_real(motion_time, "motion_time") > 0, f"motion_time must be positive, got {motion_time}")
+    return float(motion_time) * natural_frequency(**physical)
+
+
+def _real(value, name: str) -> float:
+    """``value`` as a finite float, or a one-line ``ValueError`` naming ``name`` (a string
+    such as ``"0.05"`` is refused, not read)."""
+    try:
+        number = float(value) if not isinstance(value, str | bytes | bool) else None
+    except (TypeError, ValueError):
+        number = None
+    require(number is not None and math.isfinite(number),
+            f"{name} must be a finite number (SI units), got {value!r}")
+    return number
 
 

@@ -150,7 +150,7 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     from the same steady state; ``geometry`` from the profile at the grid's nodes and 3600
     angles over the turn (a flat face over a cusp is a ``ValueError`` naming the angles).
     """
-    rpm = check_rpm(rpm)
+    rpm = check_rpm(rpm, program)  # warns of an implausible speed
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
     steady = steady or SteadyState(program, rpm.min(), devices=devices)
     out = steady.summary_checked(rpm)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 from typing import NamedTuple
 
 import jax
@@ -514,13 +515,30 @@ class SteadyState:
         return mode_between(motion, q_nodes, self.lam(rpm), np.mod(np.atleast_1d(np.asarray(s, dtype=float)), 1.0))
 
 
-def check_rpm(rpm) -> np.ndarray:
-    """Speeds as a 1-D float array, checked: positive and finite (``ValueError`` if not)."""
+IMPLAUSIBLE_RPM, IMPLAUSIBLE_PERIOD_RATIO = 100_000.0, 0.05
+"""Speeds no cam runs at, warned of (not refused): above 100,000 rpm, or a moving segment's
+period ratio below 0.05 (the follower cannot follow its motion at all): often a unit slip."""
+
+
+def check_rpm(rpm, program: Program | None = None) -> np.ndarray:
+    """Speeds as a 1-D float array, checked: positive and finite (``ValueError`` if not);
+    with ``program``, a ``UserWarning`` for a speed past ``IMPLAUSIBLE_RPM`` or one that
+    gives a segment a period ratio below ``IMPLAUSIBLE_PERIOD_RATIO``."""
     rpm = np.atleast_1d(np.asarray(rpm, dtype=float))
     if rpm.size == 0 or rpm.ndim != 1:
         raise ValueError("rpm must be one speed or a 1-D list of speeds")
     if not np.all(np.isfinite(rpm)) or np.any(rpm <= 0):
         raise ValueError(f"rpm must be positive and finite, got {rpm[~(np.isfinite(rpm) & (rpm > 0))][0]:g}")
+    if program is not None:
+        shortest = min((s.angle_deg / 360.0 for s in program.segments if s.moving), default=1.0)
+        ratio = program.follower.natural_frequency_hz * 60.0 / rpm.max() * shortest
+        why = [text for bad, text in (
+            (rpm.max() > IMPLAUSIBLE_RPM, f"faster than any cam runs (above {IMPLAUSIBLE_RPM:,.0f} rpm)"),
+            (ratio < IMPLAUSIBLE_PERIOD_RATIO, f"the shortest moving segment's period ratio is {ratio:.2g}, "
+             f"below {IMPLAUSIBLE_PERIOD_RATIO:g}: the follower cannot follow the motion at all")) if bad]
+        if why:
+            warnings.warn(f"{program.name} at {rpm.max():g} rpm: {'; '.join(why)} (check the speed's "
+                          "units)", stacklevel=3)
     return rpm
 
 
