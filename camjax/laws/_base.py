@@ -10,6 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._custom_types import ArrayLike, Breakpoints, LawValues
+from .._shapes import bucket
 from ..checks import is_concrete
 
 
@@ -76,12 +77,16 @@ class AbstractMotionLaw(eqx.Module):
 
     def evaluate(self, tau: ArrayLike) -> LawValues:
         """``(s, v, a, j)`` at ``tau``, with dwells outside ``[0, 1]``."""
-        tau = jnp.asarray(tau, dtype=float)
         if is_concrete(self, tau):
             # Called eagerly, the formulas would run op by op, and each op compiles its own
-            # small program on first use: one program per law type is far quicker.
-            return _compiled_evaluate(self, tau)
-        return self._evaluate(tau)
+            # small program on first use: one program per law type is far quicker, and
+            # the points padded to a bucketed count keep it to a few sizes.
+            tau = np.asarray(tau, dtype=float)
+            flat = tau.ravel()
+            padded = np.pad(flat, (0, bucket(flat.size) - flat.size), constant_values=0.5)
+            out = _compiled_evaluate(self, jnp.asarray(padded))
+            return tuple(jnp.asarray(np.asarray(x)[: flat.size].reshape(tau.shape)) for x in out)
+        return self._evaluate(jnp.asarray(tau, dtype=float))
 
     def _evaluate(self, tau: jax.Array) -> LawValues:
         inside = (tau >= 0.0) & (tau <= 1.0)

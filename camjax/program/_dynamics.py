@@ -25,6 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._shapes import bucket
 from ..errors import RESULTS, raise_if_failed
 from ..metrics import refined_peak
 from ..sdof import (
@@ -337,16 +338,6 @@ SUMMARY_OUTPUTS = ("max_payload_acceleration_m_s2", "min_contact_force_n", "max_
 """The ``Cycle`` fields a speed sweep keeps (``SpeedSummary``'s, after ``rpm``)."""
 
 
-def bucket(size: int, minimum: int = 16) -> int:
-    """``size`` rounded up to ``2^k``, ``1.25 2^k``, ``1.5 2^k`` or ``1.75 2^k``: the
-    shapes a compiled program is built for.  An edit that moves a grid's size or a batch's
-    width by a little keeps its shape, so it reuses the compiled program (at most a
-    quarter of the work is padding)."""
-    size = max(int(size), minimum)
-    step = max(1, 2 ** (size.bit_length() - 1) // 4)
-    return step * -(-size // step)
-
-
 class PaddedTurn(NamedTuple):
     """A turn's grid, follower and contact factors padded to bucketed shapes: the compiled
     turn's arguments.  The padding is empty intervals (width 0) at the end of the turn in a
@@ -410,13 +401,6 @@ def _cycles(rpm, turn: PaddedTurn) -> Cycle:
 
 
 @jax.jit
-def _min_contact_force(rpm, turn: PaddedTurn):
-    """The contact force's minimum over the turn at every speed of a block (the jump's
-    scan and bisection): a smaller program than the whole cycle."""
-    return jax.vmap(lambda r: _cycle(turn.grid, turn.train, r).min_contact_force_n)(rpm)
-
-
-@jax.jit
 def _started_cycle(rpm, turn: PaddedTurn, q_start) -> Cycle:
     """One turn from the mode ``q_start`` at its start (a start-up's turns)."""
     return _cycle(turn.grid, turn.train, rpm, q_start=q_start, periodic=False, contact=turn.contact)
@@ -468,10 +452,11 @@ class SteadyState:
         return out
 
     def min_contact_force_n(self, rpm) -> np.ndarray:
-        """``summary(rpm).min_contact_force_n`` alone (the same numbers, less to compute)."""
+        """``summary(rpm).min_contact_force_n`` alone (the jump's scan and bisection): the
+        same compiled program, so a program's first look compiles one."""
         rpm = check_rpm(rpm)
         self._check_slowest(rpm)
-        force = self._blocks(_min_contact_force, rpm)
+        force = self._blocks(_cycles, rpm, keep=lambda c: c.min_contact_force_n)
         raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm", force)
         return force
 
@@ -479,15 +464,16 @@ class SteadyState:
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
 
-    def _blocks(self, program, rpm: np.ndarray):
+    def _blocks(self, program, rpm: np.ndarray, keep=None):
         """``program`` over the speeds in blocks of ``SPEED_BLOCK`` (the last padded), each
-        split over the devices; the blocks are dispatched before any is waited for."""
+        split over the devices (all of them, or one where the block does not split
+        evenly: one compiled program for every call); the blocks are dispatched before any
+        is waited for, and ``keep`` picks the outputs to bring back."""
         size = rpm.size
         padded = np.pad(rpm, (0, -size % SPEED_BLOCK), mode="edge").reshape(-1, SPEED_BLOCK)
-        # The devices share a block when it splits into equal parts; a short batch (a
-        # bisection step) stays on one device, so one compiled program serves it.
-        devices = self.devices if size >= SPEED_BLOCK and SPEED_BLOCK % len(self.devices) == 0 else self.devices[:1]
-        outs = [shard_batch(program, jnp.asarray(block), self.turn, devices=devices) for block in padded]
+        devices = self.devices if SPEED_BLOCK % len(self.devices) == 0 else self.devices[:1]
+        keep = keep or (lambda out: out)
+        outs = [keep(shard_batch(program, jnp.asarray(block), self.turn, devices=devices)) for block in padded]
         return jax.tree.map(lambda *x: np.concatenate([np.asarray(v) for v in x])[:size], *outs)
 
     def cycle(self, rpm: float, q_start=None) -> Cycle:
