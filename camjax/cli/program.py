@@ -257,6 +257,29 @@ def _write_machine(out: Path, machine, report: dict, rpm, points: int) -> None:
     shaft_figures(out, machine, report, rpm)
 
 
+def program_path(text: str | None, default: str = "indexer") -> Path:
+    """The program file ``text`` names: a path, or a built-in example's name ('indexer',
+    'feed') where no such file exists; without ``text``, the example ``default``."""
+    from ..program import example_path
+
+    if not text:
+        return example_path(default)
+    path = Path(text)
+    if text.isidentifier() and not path.exists() and example_path(text).exists():
+        return example_path(text)  # a built-in example by name
+    return path
+
+
+def program_report(program, rpm, *, with_flight: bool = True, steady=None,
+                   speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION) -> dict:
+    """The report that ``camjax program --format json`` prints (before ``json_ready``):
+    ``camjax.program.analyse`` at the speeds ``rpm``, as plain types."""
+    from ..program import analyse
+
+    return analyse(program, rpm, with_flight=with_flight, steady=steady,
+                   speed_fluctuation=speed_fluctuation).as_dict()
+
+
 def run(args) -> int:
     from ..program import (
         MAX_PROFILE_POINTS,
@@ -264,8 +287,6 @@ def run(args) -> int:
         SETTLED_DEG,
         Program,
         SteadyState,
-        analyse,
-        example_path,
     )
 
     rpm = parse_range(args.rpm, "--rpm")
@@ -278,16 +299,14 @@ def run(args) -> int:
                        f"got {args.plot_rpm:g}")
     if not 0 < args.speed_fluctuation < 2:
         raise CliError(f"--speed-fluctuation: must be in (0, 2), got {args.speed_fluctuation:g}")
-    path = Path(args.file) if args.file else example_path()
-    if args.file and args.file.isidentifier() and not path.exists() and example_path(args.file).exists():
-        path = example_path(args.file)  # a built-in example by name
+    path = program_path(args.file)
     if _is_machine(path):
         return _run_machine(args, path, rpm)
     program = Program.load(path)
     out = output_dir(args.out)
     steady = SteadyState(program, float(min(rpm)))
-    report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
-                     speed_fluctuation=args.speed_fluctuation).as_dict()
+    report = program_report(program, rpm, with_flight=not args.no_flight, steady=steady,
+                            speed_fluctuation=args.speed_fluctuation)
     if out is not None:
         _write_outputs(out, program, steady, report, rpm, args.points, plot_speed(report, args.plot_rpm))
     for line in validity_warnings(program, report):
