@@ -145,4 +145,7 @@ class Workbench:
 
     def state(self) -> dict:
         """The program as its TOML structure (for the page's tables), its text and the speeds."""
-        return {"toml": self.toml, "program": tomllib.loads(self.toml), "rpm": self.rpm_text}
+        from .. import laws
+
+        return {"toml": self.toml, "program": tomllib.loads(self.toml), "rpm": self.rpm_text,
+                "laws": [*laws.names(), "constant-velocity", "polynomial"]}
