@@ -80,7 +80,7 @@ const showEnd = (v) => (v === undefined || v === "match") ? "match" :
 function input(value, onChange, attrs = {}) {
   const el = document.createElement("input");
   el.value = value === undefined ? "" : value;
-  el.size = attrs.size || 7;
+  el.size = attrs.size || 6;
   for (const [k, v] of Object.entries(attrs)) if (k !== "size") el.dataset[k] = v;
   el.addEventListener("input", () => { lastField = el; onChange(el.value); edited(); });
   return el;
@@ -138,7 +138,7 @@ function renderEditor() {
     cell(row, poly ? select(["5", "7"], String(seg.degree || 5), (v) => { seg.degree = Number(v); },
       {seg: n, key: "degree"}) : null);
     for (const key of ["start", "end"])
-      cell(row, poly ? input(showEnd(seg[key]), (t) => { seg[key] = parseEnd(t); }, {seg: n, key, size: 12}) : null);
+      cell(row, poly ? input(showEnd(seg[key]), (t) => { seg[key] = parseEnd(t); }, {seg: n, key, size: 10}) : null);
     const tools = cell(row);
     tools.className = "tools";
     tools.append(
@@ -311,13 +311,14 @@ function draw() {
   const jumpMark = report.jump_speed_rpm === null ? [] :
     [{x: report.jump_speed_rpm, label: `jump ${report.jump_speed_rpm.toFixed(1)} rpm`}];
   const so = {xlabel: "speed (rpm)", points: true, marks: jumpMark};
-  plot("c-preload", "minimum preload (N) over the speeds", rpm,
+  plot("c-preload", "minimum preload (N) vs speed", rpm,
     f.form_closed ? [] : [{label: "min preload", y: speeds.map((s) => s.min_preload_n)}],
     {...so, marks: [...jumpMark, {y: f.preload_n, color: "#ff7f0e"}]});
   const dwells = speeds[0].residual_vibration_mm.length;
-  plot("c-residual", "residual vibration (mm) over the speeds", rpm,
-    [...Array(dwells).keys()].map((i) => ({label: `dwell/CV ${i + 1}`, y: speeds.map((s) => s.residual_vibration_mm[i])})), so);
-  plot("c-torque-speed", "drive torque (N m) over the speeds", rpm, [
+  const still = report.segments.filter((g) => g.kind === "dwell" || g.kind === "constant-velocity").map((g) => g.segment);
+  plot("c-residual", "residual vibration (mm) vs speed", rpm,
+    [...Array(dwells).keys()].map((i) => ({label: `segment ${still[i]}`, y: speeds.map((s) => s.residual_vibration_mm[i])})), so);
+  plot("c-torque-speed", "drive torque (N m) vs speed", rpm, [
     {label: "peak |T|", y: speeds.map((s) => s.max_drive_torque_n_m)},
     {label: "RMS T", y: speeds.map((s) => s.rms_drive_torque_n_m)}], so);
   plot("c-torque-turn", `drive torque ${at} (N m)`, r.theta_deg, [{label: "T", y: r.drive_torque_n_m}],
@@ -326,7 +327,7 @@ function draw() {
   plot("c-stress-turn", stressed ? `Hertz stress ${at} (MPa)` : "Hertz stress: set follower contact_width_mm",
     r.theta_deg, stressed ? [{label: "p", y: r.contact_stress_mpa}] : []);
   if (!stressed) $("c-stress-turn").textContent = "Hertz stress: give follower.contact_width_mm";
-  plot("c-stress-speed", "peak Hertz stress (MPa) over the speeds", rpm,
+  plot("c-stress-speed", "peak Hertz stress (MPa) vs speed", rpm,
     stressed ? [{label: "max p", y: speeds.map((s) => s.max_contact_stress_mpa)}] : [], so);
   drawHeadline();
   drawJoins();
@@ -374,7 +375,7 @@ function renderNotes() {
     const g = report.segments[i];
     const out = [];
     if (g && g.segment === i + 1 && report.segments.length === model.segment.length) {
-      out.push(g.kind === "dwell" ? "dwell" : `${g.kind}, peak y'' ${fmt(g.peak_acceleration_mm_per_deg2, 3)} mm/deg\u00b2`);
+      if (g.kind !== "dwell") out.push(`peak y'' ${fmt(g.peak_acceleration_mm_per_deg2, 3)} mm/deg\u00b2`);
       if (g.overshoot) out.push("\u26a0 overshoots its ends");
       const join = report.joins.find((j) => j.after === i + 1);
       if (join && join.continuity !== "C2") out.push(`\u26a0 acceleration steps at its start (${join.continuity})`);
