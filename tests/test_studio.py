@@ -6,6 +6,9 @@ import io
 import json
 import math
 import os
+import signal
+import subprocess
+import sys
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -134,6 +137,26 @@ def test_cli_refuses_bad_arguments(capsys):
     assert lines[1].startswith("camjax studio: error: ") and "no-such-file.toml" in lines[1]
 
 
+def test_cli_serves_the_page_and_stops_on_ctrl_c():
+    """``camjax studio`` prints its address, serves the page and its script, and Ctrl-C
+    stops it with status 0 and no traceback."""
+    server = subprocess.Popen([sys.executable, "-m", "camjax", "studio", "indexer", "--no-browser", "--port", "0"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        line = server.stdout.readline()
+        assert line.startswith("camjax studio: indexer.toml at http://127.0.0.1:"), line
+        url = line[line.index("http://"):].split()[0]
+        with urllib.request.urlopen(url, timeout=60) as page:
+            assert "<title>camjax studio</title>" in page.read().decode()
+        with urllib.request.urlopen(url + "static/uPlot.iife.min.js", timeout=60) as script:
+            assert script.status == 200 and b"uPlot" in script.read()
+        assert call(url + "static/../_server.py")[0] == 404
+    finally:
+        server.send_signal(signal.SIGINT)
+        _, err = server.communicate(timeout=60)
+    assert server.returncode == 0 and "Traceback" not in err and err.strip() == "camjax studio: stopped"
+
+
 # -- the page in a browser --------------------------------------------------------------------
 
 def _browser():
@@ -166,6 +189,7 @@ def test_page_edits_saves_and_reloads(tmp_path):
             first = float(page.get_attribute("#jump", "data-rpm"))
             if shots:
                 page.screenshot(path=str(Path(shots) / "studio.png"))
+                page.screenshot(path=str(Path(shots) / "studio-full.png"), full_page=True)
             # change the lift of the first rise and of the last return (the turn closes)
             page.fill('input[data-seg="2"][data-key="lift_mm"]', "7")
             page.fill('input[data-seg="5"][data-key="lift_mm"]', "-22")

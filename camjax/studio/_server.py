@@ -41,8 +41,7 @@ class Studio:
         self.toml, self.base, self.rpm, self.with_flight, self.idle_s = toml, base, rpm, with_flight, idle_s
         self.workbenches: dict[str, Workbench] = {}
         self._lock = threading.Lock()
-        self.httpd = ThreadingHTTPServer((host, port), _Handler)
-        self.httpd.daemon_threads = True
+        self.httpd = _Server((host, port), _Handler)
         self.httpd.studio = self
         self.thread: threading.Thread | None = None
 
@@ -77,6 +76,18 @@ class Studio:
     def stop(self) -> None:
         self.httpd.shutdown()
         self.httpd.server_close()
+
+
+class _Server(ThreadingHTTPServer):
+    daemon_threads = True
+
+    def handle_error(self, request, client_address):
+        """One line for a request the handler could not answer (a dropped connection, a
+        malformed request), instead of the standard library's traceback."""
+        error = sys.exc_info()[1]
+        if not isinstance(error, ConnectionError):
+            print(f"camjax studio: request from {client_address[0]}: {type(error).__name__}: {error}",
+                  file=sys.stderr)
 
 
 class _Handler(BaseHTTPRequestHandler):

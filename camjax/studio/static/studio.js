@@ -263,6 +263,7 @@ function plot(id, title, x, series, opts = {}) {
   const width = Math.max(300, el.clientWidth - 8);
   charts[id] = new uPlot({
     title, width, height: 200,
+    legend: {live: false},
     scales: {x: {time: false}},
     axes: [{label: opts.xlabel || "cam angle (deg)"}, {label: opts.ylabel || "", size: 60}],
     series: [{}, ...series.map((s, i) => ({label: s.label, stroke: s.color || colors[i % colors.length],
@@ -326,9 +327,10 @@ function draw() {
   const stressed = speeds.some((s) => s.max_contact_stress_mpa !== null);
   plot("c-stress-turn", stressed ? `Hertz stress ${at} (MPa)` : "Hertz stress: set follower contact_width_mm",
     r.theta_deg, stressed ? [{label: "p", y: r.contact_stress_mpa}] : []);
-  if (!stressed) $("c-stress-turn").textContent = "Hertz stress: give follower.contact_width_mm";
   plot("c-stress-speed", "peak Hertz stress (MPa) vs speed", rpm,
     stressed ? [{label: "max p", y: speeds.map((s) => s.max_contact_stress_mpa)}] : [], so);
+  if (!stressed) for (const id of ["c-stress-turn", "c-stress-speed"])
+    $(id).textContent = "Hertz stress: give the follower's contact_width_mm";
   drawHeadline();
   drawJoins();
   renderNotes();
@@ -375,7 +377,7 @@ function renderNotes() {
     const g = report.segments[i];
     const out = [];
     if (g && g.segment === i + 1 && report.segments.length === model.segment.length) {
-      if (g.kind !== "dwell") out.push(`peak y'' ${fmt(g.peak_acceleration_mm_per_deg2, 3)} mm/deg\u00b2`);
+      if (g.kind !== "dwell" && g.kind !== "constant-velocity") out.push(`peak y'' ${fmt(g.peak_acceleration_mm_per_deg2, 3)} mm/deg\u00b2`);
       if (g.overshoot) out.push("\u26a0 overshoots its ends");
       const join = report.joins.find((j) => j.after === i + 1);
       if (join && join.continuity !== "C2") out.push(`\u26a0 acceleration steps at its start (${join.continuity})`);
