@@ -99,6 +99,11 @@ def test_sessions_are_independent(server, edited):
     assert original != edited[1]
     assert call(server.url + "api/program?session=b")[1]["toml"] == EDITED
     assert call(server.url + "api/program")[1]["toml"] == FEED
+    # the same program in another layout (no comments, 8.0 for 8) is not analysed again
+    analysed = len(server.reports)
+    plain = cp.Program.load(cp.example_path("feed")).to_toml()
+    status, report = call(server.url + f"api/program?session=d&rpm={RPM}", plain)
+    assert status == 200 and report == original and len(server.reports) == analysed
     assert call(server.url + "api/close?session=b", "")[0] == 200
     assert "b" not in server.workbenches
 
@@ -172,55 +177,51 @@ def _browser():
 REDRAW_MS = 180_000  # an analysis compiles today: tens of seconds on a busy machine
 
 
-def test_page_edits_saves_and_reloads(tmp_path):
+def test_page_edits_saves_and_reloads(server, tmp_path):
     sync_playwright = _browser()
-    running = studio("feed", rpm=RPM)
     shots = os.environ.get("CAMJAX_STUDIO_SCREENSHOTS")
     idle = "document.body.dataset.busy === '0'"
-    try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-            page = browser.new_page(viewport={"width": 1600, "height": 1250}, accept_downloads=True)
-            errors = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(running.url)
-            page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
-            page.wait_for_function(idle, timeout=REDRAW_MS)
-            first = float(page.get_attribute("#jump", "data-rpm"))
-            if shots:
-                page.screenshot(path=str(Path(shots) / "studio.png"))
-                page.screenshot(path=str(Path(shots) / "studio-full.png"), full_page=True)
-            # change the lift of the first rise and of the last return (the turn closes)
-            page.fill('input[data-seg="2"][data-key="lift_mm"]', "7")
-            page.fill('input[data-seg="5"][data-key="lift_mm"]', "-22")
-            page.wait_for_function(f"document.querySelector('#jump') && "
-                                   f"document.querySelector('#jump').dataset.rpm !== '{first!r}' && {idle}",
-                                   timeout=REDRAW_MS)
-            shown = float(page.get_attribute("#jump", "data-rpm"))
-            with page.expect_download() as download:
-                page.click("#save")
-            saved = tmp_path / "saved.toml"
-            download.value.save_as(saved)
-            assert parse_program(saved.read_text()).to_toml() == parse_program(EDITED).to_toml()
-            expected = cli_json(str(saved), "--rpm", RPM)["jump_speed_rpm"]
-            assert math.isclose(shown, expected, rel_tol=1e-9)
-            assert page.inner_text("#jump") == f"{expected:.1f} rpm"
-            # a bad value: the library's message beside the field, the last good state kept
-            page.fill('input[data-seg="2"][data-key="lift_mm"]', "seven")
-            page.wait_for_selector(".err", timeout=REDRAW_MS)
-            with pytest.raises(ValueError) as message:
-                parse_program(saved.read_text().replace("lift_mm = 7\n", 'lift_mm = "seven"\n'))
-            assert page.inner_text(".err") == str(message.value)
-            assert float(page.get_attribute("#jump", "data-rpm")) == shown
-            if shots:
-                page.screenshot(path=str(Path(shots) / "studio-error.png"))
-            # open the saved file: the same report
-            page.set_input_files("#open", str(saved))
-            page.wait_for_function(f"!document.querySelector('.err') && {idle}", timeout=REDRAW_MS)
-            assert float(page.get_attribute("#jump", "data-rpm")) == shown
-            assert page.input_value('input[data-seg="2"][data-key="lift_mm"]') == "7"
-            assert not errors, errors
-            browser.close()
-    finally:
-        running.stop()
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        page = browser.new_page(viewport={"width": 1600, "height": 1250}, accept_downloads=True)
+        errors = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(server.url)
+        page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
+        page.wait_for_function(idle, timeout=REDRAW_MS)
+        first = float(page.get_attribute("#jump", "data-rpm"))
+        if shots:
+            page.screenshot(path=str(Path(shots) / "studio.png"))
+            page.screenshot(path=str(Path(shots) / "studio-full.png"), full_page=True)
+        # change the lift of the first rise and of the last return (the turn closes)
+        page.fill('input[data-seg="2"][data-key="lift_mm"]', "7")
+        page.fill('input[data-seg="5"][data-key="lift_mm"]', "-22")
+        page.wait_for_function(f"document.querySelector('#jump') && "
+                               f"document.querySelector('#jump').dataset.rpm !== '{first!r}' && {idle}",
+                               timeout=REDRAW_MS)
+        shown = float(page.get_attribute("#jump", "data-rpm"))
+        with page.expect_download() as download:
+            page.click("#save")
+        saved = tmp_path / "saved.toml"
+        download.value.save_as(saved)
+        assert parse_program(saved.read_text()).to_toml() == parse_program(EDITED).to_toml()
+        expected = cli_json(str(saved), "--rpm", RPM)["jump_speed_rpm"]
+        assert math.isclose(shown, expected, rel_tol=1e-9)
+        assert page.inner_text("#jump") == f"{expected:.1f} rpm"
+        # a bad value: the library's message beside the field, the last good state kept
+        page.fill('input[data-seg="2"][data-key="lift_mm"]', "seven")
+        page.wait_for_selector(".err", timeout=REDRAW_MS)
+        with pytest.raises(ValueError) as message:
+            parse_program(saved.read_text().replace("lift_mm = 7\n", 'lift_mm = "seven"\n'))
+        assert page.inner_text(".err") == str(message.value)
+        assert float(page.get_attribute("#jump", "data-rpm")) == shown
+        if shots:
+            page.screenshot(path=str(Path(shots) / "studio-error.png"))
+        # open the saved file: the same report
+        page.set_input_files("#open", str(saved))
+        page.wait_for_function(f"!document.querySelector('.err') && {idle}", timeout=REDRAW_MS)
+        assert float(page.get_attribute("#jump", "data-rpm")) == shown
+        assert page.input_value('input[data-seg="2"][data-key="lift_mm"]') == "7"
+        assert not errors, errors
+        browser.close()
 

@@ -40,6 +40,7 @@ class Studio:
                  idle_s: float = IDLE_S):
         self.toml, self.base, self.rpm, self.with_flight, self.idle_s = toml, base, rpm, with_flight, idle_s
         self.workbenches: dict[str, Workbench] = {}
+        self.reports: dict = {}  # analyses shared by the workbenches (Workbench.update)
         self._lock = threading.Lock()
         self.httpd = _Server((host, port), _Handler)
         self.httpd.studio = self
@@ -59,7 +60,7 @@ class Studio:
             bench = self.workbenches.get(session)
             if bench is None:
                 bench = self.workbenches[session] = Workbench(self.toml, self.rpm, self.base,
-                                                              with_flight=self.with_flight)
+                                                              with_flight=self.with_flight, cache=self.reports)
             bench.touch()
             return bench
 

@@ -7,6 +7,7 @@ report of ``camjax program --format json`` (``camjax.cli.program.program_report`
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import threading
 import time
@@ -24,17 +25,24 @@ TURN_POINTS = 721
 """Cam angles over the turn for the kinematic curves (every half degree)."""
 PROFILE_POINTS = 720
 """Profile points the page draws."""
+CACHED_REPORTS = 16
+"""Analyses a studio keeps (oldest dropped first), shared by its workbenches."""
+_CACHE_LOCK = threading.Lock()
+
+
+def parse_toml(text: str) -> dict:
+    """TOML text as its structure, or a one-line ``ValueError``."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ValueError(f"not valid TOML ({error})") from None
 
 
 def parse_program(text: str, base: Path | None = None):
-    """A ``Program`` from TOML text, or a one-line ``ValueError``."""
+    """A ``Program`` from TOML text (law files relative to ``base``), or a one-line ``ValueError``."""
     from ..program import Program
 
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise ValueError(f"not valid TOML ({error})") from None
-    return Program.from_dict(data, base=base)
+    return Program.from_dict(parse_toml(text), base=base)
 
 
 def parse_speeds(text: str) -> np.ndarray:
@@ -70,6 +78,17 @@ def rigid_contact_force_n(program, lift_mm: np.ndarray, acceleration_m_s2: np.nd
     return f.preload_n + f.spring_rate * 1e-3 * lift_mm + f.mass_kg * acceleration_m_s2
 
 
+def _canonical(value):
+    """A TOML structure with every number a float: ``8`` and ``8.0`` are the same lift."""
+    if isinstance(value, dict):
+        return {k: _canonical(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_canonical(v) for v in value]
+    if isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    return value
+
+
 @dataclasses.dataclass
 class Workbench:
     """A program being edited: its last good TOML text, speeds, report and steady state."""
@@ -86,6 +105,7 @@ class Workbench:
     warnings: list = dataclasses.field(default_factory=list)
     used: float = dataclasses.field(default_factory=time.monotonic)
     lock: threading.Lock = dataclasses.field(default_factory=threading.Lock, repr=False)
+    cache: dict = dataclasses.field(default_factory=dict, repr=False)
 
     def touch(self) -> None:
         self.used = time.monotonic()
@@ -98,21 +118,29 @@ class Workbench:
 
     def update(self, toml: str, rpm_text: str | None = None) -> dict:
         """Replace the program (and the speeds): the new report, or a ValueError that
-        leaves the last good state as it was."""
-        from ..program import SteadyState
+        leaves the last good state as it was.  The same program (the same TOML structure,
+        whatever its layout and comments) at the same speeds is analysed once per ``cache``."""
+        from ..program import Program, SteadyState
 
         rpm_text = self.rpm_text if rpm_text is None else str(rpm_text)
-        program = parse_program(toml, self.base)
+        data = parse_toml(toml)
+        program = Program.from_dict(data, base=self.base)
         rpm = parse_speeds(rpm_text)
-        if self.report is not None and toml == self.toml and np.array_equal(rpm, self.rpm):
-            return self.report
-        steady = SteadyState(program, float(min(rpm)))
-        report = json_ready(program_report(program, rpm, with_flight=self.with_flight, steady=steady,
-                                           speed_fluctuation=self.speed_fluctuation))
-        self.warnings = validity_warnings(program, report)
-        self.toml, self.rpm_text, self.program, self.rpm = toml, rpm_text, program, rpm
-        self.report, self.steady = report, steady
-        return report
+        key = (json.dumps(_canonical(data), sort_keys=True, default=str), tuple(rpm.tolist()), self.with_flight,
+               self.speed_fluctuation, str(self.base))
+        hit = self.cache.get(key)
+        if hit is None:
+            steady = SteadyState(program, float(min(rpm)))
+            report = json_ready(program_report(program, rpm, with_flight=self.with_flight, steady=steady,
+                                               speed_fluctuation=self.speed_fluctuation))
+            hit = (program, steady, report, validity_warnings(program, report))
+            with _CACHE_LOCK:
+                self.cache[key] = hit
+                while len(self.cache) > CACHED_REPORTS:
+                    self.cache.pop(next(iter(self.cache)))
+        self.program, self.steady, self.report, self.warnings = hit
+        self.toml, self.rpm_text, self.rpm = toml, rpm_text, rpm
+        return self.report
 
     def curves(self, rpm: float | None = None) -> dict:
         """Everything the page draws beside the report: the kinematics over the turn, the
