@@ -365,7 +365,7 @@ function drawJoins() {
 }
 
 // Each segment's notes: its kind and peaks, an overshoot, an acceleration step at its start,
-// where contact is lost in it at the chosen speed.
+// where contact is lost in it at the range speed nearest the chosen one.
 function renderNotes() {
   if (!report || !model) return;
   const speed = report.speeds.reduce((best, x) => curves && Math.abs(x.rpm - curves.rpm) < Math.abs(best.rpm - curves.rpm) ? x : best);
@@ -384,7 +384,7 @@ function renderNotes() {
       for (const fl of speed.flights || []) {
         const a = fl.separation_deg;
         if (a >= starts[i] && a < starts[i] + (Number(model.segment[i].angle_deg) || 0))
-          out.push(`\u26a0 contact lost at ${fmt(a, 4)} deg at ${fmt(speed.rpm, 5)} rpm`);
+          out.push(`\u26a0 loses contact at ${fmt(a, 4)} deg`);
       }
     }
     notes.textContent = out.join("; ");
