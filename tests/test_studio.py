@@ -93,7 +93,7 @@ def test_post_program_is_its_analysis(server, edited):
     assert abs(report["jump_speed_rpm"] - original["jump_speed_rpm"]) > 1.0
 
 
-def test_sessions_are_independent(server, edited):
+def test_two_workbenches_are_independent(server, edited):
     original = call(server.url + "api/report")[1]
     assert call(server.url + "api/report?session=b")[1] == edited[1]
     assert original != edited[1]
