@@ -26,7 +26,7 @@ class _Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
 # Modules under camjax.cli that define ``register(subparsers)``; each sets ``func``.
-COMMANDS = ("laws", "ct", "design", "backlash", "follower", "bench", "program", "sweep")
+COMMANDS = ("laws", "ct", "design", "backlash", "follower", "bench", "program", "sweep", "studio")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -258,6 +258,29 @@ def _write_machine(out: Path, machine, report: dict, rpm, points: int) -> None:
     shaft_figures(out, machine, report, rpm)
 
 
+def program_path(text: str | None, default: str = "indexer") -> Path:
+    """The program file ``text`` names: a path, or a built-in example's name ('indexer',
+    'feed') where no such file exists; without ``text``, the example ``default``."""
+    from ..program import example_path
+
+    if not text:
+        return example_path(default)
+    path = Path(text)
+    if text.isidentifier() and not path.exists() and example_path(text).exists():
+        return example_path(text)  # a built-in example by name
+    return path
+
+
+def program_report(program, rpm, *, with_flight: bool = True, steady=None,
+                   speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION) -> dict:
+    """The report that ``camjax program --format json`` prints (before ``json_ready``):
+    ``camjax.program.analyse`` at the speeds ``rpm``, as plain types."""
+    from ..program import analyse
+
+    return analyse(program, rpm, with_flight=with_flight, steady=steady,
+                   speed_fluctuation=speed_fluctuation).as_dict()
+
+
 def run(args) -> int:
     from ..program import (
         MAX_PROFILE_POINTS,
@@ -265,7 +288,6 @@ def run(args) -> int:
         SETTLED_DEG,
         Program,
         SteadyState,
-        analyse,
     )
 
     rpm = parse_range(args.rpm, "--rpm")
@@ -286,8 +308,8 @@ def run(args) -> int:
         program = Program.load(path)
         out = output_dir(args.out)
         steady = SteadyState(program, float(min(rpm)))
-        report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
-                         speed_fluctuation=args.speed_fluctuation).as_dict()
+        report = program_report(program, rpm, with_flight=not args.no_flight, steady=steady,
+                                speed_fluctuation=args.speed_fluctuation)
         if out is not None:
             _write_outputs(out, program, steady, report, rpm, args.points, plot_speed(report, args.plot_rpm))
     for line in [*_messages(caught), *validity_warnings(program, report)]:
@@ -306,19 +328,6 @@ def run(args) -> int:
         print(_table(report, grooved=bool(program.follower.form_closed and program.follower.groove_clearance_mm
                                           and not args.no_flight)))
     return 0
-
-
-def program_path(text: str | None) -> Path:
-    """The program or machine file that FILE (or ``--program``) names: a path, else a
-    built-in example's name (``indexer``, ``feed``); none: the built-in ``indexer``."""
-    from ..program import example_path
-
-    if not text:
-        return example_path()
-    path = Path(text)
-    if text.isidentifier() and not path.exists() and example_path(text).exists():
-        return example_path(text)  # a built-in example by name
-    return path
 
 
 def _messages(caught) -> list[str]:

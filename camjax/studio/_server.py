@@ -1,0 +1,230 @@
+"""The studio's HTTP server: one static page and a JSON API, on Python's standard library.
+
+Each page (browser tab) names its own workbench with a ``session`` query parameter
+(requests without one share the workbench ``default``); a workbench is dropped when its
+page closes (``POST /api/close``) or after ``idle_s`` seconds without a request.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+import threading
+import time
+from http import HTTPStatus
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
+from urllib.parse import parse_qs, urlsplit
+
+from ._workbench import DEFAULT_RPM, Workbench
+
+STATIC = Path(__file__).parent / "static"
+IDLE_S = 1800.0
+"""Seconds a workbench lives without a request (its page may have closed unseen)."""
+MAX_BODY = 1 << 20
+"""Largest request body accepted (a program's TOML is a few kB)."""
+_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
+          ".css": "text/css; charset=utf-8", ".png": "image/png", ".svg": "image/svg+xml"}
+
+
+class Studio:
+    """A running studio: the server, its thread and its workbenches.
+
+    ``toml`` is the program every new workbench starts from; ``base`` the folder its law
+    files are read from.  ``port=0`` picks a free port (``url`` says which).
+    """
+
+    def __init__(self, toml: str, *, base: Path | None = None, rpm: str = DEFAULT_RPM,
+                 host: str = "127.0.0.1", port: int = 0, with_flight: bool = True,
+                 idle_s: float = IDLE_S):
+        self.toml, self.base, self.rpm, self.with_flight, self.idle_s = toml, base, rpm, with_flight, idle_s
+        self.workbenches: dict[str, Workbench] = {}
+        self.reports: dict = {}  # analyses shared by the workbenches (Workbench.update)
+        self._lock = threading.Lock()
+        self.httpd = _Server((host, port), _Handler)
+        self.httpd.studio = self
+        self.thread: threading.Thread | None = None
+
+    @property
+    def url(self) -> str:
+        host, port = self.httpd.server_address[:2]
+        return f"http://{host}:{port}/"
+
+    def workbench(self, session: str) -> Workbench:
+        """The workbench of ``session``, a new one from the starting program if none."""
+        now = time.monotonic()
+        with self._lock:
+            for key in [k for k, w in self.workbenches.items() if now - w.used > self.idle_s]:
+                del self.workbenches[key]
+            bench = self.workbenches.get(session)
+            if bench is None:
+                bench = self.workbenches[session] = Workbench(self.toml, self.rpm, self.base,
+                                                              with_flight=self.with_flight, cache=self.reports)
+            bench.touch()
+            return bench
+
+    def close(self, session: str) -> None:
+        with self._lock:
+            self.workbenches.pop(session, None)
+
+    def start(self) -> Studio:
+        """Serve on a background thread."""
+        self.thread = threading.Thread(target=self.httpd.serve_forever, name="camjax-studio", daemon=True)
+        self.thread.start()
+        return self
+
+    def stop(self) -> None:
+        self.httpd.shutdown()
+        self.httpd.server_close()
+
+
+class _Server(ThreadingHTTPServer):
+    daemon_threads = True
+
+    def handle_error(self, request, client_address):
+        """One line for a request the handler could not answer (a dropped connection, a
+        malformed request), instead of the standard library's traceback."""
+        error = sys.exc_info()[1]
+        if not isinstance(error, ConnectionError):
+            print(f"camjax studio: request from {client_address[0]}: {type(error).__name__}: {error}",
+                  file=sys.stderr)
+
+
+class _Handler(BaseHTTPRequestHandler):
+    server_version = "camjax-studio"
+
+    def log_message(self, format, *args):  # noqa: A002 - the base class's name
+        pass  # one line per request would drown the URL; errors are reported below
+
+    # -- replies ---------------------------------------------------------------------------
+
+    def _send(self, status: int, body: bytes, content_type: str, headers: dict | None = None) -> None:
+        self.send_response(status)
+        self.send_header("Content-Type", content_type)
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Cache-Control", "no-store")
+        for key, value in (headers or {}).items():
+            self.send_header(key, value)
+        self.end_headers()
+        if self.command != "HEAD":
+            self.wfile.write(body)
+
+    def _json(self, value, status: int = 200) -> None:
+        self._send(status, json.dumps(value, allow_nan=False).encode(), "application/json")
+
+    def _error(self, status: int, message: str) -> None:
+        self._json({"error": message}, status)
+
+    # -- routing ---------------------------------------------------------------------------
+
+    def do_GET(self):
+        self._route("GET")
+
+    def do_POST(self):
+        self._route("POST")
+
+    def _route(self, method: str) -> None:
+        from ..errors import SolverError
+
+        studio: Studio = self.server.studio
+        parts = urlsplit(self.path)
+        query = {k: v[-1] for k, v in parse_qs(parts.query).items()}
+        session = query.get("session", "default")[:64]
+        route = (method, parts.path)
+        try:
+            if method == "GET" and (parts.path == "/" or parts.path.startswith("/static/")):
+                return self._static(parts.path)
+            if route not in _ROUTES:
+                return self._error(HTTPStatus.NOT_FOUND, f"no such address: {method} {parts.path}")
+            if route == ("POST", "/api/close"):
+                studio.close(session)
+                return self._json({"closed": session})
+            bench = studio.workbench(session)
+            with bench.lock:
+                _ROUTES[route](self, bench, query)
+        except ValueError as error:
+            self._error(HTTPStatus.BAD_REQUEST, str(error))
+        except SolverError as error:
+            self._error(HTTPStatus.UNPROCESSABLE_ENTITY, str(error))
+        except (BrokenPipeError, ConnectionResetError):
+            pass  # the page went away
+        except Exception as error:  # a fault of the studio itself: one line, the page lives on
+            print(f"camjax studio: {method} {parts.path}: {type(error).__name__}: {error}", file=sys.stderr)
+            self._error(HTTPStatus.INTERNAL_SERVER_ERROR, f"{type(error).__name__}: {error}")
+
+    def _static(self, path: str) -> None:
+        name = "index.html" if path == "/" else path.removeprefix("/static/")
+        file = STATIC / name
+        if "/" in name or name.startswith(".") or not file.is_file():
+            return self._error(HTTPStatus.NOT_FOUND, f"no such file: {path}")
+        self._send(200, file.read_bytes(), _TYPES.get(file.suffix, "application/octet-stream"))
+
+    def _body(self) -> str:
+        length = int(self.headers.get("Content-Length") or 0)
+        if length > MAX_BODY:
+            raise ValueError(f"the program text is {length:,} bytes, more than {MAX_BODY:,}")
+        try:
+            return self.rfile.read(length).decode("utf-8")
+        except UnicodeDecodeError:
+            raise ValueError("the program text is not UTF-8") from None
+
+    # -- the API ---------------------------------------------------------------------------
+
+    def report(self, bench: Workbench, query: dict) -> None:
+        self._json(bench.ensure())
+
+    def post_program(self, bench: Workbench, query: dict) -> None:
+        self._json(bench.update(self._body(), query.get("rpm")))
+
+    def get_program(self, bench: Workbench, query: dict) -> None:
+        bench.ensure()
+        self._json(bench.state())
+
+    def curves(self, bench: Workbench, query: dict) -> None:
+        text = query.get("rpm")
+        try:
+            rpm = None if text in (None, "") else float(text)
+        except ValueError:
+            raise ValueError(f"rpm: the chosen speed must be a number, got {text!r}") from None
+        self._json(bench.curves(rpm))
+
+    def toml(self, bench: Workbench, query: dict) -> None:
+        bench.ensure()
+        name = bench.program.name
+        self._send(200, bench.toml.encode(), "application/toml; charset=utf-8",
+                   {"Content-Disposition": f'attachment; filename="{_file_name(name)}.toml"'})
+
+    def export(self, bench: Workbench, query: dict, suffix: str) -> None:
+        from ..program import profile, write_csv, write_dxf
+
+        bench.ensure()
+        points = query.get("points", "3600")
+        try:
+            points = int(points)
+        except ValueError:
+            raise ValueError(f"points: must be a whole number, got {points!r}") from None
+        prof = profile(bench.program, points)  # its ValueError names the range
+        writer = write_csv if suffix == "csv" else write_dxf
+        with tempfile.TemporaryDirectory() as folder:
+            path = writer(prof, Path(folder) / f"profile.{suffix}", outer=bench.program.follower.form_closed)
+            body = path.read_bytes()
+        kind = "text/csv; charset=utf-8" if suffix == "csv" else "application/dxf"
+        self._send(200, body, kind, {"Content-Disposition":
+                                     f'attachment; filename="{_file_name(bench.program.name)}-profile.{suffix}"'})
+
+
+def _file_name(name: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) or "program"
+
+
+_ROUTES = {
+    ("GET", "/api/report"): _Handler.report,
+    ("POST", "/api/program"): _Handler.post_program,
+    ("GET", "/api/program"): _Handler.get_program,
+    ("GET", "/api/curves"): _Handler.curves,
+    ("GET", "/api/program.toml"): _Handler.toml,
+    ("GET", "/api/profile.csv"): lambda h, b, q: h.export(b, q, "csv"),
+    ("GET", "/api/profile.dxf"): lambda h, b, q: h.export(b, q, "dxf"),
+    ("POST", "/api/close"): None,
+}

@@ -1,0 +1,464 @@
+// camjax studio: the page.  The program lives here as its TOML structure (`model`); every
+// edit writes it back to TOML and posts it (debounced); the server answers the report of
+// `camjax program --format json`, or the library's one-line error, shown beside the field
+// edited last while the last good state stays drawn.
+"use strict";
+
+const SESSION = (crypto.randomUUID ? crypto.randomUUID() : String(Math.random()).slice(2));
+const END_KEYS = ["velocity_mm_per_deg", "acceleration_mm_per_deg2", "jerk_mm_per_deg3"];
+const FOLLOWER_KINDS = ["translating-roller", "swinging-roller", "translating-flat", "swinging-flat"];
+const FOLLOWER_FIELDS = ["kind", "mass_kg", "stiffness_n_per_mm", "damping_ratio", "spring_rate_n_per_mm",
+  "preload_n", "base_radius_mm", "roller_radius_mm", "offset_mm", "arm_mm", "pivot_mm",
+  "groove_clearance_mm", "contact_width_mm"];
+const NUMBER = /^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/;
+
+let model = null;        // {program: {name}, segment: [...], follower: {...}, materials?: {...}}
+let laws = [];
+let rpmText = "";
+let chosen = null;       // the chosen speed (null: the server's choice)
+let report = null;       // last good report
+let curves = null;       // last good curves
+let lastField = null;    // the input edited last (where an error is shown)
+let timer = null, inFlight = false, dirty = false;
+const charts = {};
+
+const $ = (id) => document.getElementById(id);
+const api = (path, params = {}) =>
+  `/api/${path}?` + new URLSearchParams({session: SESSION, ...params}).toString();
+
+// ---- TOML ------------------------------------------------------------------------------
+
+function tomlValue(v) {
+  if (typeof v === "string") return JSON.stringify(v);
+  if (typeof v === "number") return String(v);
+  if (typeof v === "boolean") return String(v);
+  return "{ " + Object.entries(v).map(([k, x]) => `${k} = ${tomlValue(x)}`).join(", ") + " }";
+}
+
+function table(name, obj) {
+  const keys = Object.keys(obj || {});
+  return keys.length ? [`[${name}]`, ...keys.map((k) => `${k} = ${tomlValue(obj[k])}`), ""] : [];
+}
+
+function toToml(m) {
+  const lines = table("program", m.program);
+  for (const seg of m.segment) {
+    lines.push("[[segment]]");
+    for (const [k, v] of Object.entries(seg)) lines.push(`${k} = ${tomlValue(v)}`);
+    lines.push("");
+  }
+  lines.push(...table("follower", m.follower));
+  if (m.materials) lines.push(...table("materials", m.materials));
+  return lines.join("\n");
+}
+
+// A cell's text as a TOML value: a number where it reads as one, else the text itself (the
+// library names what is wrong with it); empty: the key is left out.
+function parseCell(text) {
+  text = text.trim();
+  if (text === "") return undefined;
+  return NUMBER.test(text) ? Number(text) : text;
+}
+
+function parseEnd(text) {
+  text = text.trim();
+  if (text === "" || text === "match") return "match";
+  const parts = text.split(",").map((s) => s.trim());
+  if (parts.every((p) => NUMBER.test(p)) && parts.length <= 3) {
+    const out = {};
+    parts.forEach((p, i) => { out[END_KEYS[i]] = Number(p); });
+    return out;
+  }
+  return text;
+}
+
+const showEnd = (v) => (v === undefined || v === "match") ? "match" :
+  typeof v === "object" ? END_KEYS.filter((k) => k in v).map((k) => v[k]).join(", ") : String(v);
+
+// ---- the editor ------------------------------------------------------------------------
+
+function input(value, onChange, attrs = {}) {
+  const el = document.createElement("input");
+  el.value = value === undefined ? "" : value;
+  el.size = attrs.size || 6;
+  for (const [k, v] of Object.entries(attrs)) if (k !== "size") el.dataset[k] = v;
+  el.addEventListener("input", () => { lastField = el; onChange(el.value); edited(); });
+  return el;
+}
+
+function select(options, value, onChange, attrs = {}) {
+  const el = document.createElement("select");
+  const all = options.includes(value) ? options : [...options, value];
+  for (const o of all) {
+    const opt = document.createElement("option");
+    opt.value = o; opt.textContent = o === "" ? "dwell" : o;
+    el.appendChild(opt);
+  }
+  el.value = value;
+  for (const [k, v] of Object.entries(attrs)) el.dataset[k] = v;
+  el.addEventListener("change", () => { lastField = el; onChange(el.value); renderEditor(); edited(); });
+  return el;
+}
+
+function cell(row, child) {
+  const td = document.createElement("td");
+  if (child) td.appendChild(typeof child === "string" ? document.createTextNode(child) : child);
+  row.appendChild(td);
+  return td;
+}
+
+function setLaw(seg, law) {
+  for (const k of ["law", "degree", "start", "end"]) delete seg[k];
+  if (law === "") { delete seg.lift_mm; return; }
+  seg.law = law;
+  if (seg.lift_mm === undefined) seg.lift_mm = 10;
+  if (law === "polynomial") Object.assign(seg, {degree: 5, start: "match", end: "match"});
+}
+
+function button(text, title, onClick) {
+  const b = document.createElement("button");
+  b.textContent = text; b.title = title;
+  b.addEventListener("click", () => { lastField = null; onClick(); renderEditor(); edited(); });
+  return b;
+}
+
+function renderEditor() {
+  $("name").value = (model.program || {}).name || "";
+  const body = $("segments").querySelector("tbody");
+  body.innerHTML = "";
+  model.segment.forEach((seg, i) => {
+    const n = i + 1, row = document.createElement("tr");
+    row.dataset.seg = n;
+    cell(row, String(n));
+    cell(row, select(["", ...laws], seg.law || "", (v) => setLaw(seg, v), {seg: n, key: "law"}));
+    const set = (key) => (text) => { const v = parseCell(text); if (v === undefined) delete seg[key]; else seg[key] = v; };
+    cell(row, seg.law ? input(seg.lift_mm, set("lift_mm"), {seg: n, key: "lift_mm"}) : null);
+    cell(row, input(seg.angle_deg, set("angle_deg"), {seg: n, key: "angle_deg"}));
+    const poly = seg.law === "polynomial";
+    cell(row, poly ? select(["5", "7"], String(seg.degree || 5), (v) => { seg.degree = Number(v); },
+      {seg: n, key: "degree"}) : null);
+    for (const key of ["start", "end"])
+      cell(row, poly ? input(showEnd(seg[key]), (t) => { seg[key] = parseEnd(t); }, {seg: n, key, size: 10}) : null);
+    const tools = cell(row);
+    tools.className = "tools";
+    tools.append(
+      button("\u2191", "move up", () => { if (i > 0) model.segment.splice(i - 1, 0, ...model.segment.splice(i, 1)); }),
+      button("\u2193", "move down", () => { if (i < model.segment.length - 1) model.segment.splice(i + 1, 0, ...model.segment.splice(i, 1)); }),
+      button("\u2715", "delete", () => { model.segment.splice(i, 1); }));
+    cell(row).className = "notes";
+    body.appendChild(row);
+  });
+  const box = $("follower");
+  box.innerHTML = "";
+  const f = model.follower = model.follower || {};
+  for (const key of FOLLOWER_FIELDS) {
+    const label = document.createElement("label");
+    label.textContent = key + " ";
+    if (key === "kind") {
+      label.appendChild(select(FOLLOWER_KINDS, f.kind || "translating-roller", (v) => { f.kind = v; }, {key}));
+    } else {
+      label.appendChild(input(f[key], (t) => { const v = parseCell(t); if (v === undefined) delete f[key]; else f[key] = v; },
+        {key}));
+    }
+    box.appendChild(label);
+  }
+  renderNotes();
+}
+
+// ---- talking to the server -------------------------------------------------------------
+
+function setStatus(text, kind) {
+  const s = $("status");
+  s.textContent = text;
+  s.className = kind || "";
+}
+
+function clearErrors() {
+  document.querySelectorAll(".err").forEach((e) => e.remove());
+  document.querySelectorAll(".bad").forEach((e) => e.classList.remove("bad"));
+}
+
+function showError(message) {
+  clearErrors();
+  setStatus(message, "error");
+  const span = document.createElement("span");
+  span.className = "err";
+  span.textContent = message;
+  const m = /^segment (\d+)/.exec(message);
+  const row = m && document.querySelector(`#segments tr[data-seg="${m[1]}"]`);
+  if (row) row.classList.add("bad");
+  const field = lastField && document.body.contains(lastField) ? lastField : null;
+  if (field) field.insertAdjacentElement("afterend", span);
+  else if (row) row.querySelector(".notes").appendChild(span);
+  else $("headline").insertAdjacentElement("beforebegin", span);
+}
+
+function edited() {
+  dirty = true;
+  clearTimeout(timer);
+  timer = setTimeout(send, 400);
+}
+
+async function send() {
+  if (inFlight) return;            // the answer will send the latest edit
+  dirty = false;
+  inFlight = true;
+  document.body.dataset.busy = "1";
+  setStatus("computing\u2026", "busy");
+  try {
+    const response = await fetch(api("program", {rpm: rpmText}), {method: "POST", body: toToml(model),
+      headers: {"Content-Type": "application/toml"}});
+    const answer = await response.json();
+    if (!response.ok) { showError(answer.error); return; }
+    report = answer;
+    clearErrors();
+    if (chosen !== null && chosen < Math.min(...report.speeds.map((x) => x.rpm))) chosen = null;
+    await loadCurves();
+  } catch (error) {
+    showError(`no answer from the studio (${error})`);
+  } finally {
+    inFlight = false;
+    if (dirty) send(); else document.body.dataset.busy = "0";
+  }
+}
+
+async function loadCurves() {
+  const params = chosen === null ? {} : {rpm: chosen};
+  const response = await fetch(api("curves", params));
+  const answer = await response.json();
+  if (!response.ok) { showError(answer.error); return; }
+  curves = answer;
+  chosen = curves.rpm;
+  $("chosen").value = chosen;
+  setStatus("ready", "ok");
+  draw();
+}
+
+async function start() {
+  const response = await fetch(api("program"));
+  const state = await response.json();
+  if (!response.ok) { showError(state.error); return; }
+  load(state);
+  send();
+}
+
+function load(state) {
+  model = state.program;
+  laws = state.laws || laws;
+  rpmText = state.rpm;
+  $("range").value = rpmText;
+  renderEditor();
+}
+
+// ---- drawing ---------------------------------------------------------------------------
+
+const fmt = (v, d = 4) => v === null || v === undefined ? "-" : Number(v).toPrecision(d);
+
+function plot(id, title, x, series, opts = {}) {
+  const el = $(id);
+  if (charts[id]) { charts[id].destroy(); delete charts[id]; }
+  el.innerHTML = "";
+  if (!series.length) return;
+  const colors = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b"];
+  const width = Math.max(300, el.clientWidth - 8);
+  charts[id] = new uPlot({
+    title, width, height: 200,
+    legend: {live: false},
+    scales: {x: {time: false}},
+    axes: [{label: opts.xlabel || "cam angle (deg)"}, {label: opts.ylabel || "", size: 60}],
+    series: [{}, ...series.map((s, i) => ({label: s.label, stroke: s.color || colors[i % colors.length],
+      width: 1.2, dash: s.dash, points: {show: !!opts.points}}))],
+    hooks: {draw: [(u) => (opts.marks || []).forEach((m) => mark(u, m))]},
+  }, [x, ...series.map((s) => s.y)], el);
+}
+
+// A vertical line at x = m.x (the jump speed) or a horizontal one at y = m.y.
+function mark(u, m) {
+  const ctx = u.ctx;
+  ctx.save();
+  ctx.strokeStyle = m.color || "#d62728";
+  ctx.setLineDash([5, 4]);
+  ctx.lineWidth = 1.5;
+  ctx.beginPath();
+  if (m.x !== undefined) {
+    const x = u.valToPos(m.x, "x", true);
+    ctx.moveTo(x, u.bbox.top); ctx.lineTo(x, u.bbox.top + u.bbox.height);
+    ctx.fillStyle = ctx.strokeStyle;
+    ctx.fillText(m.label || "", x + 4, u.bbox.top + 12);
+  } else {
+    const y = u.valToPos(m.y, "y", true);
+    ctx.moveTo(u.bbox.left, y); ctx.lineTo(u.bbox.left + u.bbox.width, y);
+  }
+  ctx.stroke();
+  ctx.restore();
+}
+
+function draw() {
+  if (!report || !curves) return;
+  const k = curves.kinematics, r = curves.response, f = curves.follower;
+  plot("c-lift", "lift y (mm)", k.theta_deg, [{label: "y", y: k.lift_mm}]);
+  plot("c-vel", "velocity y' (mm/deg)", k.theta_deg, [{label: "y'", y: k.velocity_mm_per_deg}]);
+  plot("c-acc", "acceleration y'' (mm/deg\u00b2)", k.theta_deg, [{label: "y''", y: k.acceleration_mm_per_deg2}]);
+  plot("c-jerk", "jerk y''' (mm/deg\u00b3)", k.theta_deg, [{label: "y'''", y: k.jerk_mm_per_deg3}]);
+  const at = `at ${fmt(curves.rpm, 5)} rpm`;
+  plot("c-payload", `acceleration ${at} (m/s\u00b2)`, r.theta_deg, [
+    {label: "payload x''", y: r.payload_acceleration_m_s2},
+    {label: "rigid follower y''", y: r.kinematic_acceleration_m_s2, dash: [4, 3]}]);
+  plot("c-force", `contact force ${at} (N)`, r.theta_deg, [
+    {label: "elastic train", y: r.contact_force_n},
+    {label: "rigid follower", y: r.rigid_contact_force_n, dash: [4, 3]}],
+  {marks: [{y: 0, color: "#000"}, ...(f.form_closed ? [] : [{y: f.preload_n, color: "#ff7f0e"}])]});
+  const speeds = report.speeds, rpm = speeds.map((s) => s.rpm);
+  const jumpMark = report.jump_speed_rpm === null ? [] :
+    [{x: report.jump_speed_rpm, label: `jump ${report.jump_speed_rpm.toFixed(1)} rpm`}];
+  const so = {xlabel: "speed (rpm)", points: true, marks: jumpMark};
+  plot("c-preload", "minimum preload (N) vs speed", rpm,
+    f.form_closed ? [] : [{label: "min preload", y: speeds.map((s) => s.min_preload_n)}],
+    {...so, marks: [...jumpMark, {y: f.preload_n, color: "#ff7f0e"}]});
+  const dwells = speeds[0].residual_vibration_mm.length;
+  const still = report.segments.filter((g) => g.kind === "dwell" || g.kind === "constant-velocity").map((g) => g.segment);
+  plot("c-residual", "residual vibration (mm) vs speed", rpm,
+    [...Array(dwells).keys()].map((i) => ({label: `segment ${still[i]}`, y: speeds.map((s) => s.residual_vibration_mm[i])})), so);
+  plot("c-torque-speed", "drive torque (N m) vs speed", rpm, [
+    {label: "peak |T|", y: speeds.map((s) => s.max_drive_torque_n_m)},
+    {label: "RMS T", y: speeds.map((s) => s.rms_drive_torque_n_m)}], so);
+  plot("c-torque-turn", `drive torque ${at} (N m)`, r.theta_deg, [{label: "T", y: r.drive_torque_n_m}],
+    {marks: [{y: 0, color: "#000"}]});
+  const stressed = speeds.some((s) => s.max_contact_stress_mpa !== null);
+  plot("c-stress-turn", stressed ? `Hertz stress ${at} (MPa)` : "Hertz stress: set follower contact_width_mm",
+    r.theta_deg, stressed ? [{label: "p", y: r.contact_stress_mpa}] : []);
+  plot("c-stress-speed", "peak Hertz stress (MPa) vs speed", rpm,
+    stressed ? [{label: "max p", y: speeds.map((s) => s.max_contact_stress_mpa)}] : [], so);
+  if (!stressed) for (const id of ["c-stress-turn", "c-stress-speed"])
+    $(id).textContent = "Hertz stress: give the follower's contact_width_mm";
+  drawHeadline();
+  drawJoins();
+  renderNotes();
+  drawProfile();
+}
+
+function drawHeadline() {
+  const s = report.speeds.reduce((best, x) => Math.abs(x.rpm - curves.rpm) < Math.abs(best.rpm - curves.rpm) ? x : best);
+  const jump = report.jump_below_range ? "below the range" :
+    report.jump_speed_rpm === null ? "none in the range" : `${report.jump_speed_rpm.toFixed(1)} rpm`;
+  const g = report.geometry || {};
+  $("headline").innerHTML =
+    `<div>jump speed <b id="jump" data-rpm="${report.jump_speed_rpm}">${jump}</b></div>` +
+    `<div>at ${fmt(s.rpm, 5)} rpm (range speed nearest the chosen): min preload ${fmt(s.min_preload_n)} N, ` +
+    `contact force ${fmt(s.min_contact_force_n)} to ${fmt(s.max_contact_force_n)} N, ` +
+    `peak torque ${fmt(s.max_drive_torque_n_m)} N m, RMS ${fmt(s.rms_drive_torque_n_m)} N m</div>` +
+    `<div>max pressure angle ${fmt(g.max_pressure_angle_deg)} deg, min radius of curvature ` +
+    `${fmt(g.min_radius_of_curvature_mm)} mm</div>`;
+}
+
+function drawJoins() {
+  const body = $("joins").querySelector("tbody");
+  body.innerHTML = report.joins.map((j) =>
+    `<tr><td>${j.before}|${j.after}</td><td>${fmt(j.angle_deg, 5)}</td><td>${j.state}</td><td>${j.continuity}</td>` +
+    `<td>${fmt(j.velocity_mm_per_deg)}</td><td>${fmt(j.acceleration_before_mm_per_deg2)}</td>` +
+    `<td>${fmt(j.acceleration_after_mm_per_deg2)}</td></tr>`).join("");
+  const list = $("warnings");
+  list.innerHTML = "";
+  for (const w of (curves.warnings || [])) {
+    const li = document.createElement("li"); li.textContent = w; list.appendChild(li);
+  }
+}
+
+// Each segment's notes: its kind and peaks, an overshoot, an acceleration step at its start,
+// where contact is lost in it at the range speed nearest the chosen one.
+function renderNotes() {
+  if (!report || !model) return;
+  const speed = report.speeds.reduce((best, x) => curves && Math.abs(x.rpm - curves.rpm) < Math.abs(best.rpm - curves.rpm) ? x : best);
+  let angle = 0;
+  const starts = model.segment.map((s) => { const a = angle; angle += Number(s.angle_deg) || 0; return a; });
+  document.querySelectorAll("#segments tbody tr").forEach((row, i) => {
+    const notes = row.querySelector(".notes");
+    if (notes.querySelector(".err")) return;
+    const g = report.segments[i];
+    const out = [];
+    if (g && g.segment === i + 1 && report.segments.length === model.segment.length) {
+      if (g.kind !== "dwell" && g.kind !== "constant-velocity") out.push(`peak y'' ${fmt(g.peak_acceleration_mm_per_deg2, 3)} mm/deg\u00b2`);
+      if (g.overshoot) out.push("\u26a0 overshoots its ends");
+      const join = report.joins.find((j) => j.after === i + 1);
+      if (join && join.continuity !== "C2") out.push(`\u26a0 acceleration steps at its start (${join.continuity})`);
+      for (const fl of speed.flights || []) {
+        const a = fl.separation_deg;
+        if (a >= starts[i] && a < starts[i] + (Number(model.segment[i].angle_deg) || 0))
+          out.push(`\u26a0 loses contact at ${fmt(a, 4)} deg`);
+      }
+    }
+    notes.textContent = out.join("; ");
+  });
+}
+
+function drawProfile() {
+  const canvas = $("profile"), ctx = canvas.getContext("2d");
+  const p = curves.profile, f = curves.follower;
+  const deg = Number($("angle").value);
+  $("angle-text").textContent = `${deg} deg`;
+  ctx.clearRect(0, 0, canvas.width, canvas.height);
+  const pts = [...p.pitch, ...p.profile, ...(p.outer || [])];
+  const reach = Math.max(...pts.map(([x, y]) => Math.hypot(x, y))) + (f.roller_radius_mm || 0) * 2 + 5;
+  const scale = canvas.width / 2 / reach, cx = canvas.width / 2, cy = canvas.height / 2;
+  const t = deg * Math.PI / 180, c = Math.cos(t), s = Math.sin(t);
+  // the cam turns by the cam angle; the follower stays on its axis (camjax.geometry's frame)
+  const at = ([x, y]) => [cx + scale * (c * x - s * y), cy - scale * (s * x + c * y)];
+  const path = (points, style, dash) => {
+    ctx.beginPath(); ctx.strokeStyle = style; ctx.setLineDash(dash || []);
+    points.forEach((q, i) => { const [u, v] = at(q); if (i) ctx.lineTo(u, v); else ctx.moveTo(u, v); });
+    ctx.closePath(); ctx.stroke();
+  };
+  path(p.profile, "#1f77b4");
+  if (p.outer) path(p.outer, "#1f77b4");
+  if (!p.flat_face) path(p.pitch, "#999", [4, 4]);
+  ctx.setLineDash([]);
+  const i = Math.round(deg / 360 * p.theta_deg.length) % p.theta_deg.length;
+  ctx.strokeStyle = "#d62728"; ctx.lineWidth = 2;
+  if (p.flat_face) {
+    const [u, v] = at(p.profile[i]);
+    ctx.beginPath(); ctx.moveTo(u - 60, v); ctx.lineTo(u + 60, v); ctx.stroke();
+  } else {
+    const [u, v] = at(p.pitch[i]);
+    ctx.beginPath(); ctx.arc(u, v, scale * f.roller_radius_mm, 0, 2 * Math.PI); ctx.stroke();
+    if (f.kind === "translating-roller") { ctx.beginPath(); ctx.moveTo(u, v); ctx.lineTo(u, 0); ctx.stroke(); }
+  }
+  ctx.lineWidth = 1;
+  ctx.beginPath(); ctx.arc(cx, cy, 3, 0, 2 * Math.PI); ctx.fillStyle = "#000"; ctx.fill();
+}
+
+// ---- wiring ----------------------------------------------------------------------------
+
+$("add").addEventListener("click", () => { lastField = null; model.segment.push({angle_deg: 10}); renderEditor(); edited(); });
+$("name").addEventListener("input", (e) => { lastField = e.target; model.program = {...(model.program || {}), name: e.target.value}; edited(); });
+$("range").addEventListener("input", (e) => { lastField = e.target; rpmText = e.target.value; edited(); });
+$("chosen").addEventListener("change", async (e) => {
+  lastField = e.target;
+  const v = Number(e.target.value);
+  chosen = Number.isFinite(v) && e.target.value.trim() !== "" ? v : e.target.value;
+  document.body.dataset.busy = "1";
+  try { await loadCurves(); } finally { chosen = curves ? curves.rpm : null; document.body.dataset.busy = "0"; }
+});
+$("angle").addEventListener("input", () => { if (curves) drawProfile(); });
+$("open").addEventListener("change", async (e) => {
+  const file = e.target.files[0];
+  if (!file) return;
+  const text = await file.text();
+  e.target.value = "";
+  document.body.dataset.busy = "1";
+  setStatus("computing\u2026", "busy");
+  const response = await fetch(api("program", {rpm: rpmText}), {method: "POST", body: text});
+  const answer = await response.json();
+  if (!response.ok) { lastField = null; showError(`${file.name}: ${answer.error}`); document.body.dataset.busy = "0"; return; }
+  report = answer;
+  const state = await (await fetch(api("program"))).json();
+  load(state);
+  clearErrors();
+  await loadCurves();
+  document.body.dataset.busy = "0";
+});
+for (const [id, path] of [["save", "program.toml"], ["csv", "profile.csv"], ["dxf", "profile.dxf"]])
+  $(id).href = api(path);
+window.addEventListener("pagehide", () => navigator.sendBeacon(api("close")));
+let resizeTimer = null;
+window.addEventListener("resize", () => { clearTimeout(resizeTimer); resizeTimer = setTimeout(draw, 200); });
+start();

@@ -1,0 +1,227 @@
+"""camjax studio: the JSON API against ``camjax program`` and the program API, and the page
+in a real browser (Debian's Chromium driven by Playwright; skipped where either is missing)."""
+
+import contextlib
+import io
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from camjax import program as cp
+from camjax.cli import main
+from camjax.cli._common import json_ready
+from camjax.studio import kinematics, parse_program, studio
+
+RPM = "400:1000:4"  # brackets the feed cam's jump speed (about 660 rpm)
+CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                 "--disable-component-update", "--disable-sync", "--no-first-run"]
+FEED = cp.example_path("feed").read_text()
+EDITED = FEED.replace("lift_mm = 8\n", "lift_mm = 7\n").replace("lift_mm = -23\n", "lift_mm = -22\n")
+
+
+def assert_same(a, b, where="report"):
+    """Equal structures, numbers to 1e-9 relative."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and a.keys() == b.keys(), where
+        for key in a:
+            assert_same(a[key], b[key], f"{where}.{key}")
+    elif isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            assert_same(x, y, f"{where}[{i}]")
+    elif isinstance(a, float) and not isinstance(b, bool):
+        assert isinstance(b, int | float) and math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12), (where, a, b)
+    else:
+        assert a == b, (where, a, b)
+
+
+def cli_json(*args) -> dict:
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(["program", *args, "--format", "json"]) == 0
+    return json.loads(out.getvalue())
+
+
+def call(url, data: str | None = None):
+    """(status, decoded JSON) of a GET, or of a POST of ``data``."""
+    request = urllib.request.Request(url, data=None if data is None else data.encode(),
+                                     method="GET" if data is None else "POST")
+    try:
+        with urllib.request.urlopen(request, timeout=600) as response:
+            return response.status, json.load(response)
+    except urllib.error.HTTPError as error:
+        return error.code, json.load(error)
+
+
+@pytest.fixture(scope="module")
+def server():
+    running = studio("feed", rpm=RPM)
+    yield running
+    running.stop()
+
+
+@pytest.fixture(scope="module")
+def edited(server):
+    """Session ``b``'s report after posting the edited program."""
+    return call(server.url + f"api/program?session=b&rpm={RPM}", EDITED)
+
+
+def test_report_is_the_cli_json(server):
+    status, report = call(server.url + "api/report")
+    assert status == 200
+    assert_same(report, cli_json("feed", "--rpm", RPM))
+    assert report["jump_speed_rpm"] is not None
+
+
+def test_post_program_is_its_analysis(server, edited):
+    status, report = edited
+    assert status == 200
+    rpm = np.linspace(400, 1000, 4)
+    reference = json_ready(cp.analyse(parse_program(EDITED), rpm).as_dict())
+    assert_same(report, reference)
+    original = call(server.url + "api/report")[1]
+    assert abs(report["jump_speed_rpm"] - original["jump_speed_rpm"]) > 1.0
+
+
+def test_two_workbenches_are_independent(server, edited):
+    original = call(server.url + "api/report")[1]
+    assert call(server.url + "api/report?session=b")[1] == edited[1]
+    assert original != edited[1]
+    assert call(server.url + "api/program?session=b")[1]["toml"] == EDITED
+    assert call(server.url + "api/program")[1]["toml"] == FEED
+    # the same program in another layout (no comments, 8.0 for 8) is not analysed again
+    analysed = len(server.reports)
+    plain = cp.Program.load(cp.example_path("feed")).to_toml()
+    status, report = call(server.url + f"api/program?session=d&rpm={RPM}", plain)
+    assert status == 200 and report == original and len(server.reports) == analysed
+    assert call(server.url + "api/close?session=b", "")[0] == 200
+    assert "b" not in server.workbenches
+
+
+def test_bad_program_is_a_400_with_the_library_message(server):
+    bad = FEED.replace("lift_mm = 8\n", 'lift_mm = "eight"\n')
+    with pytest.raises(ValueError) as expected:
+        parse_program(bad)
+    status, answer = call(server.url + "api/program?session=c", bad)
+    assert status == 400 and answer == {"error": str(expected.value)}
+    assert "\n" not in answer["error"] and "segment 2: lift_mm" in answer["error"]
+    status, answer = call(server.url + "api/program?session=c", "[[segment]\n")
+    assert status == 400 and answer["error"].startswith("not valid TOML")
+    status, answer = call(server.url + "api/program?session=c&rpm=0:10:3", FEED)
+    assert status == 400 and answer["error"].startswith("rpm:")
+    status, answer = call(server.url + "api/curves?rpm=100")  # the default session's range
+    assert status == 400 and "lowest speed of the range (400 rpm)" in answer["error"]
+
+
+def test_jerk_is_the_derivative_of_the_acceleration():
+    """The page's jerk against central differences of ``Program.lift``'s acceleration."""
+    program = parse_program(FEED)
+    theta = np.array([40.0, 62.5, 150.0, 170.0, 240.0, 290.0])  # inside the moving segments
+    step = 1e-4
+    plus, minus = (program.lift(theta + s)[2] for s in (step, -step))
+    jerk = kinematics(program, theta)["jerk_mm_per_deg3"]
+    np.testing.assert_allclose(jerk, (plus - minus) / (2 * step), rtol=1e-6, atol=1e-12)
+    assert np.abs(jerk).max() > 1e-4
+
+
+def test_cli_refuses_bad_arguments(capsys):
+    assert main(["studio", "--port", "70000", "--no-browser"]) == 2
+    assert main(["studio", "no-such-file.toml", "--no-browser", "--port", "0"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines[0].startswith("camjax studio: error: --port")
+    assert lines[1].startswith("camjax studio: error: ") and "no-such-file.toml" in lines[1]
+
+
+def test_cli_serves_the_page_and_stops_on_ctrl_c():
+    """``camjax studio`` prints its address, serves the page and its script, and Ctrl-C
+    stops it with status 0 and no traceback."""
+    server = subprocess.Popen([sys.executable, "-m", "camjax", "studio", "indexer", "--no-browser", "--port", "0"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        line = server.stdout.readline()
+        assert line.startswith("camjax studio: indexer.toml at http://127.0.0.1:"), line
+        url = line[line.index("http://"):].split()[0]
+        with urllib.request.urlopen(url, timeout=60) as page:
+            assert "<title>camjax studio</title>" in page.read().decode()
+        with urllib.request.urlopen(url + "static/uPlot.iife.min.js", timeout=60) as script:
+            assert script.status == 200 and b"uPlot" in script.read()
+        assert call(url + "static/../_server.py")[0] == 404
+    finally:
+        server.send_signal(signal.SIGINT)
+        _, err = server.communicate(timeout=60)
+    assert server.returncode == 0 and "Traceback" not in err and err.strip() == "camjax studio: stopped"
+
+
+# -- the page in a browser --------------------------------------------------------------------
+
+def _browser():
+    if not Path(CHROMIUM).exists():
+        pytest.skip(f"no Chromium at {CHROMIUM} (apt-get install chromium)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        pytest.skip("playwright is not installed (pip install 'camjax[test]')")
+    return sync_playwright
+
+
+REDRAW_MS = 180_000  # an analysis compiles today: tens of seconds on a busy machine
+
+
+def test_page_edits_saves_and_reloads(server, tmp_path):
+    sync_playwright = _browser()
+    shots = os.environ.get("CAMJAX_STUDIO_SCREENSHOTS")
+    idle = "document.body.dataset.busy === '0'"
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        page = browser.new_page(viewport={"width": 1600, "height": 1250}, accept_downloads=True)
+        errors = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(server.url)
+        page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
+        page.wait_for_function(idle, timeout=REDRAW_MS)
+        first = float(page.get_attribute("#jump", "data-rpm"))
+        if shots:
+            page.screenshot(path=str(Path(shots) / "studio.png"))
+            page.screenshot(path=str(Path(shots) / "studio-full.png"), full_page=True)
+        # change the lift of the first rise and of the last return (the turn closes)
+        page.fill('input[data-seg="2"][data-key="lift_mm"]', "7")
+        page.fill('input[data-seg="5"][data-key="lift_mm"]', "-22")
+        page.wait_for_function(f"document.querySelector('#jump') && "
+                               f"document.querySelector('#jump').dataset.rpm !== '{first!r}' && {idle}",
+                               timeout=REDRAW_MS)
+        shown = float(page.get_attribute("#jump", "data-rpm"))
+        with page.expect_download() as download:
+            page.click("#save")
+        saved = tmp_path / "saved.toml"
+        download.value.save_as(saved)
+        assert parse_program(saved.read_text()).to_toml() == parse_program(EDITED).to_toml()
+        expected = cli_json(str(saved), "--rpm", RPM)["jump_speed_rpm"]
+        assert math.isclose(shown, expected, rel_tol=1e-9)
+        assert page.inner_text("#jump") == f"{expected:.1f} rpm"
+        # a bad value: the library's message beside the field, the last good state kept
+        page.fill('input[data-seg="2"][data-key="lift_mm"]', "seven")
+        page.wait_for_selector(".err", timeout=REDRAW_MS)
+        with pytest.raises(ValueError) as message:
+            parse_program(saved.read_text().replace("lift_mm = 7\n", 'lift_mm = "seven"\n'))
+        assert page.inner_text(".err") == str(message.value)
+        assert float(page.get_attribute("#jump", "data-rpm")) == shown
+        if shots:
+            page.screenshot(path=str(Path(shots) / "studio-error.png"))
+        # open the saved file: the same report
+        page.set_input_files("#open", str(saved))
+        page.wait_for_function(f"!document.querySelector('.err') && {idle}", timeout=REDRAW_MS)
+        assert float(page.get_attribute("#jump", "data-rpm")) == shown
+        assert page.input_value('input[data-seg="2"][data-key="lift_mm"]') == "7"
+        assert not errors, errors
+        browser.close()
+
