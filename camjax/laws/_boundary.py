@@ -83,7 +83,11 @@ class BoundaryPolynomial(AbstractSearchedPeaksLaw):
             self.v0, self.a0, self.j0, self.v1, self.a1, self.j1)
         if not is_concrete(self):
             return f"polynomial{self.degree}"
-        return f"polynomial{self.degree}:" + ",".join(number_text(x) for x in ends)
+        # A value at rounding noise beside the others (a "match" that read -5e-16) reads 0.
+        values = [float(x) for x in ends]
+        floor = 1e-12 * max(1.0, *map(abs, values))
+        return f"polynomial{self.degree}:" + ",".join(number_text(0.0 if abs(x) <= floor else x)
+                                                     for x in values)
 
     def coefficients(self) -> jax.Array:
         """Ascending coefficients of ``s(tau)`` (degree + 1 of them)."""
