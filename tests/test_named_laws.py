@@ -221,14 +221,14 @@ def residual_by_quad(acc, ca, n):
 
 
 def test_residual_through_the_engine_matches_the_closed_form():
-    ratios = [1.7, 3.3, 5.5]
+    ratios = [1.7, 3.3, 4.0, 5.5]
     acc = freudenstein_13().derivative(2)
     curve = camjax.ct_curve("freudenstein-1-3", ratios)
     ca = laws.get("freudenstein-1-3").peak_coefficients()["Ca"]
     for n, r in zip(ratios, curve.residual):
         assert r == pytest.approx(residual_by_quad(lambda u: float(acc(u)), ca, n), abs=1e-8)
     # A sine series of K harmonics leaves no residual vibration at any integer n > K.
-    assert float(camjax.residual_vibration("freudenstein-1-3", 4.0)) < 1e-9
+    assert curve.residual[2] < 1e-9
 
 
 def test_gradient_in_a_triple_harmonic_amplitude_matches_finite_differences():
@@ -250,3 +250,56 @@ def test_laws_command_lists_the_named_laws(capsys):
     assert code == 0 and list(table) == laws.names()
     assert {"freudenstein-1-3", "freudenstein-1-3-5", "triple-harmonic-zero-jerk"} <= set(table)
     assert table["freudenstein-1-3"]["Ca"] == pytest.approx(laws.get("freudenstein-1-3").Ca, rel=1e-12)
+
+
+PROGRAM = """
+[program]
+name = "named"
+[[segment]]
+angle_deg = 30
+[[segment]]          # rest to reversal
+law = "double-harmonic"
+lift_mm = 10
+angle_deg = 120
+[[segment]]          # turn back at once, from the reversal's state to rest
+law = "polynomial"
+degree = 5
+lift_mm = -10
+angle_deg = 120
+start = "match"
+end = "match"
+[[segment]]
+angle_deg = 30
+[[segment]]
+law = "LAW"
+lift_mm = 5
+angle_deg = 30
+[[segment]]
+law = "cycloidal"
+lift_mm = -5
+angle_deg = 30
+[follower]
+kind = "translating-roller"
+mass_kg = 1.5
+stiffness_n_per_mm = 2000
+damping_ratio = 0.05
+spring_rate_n_per_mm = 10
+preload_n = 300
+base_radius_mm = 40
+roller_radius_mm = 12
+"""
+
+
+def test_a_program_takes_the_named_laws_and_turns_back_from_the_double_harmonic(tmp_path):
+    from camjax.program import Program
+
+    for law in ("freudenstein-1-3-5", "modified-sine-asym:0.4", "triple-harmonic:6,1"):
+        path = tmp_path / "p.toml"
+        path.write_text(PROGRAM.replace("LAW", law))
+        program = Program.load(path)
+        assert program.segments[4].law.name == laws.get(law).name
+        # A U join (v = 0) with the acceleration continuous: -pi^2 h / beta^2 on both sides.
+        top = program.joins()[1]
+        assert (top.before, top.after, top.velocity_mm_per_deg) == (2, 3, 0.0)
+        assert top.state == "U" and top.continuity == "C2"
+        assert top.acceleration_before_mm_per_deg2 == pytest.approx(-PI**2 * 10 / 120**2, rel=1e-12)

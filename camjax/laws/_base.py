@@ -116,7 +116,8 @@ class AbstractMotionLaw(eqx.Module):
         ``None`` where the law is traced (or is no rise); the rest-to-rest check reads it."""
         if not is_concrete(self):
             return None
-        _, v, a, _ = jax.device_get(_compiled_rise(self, jnp.array([0.0, 1.0])))
+        with jax.ensure_compile_time_eval():  # concrete, even when asked inside a trace
+            _, v, a, _ = jax.device_get(_compiled_rise(self, np.array([0.0, 1.0])))
         return float(v[0]), float(a[0]), float(v[1]), float(a[1])
 
     def peak_coefficients(self) -> dict[str, float]:

@@ -17,6 +17,7 @@ Cv = the base's; Ca = Ca_b / (2 min(L, 1-L)); Cj = Cj_b / (4 min(L, 1-L)^2).
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -28,7 +29,8 @@ from ._base import AbstractMotionLaw, float_leaf, number_text, static_breakpoint
 def _symmetric(law: AbstractMotionLaw) -> bool:
     """``s(1 - tau) = 1 - s(tau)`` at a few points (concrete laws)."""
     tau = np.array([0.1, 0.23, 0.37, 0.45])
-    s = np.asarray(law.s(np.concatenate([tau, 1 - tau])))
+    with jax.ensure_compile_time_eval():  # concrete, even when built inside a trace
+        s = np.asarray(law.s(np.concatenate([tau, 1 - tau])))
     return bool(np.max(np.abs(s[: tau.size] + s[tau.size:] - 1.0)) <= 1e-9)
 
 
