@@ -39,9 +39,8 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         return f"{text} (default: %(default)s)"
 
 
-LAW_HELP = ("a name of `camjax laws`, an alias such as modsine, scca:A,B,C, poly:K, "
-            "triple-harmonic:A1,A2, modified-sine-cv:P, modified-sine-asym:L, or a law file written "
-            "by `camjax design` (law.json)")
+LAW_HELP = ("a name of `camjax laws` or a family there (scca:A,B,C, modified-sine-asym:L, ...), "
+            "an alias such as modsine, or a law file written by `camjax design` (law.json)")
 
 
 def add_law_option(parser: argparse.ArgumentParser, default=None, what: str = "motion law") -> None:

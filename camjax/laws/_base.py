@@ -113,7 +113,8 @@ class AbstractMotionLaw(eqx.Module):
 
     def end_state(self) -> tuple[float, float, float, float] | None:
         """``(v(0), a(0), v(1), a(1))`` as Python floats (one-sided, inside the rise), or
-        ``None`` where the law is traced (or is no rise); the rest-to-rest check reads it."""
+        ``None`` where the law is traced, or where the rest-to-rest check does not apply
+        (a program's periodic turn); the rest-to-rest check reads it."""
         if not is_concrete(self):
             return None
         with jax.ensure_compile_time_eval():  # concrete, even when asked inside a trace

@@ -94,10 +94,6 @@ class HarmonicSeries(AbstractMotionLaw):
             require(abs(end - 1.0) <= 1e-9, "harmonic amplitudes must close the rise, sum A_k/(2 pi k) = 1, "
                     f"got {end:.12g}")
 
-    def _omegas(self, like):
-        return 2 * _PI * jnp.arange(1, jnp.size(self.amplitudes) + 1, dtype=float) if like is jnp else \
-            2 * _PI * np.arange(1, np.size(self.amplitudes) + 1)
-
     @property
     def name(self) -> str:
         """A preset's name, ``triple-harmonic:A1,A2`` for three harmonics, else
@@ -116,7 +112,7 @@ class HarmonicSeries(AbstractMotionLaw):
         """The ``order``-th derivative of ``s`` (0..5) as a function of ``tau`` (``xp``:
         ``jax.numpy`` or ``numpy``)."""
         amps = self.amplitudes if xp is jnp else np.asarray(self.amplitudes, dtype=float)
-        w = self._omegas(xp)
+        w = 2 * _PI * np.arange(1, np.size(self.amplitudes) + 1)  # the harmonics' 2 pi k
 
         def f(tau):
             t = xp.asarray(tau)[..., None]
