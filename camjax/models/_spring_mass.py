@@ -29,7 +29,7 @@ import numpy as np
 from .. import checks
 from ..checks import require
 from ..errors import RESULTS
-from ..laws import AbstractMotionLaw, as_law, rest_to_rest
+from ..laws import AbstractMotionLaw, rest_to_rest
 from ..sdof import (
     MAX_GRID_INTERVALS,
     MAX_PHASE_STEP,
