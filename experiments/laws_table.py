@@ -47,14 +47,14 @@ def main() -> None:
     band = np.linspace(*BAND, 1501)
     wide = np.linspace(1.0, 20.0, 3801)
     start = time.perf_counter()
-    worst = camjax.ct_curves(rest, band)
-    curves = camjax.ct_curves(sorted(set(CLASSIC + NAMED)), wide)
+    worst = camjax.ct_curves({name: name for name in rest}, band)  # keyed by the names given
+    curves = camjax.ct_curves({name: name for name in sorted(set(CLASSIC + NAMED))}, wide)
     seconds = time.perf_counter() - start
 
     rows = []
     for name in rest + IN_MOTION:
         law = laws.get(name)
-        row = {"law": law.name, **law.peak_coefficients(), "ct": None, "ca_ct": None, "residual": None}
+        row = {"law": name, **law.peak_coefficients(), "ct": None, "ca_ct": None, "residual": None}
         if name in worst:
             c = worst[name]
             row.update(ct=float(np.max(c.ct)), ca_ct=float(np.max(c.ca_ct)), residual=float(np.max(c.residual)))

@@ -146,7 +146,7 @@ def test_constant_velocity_variants_are_scca_with_a_zero_part(member, fractions)
     scaled = laws.SCCA(*((1 - P) * x for x in fractions))
     t = np.linspace(0, 1, 1001)
     np.testing.assert_array_equal(np.asarray(law.s(t)), np.asarray(scaled.s(t)))
-    assert law.name == f"{member}-cv:0.3" and laws.get(law.name) == law
+    assert law.name == scaled.name and laws.get(law.name) == law  # an SCCA law by its fractions
     # The middle P of the rise runs at constant velocity Cv with zero acceleration.
     middle = np.linspace(0.5 - P / 2 + 1e-9, 0.5 + P / 2 - 1e-9, 51)
     assert np.max(np.abs(np.asarray(law.a(middle)))) < 1e-12

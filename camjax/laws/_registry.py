@@ -169,9 +169,10 @@ def rest_to_rest_fault(law: AbstractMotionLaw) -> str | None:
     """Why ``law`` is not a rise from rest to rest (``None`` if it is, or if it is traced).
 
     A rise from rest to rest starts and ends with ``v = 0`` (an acceleration step at an
-    end, as in the simple harmonic and parabolic laws, is a jerk impulse the tools model),
-    has a nonzero peak acceleration (Ct and R are per unit Ca), and is not meant to turn
-    back without a dwell (``ends_in_reversal``).  Read from the law's concrete end states.
+    end, as in the simple harmonic and parabolic laws, is a jerk impulse the tools model;
+    rising from rest to rest, it has Ca > 0, which Ct and R are per unit of) and is not
+    meant to turn back without a dwell (``ends_in_reversal``).  Read from the law's
+    concrete end states (``end_state``).
     """
     if law.ends_in_reversal:
         return "ends in a reversal (v = 0, a != 0) to turn back without a dwell"
@@ -186,7 +187,7 @@ def rest_to_rest_fault(law: AbstractMotionLaw) -> str | None:
 
 def rest_to_rest_names() -> str:
     """The laws the rest-to-rest tools take, as their errors list them."""
-    return ", ".join(names() + list(FAMILIES) + ["polynomial5/7 with V0 = V1 = 0", "B-spline law files"])
+    return ", ".join(names() + list(FAMILIES) + ["polynomial5/7 with V0 = V1 = 0", "B-spline laws (law files)"])
 
 
 def rest_to_rest(law, tool: str, what: str = "law") -> AbstractMotionLaw:

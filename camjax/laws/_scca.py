@@ -150,12 +150,6 @@ class SCCA(AbstractMotionLaw):
         for member, known in MEMBERS.items():
             if max(abs(x - y) for x, y in zip(fractions, known)) <= 1e-12:
                 return member
-        for member in CV_BASES:
-            known = MEMBERS[member]
-            share = 1.0 - sum(fractions)  # the zero-acceleration fraction d = P
-            if 1e-12 < share < 1 and max(abs(x - (1 - share) * y)
-                                         for x, y in zip(fractions, known)) <= 1e-12:
-                return f"{member}-cv:{number_text(share)}"
         return "scca:" + ",".join(map(number_text, fractions))
 
     def end_state(self):
