@@ -54,7 +54,7 @@ from pathlib import Path
 import numpy as np
 
 from .checks import period_ratio_count, read_toml
-from .laws import SCCA, AbstractMotionLaw, get
+from .laws import SCCA, AbstractMotionLaw, rest_to_rest
 from .sdof import MAX_GRID_INTERVALS, MAX_PHASE_STEP, default_resolution
 
 METRICS = ("ct", "residual", "peak_in_motion")
@@ -180,7 +180,7 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
     names = table.get("names", [])
     if not isinstance(names, list) or not all(isinstance(x, str) for x in names):
         raise ValueError(f"laws.names must be a list of law names, got {names!r}")
-    laws = [get(name) for name in names]
+    laws = [rest_to_rest(name, "a sweep spec", "laws.names entry") for name in names]
     if "scca_step" in table:
         laws += scca_grid(_number(table["scca_step"], "laws.scca_step"),
                           face=bool(table.get("scca_face", False)))

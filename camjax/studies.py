@@ -18,7 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .errors import RESULTS
-from .laws import as_law
+from .laws import rest_to_rest
 from .models import SpringMassOptions, batch_metrics
 from .sdof import default_resolution
 from .solvers import FIXED_STEP_SOLVERS
@@ -304,7 +304,7 @@ def run_study(laws, period_ratios, cases, *, repeats: int = 2, progress=None) ->
     """Rows of :func:`measure` for every law (or law name) and case."""
     rows = []
     for name in laws:
-        law = as_law(name)
+        law = rest_to_rest(name, "run_study")
         reference = reference_metrics(law, period_ratios)
         for case in cases:
             rows.append(measure(law, period_ratios, case, reference, repeats=repeats))

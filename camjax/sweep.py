@@ -13,7 +13,7 @@ import numpy as np
 
 from . import checks
 from .errors import RESULTS, mark_failures, promote, raise_if_failed, result_names
-from .laws import AbstractMotionLaw, as_law
+from .laws import AbstractMotionLaw, as_law, rest_to_rest
 from .models import AbstractMachineModel, AbstractModel, SpringMass
 from .sdof import MAX_PHASE_STEP, default_resolution, map_in_chunks, stack_laws
 from .sharding import on_cpu, outside_traces, shard_batch, sweep_jit
@@ -321,7 +321,7 @@ def ct_curve(
         SolverError: the solver failed at any period ratio (the first is named), with
             ``throw=True``.
     """
-    law = as_law(law)
+    law = rest_to_rest(law, "ct_curve")
     n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)
     metrics, result = jax.device_get(sweep_metrics(law, n, template, options, devices=devices))
     return _curves([law.name], [law], n, template, options, *_stacked((metrics, result)), throw,
@@ -355,10 +355,10 @@ def ct_curves(
     if isinstance(laws, str):
         raise TypeError("laws must be a list of laws or law names (or a mapping), not one name")
     if isinstance(laws, Mapping):
-        named = {key: as_law(law) for key, law in laws.items()}
+        named = {key: rest_to_rest(law, "ct_curves") for key, law in laws.items()}
         names = {key: law.name for key, law in named.items()}
     else:
-        named = {law.name: law for law in map(as_law, laws)}
+        named = {law.name: law for law in (rest_to_rest(x, "ct_curves") for x in laws)}
         names = {key: key for key in named}  # each name computed once (an SCCA's: 20 us)
     like = [*named.values(), *map(as_law, like)]
     n, template, options = prepare_sweep(period_ratios, model, damping, method, dwell, **solver_options)

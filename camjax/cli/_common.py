@@ -39,8 +39,8 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
         return f"{text} (default: %(default)s)"
 
 
-LAW_HELP = ("a name of `camjax laws`, an alias such as modsine, scca:A,B,C, poly:K, or a law "
-            "file written by `camjax design` (law.json)")
+LAW_HELP = ("a name of `camjax laws` or a family there (scca:A,B,C, modified-sine-asym:L, ...), "
+            "an alias such as modsine, or a law file written by `camjax design` (law.json)")
 
 
 def add_law_option(parser: argparse.ArgumentParser, default=None, what: str = "motion law") -> None:
@@ -86,31 +86,35 @@ def law_names_of(args, default=None) -> list[str]:
     if args.law:
         raise CliError("--law: no law name given")
     if default is None:
-        from ..laws import names
+        from ..laws import standard_laws
 
-        return names()
+        return [law.name for law in standard_laws()]
     return list(default)
 
 
-def law_of(spec: str, option: str = "--law"):
+def law_of(spec: str, option: str = "--law", tool: str | None = None):
     """The law that ``spec`` names: a law file (``*.json``, or an existing file) or a name,
-    as a ``CliError`` naming ``option`` if neither."""
-    from ..laws import get, load
+    as a ``CliError`` naming ``option`` if neither; with ``tool`` (``"camjax ct"``) also if
+    it is no rise from rest to rest (``camjax.laws.rest_to_rest``)."""
+    from ..laws import get, load, rest_to_rest
 
     try:
         if spec.lower().endswith(".json") or Path(spec).is_file():
-            return load(spec)
-        return get(spec)
+            law = load(spec)
+        else:
+            law = get(spec)
+        return law if tool is None else rest_to_rest(law, tool)
     except (ValueError, TypeError) as error:
         raise CliError(f"{option}: {error}") from None
 
 
-def laws_of(args, default=None) -> dict:
+def laws_of(args, default=None, tool: str | None = None) -> dict:
     """The ``--law`` laws by name, in the order given: a name given twice (or an alias of
-    it) counts once; a law file whose law's name is taken goes by the file's stem."""
+    it) counts once; a law file whose law's name is taken goes by the file's stem.  With
+    ``tool``, each must rise from rest to rest (``law_of``)."""
     selected = {}
     for spec in law_names_of(args, default):
-        law = law_of(spec)
+        law = law_of(spec, tool=tool)
         from_file = spec.lower().endswith(".json") or Path(spec).is_file()
         name = Path(spec).stem if from_file and law.name in selected else law.name
         selected[name] = law

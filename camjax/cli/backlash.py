@@ -86,7 +86,7 @@ def _format_table(report: dict) -> str:
 def run(args) -> int:
     bk = parse_float_list(args.bk, "--bk")
     dn = parse_float_list(args.dn, "--dn")
-    selected = laws_of(args)
+    selected = laws_of(args, tool="camjax backlash")
     out = output_dir(args.out)
     report = backlash_report(selected, bk, dn)
     text = dump_json(report, out / "backlash.json" if out else None)

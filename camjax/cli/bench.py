@@ -53,7 +53,7 @@ def run(args) -> int:
         study_cases,
     )
 
-    selected = laws_of(args, DEFAULT_LAWS)
+    selected = laws_of(args, DEFAULT_LAWS, tool="camjax bench")
     n = parse_range(args.n, "--n")
     if (n < 1e-3).any() or n.size < 1:
         raise CliError("--n: period ratios must be positive")

@@ -92,12 +92,13 @@ def _fit_or_none(curve):
 
 
 def _table(curves, fits) -> str:
-    lines = [f"{'law':<20} {'Ca':>7} {'max Ct':>7} {'max CaCt':>8} {'max R':>7} "
+    width = max([20, *(len(name) + 1 for name in curves)])
+    lines = [f"{'law':<{width}} {'Ca':>7} {'max Ct':>7} {'max CaCt':>8} {'max R':>7} "
              f"{'p':>7} {'q':>6} {'r':>6}"]
     for name, c in curves.items():
         f = fits.get(name)
         fit = f"{f.p:7.3f} {f.q:6.3f} {f.r:6.3f}" if f else f"{'-':>7} {'-':>6} {'-':>6}"
-        lines.append(f"{name:<20} {c.ca:7.4f} {_largest(c.ct):7.4f} {_largest(c.ca_ct):8.4f} "
+        lines.append(f"{name:<{width}} {c.ca:7.4f} {_largest(c.ct):7.4f} {_largest(c.ca_ct):8.4f} "
                      f"{_largest(c.residual):7.4f} {fit}")
     lines.append("Ca and Ca*Ct in units of h/T^2 (stroke over rise time squared); Ct and R in "
                  "units of Ca; maxima over the period ratios given (those solved).")
@@ -181,7 +182,7 @@ def run(args) -> int:
 
     plotting = import_aside("camjax.plot") if args.out is not None else None  # imports while the sweep compiles
 
-    selected = laws_of(args)
+    selected = laws_of(args, tool="camjax ct")
     n = parse_range(args.n, "--n")
     check_damping(args.damping)
     if not args.dwell >= 0:

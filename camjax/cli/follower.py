@@ -51,7 +51,7 @@ def register(subparsers) -> None:
 def _model(args):
     from ..models import SwingingFollower
 
-    law = law_of(args.law)
+    law = law_of(args.law, tool="camjax follower")
     for name in ("omega", "length", "radius", "roller_mass", "rise"):
         value = getattr(args, name)
         if not (math.isfinite(value) and value > 0):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import abc
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -41,6 +42,10 @@ class AbstractMotionLaw(eqx.Module):
     ``tau`` (scalar or array), jittable, vmappable and differentiable in the law's
     parameters (its pytree leaves).
     """
+
+    ends_in_reversal: ClassVar[bool] = False
+    """True for a law that ends in a reversal (``v = 0``, ``a != 0``) to join its return
+    without a dwell (the double harmonic): the rest-to-rest tools refuse it."""
 
     @property
     @abc.abstractmethod
@@ -111,6 +116,16 @@ class AbstractMotionLaw(eqx.Module):
         """Normalised jerk ``d3s/dtau3``."""
         return self.evaluate(tau)[3]
 
+    def end_state(self) -> tuple[float, float, float, float] | None:
+        """``(v(0), a(0), v(1), a(1))`` as Python floats (one-sided, inside the rise), or
+        ``None`` where the law is traced, or where the rest-to-rest check does not apply
+        (a program's periodic turn); the rest-to-rest check reads it."""
+        if not is_concrete(self):
+            return None
+        with jax.ensure_compile_time_eval():  # concrete, even when asked inside a trace
+            _, v, a, _ = jax.device_get(_compiled_rise(self, np.array([0.0, 1.0])))
+        return float(v[0]), float(a[0]), float(v[1]), float(a[1])
+
     def peak_coefficients(self) -> dict[str, float]:
         """``{"Cv", "Ca", "Cj"}`` as Python floats (``inf`` for an acceleration step)."""
         # One transfer for the three (on a GPU each float() of a device value is a wait).
@@ -145,6 +160,11 @@ def _compiled_evaluate(law: AbstractMotionLaw, tau: jax.Array) -> LawValues:
 
 
 @eqx.filter_jit
+def _compiled_rise(law: AbstractMotionLaw, tau: jax.Array) -> LawValues:
+    return law.rise(tau)
+
+
+@eqx.filter_jit
 def _compiled_peaks(law: AbstractMotionLaw):
     return jnp.asarray(law.Cv, float), jnp.asarray(law.Ca, float), jnp.asarray(law.Cj, float)
 
@@ -164,3 +184,14 @@ def polynomial_peaks(coefficients: np.ndarray) -> float:
     roots = poly.deriv().roots() if poly.degree() > 0 else np.array([])
     candidates = [0.0, 1.0] + [r.real for r in roots if abs(r.imag) < 1e-12 and 0 <= r.real <= 1]
     return float(max(abs(poly(np.array(candidates)))))
+
+
+def number_text(value) -> str:
+    """A law parameter as it appears in the law's name: ``%.12g`` where that reads back
+    within rounding noise (``-5.5``, not ``-5.499999999999999``), else the exact ``repr``,
+    so that ``get(law.name)`` rebuilds the law."""
+    x = float(value)
+    short = f"{x:.12g}"
+    if abs(float(short) - x) <= 4e-15 * abs(x):
+        return "0" if short == "-0" else short
+    return repr(x)

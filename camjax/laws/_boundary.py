@@ -20,7 +20,7 @@ import numpy as np
 
 from .._custom_types import Breakpoints, LawValues
 from ..checks import is_concrete, require
-from ._base import AbstractMotionLaw, AbstractSearchedPeaksLaw, float_leaf, polynomial_peaks
+from ._base import AbstractMotionLaw, AbstractSearchedPeaksLaw, float_leaf, number_text, polynomial_peaks
 from ._spline import BSplineLaw, max_abs_piecewise
 
 DEGREES = (5, 7)
@@ -83,7 +83,11 @@ class BoundaryPolynomial(AbstractSearchedPeaksLaw):
             self.v0, self.a0, self.j0, self.v1, self.a1, self.j1)
         if not is_concrete(self):
             return f"polynomial{self.degree}"
-        return f"polynomial{self.degree}:" + ",".join(repr(float(x)) for x in ends)
+        # A value at rounding noise beside the others (a "match" that read -5e-16) reads 0.
+        values = [float(x) for x in ends]
+        floor = 1e-12 * max(1.0, *map(abs, values))
+        return f"polynomial{self.degree}:" + ",".join(number_text(0.0 if abs(x) <= floor else x)
+                                                     for x in values)
 
     def coefficients(self) -> jax.Array:
         """Ascending coefficients of ``s(tau)`` (degree + 1 of them)."""
@@ -119,6 +123,11 @@ class BoundaryPolynomial(AbstractSearchedPeaksLaw):
             return {"Cv": self.Cv, "Ca": self.Ca, "Cj": self.Cj}
         return super().peak_coefficients()
 
+    def end_state(self):
+        if not is_concrete(self):
+            return None
+        return tuple(float(x) for x in (self.v0, self.a0, self.v1, self.a1))
+
     def displacement_range(self) -> tuple[float, float]:
         """``(min s, max s)`` over ``[0, 1]``, exactly: outside ``[0, 1]`` the lift overshoots."""
         poly = np.polynomial.Polynomial(self._numpy_derivative(0))
@@ -140,6 +149,9 @@ class ConstantVelocity(AbstractMotionLaw):
 
     def breakpoints(self) -> Breakpoints:
         return ()
+
+    def end_state(self):
+        return 1.0, 0.0, 1.0, 0.0
 
     @property
     def Cv(self) -> float:
@@ -188,6 +200,10 @@ class CorrectedPolynomial(AbstractSearchedPeaksLaw):
 
     def breakpoints(self) -> Breakpoints:
         return self._spline(self.coefficients).breakpoints()
+
+    def end_state(self):
+        # The correction keeps the base's end states for any coefficients.
+        return self.base.end_state() if is_concrete(self) else None
 
     def peak(self, order: int):
         edges = np.array([0.0, *self.breakpoints(), 1.0])

@@ -62,6 +62,10 @@ class PolynomialLaw(AbstractMotionLaw):
     def breakpoints(self) -> Breakpoints:
         return ()
 
+    def end_state(self):
+        a = np.polynomial.Polynomial(self._coefficients(2))
+        return 0.0, float(a(0.0)), 0.0, float(a(1.0))
+
     @property
     def Cv(self) -> float:
         return polynomial_peaks(self._coefficients(1))

@@ -1,7 +1,10 @@
 """Look laws up by name: ``get("modsine")``, ``get("scca:0.25,0.5,0.25")``, ``get("poly:5")``.
 
-``names()`` and ``standard_laws()`` list the rest-to-rest laws only; ``get`` also knows the
-laws that start or end in motion (``constant-velocity``, ``polynomial5:V0,A0,V1,A1`` and
+``names()`` lists the rest-to-rest laws with fixed names (the seven classic laws that
+``standard_laws()`` gives first, then the named laws of the trade); ``get`` also takes the
+parameterised rest-to-rest families (``scca:A,B,C``, ``poly:K``, ``triple-harmonic:A1,A2``,
+``NAME-cv:P``, ``NAME-asym:L``) and the laws that start or end in motion
+(``constant-velocity``, ``double-harmonic``, ``polynomial5:V0,A0,V1,A1`` and
 ``polynomial7:V0,A0,J0,V1,A1,J1``, boundary values in normalised units).
 """
 
@@ -11,14 +14,24 @@ from collections.abc import Callable
 
 from ._base import AbstractMotionLaw
 from ._boundary import BoundaryPolynomial, ConstantVelocity
+from ._harmonic import (
+    TRIPLE_HARMONIC_PRESETS,
+    DoubleHarmonic,
+    FreudensteinOneThree,
+    FreudensteinOneThreeFive,
+    TripleHarmonic,
+)
+from ._inflected import Inflected
 from ._polynomial import PolynomialLaw
 from ._scca import (
+    CV_BASES,
     SCCA,
     Cycloidal,
     ModifiedSine,
     ModifiedTrapezoid,
     Parabolic,
     SimpleHarmonic,
+    constant_velocity_variant,
 )
 
 _STANDARD: dict[str, Callable[[], AbstractMotionLaw]] = {
@@ -31,8 +44,16 @@ _STANDARD: dict[str, Callable[[], AbstractMotionLaw]] = {
     "poly4567": lambda: PolynomialLaw(4),
 }
 
+_NAMED: dict[str, Callable[[], AbstractMotionLaw]] = {
+    "freudenstein-1-3": FreudensteinOneThree,
+    "freudenstein-1-3-5": FreudensteinOneThreeFive,
+    **{name: (lambda a=a: TripleHarmonic(*a)) for name, a in TRIPLE_HARMONIC_PRESETS.items()},
+}
+"""Rest-to-rest laws of the trade with fixed names, beyond the classic seven."""
+
 _IN_MOTION: dict[str, Callable[[], AbstractMotionLaw]] = {
     "constant-velocity": ConstantVelocity,
+    "double-harmonic": DoubleHarmonic,
 }
 
 _ALIASES = {
@@ -48,15 +69,27 @@ _ALIASES = {
     "4-5-6-7": "poly4567",
 }
 
+FAMILIES = ("scca:A,B,C", "poly:K", "triple-harmonic:A1,A2",
+            *(f"{name}-cv:P" for name in CV_BASES), "NAME-asym:L")
+"""The parameterised rest-to-rest families ``get`` reads (``NAME``: a name of ``names()``)."""
+
+IN_MOTION_FAMILIES = ("polynomial5:V0,A0,V1,A1", "polynomial7:V0,A0,J0,V1,A1,J1")
+
 
 def names() -> list[str]:
-    """Canonical names of the standard laws, in the order reports list them."""
-    return list(_STANDARD)
+    """Canonical names of the rest-to-rest laws with fixed names: the classic seven of
+    ``standard_laws()`` first, then the named laws of the trade (``camjax laws`` lists them)."""
+    return list(_STANDARD) + list(_NAMED)
 
 
 def standard_laws() -> list[AbstractMotionLaw]:
-    """One instance of every standard law."""
+    """One instance of each of the seven classic laws, the set reports compare by default."""
     return [make() for make in _STANDARD.values()]
+
+
+def named_laws() -> list[AbstractMotionLaw]:
+    """One instance of every law of ``names()``."""
+    return [make() for make in (*_STANDARD.values(), *_NAMED.values())]
 
 
 def _parse_numbers(text: str, kind, name: str) -> list:
@@ -66,16 +99,25 @@ def _parse_numbers(text: str, kind, name: str) -> list:
         raise ValueError(f"cannot read the parameters of law {name!r}") from None
 
 
+def _parse_one(text: str, kind, name: str, form: str):
+    values = _parse_numbers(text, kind, name)
+    if len(values) != 1:
+        raise ValueError(f"law {name!r}: takes one number, {form!r}")
+    return values[0]
+
+
 def get(name: str) -> AbstractMotionLaw:
-    """The law called ``name``: a standard name, an alias, ``scca:A,B,C`` or ``poly:K``."""
+    """The law called ``name``: a name of ``names()``, an alias, a family member
+    (``FAMILIES``: ``scca:A,B,C``, ``modified-sine-asym:0.4``, ...) or a law that starts or
+    ends in motion (``constant-velocity``, ``double-harmonic``, ``polynomial5:...``)."""
     if not isinstance(name, str):
         raise TypeError(f"a law name must be a string, got {type(name).__name__}")
     key = name.strip().lower().replace("_", "-").replace(" ", "-")
     key = _ALIASES.get(key, key)
-    if key in _STANDARD:
-        return _STANDARD[key]()
-    if key in _IN_MOTION:
-        return _IN_MOTION[key]()
+    for table in (_STANDARD, _NAMED, _IN_MOTION):
+        if key in table:
+            return table[key]()
+    family, _, text = key.partition(":")
     if key.startswith(("polynomial5:", "polynomial7:")):
         degree = int(key[10])
         values = _parse_numbers(key[12:], float, name)
@@ -84,16 +126,32 @@ def get(name: str) -> AbstractMotionLaw:
             raise ValueError(f"law {name!r}: polynomial{degree} takes {len(keys)} boundary values, "
                              f"'polynomial{degree}:{','.join(k.upper() for k in keys)}'")
         return BoundaryPolynomial(**dict(zip(keys, values)), degree=degree)
-    if key.startswith("scca:"):
-        fractions = _parse_numbers(key[5:], float, name)
+    if family == "scca":
+        fractions = _parse_numbers(text, float, name)
         if len(fractions) != 3:
             raise ValueError(f"law {name!r}: scca takes three fractions, 'scca:A,B,C'")
         return SCCA(*fractions)
-    if key.startswith("poly:"):
-        (order,) = _parse_numbers(key[5:], int, name)
+    if family == "poly":
+        order = _parse_one(text, int, name, "poly:K")
         return PolynomialLaw(order)
-    valid = ", ".join(names() + sorted(_ALIASES) + ["scca:A,B,C", "poly:K"] + list(_IN_MOTION)
-                      + ["polynomial5:V0,A0,V1,A1", "polynomial7:V0,A0,J0,V1,A1,J1"])
+    if family == "triple-harmonic":
+        amplitudes = _parse_numbers(text, float, name)
+        if len(amplitudes) != 2:
+            raise ValueError(f"law {name!r}: triple-harmonic takes two amplitudes, 'triple-harmonic:A1,A2' "
+                             "(A3 closes the rise)")
+        return TripleHarmonic(*amplitudes)
+    if family.endswith("-cv") and text:
+        base = _ALIASES.get(family[:-3], family[:-3])
+        share = _parse_one(text, float, name, f"{base}-cv:P")
+        return constant_velocity_variant(base, share)
+    if family.endswith("-asym") and text:
+        base = _ALIASES.get(family[:-5], family[:-5])
+        if base not in _STANDARD and base not in _NAMED:
+            raise ValueError(f"law {name!r}: NAME-asym:L takes a law of {', '.join(names())}")
+        inflection = _parse_one(text, float, name, f"{base}-asym:L")
+        return Inflected(get(base), inflection)
+    valid = ", ".join(names() + sorted(_ALIASES) + list(FAMILIES) + list(_IN_MOTION)
+                      + list(IN_MOTION_FAMILIES))
     raise ValueError(f"unknown law {name!r}; valid names: {valid}")
 
 
@@ -105,3 +163,40 @@ def as_law(law, what: str = "law") -> AbstractMotionLaw:
     if isinstance(law, str):
         return get(law)
     raise TypeError(f"{what} must be a camjax motion law or a law name, got {type(law).__name__}")
+
+
+def rest_to_rest_fault(law: AbstractMotionLaw) -> str | None:
+    """Why ``law`` is not a rise from rest to rest (``None`` if it is, or if it is traced).
+
+    A rise from rest to rest starts and ends with ``v = 0`` (an acceleration step at an
+    end, as in the simple harmonic and parabolic laws, is a jerk impulse the tools model;
+    rising from rest to rest, it has Ca > 0, which Ct and R are per unit of) and is not
+    meant to turn back without a dwell (``ends_in_reversal``).  Read from the law's
+    concrete end states (``end_state``).
+    """
+    if law.ends_in_reversal:
+        return "ends in a reversal (v = 0, a != 0) to turn back without a dwell"
+    ends = law.end_state()
+    if ends is None:
+        return None
+    v0, _, v1, _ = ends
+    if abs(v0) > 1e-9 or abs(v1) > 1e-9:
+        return f"starts or ends in motion (v(0) = {v0:.6g}, v(1) = {v1:.6g})"
+    return None
+
+
+def rest_to_rest_names() -> str:
+    """The laws the rest-to-rest tools take, as their errors list them."""
+    return ", ".join(names() + list(FAMILIES) + ["polynomial5/7 with V0 = V1 = 0", "B-spline laws (law files)"])
+
+
+def rest_to_rest(law, tool: str, what: str = "law") -> AbstractMotionLaw:
+    """``law`` (or the law its name gives) if it rises from rest to rest, else a one-line
+    ``ValueError`` naming ``tool`` and the laws it takes: the one check of every tool that
+    follows a rise with a dwell (Ct, residual vibration, backlash, the follower, sweeps)."""
+    law = as_law(law, what)
+    fault = rest_to_rest_fault(law)
+    if fault is not None:
+        raise ValueError(f"{tool} needs a rise from rest to rest; {what} {law.name!r} {fault}; "
+                         f"{tool} takes {rest_to_rest_names()}")
+    return law

@@ -22,9 +22,22 @@ import numpy as np
 from .. import checks
 from .._custom_types import Breakpoints, LawValues
 from ..checks import is_concrete, require
-from ._base import AbstractMotionLaw, float_leaf, static_breakpoints
+from ._base import AbstractMotionLaw, float_leaf, number_text, static_breakpoints
 
 _PI = math.pi
+
+
+def _piece_ends(a, b, c):
+    """``(s, v)`` at the end of the sine, constant and cosine pieces, and ``s(1/2)``, for
+    unit peak acceleration: plain arithmetic, so NumPy fractions stay NumPy."""
+    d = 1.0 - a - b - c
+    v1 = a / _PI
+    s1 = a**2 * (1 / (2 * _PI) - 1 / _PI**2)
+    v2 = v1 + b / 2
+    s2 = s1 + v1 * b / 2 + (b / 2) ** 2 / 2
+    v3 = v2 + c / _PI
+    s3 = s2 + v2 * c / 2 + c**2 / _PI**2
+    return (s1, v1), (s2, v2), (s3, v3), s3 + v3 * d / 2
 
 
 def _half_rise(tau, a, b, c):
@@ -33,20 +46,12 @@ def _half_rise(tau, a, b, c):
     Written with safe divisions so that values and gradients stay finite when a
     fraction is zero (its piece then has zero width and is never selected).
     """
-    d = 1.0 - a - b - c
     t1 = a / 2
     t2 = t1 + b / 2
     t3 = t2 + c / 2
     k1 = _PI / jnp.where(a > 0, a, 1.0)
     k3 = _PI / jnp.where(c > 0, c, 1.0)
-    # State at the end of each piece (unit peak acceleration).
-    v1 = a / _PI
-    s1 = a**2 * (1 / (2 * _PI) - 1 / _PI**2)
-    v2 = v1 + b / 2
-    s2 = s1 + v1 * b / 2 + (b / 2) ** 2 / 2
-    v3 = v2 + c / _PI
-    s3 = s2 + v2 * c / 2 + c**2 / _PI**2
-    s_half = s3 + v3 * d / 2
+    (s1, v1), (s2, v2), (s3, v3), s_half = _piece_ends(a, b, c)
 
     u1 = tau
     sine = (
@@ -145,7 +150,15 @@ class SCCA(AbstractMotionLaw):
         for member, known in MEMBERS.items():
             if max(abs(x - y) for x, y in zip(fractions, known)) <= 1e-12:
                 return member
-        return "scca:{:g},{:g},{:g}".format(*fractions)
+        return "scca:" + ",".join(map(number_text, fractions))
+
+    def end_state(self):
+        fractions = self._concrete_fractions()
+        if fractions is None:
+            return super().end_state()
+        # v = 0 at both ends by construction; a starts at A only without a sine ramp.
+        a0 = 0.5 / _piece_ends(*fractions)[3] if fractions[0] == 0 else 0.0
+        return 0.0, a0, 0.0, -a0
 
     @property
     def peak_acceleration(self):
@@ -203,6 +216,21 @@ MEMBERS: dict[str, tuple[float, float, float]] = {
     "parabolic": (0.0, 1.0, 0.0),
 }
 """Fractions ``(sine, constant, cosine)`` of the named SCCA laws."""
+
+CV_BASES = ("modified-trapezoid", "modified-sine", "cycloidal")
+"""Members with a constant-velocity variant ``NAME-cv:P``: the member's fractions scaled by
+``1 - P``, so that a zero-acceleration (constant-velocity) part ``d = P`` spans the middle."""
+
+
+def constant_velocity_variant(member: str, share) -> SCCA:
+    """``member`` (one of ``CV_BASES``) with a constant-velocity part ``d = share`` in
+    ``[0, 1)`` in the middle: SCCA of the member's fractions times ``1 - share``."""
+    share = float(share)
+    require(member in CV_BASES, f"no constant-velocity variant of {member!r}; there are "
+            + ", ".join(f"{m}-cv:P" for m in CV_BASES))
+    require(0.0 <= share < 1.0, f"law {member}-cv:P: the constant-velocity fraction P must be "
+            f"in [0, 1), got {share:g}")
+    return SCCA(*((1.0 - share) * x for x in MEMBERS[member]))
 
 
 def Cycloidal() -> SCCA:

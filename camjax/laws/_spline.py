@@ -188,6 +188,10 @@ class BSplineLaw(AbstractSearchedPeaksLaw):
     def rise(self, tau) -> LawValues:
         return _spline_rise(self, tau)
 
+    def end_state(self):
+        # v = a = 0 at both ends for any coefficients (the fixed control points).
+        return (0.0, 0.0, 0.0, 0.0) if is_concrete(self) else None
+
     def breakpoints(self) -> Breakpoints:
         return tuple(float(x) for x in np.unique(self.knots)[1:-1])
 

@@ -39,7 +39,7 @@ import numpy as np
 from .. import checks
 from ..checks import is_concrete, require
 from ..errors import RESULTS
-from ..laws import AbstractMotionLaw, as_law
+from ..laws import AbstractMotionLaw, rest_to_rest
 from ..sdof import residual_amplitude
 from ..solvers import solver
 from ._base import Metrics, Options, Response
@@ -112,7 +112,7 @@ def kinematic_impact(
     check_backlash_inputs(backlash, natural_deceleration)
     bk = jnp.asarray(backlash, dtype=float)
     dn = jnp.asarray(natural_deceleration, dtype=float)
-    return _kinematic_impact(as_law(law), bk, dn, samples)
+    return _kinematic_impact(rest_to_rest(law, "kinematic_impact"), bk, dn, samples)
 
 
 @eqx.filter_jit
@@ -195,7 +195,7 @@ def kinematic_impact_table(
     dn = jnp.atleast_1d(jnp.asarray(natural_deceleration, dtype=float))
     require(bk.ndim == 1 and dn.ndim == 1, "backlash and natural deceleration must be 1-D lists")
     check_backlash_inputs(bk, dn)
-    return _impact_table(as_law(law), bk, dn, samples)
+    return _impact_table(rest_to_rest(law, "kinematic_impact_table"), bk, dn, samples)
 
 
 # --- physical units -------------------------------------------------------------------

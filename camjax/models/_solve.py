@@ -8,7 +8,7 @@ import jax.numpy as jnp
 
 from .. import checks
 from ..errors import RESULTS, promote, raise_if_failed
-from ..laws import AbstractMotionLaw, as_law
+from ..laws import AbstractMotionLaw, rest_to_rest
 from ..registry import model_class_names
 from ..sharding import cpu_options_jit
 from ._base import AbstractMachineModel, AbstractModel, Response
@@ -92,7 +92,7 @@ def _arguments(law, model, dwell, method, options):
     if not isinstance(model, AbstractModel):
         raise TypeError(f"model must be a camjax model ({model_class_names()}), "
                         f"got {type(model).__name__}")
-    law = None if law is None else as_law(law)
+    law = None if law is None else rest_to_rest(law, "solve")
     if law is None and not isinstance(model, AbstractMachineModel):
         raise TypeError(f"{type(model).__name__} needs a motion law (law is None)")
     opts = model.options(method, dwell, **options)

@@ -29,7 +29,7 @@ import numpy as np
 from .. import checks
 from ..checks import require
 from ..errors import RESULTS
-from ..laws import AbstractMotionLaw, as_law
+from ..laws import AbstractMotionLaw, rest_to_rest
 from ..sdof import (
     MAX_GRID_INTERVALS,
     MAX_PHASE_STEP,
@@ -293,7 +293,7 @@ def _traced_too_coarse() -> str:
             f"torsion_factor(law, n, resolution=4096) for n <= {_down(4096 / per_n, 3):.3g}")
 
 
-def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
+def _exact_metrics(law, period_ratio, damping, dwell, resolution, tool: str) -> Metrics:
     """Metrics of the exact path on a grid sized to the period ratio, or refused.
 
     A concrete period ratio gets the default grid (``SpringMassOptions``; refused above
@@ -301,7 +301,7 @@ def _exact_metrics(law, period_ratio, damping, dwell, resolution) -> Metrics:
     ``None``), and a period ratio past what that grid resolves raises, when the
     computation runs, instead of returning a wrong number.
     """
-    law = as_law(law)
+    law = rest_to_rest(law, tool)
     for value, name in ((period_ratio, "period_ratio"), (damping, "damping")):
         _one_number(value, name)
     model = SpringMass(period_ratio, damping)  # concrete values checked here
@@ -346,13 +346,13 @@ def torsion_factor(law, period_ratio, damping=0.0, *, dwell=1.0, resolution=None
     past what the grid resolves, damping outside ``[0, 1)`` or invalid law parameters
     raise, even under ``jit``, ``vmap`` and ``grad``.
     """
-    return _exact_metrics(law, period_ratio, damping, dwell, resolution).ct
+    return _exact_metrics(law, period_ratio, damping, dwell, resolution, "torsion_factor").ct
 
 
 def residual_vibration(law, period_ratio, damping=0.0, *, resolution=None):
     """Residual vibration R (units of Ca) of the exact path, jittable and differentiable;
     the law, grid and checks as in ``torsion_factor``."""
-    return _exact_metrics(law, period_ratio, damping, 1.0, resolution).residual
+    return _exact_metrics(law, period_ratio, damping, 1.0, resolution, "residual_vibration").residual
 
 
 # --- physical inputs ------------------------------------------------------------------

@@ -30,7 +30,7 @@ import numpy as np
 from .. import checks, geometry
 from ..checks import is_concrete, require
 from ..errors import RESULTS, promote
-from ..laws import AbstractMotionLaw, Cycloidal, RiseDwellFall
+from ..laws import AbstractMotionLaw, Cycloidal, RiseDwellFall, rest_to_rest
 from ..solvers import solver
 from ._base import AbstractMachineModel, Options, Response
 
@@ -223,6 +223,8 @@ class SwingingFollower(AbstractMachineModel):
         require(
             axial is None or (isinstance(axial, int) and 1 <= axial <= 12), f"axial_modes must be None or an integer 1..12, got {axial}"
         )
+        for which in ("rise", "fall"):  # rise-dwell-fall-dwell: each law runs from rest to rest
+            rest_to_rest(getattr(self, which), "SwingingFollower", which)
         if is_concrete(self.total_swing, self.observation_point):
             require(0 < float(self.total_swing) < math.pi / 2, f"total_swing must be in (0, pi/2) rad, got {self.total_swing}")
             require(0 < float(self.observation_point) <= 1, "observation_point must be in (0, 1]")

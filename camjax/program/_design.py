@@ -11,7 +11,6 @@ import dataclasses
 from pathlib import Path
 
 import jax.numpy as jnp
-import numpy as np
 
 from .. import laws
 from ._spec import Program, segment_band, with_law
@@ -71,10 +70,11 @@ def _in_motion_start(law):
     """The law a design of a segment in motion starts from, or ``None`` for a rest-to-rest law."""
     if isinstance(law, laws.BoundaryPolynomial | laws.CorrectedPolynomial):
         return law
-    _, v, a, _ = (np.asarray(x, dtype=float) for x in law.evaluate(np.array([0.0, 1.0])))
-    if np.all(np.abs(v) < 1e-12):  # from and to rest: the rest-to-rest B-spline meets it
+    if laws.rest_to_rest_fault(law) is None:  # from and to rest: the rest-to-rest B-spline meets it
         return None
-    return laws.BoundaryPolynomial(v0=v[0], a0=a[0], v1=v[1], a1=a[1], degree=5)
+    # In motion, or a reversal (the double harmonic): keep the end states.
+    v0, a0, v1, a1 = law.end_state()
+    return laws.BoundaryPolynomial(v0=v0, a0=a0, v1=v1, a1=a1, degree=5)
 
 
 def write_program(program: Program, directory) -> Path:

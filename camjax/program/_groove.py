@@ -87,6 +87,10 @@ class TurnLaw(AbstractMotionLaw):
     def rise(self, tau):
         return self.evaluate(tau)
 
+    def end_state(self):
+        """None: a periodic turn, not a rise, so the rest-to-rest check does not apply."""
+        return None
+
     def breakpoints(self):
         points = set()
         for law, s0, f in zip(self.laws, self.start, self.width):
