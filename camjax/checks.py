@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import math
 from pathlib import Path
 
 import equinox as eqx
@@ -102,6 +103,16 @@ def as_value_errors():
         if not messages:
             raise
         raise ValueError(messages[-1]) from None
+
+
+def finite_number(value, what: str) -> float:
+    """``value`` as a float: a real number (not a bool, not a string) and finite."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{what} must be a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{what} must be finite, got {value}")
+    return value
 
 
 def positive_integer(value, name: str) -> int:

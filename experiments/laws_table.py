@@ -63,7 +63,7 @@ def main() -> None:
     def cell(x, digits=4):
         return "refused" if x is None else "inf" if not np.isfinite(x) else f"{x:.{digits}f}"
 
-    lines = [f"| law | Cv | Ca | Cj | worst Ct | worst Ca*Ct | worst R |",
+    lines = ["| law | Cv | Ca | Cj | worst Ct | worst Ca*Ct | worst R |",
              "|---|---:|---:|---:|---:|---:|---:|"]
     lines += [f"| {r['law']} | {cell(r['Cv'])} | {cell(r['Ca'])} | {cell(r['Cj'], 2)} | {cell(r['ct'])} | "
               f"{cell(r['ca_ct'], 3)} | {cell(r['residual'])} |" for r in rows]

@@ -16,7 +16,6 @@ A speed sweep is one compiled call through the engine's ``chunked_map``.
 
 from __future__ import annotations
 
-import functools
 import math
 import warnings
 from typing import NamedTuple
@@ -33,7 +32,6 @@ from ..sdof import (
     MAX_GRID_INTERVALS,
     TARGET_PHASE_STEP,
     MotionGrid,
-    chunked_map,
     deflection_gains,
     eigenvalue,
     gain_derivatives,

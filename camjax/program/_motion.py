@@ -15,6 +15,7 @@ import math
 import jax
 import numpy as np
 
+from ..checks import finite_number as _finite
 from ..checks import is_concrete
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
 
@@ -57,7 +58,6 @@ def is_polynomial(seg) -> bool:
 
 
 def _check_spec(i: int, seg, key: str) -> None:
-    from ._spec import _finite
 
     spec = getattr(seg, key)
     if spec == MATCH:

@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import laws
-from ..checks import is_concrete, read_toml
+from ..checks import finite_number, is_concrete, read_toml
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
 from ._motion import END_STATE_KEYS, MATCH, EndState, is_polynomial, joins, resolve_segments
 
@@ -120,13 +120,7 @@ class Follower:
         return math.sqrt((self.stiffness + self.spring_rate) / self.mass_kg) / (2 * math.pi)
 
 
-def _finite(value, what: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{what} must be a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"{what} must be finite, got {value}")
-    return value
+_finite = finite_number  # a program file's numbers are checked as every other input
 
 
 def _positive(value, what: str) -> float:

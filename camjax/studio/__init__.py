@@ -10,7 +10,6 @@ docs/studio.md describes the page and the API.
 
 from __future__ import annotations
 
-
 from ._server import Studio as Studio
 from ._workbench import DEFAULT_RPM as DEFAULT_RPM
 from ._workbench import Workbench as Workbench
