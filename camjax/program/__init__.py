@@ -42,6 +42,7 @@ from ._groove import groove_turns as groove_turns
 from ._jump import Flight as Flight
 from ._jump import flight as flight
 from ._jump import flights as flights
+from ._jump import flights_at as flights_at
 from ._jump import jump_speed_rpm as jump_speed_rpm
 from ._jump import min_preload_n as min_preload_n
 from ._machine import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION

@@ -8,7 +8,7 @@ import numpy as np
 
 from ._dynamics import SteadyState, check_rpm
 from ._groove import Impact, groove_turns
-from ._jump import Flight, flights, jump_speed_rpm, min_preload_n
+from ._jump import Flight, flights_at, jump_speed_rpm, min_preload_n
 from ._machine import (
     DEFAULT_SPEED_FLUCTUATION,
     Geometry,
@@ -163,12 +163,13 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     flywheel = flywheel_inertia_kg_m2(out.energy_fluctuation_j, rpm, speed_fluctuation)
     stressed = program.follower.contact_width_mm is not None
     theta_nodes = 360.0 * steady.grid.nodes
+    lost = np.flatnonzero(out.min_contact_force_n < 0) if with_flight and not closed else np.zeros(0, int)
+    found = dict(zip(lost.tolist(), flights_at(steady, rpm[lost]) if lost.size else []))
     speeds = []
     for i, r in enumerate(rpm):
         stress = float(out.max_contact_stress_mpa[i])
         half_width = 2 * float(out.max_contact_stress_radius_mm[i]) * stress / program.materials.contact_modulus_mpa
         jump = bool(out.min_contact_force_n[i] < 0) and not closed
-        found = tuple(flights(steady, float(r))) if jump and with_flight else None
         speeds.append(SpeedReport(
             rpm=float(r),
             max_payload_acceleration_m_s2=float(out.max_payload_acceleration_m_s2[i]),
@@ -179,7 +180,7 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
             min_preload_n=None if closed else float(preload[i]),
             residual_vibration_mm=tuple(float(v) for v in out.residual_vibration_mm[i]),
             period_ratios=tuple(float(v) for v in ratios[i]),
-            flights=found,
+            flights=tuple(found[i]) if i in found else None,
             impacts=None if turns[i] is None else tuple(turns[i].impacts),
             impacts_change_deg=None if turns[i] is None else turns[i].change_deg,
             max_drive_torque_n_m=float(out.max_drive_torque_n_m[i]),

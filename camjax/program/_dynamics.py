@@ -449,6 +449,16 @@ class SteadyState:
         self._kept = {float(r): i for i, r in enumerate(rpm)}, out
         return out
 
+    def cycles_at(self, rpm) -> Cycle:
+        """``cycles`` at the speeds ``rpm``: read from the last batch where every one of them
+        was computed (``summary`` keeps it), else computed."""
+        rpm = check_rpm(rpm)
+        kept, cycles = getattr(self, "_kept", ({}, None))
+        if all(float(r) in kept for r in rpm):
+            rows = np.array([kept[float(r)] for r in rpm], dtype=int)
+            return jax.tree.map(lambda x: x[rows], cycles)
+        return self.cycles(rpm)
+
     def min_contact_force_n(self, rpm) -> np.ndarray:
         """``summary(rpm).min_contact_force_n`` alone (the jump's scan and bisection): the
         same compiled program, so a program's first look compiles one."""

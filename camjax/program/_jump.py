@@ -20,8 +20,8 @@ import math
 
 import numpy as np
 
-from ..sdof import MotionGrid, mode_between
-from ._dynamics import SteadyState
+from ..sdof import psi_host
+from ._dynamics import SteadyState, check_rpm
 
 _BISECTIONS = 2  # rounds of 64-way subdivision before the secant: a bracket shrinks by 65^2
 _SAMPLES_PER_INTERVAL = 8
@@ -30,24 +30,6 @@ _SAMPLES_PER_INTERVAL = 8
 def min_preload_n(min_contact_force_n, preload_n):
     """Preload that just keeps contact: ``max(0, max over the cycle of -(k e + c e'))``."""
     return np.maximum(0.0, preload_n - np.asarray(min_contact_force_n))
-
-
-def _first_root(f, lo: float, hi: float) -> float:
-    """A root of ``f`` (vectorised) in ``[lo, hi]`` with ``f(lo) > 0 >= f(hi)``: the first one.
-
-    Two rounds of 64-way subdivision shrink the bracket 4225-fold around the first sign
-    change; the root is then the secant's through the bracket's ends (the force is smooth
-    there: its error is of the bracket's square, far below the bisection's 65^-4)."""
-    f_lo = f_hi = None
-    for _ in range(_BISECTIONS):
-        t = np.linspace(lo, hi, 66)
-        values = f(t)
-        i = int(np.argmax(values <= 0)) if np.any(values[1:] <= 0) else 65
-        i = max(i, 1)
-        lo, hi, f_lo, f_hi = t[i - 1], t[i], values[i - 1], values[i]
-    if f_lo > 0 >= f_hi and f_lo != f_hi:
-        return float(lo + (hi - lo) * f_lo / (f_lo - f_hi))
-    return 0.5 * (lo + hi)
 
 
 def even_periods(rpm_lo: float, rpm_hi: float, count: int) -> np.ndarray:
@@ -109,107 +91,159 @@ class Flight:
         return dataclasses.asdict(self)
 
 
-class _SteadyState:
-    """Exact contact-held steady state at one speed, in SI, at any time ``t`` (seconds).
+class _Turns:
+    """The contact-held periodic steady states at several speeds (rows), exact at any time,
+    in SI, on the host (NumPy): every method takes the rows and the times (seconds) as
+    arrays that broadcast, so the event searches of every speed run at once.
 
     The lift is read from the turn's grid (its degree-5 interpolant of ``y`` per interval,
-    the one the steady state was computed from: within 1e-12 of the laws), on the host:
-    the event search calls it many times with a few points each."""
+    the one the steady state was computed from: within 1e-12 of the laws); the deflection
+    is the engine's exact step from the node before (``camjax.sdof.mode_between``'s).
+    """
 
-    def __init__(self, steady: SteadyState, rpm: float):
-        self.steady, self.rpm = steady, rpm
-        self.period = 60.0 / rpm
-        self.lam = steady.lam(rpm)
-        self.cycle = steady.cycle(rpm)
-        grid = steady.grid
-        self._nodes = np.asarray(grid.nodes)
-        self._widths = np.asarray(grid.piece_width)[np.asarray(grid.motion.piece)]
-        self._lift = np.asarray(grid.lift)
-        beta = float(steady.train.ks / steady.train.m) * self.period**2
-        # NumPy throughout (converted once): the searches call these thousands of times.
-        self._motion = MotionGrid(self._nodes, np.asarray(grid.motion.piece), np.asarray(grid.piece_width),
-                                  np.asarray(grid.motion.forcing) + beta * self._lift)
-        tr = steady.train
-        self._force_gains = (float(tr.preload), float(tr.k), float(tr.c))
+    def __init__(self, steady: SteadyState, rpm: np.ndarray):
+        grid, tr = steady.grid, steady.train
+        self.period = 60.0 / np.asarray(rpm, dtype=float)
+        w, zeta = float(tr.omega) * self.period, float(tr.zeta)
+        self.lam = -zeta * w + 1j * w * math.sqrt(1.0 - zeta**2)  # per turn
+        self.q = steady.cycles_at(rpm).q
+        self.nodes = np.asarray(grid.nodes)
+        self.piece = np.asarray(grid.motion.piece)
+        self.piece_width = np.asarray(grid.piece_width)
+        self.widths = self.piece_width[self.piece]
+        self.lift_coefficients = np.asarray(grid.lift)
+        self.acceleration = np.asarray(grid.motion.forcing)
+        self.beta = float(tr.ks / tr.m) * self.period**2
+        self.preload, self.k, self.c = float(tr.preload), float(tr.k), float(tr.c)
+        self.ks, self.m = float(tr.ks), float(tr.m)
 
-    def _at(self, t):
-        """Interval index and local time ``sigma`` of times ``t`` (periodic), by index."""
-        s = np.mod(np.atleast_1d(np.asarray(t, dtype=float)) / self.period, 1.0)
-        k = np.clip(np.searchsorted(self._nodes, s, side="right") - 1, 0, self._widths.size - 1)
-        return k, (s - self._nodes[k]) / self._widths[k]
+    def _locate(self, rows, t):
+        s = np.mod(t / self.period[rows], 1.0)
+        k = np.clip(np.searchsorted(self.nodes, s, side="right") - 1, 0, self.widths.size - 1)
+        return k, s - self.nodes[k]
 
-    def lift(self, t):
-        """Cam lift (m) and its rate (m/s) at times ``t``."""
-        k, sigma = self._at(t)
-        c = self._lift[k]
-        y = c[:, 5]
-        dy = 5 * c[:, 5]
+    def lift(self, rows, t):
+        """Cam lift (m) and its rate (m/s)."""
+        k, delta = self._locate(rows, t)
+        c = self.lift_coefficients[k]
+        sigma = delta / self.widths[k]
+        y, dy = c[..., 5], 5 * c[..., 5]
         for m in range(4, -1, -1):
-            y = y * sigma + c[:, m]
+            y = y * sigma + c[..., m]
             if m:
-                dy = dy * sigma + m * c[:, m]
-        return 1e-3 * y, 1e-3 * dy / self._widths[k] / self.period
+                dy = dy * sigma + m * c[..., m]
+        return 1e-3 * y, 1e-3 * dy / self.widths[k] / self.period[rows]
 
-    def deflection(self, t):
-        """``e`` (m) and ``e'`` (m/s) of the steady state at times ``t``."""
-        s = np.mod(np.atleast_1d(np.asarray(t, dtype=float)) / self.period, 1.0)
-        q = mode_between(self._motion, self.cycle.q, self.lam, s)
-        e = q.imag / self.lam.imag
-        e_rate = (q.real + self.lam.real * e) / self.period
-        return 1e-3 * e, 1e-3 * e_rate
+    def deflection(self, rows, t):
+        """``e`` (m) and ``e'`` (m/s) of the steady state."""
+        k, delta = self._locate(rows, t)
+        lam = self.lam[rows]
+        z = lam * delta
+        powers = (delta / self.widths[k])[..., None] ** np.arange(6)
+        forcing = self.acceleration[k] + self.beta[rows][..., None] * self.lift_coefficients[k]
+        q = np.exp(z) * self.q[rows, k] + delta * np.sum(forcing * powers * psi_host(z), axis=-1)
+        e = q.imag / lam.imag
+        return 1e-3 * e, 1e-3 * (q.real + lam.real * e) / self.period[rows]
 
-    def contact_force(self, t):
-        preload, k, c = self._force_gains
-        e, e_rate = self.deflection(t)
-        return preload + k * e + c * e_rate
+    def contact_force(self, rows, t):
+        e, e_rate = self.deflection(rows, t)
+        return self.preload + self.k * e + self.c * e_rate
+
+    def sampled_force(self):
+        """The contact force at ``_SAMPLES_PER_INTERVAL`` fixed fractions of every interval:
+        ``(times in turns (S,), force (rows, S))`` (the propagation's weights are taken per
+        piece, not per sample)."""
+        fractions = np.arange(_SAMPLES_PER_INTERVAL) / _SAMPLES_PER_INTERVAL
+        delta = self.widths[:, None] * fractions
+        times = (self.nodes[:-1, None] + delta).ravel()
+        powers = fractions[:, None] ** np.arange(6)
+        out = np.empty((self.period.size, times.size))
+        for r, lam in enumerate(self.lam):  # one speed at a time: (K, samples, 6) at most
+            weights = psi_host(lam * self.piece_width[:, None] * fractions)[self.piece]
+            forcing = self.acceleration + self.beta[r] * self.lift_coefficients
+            q = (np.exp(lam * delta) * self.q[r, :-1, None]
+                 + delta * np.einsum("kc,jc,kjc->kj", forcing, powers, weights))
+            e = q.imag / lam.imag
+            e_rate = (q.real + lam.real * e) / self.period[r]
+            out[r] = (self.preload + self.k * 1e-3 * e + self.c * 1e-3 * e_rate).ravel()
+        return times, out
+
+
+def _first_roots(f, lo, hi) -> np.ndarray:
+    """The first root of ``f`` in each row's ``[lo, hi]`` (``f(lo) > 0 >= f(hi)``); ``f`` maps
+    times ``(rows, points)`` to values.  Two rounds of 64-way subdivision shrink each
+    bracket 4225-fold around its first sign change; the root is then the secant's through
+    the bracket's ends (the force is smooth there: the error is of the bracket's square)."""
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    rows = np.arange(lo.size)
+    f_lo = f_hi = np.zeros_like(lo)
+    for _ in range(_BISECTIONS):
+        t = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, 66)
+        values = f(t)
+        hit = values[:, 1:] <= 0
+        i = np.where(hit.any(axis=1), hit.argmax(axis=1) + 1, 65)
+        lo, hi, f_lo, f_hi = t[rows, i - 1], t[rows, i], values[rows, i - 1], values[rows, i]
+    secant = (f_lo > 0) & (f_hi <= 0) & (f_lo != f_hi)
+    return np.where(secant, lo + (hi - lo) * f_lo / np.where(secant, f_lo - f_hi, 1.0), 0.5 * (lo + hi))
 
 
 def flights(steady: SteadyState, rpm: float) -> list[Flight]:
-    """Every flight in one turn at ``rpm`` (empty where contact holds).
+    """Every flight in one turn at ``rpm`` (empty where contact holds); see ``flights_at``."""
+    return flights_at(steady, check_rpm(rpm)[:1])[0]
+
+
+def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
+    """Every flight in one turn at each speed of ``rpm`` (empty where contact holds).
 
     The turn starts at the steady state's first separation (the linear answer is exact
     until then) and runs for one period: after each re-impact contact holds (steady state
     plus the free vibration of the difference) until the force reaches zero again, and the
-    follower takes off again; the turn ends one period after the first separation.
+    follower takes off again; the turn ends one period after the first separation.  The
+    speeds' events are searched together, flight by flight.
     """
+    rpm = check_rpm(rpm)
+    out = [[] for _ in rpm]
     if steady.program.follower.form_closed:
-        return []
-    ss = _SteadyState(steady, rpm)
-    if not ss.cycle.min_contact_force_n < 0:
-        return []
-    period = ss.period
-    t_sep = _first_separation(steady, ss)
-    y0, dy0 = ss.lift(t_sep)
-    e0, de0 = ss.deflection(t_sep)
-    state = (float(y0[0] - e0[0]), float(dy0[0] - de0[0]), float(e0[0]))
+        return out
+    lost = np.flatnonzero(steady.cycles_at(rpm).min_contact_force_n < 0)
+    if lost.size == 0:
+        return out
+    turns = _Turns(steady, rpm[lost])
+    times, table = turns.sampled_force()
+    period = turns.period
+    rows = np.arange(lost.size)
+    t_sep = _first_separations(turns, times, table)
+    y0, dy0 = turns.lift(rows, t_sep)
+    e0, de0 = turns.deflection(rows, t_sep)
+    x, v, e = y0 - e0, dy0 - de0, e0
     t_end = t_sep + period
-    # After each impact the next separation is the force's first sign change on a fine
-    # sample of the following period (``_SAMPLES_PER_INTERVAL`` per grid interval, at
-    # fixed times of the turn, so the steady state's share is computed once), then bisected.
-    count = _SAMPLES_PER_INTERVAL * (steady.grid.nodes.size - 1)
-    step = period / count
-    steady_force = ss.contact_force(step * np.arange(count))
-    out = []
-    while t_sep < t_end:
-        t_i, impact = _fly(steady, ss, t_sep, *state)
-        if t_i is None:
-            out.append(Flight(_angle(t_sep, period), None, None, None))
+    while rows.size:
+        t_i, velocity, x_i, v_i = _fly(turns, rows, t_sep[rows], x[rows], v[rows], e[rows])
+        for r in rows[np.isnan(t_i)]:  # the roller does not come back within a turn
+            out[lost[r]].append(Flight(_angle(t_sep[r], period[r]), None, None, None))
+        back = ~np.isnan(t_i)
+        rows, t_i, velocity, x_i, v_i = rows[back], t_i[back], velocity[back], x_i[back], v_i[back]
+        if not rows.size:
             break
-        velocity, (x_i, v_i) = impact
-        force_after = _contact_after(ss, t_i, x_i, v_i)
-        ticks = np.arange(int(t_i // step) + 1, int(t_i // step) + 1 + count)
-        samples = np.concatenate([[0.0], step * ticks - t_i])
-        values = np.concatenate([force_after(samples[:1]),
-                                 steady_force[ticks % count] + force_after.difference(samples[1:])])
-        again = np.flatnonzero(values[1:] < 0)
-        stop = again[0] + 1 if again.size else values.size
-        out.append(Flight(_angle(t_sep, period), _angle(t_i, period), velocity,
-                          _peak(force_after, samples, values, stop)))
-        if not again.size:
+        contact = _Contact(turns, rows, t_i, x_i, v_i)
+        samples, values = contact.sampled(times, table)
+        negative = values[:, 1:] < 0
+        again = negative.any(axis=1)
+        stop = np.where(again, negative.argmax(axis=1) + 1, values.shape[1])
+        peaks = _peaks(contact, samples, values, stop)
+        for j, r in enumerate(rows):
+            out[lost[r]].append(Flight(_angle(t_sep[r], period[r]), _angle(t_i[j], period[r]),
+                                       float(velocity[j]), float(peaks[j])))
+        sub = np.flatnonzero(again)
+        if not sub.size:
             break
-        tau = _first_root(force_after, samples[stop - 1], samples[stop])
-        t_sep = t_i + tau
-        state = _contact_state(ss, t_i, x_i, v_i, tau)
+        here = np.arange(sub.size)
+        tau = _first_roots(lambda t: contact.force(sub[here, None], t),
+                           samples[sub, stop[sub] - 1], samples[sub, stop[sub]])
+        rows = rows[sub]
+        t_sep[rows] = t_i[sub] + tau
+        x[rows], v[rows], e[rows] = contact.state(sub, tau)
+        rows = rows[t_sep[rows] < t_end[rows]]
     return out
 
 
@@ -223,122 +257,142 @@ def _angle(t: float, period: float) -> float:
     return float(np.mod(360 * t / period, 360))
 
 
-def _first_separation(steady: SteadyState, ss: _SteadyState) -> float:
-    """Time of the steady state's first loss of contact after its largest force."""
-    T = ss.period
-    force = ss.cycle.contact_force_n
-    s_nodes = steady.grid.nodes
-    start = int(np.argmax(force))
-    order = (start + np.arange(force.size - 1)) % (force.size - 1)
-    j = order[int(np.argmax(force[order] < 0))]
-    if force[j] >= 0:  # negative between nodes only: find the refined dip
-        dense = np.linspace(0, T, 16 * force.size)
-        values = ss.contact_force(dense)
-        j_t = dense[int(np.argmin(values))]
-        return _first_root(ss.contact_force, j_t - T / force.size, j_t)
-    prev = (j - 1) % (force.size - 1)
-    t_lo = s_nodes[prev] * T
-    t_hi = s_nodes[j] * T + (T if s_nodes[j] < s_nodes[prev] else 0.0)
-    return _first_root(ss.contact_force, t_lo, t_hi)
-
-
-def _fly(steady: SteadyState, ss: _SteadyState, t_sep: float, x0: float, v0: float, e0: float):
-    """Flight from separation at ``t_sep`` (payload ``x0``, ``v0``; train ``e0``) to re-impact.
-
-    Returns ``(t_impact, (impact velocity, (x, v) at impact))``, or ``(None, None)`` if the
-    roller does not come back within a turn.
-    """
-    tr = steady.train
-    T = ss.period
-    w_f = math.sqrt(tr.ks / tr.m)
-    x_eq = -tr.preload / tr.ks
-    e_eq = -tr.preload / tr.k
-
-    def payload(tau):
-        return (x_eq + (x0 - x_eq) * np.cos(w_f * tau) + v0 / w_f * np.sin(w_f * tau),
-                -(x0 - x_eq) * w_f * np.sin(w_f * tau) + v0 * np.cos(w_f * tau))
-
-    def train(tau):
-        if tr.c == 0:
-            return np.full_like(tau, e_eq), np.zeros_like(tau)
-        decay = (e0 - e_eq) * np.exp(-tr.k * tau / tr.c)
-        return e_eq + decay, -tr.k / tr.c * decay
-
-    def gap(tau):
-        x, _ = payload(tau)
-        ef, _ = train(tau)
-        return x + ef - ss.lift(t_sep + tau)[0]
-
-    step = T * float(np.min(steady.grid.piece_width)) / 2
-    tau = np.arange(1, int(T / step) + 2) * step
-    hits = np.flatnonzero(gap(tau) <= 0)
-    if hits.size == 0:
-        return None, None
-    i = int(hits[0])
-    tau_i = _first_root(gap, tau[i - 1] if i else 0.5 * step, tau[i])
-    t_i = t_sep + tau_i
-    x_i, v_i = (float(v) for v in payload(tau_i))
-    _, def_i = (float(v[0]) for v in train(np.array([tau_i])))
-    dy_i = float(ss.lift(t_i)[1][0])
-    return t_i, (dy_i - (v_i + def_i), (x_i, v_i))  # cam surface velocity relative to the roller
-
-
-def _difference_mode(ss: _SteadyState, t_i: float, x_i: float, v_i: float):
-    """Complex mode of the contact phase's departure from the steady state, from impact."""
-    y_i, dy_i = (float(v[0]) for v in ss.lift(t_i))
-    es, des = (float(v[0]) for v in ss.deflection(t_i))
-    u0, du0 = (y_i - x_i) - es, (dy_i - v_i) - des
-    lam = ss.lam / ss.period
-    return du0 - np.conj(lam) * u0, lam
-
-
-def _contact_after(ss: _SteadyState, t_i: float, x_i: float, v_i: float):
-    """Contact force ``t`` seconds after an impact: steady state plus the free vibration."""
-    tr = ss.steady.train
-    qu, lam = _difference_mode(ss, t_i, x_i, v_i)
-
-    def difference(t):
-        z = qu * np.exp(lam * t)
-        u = z.imag / lam.imag
-        return tr.k * u + tr.c * (z.real + lam.real * u)
-
-    def force_after(t):
-        return ss.contact_force(t_i + t) + difference(t)
-
-    force_after.difference = difference  # the free vibration's share alone
-    return force_after
-
-
-def _contact_state(ss: _SteadyState, t_i: float, x_i: float, v_i: float, tau: float):
-    """``(x, v, e)`` of the contact phase ``tau`` seconds after an impact."""
-    qu, lam = _difference_mode(ss, t_i, x_i, v_i)
-    z = qu * np.exp(lam * tau)
-    u = z.imag / lam.imag
-    du = z.real + lam.real * u
-    t = np.array([t_i + tau])
-    y, dy = (float(v[0]) for v in ss.lift(t))
-    es, des = (float(v[0]) for v in ss.deflection(t))
-    e, de = es + u, des + du
-    return y - e, dy - de, e
-
-
-def _peak(force_after, samples, values, stop: int) -> float:
-    """Largest contact force from the impact to ``samples[stop]``, polished by zooming: three
-    rounds of 32 samples around the best one (the bracket shrinks 16-fold each), then
-    the vertex of the parabola through the best three (the force is smooth there)."""
-    k = int(np.argmax(values[:stop]))
-    peak = float(values[k])
-    if 0 < k < stop - 1:
-        lo, hi = samples[k - 1], samples[k + 1]
+def _first_separations(turns: _Turns, times: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """Time (s) of each steady state's first loss of contact after its largest force: the
+    first sign change of the sampled force after its largest sample, bisected (where the
+    force dips below zero only between samples, around its smallest sample)."""
+    m, n = table.shape
+    rows = np.arange(m)
+    order = (table.argmax(axis=1)[:, None] + np.arange(n)) % n
+    negative = np.take_along_axis(table, order, axis=1) < 0
+    first = negative.argmax(axis=1)
+    j, prev = order[rows, first], order[rows, first - 1]
+    lo, hi = times[prev], times[j] + (times[j] < times[prev])
+    for r in np.flatnonzero(~negative.any(axis=1)):  # a dip between samples: find a negative point
+        a = int(table[r].argmin())
+        lo[r], hi[r] = times[a - 1] - (a == 0), times[(a + 1) % n] + (a == n - 1)
         for _ in range(3):
-            t = np.linspace(lo, hi, 33)
-            f = force_after(t)
-            j = int(np.clip(np.argmax(f), 1, 31))
-            peak = max(peak, float(f[j]))
-            lo, hi = t[j - 1], t[j + 1]
-        (fa, fb, fc), h = force_after(np.array([lo, 0.5 * (lo + hi), hi])), 0.5 * (hi - lo)
-        curvature = fa - 2 * fb + fc
-        if curvature < 0:
-            vertex = 0.5 * (lo + hi) + 0.5 * h * (fa - fc) / curvature
-            peak = max(peak, float(force_after(np.array([vertex]))[0]))
+            t = np.linspace(lo[r], hi[r], 33)
+            i = int(np.clip(turns.contact_force(r, t * turns.period[r]).argmin(), 1, 31))
+            lo[r], hi[r] = t[i - 1], t[i]
+    period = turns.period
+    return _first_roots(lambda t: turns.contact_force(rows[:, None], t), lo * period, hi * period)
+
+
+def _fly(turns: _Turns, rows, t_sep, x0, v0, e0):
+    """Flight from separation at ``t_sep`` (payload ``x0``, ``v0``; train ``e0``) to re-impact,
+    for each row: ``(t_impact, impact velocity, x, v at impact)``, NaN where the roller does
+    not come back within a turn."""
+    w_f = math.sqrt(turns.ks / turns.m)
+    x_eq, e_eq = -turns.preload / turns.ks, -turns.preload / turns.k
+
+    def payload(i, tau):  # i broadcasts with tau
+        x_rel, v_i = x0[i] - x_eq, v0[i]
+        return (x_eq + x_rel * np.cos(w_f * tau) + v_i / w_f * np.sin(w_f * tau),
+                -x_rel * w_f * np.sin(w_f * tau) + v_i * np.cos(w_f * tau))
+
+    def train(i, tau):
+        if turns.c == 0:
+            return np.full_like(tau, e_eq), np.zeros_like(tau)
+        decay = (e0[i] - e_eq) * np.exp(-turns.k * tau / turns.c)
+        return e_eq + decay, -turns.k / turns.c * decay
+
+    def gap(i, tau):
+        return payload(i, tau)[0] + train(i, tau)[0] - turns.lift(rows[i], t_sep[i] + tau)[0]
+
+    every = np.arange(rows.size)
+    step = turns.period[rows] * float(np.min(turns.piece_width)) / 2
+    tau = np.arange(1, int(2.0 / float(np.min(turns.piece_width))) + 2) * step[:, None]
+    hits = gap(every[:, None], tau) <= 0
+    back = np.flatnonzero(hits.any(axis=1))
+    t_i, velocity, x_i, v_i = (np.full(rows.size, np.nan) for _ in range(4))
+    if not back.size:
+        return t_i, velocity, x_i, v_i
+    first = hits[back].argmax(axis=1)
+    lo = np.where(first > 0, tau[back, first - 1], 0.5 * step[back])
+    here = np.arange(back.size)
+    tau_i = _first_roots(lambda t: gap(back[here, None], t), lo, tau[back, first])
+    x, v = payload(back, tau_i)
+    _, e_rate = train(back, tau_i)
+    t_i[back] = t_sep[back] + tau_i
+    _, dy = turns.lift(rows[back], t_i[back])
+    velocity[back] = dy - (v + e_rate)  # the cam surface's velocity relative to the roller
+    x_i[back], v_i[back] = x, v
+    return t_i, velocity, x_i, v_i
+
+
+class _Contact:
+    """Contact after each row's impact: the steady state plus the free vibration of the
+    difference, ``tau`` seconds after the impact at ``t_i``."""
+
+    def __init__(self, turns: _Turns, rows, t_i, x_i, v_i):
+        self.turns, self.rows, self.t_i = turns, rows, t_i
+        y_i, dy_i = turns.lift(rows, t_i)
+        es, des = turns.deflection(rows, t_i)
+        u0, du0 = (y_i - x_i) - es, (dy_i - v_i) - des
+        self.lam = turns.lam[rows] / turns.period[rows]
+        self.q = du0 - np.conj(self.lam) * u0
+
+    def _difference(self, i, tau):
+        lam = self.lam[i]
+        z = self.q[i] * np.exp(lam * tau)
+        u = z.imag / lam.imag
+        return u, z.real + lam.real * u
+
+    def force(self, i, tau):
+        """Contact force (N) of rows ``i`` at ``tau``."""
+        u, du = self._difference(i, tau)
+        steady = self.turns.contact_force(self.rows[i], self.t_i[i] + tau)
+        return steady + self.turns.k * u + self.turns.c * du
+
+    def sampled(self, times, table):
+        """The force over one period after each impact: at the impact, then at the turn's
+        fixed samples (``_Turns.sampled_force``), whose steady share is read from the table."""
+        count = times.size
+        s_i = self.t_i / self.turns.period[self.rows]
+        base = np.floor(s_i)
+        ticks = np.searchsorted(times, s_i - base, side="right")[:, None] + np.arange(count)
+        at = (base[:, None] + ticks // count + times[ticks % count]) * self.turns.period[self.rows][:, None]
+        tau = np.concatenate([np.zeros((self.rows.size, 1)), at - self.t_i[:, None]], axis=1)
+        i = np.arange(self.rows.size)[:, None]
+        u, du = self._difference(i, tau[:, 1:])
+        after = table[self.rows[:, None], ticks % count] + self.turns.k * u + self.turns.c * du
+        return tau, np.concatenate([self.force(i, tau[:, :1]), after], axis=1)
+
+    def state(self, i, tau):
+        """``(x, v, e)`` of rows ``i`` ``tau`` seconds after their impacts."""
+        u, du = self._difference(i, tau)
+        t = self.t_i[i] + tau
+        y, dy = self.turns.lift(self.rows[i], t)
+        es, des = self.turns.deflection(self.rows[i], t)
+        e, de = es + u, des + du
+        return y - e, dy - de, e
+
+
+def _peaks(contact: _Contact, samples, values, stop) -> np.ndarray:
+    """Largest contact force of each row from the impact to ``samples[stop]``, polished by
+    zooming: three rounds of 32 samples around the best one (the bracket shrinks 16-fold
+    each), then the vertex of the parabola through the best three (the force is smooth)."""
+    masked = np.where(np.arange(values.shape[1]) < stop[:, None], values, -np.inf)
+    k = masked.argmax(axis=1)
+    peak = masked[np.arange(k.size), k]
+    sub = np.flatnonzero((k > 0) & (k < stop - 1))
+    if not sub.size:
+        return peak
+    here = np.arange(sub.size)
+    lo, hi = samples[sub, k[sub] - 1], samples[sub, k[sub] + 1]
+    best = peak[sub]
+    for _ in range(3):
+        t = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, 33)
+        f = contact.force(sub[:, None], t)
+        j = np.clip(f.argmax(axis=1), 1, 31)
+        best = np.maximum(best, f[here, j])
+        lo, hi = t[here, j - 1], t[here, j + 1]
+    mid = 0.5 * (lo + hi)
+    fa, fb, fc = (contact.force(sub, x) for x in (lo, mid, hi))
+    curvature = fa - 2 * fb + fc
+    ok = curvature < 0
+    vertex = mid + 0.25 * (hi - lo) * (fa - fc) / np.where(ok, curvature, -1.0)
+    best = np.where(ok, np.maximum(best, contact.force(sub, np.where(ok, vertex, mid))), best)
+    peak[sub] = best
     return peak
