@@ -2,6 +2,7 @@
 grooved cam's run refused or bounded before the work, many segments, join tolerances,
 and absurd input accepted without a word."""
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -65,3 +66,47 @@ def test_a_design_that_ends_worse_keeps_its_start_and_says_so():
     assert result.kept_initial
     np.testing.assert_allclose(np.asarray(result.law.coefficients), np.asarray(start.coefficients), atol=1e-12)
     assert result.values == result.initial_values
+
+
+def _feed_data(**changes):
+    import tomllib
+
+    data = tomllib.loads(example_path("feed").read_text())
+    for key, value in changes.items():
+        data[key] = value
+    return data
+
+
+def test_an_absurd_end_velocity_is_refused_on_its_own_segment():
+    data = _feed_data()
+    data["segment"][3]["end"]["velocity_mm_per_deg"] = -1e6
+    with pytest.raises(ValueError, match=r"^segment 4: its end.velocity_mm_per_deg = -1e\+06 cannot be met"):
+        Program.from_dict(data)
+
+
+def test_the_join_check_is_relative_to_the_velocities_involved():
+    """Segment 5 starts at -1e6 mm/deg and ends at rest to its round-off (7e-9 mm/deg):
+    no velocity jump between segments 5 and 6, which the user did not touch."""
+    from camjax.program._motion import joins, resolve_segments
+    from camjax.program._spec import _segment
+
+    data = _feed_data()
+    data["segment"][3]["end"]["velocity_mm_per_deg"] = -1e6
+    segments = resolve_segments(tuple(_segment(i, s, None) for i, s in enumerate(data["segment"], 1)))
+    start = np.concatenate([[0.0], np.cumsum([s.angle_deg for s in segments])[:-1]])
+    out = joins(segments, start)
+    assert out[4].velocity_mm_per_deg == pytest.approx(0.0, abs=1e-6)
+    assert abs(law_state(segments[4], True)[0]) < 1e-6
+    # A real jump is still one: segment 4 made to start at -0.4 mm/deg against 0.3.
+    jumped = dataclasses.replace(segments[3], law=laws.BoundaryPolynomial(v0=-0.4 * 55 / -3, v1=-0.4 * 55 / -3))
+    with pytest.raises(ValueError, match="segments 3 and 4 meet at 140 deg"):
+        joins((*segments[:3], jumped, *segments[4:]), start)
+
+
+def test_a_swinging_flat_face_without_pivot_says_what_it_needs():
+    data = _feed_data()
+    data["follower"].update(kind="swinging-flat", arm_mm=100.0)
+    del data["follower"]["roller_radius_mm"]
+    with pytest.raises(ValueError, match="follower.pivot_mm is missing: a swinging-flat follower needs "
+                                         "arm_mm and pivot_mm"):
+        Program.from_dict(data)

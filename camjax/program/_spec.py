@@ -17,7 +17,15 @@ import numpy as np
 from .. import laws
 from ..checks import is_concrete, read_toml
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
-from ._motion import END_STATE_KEYS, MATCH, EndState, is_polynomial, joins, resolve_segments
+from ._motion import (
+    END_STATE_KEYS,
+    MATCH,
+    EndState,
+    check_excursions,
+    is_polynomial,
+    joins,
+    resolve_segments,
+)
 
 FOLLOWER_KINDS = ("translating-roller", "swinging-roller", "translating-flat", "swinging-flat")
 _ANGLE_TOLERANCE_DEG = 1e-9
@@ -159,16 +167,17 @@ def _check_follower(f: Follower) -> None:
     if f.kind == "translating-flat" and offset != 0:
         raise ValueError("follower.offset_mm: a flat face's profile does not depend on an offset; "
                          "leave it 0")
+    if f.swinging:
+        for name in ("arm_mm", "pivot_mm"):
+            if getattr(f, name) is None:
+                raise ValueError(f"follower.{name} is missing: a {f.kind} follower needs "
+                                 "arm_mm and pivot_mm")
     if f.kind == "swinging-flat":
         _positive(f.arm_mm, "follower.arm_mm")
         if _positive(f.pivot_mm, "follower.pivot_mm") <= f.base_radius_mm:
             raise ValueError("follower.pivot_mm: the pivot must lie outside the base circle "
                              "(pivot_mm > base_radius_mm) for its face to touch it")
     if f.kind == "swinging-roller":
-        for name in ("arm_mm", "pivot_mm"):
-            if getattr(f, name) is None:
-                raise ValueError(f"follower.{name} is missing: a swinging-roller follower needs "
-                                 "arm_mm and pivot_mm")
         arm = _positive(f.arm_mm, "follower.arm_mm")
         pivot = _positive(f.pivot_mm, "follower.pivot_mm")
         rp = f.base_radius_mm + f.roller_radius_mm
@@ -244,6 +253,7 @@ class Program:
             raise ValueError(f"the cumulative lift ends at {lift:g} mm, not back at zero (the base circle)")
         object.__setattr__(self, "segments", resolve_segments(self.segments))
         if is_concrete([s.law for s in self.segments]):
+            check_excursions(self.segments, self.start_lift_mm)
             self.joins()
         _check_follower(self.follower)
 
