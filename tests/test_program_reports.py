@@ -39,6 +39,7 @@ def test_designed_stroke_needs_no_more_preload_than_the_original(feed, designed_
     # the design keeps the stroke's end jerk (it changed it, and segment 4 with it).
     assert law_state(new.segments[2], True) == pytest.approx(law_state(feed.segments[2], True), abs=1e-12)
     assert new.segments[3].law == feed.segments[3].law
+    assert not result.kept_initial  # improved by the design, not kept by the fallback
     # Independently, by the program's own analysis on speeds across the band.
     rpm = np.linspace(*RPM, 33)
     before, after = _worst_preload(feed, rpm), _worst_preload(new, rpm)

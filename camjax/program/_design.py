@@ -63,7 +63,7 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
                              "measures a rise from rest to rest; use preload or residual")
         if objective == "residual":
             goal = MaxProgramResidual(program, segment, float(rpm_lo), float(rpm_hi), damping=zeta)
-    if initial is not seg.law:
+    if isinstance(initial, laws.BoundaryPolynomial | laws.CorrectedPolynomial):
         base = initial if isinstance(initial, laws.BoundaryPolynomial) else initial.base
         monotone = float(jnp.min(base.v(jnp.linspace(0.0, 1.0, 20001)))) >= -1e-12
         caps = dataclasses.replace(caps, monotone=caps.monotone and monotone)

@@ -143,7 +143,8 @@ def check_excursions(segments, start_lift_mm) -> None:
     explicit = sorted(polys, key=lambda k: not any(isinstance(x, EndState) for x in (segments[k].start, segments[k].end)))
     for k in explicit:
         seg = segments[k]
-        low, high = displacement_range(seg.law)
+        with jax.ensure_compile_time_eval():  # concrete even when a design traces around it
+            low, high = displacement_range(seg.law)
         y0 = float(start_lift_mm[k])
         ends = sorted((y0, y0 + seg.lift_mm))
         swing = max(ends[0] - min(y0 + seg.lift_mm * low, y0 + seg.lift_mm * high),
