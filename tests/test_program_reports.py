@@ -111,3 +111,50 @@ def test_a_swinging_flat_face_without_pivot_says_what_it_needs():
     with pytest.raises(ValueError, match="follower.pivot_mm is missing: a swinging-flat follower needs "
                                          "arm_mm and pivot_mm"):
         Program.from_dict(data)
+
+
+def _sliced_indexer(dwell_pieces: int) -> dict:
+    """The indexer with each dwell cut into ``dwell_pieces`` equal dwells."""
+    data = _feed_data()
+    data["segment"] = ([{"law": "cycloidal", "lift_mm": 20.0, "angle_deg": 100.0}]
+                       + [{"angle_deg": 80.0 / dwell_pieces}] * dwell_pieces
+                       + [{"law": "modified-sine", "lift_mm": -20.0, "angle_deg": 100.0}]
+                       + [{"angle_deg": 80.0 / dwell_pieces}] * dwell_pieces)
+    return data
+
+
+def test_a_program_past_the_segment_limit_is_refused_before_any_work(tmp_path, capsys):
+    from camjax.cli import main
+    from camjax.program import MAX_SEGMENTS
+
+    data = _sliced_indexer(MAX_SEGMENTS // 2)  # two more than the limit
+    with pytest.raises(ValueError, match=f"the program has {MAX_SEGMENTS + 2} segments; the limit is {MAX_SEGMENTS}"):
+        Program.from_dict(data)
+    segments = [Program.from_dict(_sliced_indexer(2)).segments[0]] * (MAX_SEGMENTS + 1)
+    with pytest.raises(ValueError, match=f"{MAX_SEGMENTS + 1} segments; the limit"):
+        Program("many", segments, Program.load(example_path("indexer")).follower)
+    lines = ["[program]", 'name = "slivers"']
+    for seg in data["segment"]:
+        lines += ["[[segment]]"] + [f"{k} = {v!r}".replace("'", '"') for k, v in seg.items()]
+    lines += ["[follower]"] + [f"{k} = {v!r}".replace("'", '"') for k, v in data["follower"].items()]
+    (tmp_path / "p.toml").write_text("\n".join(lines) + "\n")
+    assert main(["program", str(tmp_path / "p.toml"), "--rpm", "300"]) == 2
+    err = capsys.readouterr().err
+    assert f"the program has {MAX_SEGMENTS + 2} segments; the limit is {MAX_SEGMENTS}" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_a_long_program_is_summarised_in_text_and_whole_in_json_and_csv():
+    from camjax.cli.program import SHOWN, _csv, _table
+
+    program = Program.from_dict(_sliced_indexer(20))  # 42 segments, 40 of them dwells
+    report = analyse(program, [300.0], with_flight=False).as_dict()
+    text = _table(report)
+    assert len(report["joins"]) == 42 and len(report["segments"]) == 42
+    assert len(report["speeds"][0]["residual_vibration_mm"]) == 40
+    assert len(text.splitlines()) < 30 and max(map(len, text.splitlines())) < 250
+    assert "42 segments (1 rise, 40 dwell, 1 return)" in text
+    assert "42 joins:" in text and "40 from " in text
+    header, row = _csv(report).splitlines()
+    assert header.count("residual_vibration_mm_") == 40 and len(row.split(",")) == len(header.split(","))
+    assert SHOWN < 40

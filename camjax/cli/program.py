@@ -81,7 +81,15 @@ def _cell(value, fmt):
     return "-" if value is None else fmt.format(value)
 
 
+SHOWN = 12
+"""Most entries (numbers in a cell, segment and join lines) the text table lists one by one;
+a longer list is summarised (the JSON and CSV outputs hold every entry)."""
+
+
 def _numbers(values, fmt="{:.4g}") -> str:
+    values = list(values)
+    if len(values) > SHOWN:
+        return f"{len(values)} from {fmt.format(min(values))} to {fmt.format(max(values))}"
     return " ".join(fmt.format(v) for v in values) or "-"
 
 
@@ -101,10 +109,13 @@ def _geometry_lines(g: dict) -> list[str]:
     if g["face_width_mm"] is not None:
         lines.append(f"face width {g['face_width_mm']:.5g} mm (the contact's travel along the face; "
                      "add twice the contact half-width and a margin)")
-    for j in g["joins"]:
-        if j["radius_before_mm"] != j["radius_after_mm"]:
-            lines.append(f"join at {j['angle_deg']:g} deg: radius of curvature {j['radius_before_mm']:.5g} mm "
-                         f"before, {j['radius_after_mm']:.5g} mm after")
+    steps = [j for j in g["joins"] if j["radius_before_mm"] != j["radius_after_mm"]]
+    if len(steps) > SHOWN:
+        lines.append(f"the radius of curvature steps at {len(steps)} joins (each in --format json)")
+        return lines
+    for j in steps:
+        lines.append(f"join at {j['angle_deg']:g} deg: radius of curvature {j['radius_before_mm']:.5g} mm "
+                     f"before, {j['radius_after_mm']:.5g} mm after")
     return lines
 
 
@@ -159,6 +170,8 @@ def _machine_table(report: dict) -> str:
 def _motion_lines(report: dict) -> list[str]:
     """The motion at any speed: each moving segment's peaks and every join's state."""
     lines = []
+    if len(report["segments"]) > SHOWN:
+        return _motion_summary(report)
     for g in report["segments"]:
         if g["kind"] != "dwell":
             lines.append(
@@ -167,6 +180,30 @@ def _motion_lines(report: dict) -> list[str]:
                 f"{g['peak_jerk_mm_per_deg3']:.4g} mm/deg3" + (", overshoots its ends" if g["overshoot"] else ""))
     lines += [f"join {j['before']}|{j['after']} at {j['angle_deg']:g} deg: {j['state']} {j['continuity']}, "
               f"y' {j['velocity_mm_per_deg']:.4g} mm/deg" for j in report["joins"]]
+    return lines
+
+
+def _tally(items) -> str:
+    counts = {}
+    for item in items:
+        counts[item] = counts.get(item, 0) + 1
+    return ", ".join(f"{count} {item}" for item, count in counts.items())
+
+
+def _motion_summary(report: dict) -> list[str]:
+    """``_motion_lines`` for a long program: counts and the largest peaks."""
+    segments, joins = report["segments"], report["joins"]
+    lines = [f"{len(segments)} segments ({_tally(g['kind'] for g in segments)}), each with its "
+             "peaks in --format json"]
+    moving = [g for g in segments if g["kind"] != "dwell"]
+    for key, name, unit in (("peak_velocity_mm_per_deg", "y'", "mm/deg"),
+                            ("peak_acceleration_mm_per_deg2", "y''", "mm/deg2"),
+                            ("peak_jerk_mm_per_deg3", "y" + "'" * 3, "mm/deg3")):
+        if moving:
+            top = max(moving, key=lambda g: g[key])
+            lines.append(f"largest peak {name} {top[key]:.4g} {unit} (segment {top['segment']})")
+    lines.append(f"{len(joins)} joins: {_tally(j['state'] + ' ' + j['continuity'] for j in joins)} "
+                 "(each in --format json)")
     return lines
 
 

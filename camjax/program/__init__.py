@@ -59,6 +59,7 @@ from ._shaft import ShaftSpeedReport as ShaftSpeedReport
 from ._shaft import analyse_machine as analyse_machine
 from ._shaft import is_machine_file as is_machine_file
 from ._shaft import shaft_torque as shaft_torque
+from ._spec import MAX_SEGMENTS as MAX_SEGMENTS
 from ._spec import Follower as Follower
 from ._spec import Materials as Materials
 from ._spec import Program as Program

@@ -28,6 +28,10 @@ from ._motion import (
 )
 
 FOLLOWER_KINDS = ("translating-roller", "swinging-roller", "translating-flat", "swinging-flat")
+MAX_SEGMENTS = 360
+"""Most segments of a program (a degree each on average): each is sampled, checked and
+reported apart, so 100,000 slivers took minutes and megabytes of output; more is refused
+before any work."""
 _ANGLE_TOLERANCE_DEG = 1e-9
 _LIFT_TOLERANCE_MM = 1e-9
 
@@ -220,7 +224,7 @@ class Program:
     degrees (the program starts and ends on the base circle); the velocity continuous at
     every join, the wrap from the last segment to the first included (an acceleration
     step is allowed: ``joins``); the follower's numbers positive and finite.  Any number
-    of segments, in any order.  Polynomial segments get their laws solved from their end
+    of segments up to ``MAX_SEGMENTS``, in any order.  Polynomial segments get their laws solved from their end
     states (``"match"`` reads the neighbour's).
     """
 
@@ -233,6 +237,7 @@ class Program:
         object.__setattr__(self, "segments", tuple(self.segments))
         if not self.segments:
             raise ValueError("a program needs at least one segment")
+        _segment_count(len(self.segments))
         lift = 0.0
         for i, seg in enumerate(self.segments, 1):
             _positive(seg.angle_deg, f"segment {i}: angle_deg")
@@ -283,6 +288,7 @@ class Program:
         segments_data = data.get("segment")
         if not isinstance(segments_data, list) or not segments_data:
             raise ValueError("no [[segment]] tables: a program needs at least one segment")
+        _segment_count(len(segments_data))
         segments = [_segment(i, s, base) for i, s in enumerate(segments_data, 1)]
         follower_data = data.get("follower")
         if not isinstance(follower_data, dict):
@@ -411,6 +417,12 @@ class LiftCurve(eqx.Module):
         for law, start, angle, lift in zip(self.laws, self.start_deg, self.angle_deg, self.lift_mm):
             y = y + lift * law.s((theta_deg - start) / angle)
         return self.scale * y
+
+
+def _segment_count(count: int) -> None:
+    if count > MAX_SEGMENTS:
+        raise ValueError(f"the program has {count:,} segments; the limit is {MAX_SEGMENTS} "
+                         "(merge neighbouring dwells, and short segments into their neighbours)")
 
 
 def _no_unknown(table, allowed: set[str], where: str) -> None:
