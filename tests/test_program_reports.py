@@ -158,3 +158,97 @@ def test_a_long_program_is_summarised_in_text_and_whole_in_json_and_csv():
     header, row = _csv(report).splitlines()
     assert header.count("residual_vibration_mm_") == 40 and len(row.split(",")) == len(header.split(","))
     assert SHOWN < 40
+
+
+def _indexer_with(follower=None, materials=None) -> Program:
+    import tomllib
+
+    data = tomllib.loads(example_path("indexer").read_text())
+    data["follower"].update(follower or {})
+    if materials is not None:
+        data["materials"] = materials
+    return Program.from_dict(data)
+
+
+@pytest.mark.parametrize(("follower", "materials", "expected"), [
+    ({"contact_width_mm": 15.0}, {"cam_youngs_modulus_gpa": 1e12}, "materials.cam_youngs_modulus_gpa = 1e+12 lies outside 1-1000 GPa"),
+    ({"contact_width_mm": 15.0}, {"follower_youngs_modulus_gpa": 210e9}, "materials.follower_youngs_modulus_gpa = 2.1e+11 lies outside"),
+    ({}, {"cam_poisson_ratio": 0.29}, "[materials] is used only for the Hertz contact stress, which needs "
+                                      "follower.contact_width_mm"),
+    ({"contact_width_mm": 1e9}, None, "follower.contact_width_mm = 1e+09 is more than ten times"),
+])
+def test_absurd_input_is_warned_about_by_the_library(follower, materials, expected):
+    from camjax.program import design_warnings
+
+    assert design_warnings(_indexer_with()) == []
+    assert design_warnings(_indexer_with({"contact_width_mm": 15.0}, {"cam_youngs_modulus_gpa": 200.0})) == []
+    found = design_warnings(_indexer_with(follower, materials))
+    assert len(found) == 1 and expected in found[0]
+
+
+def test_a_hertz_half_width_past_the_contact_radius_is_warned_about():
+    from camjax.program import MAX_HALF_WIDTH_RATIO, design_warnings
+
+    program = _indexer_with({"contact_width_mm": 1e-9})
+    report = analyse(program, [300.0], with_flight=False).as_dict()
+    (found,) = design_warnings(program, report)
+    assert "at 300 rpm the Hertz contact half-width" in found and "past the 0.1 where Hertz theory holds" in found
+    # The same contact 15 mm wide: p scales as 1/sqrt(L) and b as p (b = 2 R' p / E*).
+    scale = (1e-9 / 15.0) ** 0.5
+    speed = dict(report["speeds"][0])
+    speed.update(max_contact_stress_mpa=speed["max_contact_stress_mpa"] * scale,
+                 contact_half_width_mm=speed["contact_half_width_mm"] * scale)
+    wide = _indexer_with({"contact_width_mm": 15.0})
+    assert design_warnings(wide, dict(report, speeds=[speed])) == []
+    # b / R' = 2 p / E* (E* = 115.4 GPa for two steels at 210 GPa, nu 0.3).
+    e_star = 1 / (2 * (1 - 0.3**2) / 210e3)
+    assert 2 * speed["max_contact_stress_mpa"] / e_star < MAX_HALF_WIDTH_RATIO
+
+
+def test_plot_rpm_must_be_a_speed_of_the_table(capsys):
+    from camjax.cli import main
+
+    assert main(["program", "indexer", "--rpm", "300,600", "--plot-rpm", "5000"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("--plot-rpm: 5000 is not one of the --rpm speeds (300, 600): the figures show a "
+                        "speed of the table; name one of them")
+    assert len(err.splitlines()) == 1
+
+
+def _grooved_indexer() -> Program:
+    base = Program.load(example_path("indexer"))
+    follower = dataclasses.replace(base.follower, spring_rate_n_per_mm=None, preload_n=0.0,
+                                   groove_clearance_mm=0.05)
+    return dataclasses.replace(base, follower=follower)
+
+
+def _first_run_samples(rpm: float) -> int:
+    """Samples of a groove run's first try, from the follower's numbers (indexer, grooved):
+    128 a natural period, and turns enough for the contact vibration to decay by 1e9."""
+    import math
+
+    f_n = (2e6 / 1.5) ** 0.5 / (2 * math.pi)
+    cycles = f_n * 60.0 / rpm
+    return 128 * math.ceil(cycles) * (1 + max(1, math.ceil(math.log(1e9) / (2 * math.pi * 0.05 * cycles))))
+
+
+def test_a_groove_run_past_its_budget_is_refused_before_any_work():
+    import re
+    import time
+
+    from camjax.program import MAX_GROOVE_SAMPLES, groove_turns
+
+    program = _grooved_indexer()
+    started = time.perf_counter()
+    with pytest.raises(ValueError, match=r"^the grooved cam at 50 rpm: the follower vibrates 221 times a turn "
+                                         r"\(28,288 samples a turn\)") as error:
+        groove_turns(program, [50.0])
+    assert time.perf_counter() - started < 2.0  # refused before any work
+    message = str(error.value)
+    assert "lower follower.stiffness_n_per_mm or raise follower.damping_ratio" in message
+    faster = float(re.search(r"run at ([0-9.e+]+) rpm or faster", message).group(1))
+    assert _first_run_samples(50.0) > MAX_GROOVE_SAMPLES
+    assert _first_run_samples(faster) <= MAX_GROOVE_SAMPLES < _first_run_samples(faster / 1.01)
+    # Turns asked for: in the same terms, not the solver's dwell and samples.
+    with pytest.raises(ValueError, match=r"^400 groove turns at 4,736 samples a turn .* ask for at most 10 turns"):
+        groove_turns(program, [300.0], turns=400)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import io
-import itertools
 import math
 import sys
 from pathlib import Path
@@ -223,27 +222,11 @@ def _csv(report: dict) -> str:
     return buffer.getvalue().rstrip()
 
 
-MAX_PRESSURE_ANGLE_DEG = {"translating-roller": 30.0, "swinging-roller": 45.0}
-"""The pressure angle above which a roller follower is taken to jam or wear (the design
-rule of thumb: 30 degrees translating, 45 swinging); flat faces have their own checks."""
-
-
 def validity_warnings(program, report: dict) -> list[str]:
-    """Where a result lies outside what the design rules hold: a pressure angle past the
-    follower's limit, a lift large against the base circle (often a unit slip)."""
-    out = []
-    geometry = report.get("geometry") or {}
-    limit = MAX_PRESSURE_ANGLE_DEG.get(program.follower.kind)
-    angle = geometry.get("max_pressure_angle_deg")
-    if limit is not None and angle is not None and abs(angle) > limit:
-        out.append(f"the pressure angle reaches {abs(angle):.3g} deg, above the {limit:g} deg a "
-                   f"{program.follower.kind} follower tolerates: enlarge follower.base_radius_mm "
-                   "or lengthen the rises")
-    stroke = max(abs(y) for y in itertools.accumulate(s.lift_mm for s in program.segments))
-    if stroke > 2 * program.follower.base_radius_mm:
-        out.append(f"the lift ({stroke:g} mm) is more than twice the base circle's radius "
-                   f"({program.follower.base_radius_mm:g} mm): check the program's units")
-    return out
+    """The library's ``camjax.program.design_warnings``, which the command prints."""
+    from ..program import design_warnings
+
+    return design_warnings(program, report)
 
 
 def plot_speed(report: dict, chosen: float | None) -> float:
@@ -296,6 +279,7 @@ def _write_machine(out: Path, machine, report: dict, rpm, points: int) -> None:
 
 def run(args) -> int:
     from ..program import (
+        MAX_GROOVE_SAMPLES,
         MAX_PROFILE_POINTS,
         MAX_TURNS,
         SETTLED_DEG,
@@ -310,9 +294,12 @@ def run(args) -> int:
         raise CliError(f"--rpm: speeds must be positive, got {args.rpm!r}")
     if not 8 <= args.points <= MAX_PROFILE_POINTS:
         raise CliError(f"--points: must be from 8 to {MAX_PROFILE_POINTS:,}, got {args.points}")
-    if args.plot_rpm is not None and not (math.isfinite(args.plot_rpm) and args.plot_rpm >= min(rpm)):
-        raise CliError(f"--plot-rpm: must be a speed at or above the lowest --rpm ({min(rpm):g}), "
-                       f"got {args.plot_rpm:g}")
+    if args.plot_rpm is not None and not any(math.isclose(args.plot_rpm, r, rel_tol=1e-9) for r in rpm):
+        shown = ", ".join(f"{r:g}" for r in list(rpm)[:SHOWN]) + (", ..." if len(rpm) > SHOWN else "")
+        raise CliError(f"--plot-rpm: {args.plot_rpm:g} is not one of the --rpm speeds ({shown}): "
+                       "the figures show a speed of the table; name one of them")
+    if args.plot_rpm is not None:
+        args.plot_rpm = next(r for r in rpm if math.isclose(args.plot_rpm, r, rel_tol=1e-9))
     if not 0 < args.speed_fluctuation < 2:
         raise CliError(f"--speed-fluctuation: must be in (0, 2), got {args.speed_fluctuation:g}")
     path = Path(args.file) if args.file else example_path()
@@ -332,9 +319,11 @@ def run(args) -> int:
     for s in report["speeds"]:
         change = s["impacts_change_deg"]
         if change is not None and not change <= SETTLED_DEG:
-            print(f"warning: at {s['rpm']:g} rpm the groove's strikes had not settled after "
-                  f"{MAX_TURNS} turns (they still move by {change:.3g} deg per turn): the "
-                  "roller chatters without a period; the last turn is reported", file=sys.stderr)
+            print(f"warning: at {s['rpm']:g} rpm the groove's strikes had not settled within "
+                  f"the longest run allowed ({MAX_TURNS} turns, {MAX_GROOVE_SAMPLES:,} samples; they "
+                  f"still move by {change:.3g} deg per turn): the roller chatters without a "
+                  "period, and the last turn is reported; a narrower groove "
+                  "(groove_clearance_mm) or more damping settles sooner", file=sys.stderr)
     if args.format == "json":
         print(dump_json(report))
     elif args.format == "csv":

@@ -32,6 +32,7 @@ from ._export import profile as profile
 from ._export import shape as shape
 from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
+from ._groove import MAX_GROOVE_SAMPLES as MAX_GROOVE_SAMPLES
 from ._groove import MAX_TURNS as MAX_TURNS
 from ._groove import SETTLED_DEG as SETTLED_DEG
 from ._groove import SETTLED_REL as SETTLED_REL
@@ -45,11 +46,15 @@ from ._jump import flights as flights
 from ._jump import jump_speed_rpm as jump_speed_rpm
 from ._jump import min_preload_n as min_preload_n
 from ._machine import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
+from ._machine import MAX_HALF_WIDTH_RATIO as MAX_HALF_WIDTH_RATIO
+from ._machine import MAX_PRESSURE_ANGLE_DEG as MAX_PRESSURE_ANGLE_DEG
+from ._machine import MODULUS_RANGE_GPA as MODULUS_RANGE_GPA
 from ._machine import ContactGeometry as ContactGeometry
 from ._machine import Geometry as Geometry
 from ._machine import JoinCurvature as JoinCurvature
 from ._machine import cam_geometry as cam_geometry
 from ._machine import contact_geometry as contact_geometry
+from ._machine import design_warnings as design_warnings
 from ._motion import EndState as EndState
 from ._motion import Join as Join
 from ._motion import segment_kinematics as segment_kinematics
