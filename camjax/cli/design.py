@@ -97,9 +97,9 @@ def _run_program(args, out) -> int:
             print(f"warning: {w.message}", file=sys.stderr)
         else:
             warnings.showwarning(w.message, w.category, w.filename, w.lineno)
-    print(f"segment {args.segment}: band n = {n1:.4g}..{n2:.4g}; {label}: {start:.5g} with the "
-          f"segment's own law, {value:.5g} "
-          + ("kept (the design did not improve on it)" if result.kept_initial else "designed")
+    print(f"segment {args.segment}: band n = {n1:.4g}..{n2:.4g}; {label} = {value:.5g}; "
+          + ("the segment's own law kept (the design did not improve on it)" if result.kept_initial
+             else f"{start:.5g} with the segment's own law")
           + f"; wrote {path}")
     return 0
 

@@ -320,8 +320,10 @@ def run(args) -> int:
         change = s["impacts_change_deg"]
         if change is not None and not change <= SETTLED_DEG:
             print(f"warning: at {s['rpm']:g} rpm the groove's strikes had not settled within "
-                  f"the longest run allowed ({MAX_TURNS} turns, {MAX_GROOVE_SAMPLES:,} samples; they "
-                  f"still move by {change:.3g} deg per turn): the roller chatters without a "
+                  f"the longest run allowed ({MAX_TURNS} turns, {MAX_GROOVE_SAMPLES:,} samples; "
+                  + (f"they still move by {change:.3g} deg per turn" if math.isfinite(change) else
+                     "they still differ in number or flank from turn to turn")
+                  + "): the roller chatters without a "
                   "period, and the last turn is reported; a narrower groove "
                   "(groove_clearance_mm) or more damping settles sooner", file=sys.stderr)
     if args.format == "json":
