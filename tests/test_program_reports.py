@@ -192,6 +192,7 @@ def test_a_hertz_half_width_past_the_contact_radius_is_warned_about():
     program = _indexer_with({"contact_width_mm": 1e-9})
     report = analyse(program, [300.0], with_flight=False).as_dict()
     (found,) = design_warnings(program, report)
+    assert report["warnings"] == [found]  # the report carries them, for the API and the CLI
     assert "at 300 rpm the Hertz contact half-width" in found and "past the 0.1 where Hertz theory holds" in found
     # The same contact 15 mm wide: p scales as 1/sqrt(L) and b as p (b = 2 R' p / E*).
     scale = (1e-9 / 15.0) ** 0.5

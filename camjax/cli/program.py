@@ -222,13 +222,6 @@ def _csv(report: dict) -> str:
     return buffer.getvalue().rstrip()
 
 
-def validity_warnings(program, report: dict) -> list[str]:
-    """The library's ``camjax.program.design_warnings``, which the command prints."""
-    from ..program import design_warnings
-
-    return design_warnings(program, report)
-
-
 def plot_speed(report: dict, chosen: float | None) -> float:
     """The speed whose turn the figures draw: ``chosen``, else the speed given nearest the
     jump speed (the first that jumps when the jump lies below the range), else the highest."""
@@ -314,7 +307,7 @@ def run(args) -> int:
                      speed_fluctuation=args.speed_fluctuation).as_dict()
     if out is not None:
         _write_outputs(out, program, steady, report, rpm, args.points, plot_speed(report, args.plot_rpm))
-    for line in validity_warnings(program, report):
+    for line in report["warnings"]:
         print(f"warning: {line}", file=sys.stderr)
     for s in report["speeds"]:
         change = s["impacts_change_deg"]
@@ -356,6 +349,9 @@ def _run_machine(args, path: Path, rpm) -> int:
                              speed_fluctuation=args.speed_fluctuation).as_dict()
     if out is not None:
         _write_machine(out, machine, report, rpm, args.points)
+    for cam in report["cams"]:
+        for line in cam.get("warnings", []):
+            print(f"warning: cam {cam['program']} at phase {cam['phase_deg']:g} deg: {line}", file=sys.stderr)
     if args.format == "json":
         print(dump_json(report))
     elif args.format == "csv":
