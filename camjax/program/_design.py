@@ -36,6 +36,13 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     ``"residual"`` is the largest residual vibration of the whole program over the speed
     range (``MaxProgramResidual``: the segment's own rise is not from rest to rest),
     ``"ca-ct"`` does not apply, and the monotone cap only where that polynomial is monotone.
+    Where a neighbour is a degree-7 polynomial that matches this segment (it reads the end
+    jerk too), the start is the degree-7 polynomial of the end states and jerks, so the
+    design keeps the jerk and the neighbour's law stays what the design trained with.
+
+    The result's ``initial_values`` hold the objective of the segment's own law, reported
+    as the design's; a design that does not beat it returns the program unchanged (the
+    result's ``law`` the segment's, ``kept_initial`` true) with a ``DesignNotImproved`` warning.
     """
     from .. import law_design
     from ._preload import MaxPreload, MaxProgramResidual  # import optax: only when designing
