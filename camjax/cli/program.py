@@ -44,8 +44,8 @@ def register(subparsers) -> None:
                         f"(max - min speed) / mean (default {DEFAULT_SPEED_FLUCTUATION})")
     parser.add_argument("--points", type=int, default=3600, help="profile points over the turn (default 3600)")
     parser.add_argument("--plot-rpm", type=float, default=None, metavar="RPM",
-                        help="the speed whose turn the figures show (default: the speed given "
-                        "nearest the jump speed, else the highest)")
+                        help="the speed whose turn the figures show, one of the --rpm speeds "
+                        "(default: the speed given nearest the jump speed, else the highest)")
     add_format(parser)
     parser.add_argument("--out", metavar="DIR", help="write profile.csv, profile.dxf, response.csv, "
                         "summary.json and figures here (response.csv at up to 10 speeds)")
