@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+import warnings
 
 import numpy as np
 
@@ -66,7 +67,7 @@ def register(subparsers) -> None:
 
 
 def _run_program(args, out) -> int:
-    from ..law_design import Caps
+    from ..law_design import Caps, DesignNotImproved
     from ..program import Program, design_segment, segment_band, write_program
 
     if args.segment is None or args.rpm is None:
@@ -81,7 +82,8 @@ def _run_program(args, out) -> int:
     if is_machine(path):
         raise CliError(f"--program: {path} is a machine file (several cams on one shaft); "
                        "design takes one cam's program: give the program file of the cam")
-    with file_named(path):
+    with file_named(path), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DesignNotImproved)
         program = Program.load(path)
         with options_named(segment="--segment"):
             n1, n2 = segment_band(program, args.segment, rpm_lo, rpm_hi)
@@ -92,7 +94,20 @@ def _run_program(args, out) -> int:
             **({} if args.steps is None else {"steps": args.steps}))
     path = write_program(new, out)
     (label, value), = result.values.items()
-    print(f"segment {args.segment}: band n = {n1:.4g}..{n2:.4g}; {label} = {value:.5g}; wrote {path}")
+    start = result.initial_values[label]
+    dump_json({"segment": args.segment, "rpm": [rpm_lo, rpm_hi], "band": [n1, n2],
+               "objective": label, "initial_value": start, "value": value,
+               "kept_initial": result.kept_initial, "law": new.segments[args.segment - 1].law.name},
+              out / "summary.json")
+    for w in caught:
+        if issubclass(w.category, DesignNotImproved):
+            print(f"warning: {w.message}", file=sys.stderr)
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    print(f"segment {args.segment}: band n = {n1:.4g}..{n2:.4g}; {label} = {value:.5g}; "
+          + ("the segment's own law kept (the design did not improve on it)" if result.kept_initial
+             else f"{start:.5g} with the segment's own law")
+          + f"; wrote {path}")
     return 0
 
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import io
-import itertools
 import math
 import sys
 import warnings
@@ -46,8 +45,8 @@ def register(subparsers) -> None:
                         f"(max - min speed) / mean (default {DEFAULT_SPEED_FLUCTUATION})")
     parser.add_argument("--points", type=int, default=3600, help="profile points over the turn (default 3600)")
     parser.add_argument("--plot-rpm", type=float, default=None, metavar="RPM",
-                        help="the speed whose turn the figures show (default: the speed given "
-                        "nearest the jump speed, else the highest)")
+                        help="the speed whose turn the figures show, one of the --rpm speeds "
+                        "(default: the speed given nearest the jump speed, else the highest)")
     add_format(parser)
     parser.add_argument("--out", metavar="DIR", help="write profile.csv, profile.dxf, response.csv, "
                         "summary.json and figures here (response.csv at up to 10 speeds)")
@@ -82,7 +81,15 @@ def _cell(value, fmt):
     return "-" if value is None else fmt.format(value)
 
 
+SHOWN = 12
+"""Most entries (numbers in a cell, segment and join lines) the text table lists one by one;
+a longer list is summarised (the JSON and CSV outputs hold every entry)."""
+
+
 def _numbers(values, fmt="{:.4g}") -> str:
+    values = list(values)
+    if len(values) > SHOWN:
+        return f"{len(values)} from {fmt.format(min(values))} to {fmt.format(max(values))}"
     return " ".join(fmt.format(v) for v in values) or "-"
 
 
@@ -102,10 +109,13 @@ def _geometry_lines(g: dict) -> list[str]:
     if g["face_width_mm"] is not None:
         lines.append(f"face width {g['face_width_mm']:.5g} mm (the contact's travel along the face; "
                      "add twice the contact half-width and a margin)")
-    for j in g["joins"]:
-        if j["radius_before_mm"] != j["radius_after_mm"]:
-            lines.append(f"join at {j['angle_deg']:g} deg: radius of curvature {j['radius_before_mm']:.5g} mm "
-                         f"before, {j['radius_after_mm']:.5g} mm after")
+    steps = [j for j in g["joins"] if j["radius_before_mm"] != j["radius_after_mm"]]
+    if len(steps) > SHOWN:
+        lines.append(f"the radius of curvature steps at {len(steps)} joins (each in --format json)")
+        return lines
+    for j in steps:
+        lines.append(f"join at {j['angle_deg']:g} deg: radius of curvature {j['radius_before_mm']:.5g} mm "
+                     f"before, {j['radius_after_mm']:.5g} mm after")
     return lines
 
 
@@ -160,6 +170,8 @@ def _machine_table(report: dict) -> str:
 def _motion_lines(report: dict) -> list[str]:
     """The motion at any speed: each moving segment's peaks and every join's state."""
     lines = []
+    if len(report["segments"]) > SHOWN:
+        return _motion_summary(report)
     for g in report["segments"]:
         if g["kind"] != "dwell":
             lines.append(
@@ -168,6 +180,30 @@ def _motion_lines(report: dict) -> list[str]:
                 f"{g['peak_jerk_mm_per_deg3']:.4g} mm/deg3" + (", overshoots its ends" if g["overshoot"] else ""))
     lines += [f"join {j['before']}|{j['after']} at {j['angle_deg']:g} deg: {j['state']} {j['continuity']}, "
               f"y' {j['velocity_mm_per_deg']:.4g} mm/deg" for j in report["joins"]]
+    return lines
+
+
+def _tally(items) -> str:
+    counts = {}
+    for item in items:
+        counts[item] = counts.get(item, 0) + 1
+    return ", ".join(f"{count} {item}" for item, count in counts.items())
+
+
+def _motion_summary(report: dict) -> list[str]:
+    """``_motion_lines`` for a long program: counts and the largest peaks."""
+    segments, joins = report["segments"], report["joins"]
+    lines = [f"{len(segments)} segments ({_tally(g['kind'] for g in segments)}), each with its "
+             "peaks in --format json"]
+    moving = [g for g in segments if g["kind"] != "dwell"]
+    for key, name, unit in (("peak_velocity_mm_per_deg", "y'", "mm/deg"),
+                            ("peak_acceleration_mm_per_deg2", "y''", "mm/deg2"),
+                            ("peak_jerk_mm_per_deg3", "y" + "'" * 3, "mm/deg3")):
+        if moving:
+            top = max(moving, key=lambda g: g[key])
+            lines.append(f"largest peak {name} {top[key]:.4g} {unit} (segment {top['segment']})")
+    lines.append(f"{len(joins)} joins: {_tally(j['state'] + ' ' + j['continuity'] for j in joins)} "
+                 "(each in --format json)")
     return lines
 
 
@@ -185,29 +221,6 @@ def _csv(report: dict) -> str:
                         + list(s["residual_vibration_mm"])
                         + [report["jump_speed_rpm"] or "", report["jump_below_range"]])
     return buffer.getvalue().rstrip()
-
-
-MAX_PRESSURE_ANGLE_DEG = {"translating-roller": 30.0, "swinging-roller": 45.0}
-"""The pressure angle above which a roller follower is taken to jam or wear (the design
-rule of thumb: 30 degrees translating, 45 swinging); flat faces have their own checks."""
-
-
-def validity_warnings(program, report: dict) -> list[str]:
-    """Where a result lies outside what the design rules hold: a pressure angle past the
-    follower's limit, a lift large against the base circle (often a unit slip)."""
-    out = []
-    geometry = report.get("geometry") or {}
-    limit = MAX_PRESSURE_ANGLE_DEG.get(program.follower.kind)
-    angle = geometry.get("max_pressure_angle_deg")
-    if limit is not None and angle is not None and abs(angle) > limit:
-        out.append(f"the pressure angle reaches {abs(angle):.3g} deg, above the {limit:g} deg a "
-                   f"{program.follower.kind} follower tolerates: enlarge follower.base_radius_mm "
-                   "or lengthen the rises")
-    stroke = max(abs(y) for y in itertools.accumulate(s.lift_mm for s in program.segments))
-    if stroke > 2 * program.follower.base_radius_mm:
-        out.append(f"the lift ({stroke:g} mm) is more than twice the base circle's radius "
-                   f"({program.follower.base_radius_mm:g} mm): check the program's units")
-    return out
 
 
 def plot_speed(report: dict, chosen: float | None) -> float:
@@ -283,6 +296,7 @@ def program_report(program, rpm, *, with_flight: bool = True, steady=None,
 
 def run(args) -> int:
     from ..program import (
+        MAX_GROOVE_SAMPLES,
         MAX_PROFILE_POINTS,
         MAX_TURNS,
         SETTLED_DEG,
@@ -295,9 +309,12 @@ def run(args) -> int:
         raise CliError(f"--rpm: speeds must be positive, got {args.rpm!r}")
     if not 8 <= args.points <= MAX_PROFILE_POINTS:
         raise CliError(f"--points: must be from 8 to {MAX_PROFILE_POINTS:,}, got {args.points}")
-    if args.plot_rpm is not None and not (math.isfinite(args.plot_rpm) and args.plot_rpm >= min(rpm)):
-        raise CliError(f"--plot-rpm: must be a speed at or above the lowest --rpm ({min(rpm):g}), "
-                       f"got {args.plot_rpm:g}")
+    if args.plot_rpm is not None and not any(math.isclose(args.plot_rpm, r, rel_tol=1e-9) for r in rpm):
+        shown = ", ".join(f"{r:g}" for r in list(rpm)[:SHOWN]) + (", ..." if len(rpm) > SHOWN else "")
+        raise CliError(f"--plot-rpm: {args.plot_rpm:g} is not one of the --rpm speeds ({shown}): "
+                       "the figures show a speed of the table; name one of them")
+    if args.plot_rpm is not None:
+        args.plot_rpm = next(r for r in rpm if math.isclose(args.plot_rpm, r, rel_tol=1e-9))
     if not 0 < args.speed_fluctuation < 2:
         raise CliError(f"--speed-fluctuation: must be in (0, 2), got {args.speed_fluctuation:g}")
     path = program_path(args.file)
@@ -312,14 +329,18 @@ def run(args) -> int:
                                 speed_fluctuation=args.speed_fluctuation)
         if out is not None:
             _write_outputs(out, program, steady, report, rpm, args.points, plot_speed(report, args.plot_rpm))
-    for line in [*_messages(caught), *validity_warnings(program, report)]:
+    for line in dict.fromkeys([*_messages(caught), *report["warnings"]]):
         print(f"warning: {line}", file=sys.stderr)
     for s in report["speeds"]:
         change = s["impacts_change_deg"]
         if change is not None and not change <= SETTLED_DEG:
-            print(f"warning: at {s['rpm']:g} rpm the groove's strikes had not settled after "
-                  f"{MAX_TURNS} turns (they still move by {change:.3g} deg per turn): the "
-                  "roller chatters without a period; the last turn is reported", file=sys.stderr)
+            print(f"warning: at {s['rpm']:g} rpm the groove's strikes had not settled within "
+                  f"the longest run allowed ({MAX_TURNS} turns, {MAX_GROOVE_SAMPLES:,} samples; "
+                  + (f"they still move by {change:.3g} deg per turn" if math.isfinite(change) else
+                     "they still differ in number or flank from turn to turn")
+                  + "): the roller chatters without a "
+                  "period, and the last turn is reported; a narrower groove "
+                  "(groove_clearance_mm) or more damping settles sooner", file=sys.stderr)
     if args.format == "json":
         print(dump_json(report))
     elif args.format == "csv":
@@ -359,6 +380,9 @@ def _run_machine(args, path: Path, rpm) -> int:
             _write_machine(out, machine, report, rpm, args.points)
     for line in _messages(caught):
         print(f"warning: {line}", file=sys.stderr)
+    for cam in report["cams"]:
+        for line in cam.get("warnings", []):
+            print(f"warning: cam {cam['program']} at phase {cam['phase_deg']:g} deg: {line}", file=sys.stderr)
     if args.format == "json":
         print(dump_json(report))
     elif args.format == "csv":

@@ -46,6 +46,7 @@ from ._objectives import peak_loads as peak_loads
 from ._optimise import DEFAULT_STEPS as DEFAULT_STEPS
 from ._optimise import MAX_KNOTS as MAX_KNOTS
 from ._optimise import MAX_STEPS as MAX_STEPS
+from ._optimise import DesignNotImproved as DesignNotImproved
 from ._optimise import DesignResult as DesignResult
 from ._optimise import design as design
 from ._optimise import linear_maps as linear_maps

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 
 import equinox as eqx
 import jax
@@ -30,8 +31,17 @@ per coefficient and its grid a piece per knot, so memory grows with the square (
 knots took 6 GB); more is refused before any work."""
 
 
+class DesignNotImproved(UserWarning):
+    """A design that ended no better than the law it started from, which it returns instead."""
+
+
 class DesignResult(eqx.Module):
-    """A designed law with its reported objective values and training history."""
+    """A designed law with its reported objective values and training history.
+
+    ``initial_values`` are the same reports of the law the design started from;
+    ``kept_initial`` is true where the design did not improve on it and that law is
+    returned instead (with a ``DesignNotImproved`` warning).
+    """
 
     law: BSplineLaw
     objectives: tuple[AbstractObjective, ...] = eqx.field(static=True)
@@ -40,6 +50,8 @@ class DesignResult(eqx.Module):
     loss_history: np.ndarray
     restored: bool = eqx.field(static=True)
     seconds: float = eqx.field(static=True)
+    initial_values: dict = eqx.field(static=True, default=None)
+    kept_initial: bool = eqx.field(static=True, default=False)
 
 
 def _acceleration_coordinates(knots: int, degree: int, fixed: int = 3) -> jax.Array:
@@ -273,6 +285,15 @@ def design(
             raise CapError(f"the design breaks its caps: {_describe(violations)}")
         bar.set_postfix_str("reporting the objectives")
         values = {o.label: o.report(final) for o in objectives}
+        start = law_of(jnp.zeros(knots))
+        initial_values = {o.label: o.report(start) for o in objectives}
+        kept = not _improved(objectives, values, initial_values) and caps.met(start)
+        if kept:
+            warnings.warn("the design did not improve on the law it started from ("
+                          + "; ".join(f"{k}: {values[k]:.6g} designed against {initial_values[k]:.6g}"
+                                      for k in values) + "); that law is returned",
+                          DesignNotImproved, stacklevel=2)
+            final, values = start, dict(initial_values)
         coefficients = dict(zip(("Cv", "Ca", "Cj"), (float(x) for x in _fine_checks(final)[:3])))
         bar.set_postfix_str("done")
     return DesignResult(
@@ -281,6 +302,15 @@ def design(
         values=values,
         coefficients=coefficients,
         loss_history=np.concatenate(history),
-        restored=final is not law,
+        restored=not kept and final is not law,
         seconds=time.perf_counter() - started,
+        initial_values=initial_values,
+        kept_initial=kept,
     )
+
+
+def _improved(objectives, values: dict, initial: dict) -> bool:
+    """Whether the weighted sum of the reports, each relative to its start, went down."""
+    def score(v):
+        return sum(o.weight * v[o.label] / max(abs(initial[o.label]), 1e-300) for o in objectives)
+    return score(values) < score(initial)

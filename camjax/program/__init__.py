@@ -32,6 +32,7 @@ from ._export import profile as profile
 from ._export import shape as shape
 from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
+from ._groove import MAX_GROOVE_SAMPLES as MAX_GROOVE_SAMPLES
 from ._groove import MAX_TURNS as MAX_TURNS
 from ._groove import SETTLED_DEG as SETTLED_DEG
 from ._groove import SETTLED_REL as SETTLED_REL
@@ -46,11 +47,15 @@ from ._jump import flights_at as flights_at
 from ._jump import jump_speed_rpm as jump_speed_rpm
 from ._jump import min_preload_n as min_preload_n
 from ._machine import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
+from ._machine import MAX_HALF_WIDTH_RATIO as MAX_HALF_WIDTH_RATIO
+from ._machine import MAX_PRESSURE_ANGLE_DEG as MAX_PRESSURE_ANGLE_DEG
+from ._machine import MODULUS_RANGE_GPA as MODULUS_RANGE_GPA
 from ._machine import ContactGeometry as ContactGeometry
 from ._machine import Geometry as Geometry
 from ._machine import JoinCurvature as JoinCurvature
 from ._machine import cam_geometry as cam_geometry
 from ._machine import contact_geometry as contact_geometry
+from ._machine import design_warnings as design_warnings
 from ._motion import EndState as EndState
 from ._motion import Join as Join
 from ._motion import segment_kinematics as segment_kinematics
@@ -60,6 +65,7 @@ from ._shaft import ShaftSpeedReport as ShaftSpeedReport
 from ._shaft import analyse_machine as analyse_machine
 from ._shaft import is_machine_file as is_machine_file
 from ._shaft import shaft_torque as shaft_torque
+from ._spec import MAX_SEGMENTS as MAX_SEGMENTS
 from ._spec import Follower as Follower
 from ._spec import Materials as Materials
 from ._spec import Program as Program

@@ -14,6 +14,7 @@ from ._machine import (
     Geometry,
     cam_geometry,
     check_speed_fluctuation,
+    design_warnings,
     flywheel_inertia_kg_m2,
 )
 from ._motion import Join, segment_kinematics
@@ -125,13 +126,14 @@ class Report:
     joins: tuple[Join, ...] = ()
     geometry: Geometry | None = None
     speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION
+    warnings: tuple[str, ...] = ()  # design_warnings: input or results past the design rules
 
     def as_dict(self) -> dict:
         return {"program": self.program, "speeds": [s.as_dict() for s in self.speeds],
                 "jump_speed_rpm": self.jump_speed_rpm, "jump_below_range": self.jump_below_range,
                 "segments": list(self.segments), "joins": [j.as_dict() for j in self.joins],
                 "geometry": None if self.geometry is None else self.geometry.as_dict(),
-                "speed_fluctuation": self.speed_fluctuation}
+                "speed_fluctuation": self.speed_fluctuation, "warnings": list(self.warnings)}
 
 
 def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadyState | None = None,
@@ -197,8 +199,9 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     if not closed and not below and rpm.size > 1 and rpm.max() > rpm.min():
         jump_speed = jump_speed_rpm(steady, float(rpm.min()), float(rpm.max()))
     geometry = cam_geometry(program, np.union1d(theta_nodes[:-1], np.arange(3600) * 0.1))
-    return Report(program.name, tuple(speeds), jump_speed, below, tuple(segment_kinematics(program)),
-                  tuple(program.joins()), geometry, speed_fluctuation)
+    report = Report(program.name, tuple(speeds), jump_speed, below, tuple(segment_kinematics(program)),
+                    tuple(program.joins()), geometry, speed_fluctuation)
+    return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))
 
 
 def response(program: Program, rpm: float, *, steady: SteadyState | None = None) -> dict[str, np.ndarray]:

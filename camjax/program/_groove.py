@@ -23,11 +23,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
+from tqdm import tqdm
 
+from ..errors import SolverError
 from ..laws import AbstractMotionLaw
 from ._dynamics import check_rpm
 from ._spec import Program
@@ -39,6 +42,11 @@ SETTLED_REL = 1e-6
 """Largest relative change of a strike's velocity between the last two turns of a settled run."""
 MAX_TURNS = 1024
 """Most turns a groove run takes from rest before it reports that it has not settled."""
+MAX_GROOVE_SAMPLES = 50_000
+"""Most samples (turns times samples per turn) of one groove run: the doubling of the turns
+stops before a run would pass it (the turn is then reported unsettled), and a speed whose
+first run passes it is refused before any work.  A run of 28,000 samples (the indexer at
+300 rpm, six turns) took about 40 s on two cores."""
 _SAMPLES_PER_PERIOD = 128  # samples per natural period (force peaks sampled: within 0.03%)
 FLANKS = {0: "inner", 2: "outer"}
 
@@ -203,15 +211,20 @@ class GrooveTurn:
         return change
 
 
-def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[GrooveTurn]:
+def groove_turns(program: Program, rpm, *, turns: int | None = None,
+                 progress: bool | None = None) -> list[GrooveTurn]:
     """The settled turn at every speed: turns from rest until the strikes of the last two
     agree (``GrooveTurn.settled``; doubling the turns from ``settling_turns``, up to
-    ``MAX_TURNS``), or exactly ``turns`` turns when given.
+    ``MAX_TURNS`` and as long as a run stays within ``MAX_GROOVE_SAMPLES``), or exactly
+    ``turns`` turns when given.  A first run past ``MAX_GROOVE_SAMPLES`` is a ``ValueError``
+    before any work, naming the speed, stiffness or damping to change.  ``progress``: a bar
+    on stderr (``None``: on a terminal, where the work is long).
 
     Needs a form-closed follower with ``groove_clearance_mm``.  One compiled solve serves
     every speed with the same turn count (the model's numbers are traced).  A run that has
     not settled by ``MAX_TURNS`` (a roller that chatters without a period) is returned with
-    its ``change_deg``; the command line warns about it.
+    its ``change_deg`` (a roller that chatters in a wide groove, ``groove_clearance_mm``);
+    the command line warns about it.
     """
     from ..models import Backlash, solve
 
@@ -222,7 +235,10 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[Gro
         raise ValueError("groove impacts need follower.damping_ratio > 0 (the start-up must settle)")
     rpm = check_rpm(rpm)
     h = stroke_mm(program)
-    samples = _SAMPLES_PER_PERIOD * math.ceil(f.natural_frequency_hz * 60.0 / float(rpm.min()))
+    samples = _samples_per_turn(program, float(rpm.min()))
+    first = settling_turns(program, float(rpm.max())) if turns is None else max(2, int(turns))
+    _check_work(program, rpm, samples, first, turns is not None)
+    most = max(first, min(MAX_TURNS, MAX_GROOVE_SAMPLES // samples))  # turns of the longest run
 
     def run(r: float, count: int) -> GrooveTurn:
         period = 60.0 / r
@@ -233,13 +249,55 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None) -> list[Gro
                         for k in (count - 1, count - 2))
         return dataclasses.replace(last, change_deg=last.change_from(before))
 
-    first = settling_turns(program, float(rpm.max())) if turns is None else max(2, int(turns))
     out = []
-    for r in map(float, rpm):
-        count = first  # the same count at every speed: one compiled solve
-        turn = run(r, count)
-        while turns is None and not turn.settled and 2 * count <= MAX_TURNS:
-            count *= 2
-            turn = run(r, count)
-        out.append(turn)
+    if progress is None:  # on a terminal, where the work is long
+        progress = sys.stderr.isatty() and first * samples * rpm.size > 20_000
+    with tqdm(total=rpm.size, desc="groove", unit="speed", disable=not progress, file=sys.stderr) as bar:
+        for r in map(float, rpm):
+            count = first  # the same count at every speed: one compiled solve
+            bar.set_postfix_str(f"{r:g} rpm, {count} turns")
+            try:
+                turn = run(r, count)
+            except SolverError as error:
+                raise SolverError(f"the grooved cam at {r:g} rpm: the strikes could not be followed over "
+                                  f"{count} turns ({error}); a narrower groove (groove_clearance_mm), more "
+                                  "damping or --no-flight") from None
+            while turns is None and not turn.settled and 2 * count <= most:
+                count *= 2
+                bar.set_postfix_str(f"{r:g} rpm, {count} turns")
+                try:
+                    turn = run(r, count)
+                except SolverError:  # the longer run failed: the last one is reported, unsettled
+                    break
+            out.append(turn)
+            bar.update()
     return out
+
+
+def _samples_per_turn(program: Program, rpm: float) -> int:
+    return _SAMPLES_PER_PERIOD * math.ceil(program.follower.natural_frequency_hz * 60.0 / rpm)
+
+
+def _check_work(program: Program, rpm: np.ndarray, samples: int, first: int, given: bool) -> None:
+    """Refuse, before any work, a first run past ``MAX_GROOVE_SAMPLES``, saying what to change."""
+    if first * samples <= MAX_GROOVE_SAMPLES:
+        return
+    f = program.follower
+    cycles = f.natural_frequency_hz * 60.0 / float(rpm.min())
+    if given:
+        raise ValueError(f"{first} groove turns at {samples:,} samples a turn (the follower vibrates "
+                         f"{cycles:.0f} times a turn at {rpm.min():g} rpm) are {first * samples:,} samples; "
+                         f"the limit is {MAX_GROOVE_SAMPLES:,}: ask for at most "
+                         f"{max(2, MAX_GROOVE_SAMPLES // samples)} turns")
+    # The slowest speed whose first run fits, the others as they are.
+    fits = next((x for x in np.geomspace(rpm.min(), 100 * rpm.max(), 2000)
+                 if _samples_per_turn(program, x) * settling_turns(program, max(x, rpm.max())) <= MAX_GROOVE_SAMPLES),
+                None)
+    faster = f"run at {fits:.3g} rpm or faster, " if fits is not None else ""
+    raise ValueError(
+        f"the grooved cam at {rpm.min():g} rpm: the follower vibrates {cycles:.0f} times a turn "
+        f"({samples:,} samples a turn) and its contact vibration (damping_ratio {f.damping_ratio:g}) "
+        f"needs {first} turns from rest to settle: {first * samples:,} samples, past the "
+        f"{MAX_GROOVE_SAMPLES:,} a groove run may take (minutes of work); {faster}lower "
+        "follower.stiffness_n_per_mm or raise follower.damping_ratio, or leave out the groove's "
+        "strikes (camjax program --no-flight)")

@@ -238,7 +238,7 @@ def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
         if not sub.size:
             break
         here = np.arange(sub.size)
-        tau = _first_roots(lambda t: contact.force(sub[here, None], t),
+        tau = _first_roots(lambda t, c=contact, rows_=sub[here, None]: c.force(rows_, t),
                            samples[sub, stop[sub] - 1], samples[sub, stop[sub]])
         rows = rows[sub]
         t_sep[rows] = t_i[sub] + tau

@@ -243,3 +243,64 @@ def cam_geometry(program: Program, theta_deg) -> Geometry:
         face_width_mm=width,
         joins=joins,
     )
+
+
+MAX_PRESSURE_ANGLE_DEG = {"translating-roller": 30.0, "swinging-roller": 45.0}
+"""The pressure angle above which a roller follower is taken to jam or wear (the design
+rule of thumb: 30 degrees translating, 45 swinging); flat faces have their own checks."""
+MODULUS_RANGE_GPA = (1.0, 1000.0)
+"""Young's moduli of engineering solids, polymers to diamond: a value outside is taken for
+a unit slip (a modulus in Pa or MPa)."""
+MAX_HALF_WIDTH_RATIO = 0.1
+"""Largest Hertz half-width ``b`` against the relative radius ``R'`` where the stress peaks
+(``b / R' = 2 p / E*``) for which the Hertz line contact holds (it needs ``b << R'``)."""
+
+
+def design_warnings(program: Program, report=None) -> list[str]:
+    """Where the input or a result lies outside what the design rules and the models hold,
+    one line each (empty where all is well): the program's own numbers, and with ``report``
+    (``analyse``'s ``Report`` or its ``as_dict()``) the pressure angle and the Hertz contact.
+
+    Each is a warning, not an error: the numbers are computed, but they are not to be
+    trusted as they stand.  ``camjax program`` prints them.
+    """
+    out = []
+    f, materials = program.follower, program.materials
+    report = report.as_dict() if hasattr(report, "as_dict") else report
+    limit = MAX_PRESSURE_ANGLE_DEG.get(f.kind)
+    angle = ((report or {}).get("geometry") or {}).get("max_pressure_angle_deg")
+    if limit is not None and angle is not None and abs(angle) > limit:
+        out.append(f"the pressure angle reaches {abs(angle):.3g} deg, above the {limit:g} deg a "
+                   f"{f.kind} follower tolerates: enlarge follower.base_radius_mm "
+                   "or lengthen the rises")
+    stroke = max(abs(float(y)) for y in np.cumsum([s.lift_mm for s in program.segments]))
+    if stroke > 2 * f.base_radius_mm:
+        out.append(f"the lift ({stroke:g} mm) is more than twice the base circle's radius "
+                   f"({f.base_radius_mm:g} mm): check the program's units")
+    low, high = MODULUS_RANGE_GPA
+    for part in ("cam", "follower"):
+        modulus = getattr(materials, f"{part}_youngs_modulus_gpa")
+        if not low <= modulus <= high:
+            out.append(f"materials.{part}_youngs_modulus_gpa = {modulus:g} lies outside {low:g}-{high:g} "
+                       "GPa (steel is about 210): check the unit (GPa, not Pa or MPa)")
+    if f.contact_width_mm is None and materials != type(materials)():
+        out.append("[materials] is used only for the Hertz contact stress, which needs "
+                   "follower.contact_width_mm: without it no stress is computed")
+    if f.contact_width_mm is not None and f.contact_width_mm > 20 * f.base_radius_mm:
+        out.append(f"follower.contact_width_mm = {f.contact_width_mm:g} is more than ten times the "
+                   f"base circle's diameter: check the unit (mm)")
+    if report is None:
+        return out
+    worst = max((s for s in report["speeds"] if s.get("contact_half_width_mm")),
+                key=lambda s: s["max_contact_stress_mpa"], default=None)
+    if worst is not None:
+        ratio = 2 * worst["max_contact_stress_mpa"] / materials.contact_modulus_mpa  # b / R'
+        if ratio > MAX_HALF_WIDTH_RATIO:
+            radius = worst["contact_half_width_mm"] / ratio
+            out.append(f"at {worst['rpm']:g} rpm the Hertz contact half-width "
+                       f"({worst['contact_half_width_mm']:.3g} mm) is {ratio:.3g} times the relative "
+                       f"radius of the contact ({radius:.3g} mm), past the {MAX_HALF_WIDTH_RATIO:g} "
+                       "where Hertz theory holds: its stress "
+                       f"({worst['max_contact_stress_mpa']:.3g} MPa) is not to be trusted; check "
+                       "follower.contact_width_mm and the moduli")
+    return out

@@ -127,6 +127,45 @@ def resolve_segments(segments: tuple) -> tuple:
     return tuple(built)
 
 
+MAX_EXCURSION = 100.0
+"""How far (in program strokes) a polynomial's lift may swing past its ends: further is an
+end state out of proportion to the segment (a velocity in the wrong unit, a typo)."""
+
+
+def check_excursions(segments, start_lift_mm) -> None:
+    """Refuse a polynomial segment whose lift swings more than ``MAX_EXCURSION`` program
+    strokes past its ends, naming the segment that gives the end state responsible: its
+    own (explicit ones first) or, through ``"match"``, the neighbour's."""
+    stroke = max([abs(float(y)) for y in np.cumsum([s.lift_mm for s in segments])]
+                 + [abs(s.lift_mm) for s in segments])
+    n = len(segments)
+    polys = [k for k, s in enumerate(segments) if is_polynomial(s) and s.moving]
+    explicit = sorted(polys, key=lambda k: not any(isinstance(x, EndState) for x in (segments[k].start, segments[k].end)))
+    for k in explicit:
+        seg = segments[k]
+        with jax.ensure_compile_time_eval():  # concrete even when a design traces around it
+            low, high = displacement_range(seg.law)
+        y0 = float(start_lift_mm[k])
+        ends = sorted((y0, y0 + seg.lift_mm))
+        swing = max(ends[0] - min(y0 + seg.lift_mm * low, y0 + seg.lift_mm * high),
+                    max(y0 + seg.lift_mm * low, y0 + seg.lift_mm * high) - ends[1], 0.0)
+        if swing <= MAX_EXCURSION * stroke:
+            continue
+        given = [f"{key}.velocity_mm_per_deg = {spec.velocity_mm_per_deg:g}" for key, spec in
+                 (("start", seg.start), ("end", seg.end)) if isinstance(spec, EndState)]
+        if given:
+            source = f"segment {k + 1}: its {' and '.join(given)}"
+        else:
+            other = (k - 1) % n if seg.start == MATCH else (k + 1) % n
+            source = (f"segment {other + 1}'s end state (which segment {k + 1} matches); "
+                      f"segment {k + 1}")
+        raise ValueError(
+            f"{source} cannot be met by a polynomial of lift {seg.lift_mm:g} mm over "
+            f"{seg.angle_deg:g} deg without swinging the lift {swing:.3g} mm past its ends "
+            f"(the program's stroke is {stroke:g} mm): the end state is out of proportion to "
+            "the segment; check its value and unit (mm per degree of cam angle)")
+
+
 def _state(spec: EndState) -> tuple[float, float, float]:
     return (float(spec.velocity_mm_per_deg), float(spec.acceleration_mm_per_deg2),
             float(spec.jerk_mm_per_deg3 or 0.0))
@@ -178,7 +217,10 @@ def joins(segments, start_deg) -> list[Join]:
         after = (k + 1) % n
         (v0, a0, _), (v1, a1, _) = states[k][1], states[after][0]
         angle = float(start_deg[after]) if after else 360.0
-        if abs(v0 - v1) > _VELOCITY_TOLERANCE * max(1.0, abs(v0), abs(v1)):
+        # Relative to every end velocity of the two segments: a polynomial that starts at
+        # 1e6 mm/deg ends at rest only to about 1e-9 of that (its coefficients' round-off).
+        scale = max(1.0, *(abs(state[0]) for ends in (states[k], states[after]) for state in ends))
+        if abs(v0 - v1) > _VELOCITY_TOLERANCE * scale:
             raise ValueError(
                 f"segments {k + 1} and {after + 1} meet at {angle:g} deg with velocity {v0:.6g} mm/deg "
                 f"(end of segment {k + 1}) and {v1:.6g} mm/deg (start of segment {after + 1}): a "

@@ -51,8 +51,16 @@ def _segment_grid(objective, law):
     placeholder = jax.tree.map(lambda x: np.zeros(np.shape(x)) if isinstance(x, jax.core.Tracer) else x, law)
     program = with_law(objective.program, objective.segment, placeholder)
     with jax.ensure_compile_time_eval():
-        grid = cycle_grid(program, resolution(program, objective.rpm_lo))
+        grid = _same_points(cycle_grid(program, resolution(program, objective.rpm_lo)), objective.program)
     return program, with_segment_law(grid, program, objective.segment - 1, law), Train.of(program)
+
+
+def _same_points(grid, original: Program):
+    """``grid`` with its residual points at the ``original`` program's dwells and
+    constant-velocity segments: a designed constant-velocity stroke is one no more, yet the
+    vibration entering it is what the design and its start are compared on."""
+    starts = np.asarray(grid.segment_start)[original.residual_segments()]
+    return grid._replace(residual_start=np.asarray(starts, dtype=int))
 
 
 class AbstractProgramObjective(AbstractObjective):
@@ -136,7 +144,8 @@ class MaxProgramResidual(AbstractProgramObjective):
     the objective for a segment that starts or ends in motion, whose own rise is not from
     rest to rest.  Training smooths the maximum over the training speeds and residual
     points of ``|mode|``, whose real and imaginary parts are affine in the law; the report
-    is the largest by ``SteadyState`` on ``EVALUATION_SAMPLES`` speeds.
+    is the largest by ``SteadyState`` on ``EVALUATION_SAMPLES`` speeds.  The residual points
+    are the given program's (a designed constant-velocity stroke keeps its point).
     """
 
     what: ClassVar[str] = "residual"
@@ -163,8 +172,9 @@ class MaxProgramResidual(AbstractProgramObjective):
 
     def residual_mm(self, law) -> np.ndarray:
         """Largest residual vibration (mm) at every evaluation speed, by ``SteadyState``."""
-        program = with_law(self.program, self.segment, law)
-        out = SteadyState(program, self.rpm_lo).summary(self.evaluation_speeds())
+        steady = SteadyState(with_law(self.program, self.segment, law), self.rpm_lo)
+        steady.grid = _same_points(steady.grid, self.program)  # before its first (tracing) call
+        out = steady.summary(self.evaluation_speeds())
         return np.max(out.residual_vibration_mm, axis=1)
 
     def report(self, law) -> float:

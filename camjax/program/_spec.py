@@ -17,9 +17,21 @@ import numpy as np
 from .. import laws
 from ..checks import finite_number, is_concrete, read_toml
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
-from ._motion import END_STATE_KEYS, MATCH, EndState, is_polynomial, joins, resolve_segments
+from ._motion import (
+    END_STATE_KEYS,
+    MATCH,
+    EndState,
+    check_excursions,
+    is_polynomial,
+    joins,
+    resolve_segments,
+)
 
 FOLLOWER_KINDS = ("translating-roller", "swinging-roller", "translating-flat", "swinging-flat")
+MAX_SEGMENTS = 360
+"""Most segments of a program (a degree each on average): each is sampled, checked and
+reported apart, so 100,000 slivers took minutes and megabytes of output; more is refused
+before any work."""
 _ANGLE_TOLERANCE_DEG = 1e-9
 _LIFT_TOLERANCE_MM = 1e-9
 
@@ -157,16 +169,17 @@ def _check_follower(f: Follower) -> None:
     if f.kind == "translating-flat" and offset != 0:
         raise ValueError("follower.offset_mm: a flat face's profile does not depend on an offset; "
                          "leave it 0")
+    if f.swinging:
+        for name in ("arm_mm", "pivot_mm"):
+            if getattr(f, name) is None:
+                raise ValueError(f"follower.{name} is missing: a {f.kind} follower needs "
+                                 "arm_mm and pivot_mm")
     if f.kind == "swinging-flat":
         _positive(f.arm_mm, "follower.arm_mm")
         if _positive(f.pivot_mm, "follower.pivot_mm") <= f.base_radius_mm:
             raise ValueError("follower.pivot_mm: the pivot must lie outside the base circle "
                              "(pivot_mm > base_radius_mm) for its face to touch it")
     if f.kind == "swinging-roller":
-        for name in ("arm_mm", "pivot_mm"):
-            if getattr(f, name) is None:
-                raise ValueError(f"follower.{name} is missing: a swinging-roller follower needs "
-                                 "arm_mm and pivot_mm")
         arm = _positive(f.arm_mm, "follower.arm_mm")
         pivot = _positive(f.pivot_mm, "follower.pivot_mm")
         rp = f.base_radius_mm + f.roller_radius_mm
@@ -209,7 +222,7 @@ class Program:
     degrees (the program starts and ends on the base circle); the velocity continuous at
     every join, the wrap from the last segment to the first included (an acceleration
     step is allowed: ``joins``); the follower's numbers positive and finite.  Any number
-    of segments, in any order.  Polynomial segments get their laws solved from their end
+    of segments up to ``MAX_SEGMENTS``, in any order.  Polynomial segments get their laws solved from their end
     states (``"match"`` reads the neighbour's).
     """
 
@@ -222,6 +235,7 @@ class Program:
         object.__setattr__(self, "segments", tuple(self.segments))
         if not self.segments:
             raise ValueError("a program needs at least one segment")
+        _segment_count(len(self.segments))
         lift = 0.0
         for i, seg in enumerate(self.segments, 1):
             _positive(seg.angle_deg, f"segment {i}: angle_deg")
@@ -242,6 +256,7 @@ class Program:
             raise ValueError(f"the cumulative lift ends at {lift:g} mm, not back at zero (the base circle)")
         object.__setattr__(self, "segments", resolve_segments(self.segments))
         if is_concrete([s.law for s in self.segments]):
+            check_excursions(self.segments, self.start_lift_mm)
             self.joins()
         _check_follower(self.follower)
 
@@ -271,6 +286,7 @@ class Program:
         segments_data = data.get("segment")
         if not isinstance(segments_data, list) or not segments_data:
             raise ValueError("no [[segment]] tables: a program needs at least one segment")
+        _segment_count(len(segments_data))
         segments = [_segment(i, s, base) for i, s in enumerate(segments_data, 1)]
         follower_data = data.get("follower")
         if not isinstance(follower_data, dict):
@@ -407,6 +423,12 @@ class LiftCurve(eqx.Module):
         for law, start, angle, lift in zip(self.laws, self.start_deg, self.angle_deg, self.lift_mm):
             y = y + lift * law.s((theta_deg - start) / angle)
         return self.scale * y
+
+
+def _segment_count(count: int) -> None:
+    if count > MAX_SEGMENTS:
+        raise ValueError(f"the program has {count:,} segments; the limit is {MAX_SEGMENTS} "
+                         "(merge neighbouring dwells, and short segments into their neighbours)")
 
 
 def _no_unknown(table, allowed: set[str], where: str) -> None:

@@ -53,8 +53,8 @@ from ._peaks import residual_of_mode as residual_of_mode
 from ._peaks import set_peak_search as set_peak_search
 from ._step import eigenvalue as eigenvalue
 from ._step import mode_between as mode_between
-from ._step import psi_host as psi_host
 from ._step import periodic_propagate as periodic_propagate
 from ._step import propagate as propagate
 from ._step import psi as psi
+from ._step import psi_host as psi_host
 from ._step import steps_within as steps_within
