@@ -78,6 +78,9 @@ def test_the_extending_page_runs(capsys):
     out = capsys.readouterr().out
     differences = [float(x) for x in re.findall(r"difference from [^:]*: (\S+)", out)]
     assert len(differences) == 2 and max(differences) < 5e-12  # rounding of two formulas
+    # The probe's mean contact force against the mean lift's (trapezoid rules: 1e-5 apart).
+    means = [tuple(map(float, m)) for m in re.findall(r"mean contact force (\S+) N, from the mean lift (\S+) N", out)]
+    assert len(means) == 2 and all(abs(a - b) < 1e-4 * b for a, b in means), means
     ct = float(re.search(r"Ct at n = 6.4: (\S+)", out).group(1))
     import camjax
 

@@ -130,6 +130,9 @@ def _table(report: dict, grooved: bool = False) -> str:
                  "and constant-velocity stroke")
     stressed = any(s["max_contact_stress_mpa"] is not None for s in report["speeds"])
     lines += _rows(report["speeds"], _DRIVE_COLUMNS + (_CONTACT_COLUMNS if stressed else ()))
+    probes = _probe_columns(report)
+    if probes:
+        lines += _rows(report["speeds"], (_DRIVE_COLUMNS[0], *probes))
     if grooved:
         lines.append("the strikes below are the groove's, with its clearance (the Backlash model): "
                      "their forces are not bounded by the contact-held Fc above")
@@ -156,6 +159,14 @@ def _table(report: dict, grooved: bool = False) -> str:
     if report.get("geometry") is not None:
         lines += _geometry_lines(report["geometry"])
     return "\n".join(lines)
+
+
+def _probe_columns(report: dict) -> tuple:
+    """Columns of the registered probes the report carries (``camjax.program.register_probe``)."""
+    from ..program import PROBES
+
+    first = report["speeds"][0] if report["speeds"] else {}
+    return tuple((name, probe.label, "{:.6g}") for name, probe in PROBES.items() if name in first)
 
 
 def _machine_table(report: dict) -> str:
@@ -210,7 +221,7 @@ def _motion_summary(report: dict) -> list[str]:
 def _csv(report: dict) -> str:
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    keys = [key for key, _, _ in _COLUMNS + _DRIVE_COLUMNS[1:] + _CONTACT_COLUMNS]
+    keys = [key for key, _, _ in _COLUMNS + _DRIVE_COLUMNS[1:] + _CONTACT_COLUMNS + _probe_columns(report)]
     segments = len(report["speeds"][0]["period_ratios"])
     dwells = len(report["speeds"][0]["residual_vibration_mm"])
     writer.writerow(keys + [f"period_ratio_{i + 1}" for i in range(segments)]

@@ -59,6 +59,10 @@ from ._machine import design_warnings as design_warnings
 from ._motion import EndState as EndState
 from ._motion import Join as Join
 from ._motion import segment_kinematics as segment_kinematics
+from ._probes import PROBES as PROBES
+from ._probes import Probe as Probe
+from ._probes import register_probe as register_probe
+from ._probes import unregister_probe as unregister_probe
 from ._shaft import Machine as Machine
 from ._shaft import MachineReport as MachineReport
 from ._shaft import ShaftSpeedReport as ShaftSpeedReport

@@ -69,6 +69,8 @@ class SpeedReport:
         max_contact_stress_mpa, max_contact_stress_deg: peak Hertz line-contact pressure over
             the grid's nodes and where (``None`` without ``follower.contact_width_mm``).
         contact_half_width_mm: the Hertz contact half-width there, ``2 R' p_max / E*``.
+        outputs: the registered probes' values (``camjax.program.register_probe``), also
+            read as attributes (``speed.rms_contact_force_n``) and flat in ``as_dict``.
     """
 
     rpm: float
@@ -91,6 +93,14 @@ class SpeedReport:
     max_contact_stress_mpa: float | None = None
     max_contact_stress_deg: float | None = None
     contact_half_width_mm: float | None = None
+    outputs: dict[str, float] = dataclasses.field(default_factory=dict)
+
+    def __getattr__(self, name):  # a registered probe's value, as an attribute
+        outputs = self.__dict__.get("outputs", {})
+        if name in outputs:
+            return outputs[name]
+        raise AttributeError(f"{type(self).__name__} has no attribute {name!r} (outputs: "
+                             f"{', '.join(outputs) or 'none registered'})")
 
     @property
     def flight(self) -> Flight | None:
@@ -100,7 +110,8 @@ class SpeedReport:
     def as_dict(self) -> dict:
         """Plain types for JSON, with ``flight`` (the first flight) beside ``flights``."""
         flights = None if self.flights is None else [x.as_dict() for x in self.flights]
-        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "outputs"}
+        out.update(self.outputs)
         out.update(residual_vibration_mm=list(self.residual_vibration_mm),
                    period_ratios=list(self.period_ratios), flight=flights[0] if flights else None,
                    flights=flights,
@@ -193,6 +204,7 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
             max_contact_stress_mpa=stress if stressed else None,
             max_contact_stress_deg=float(theta_nodes[int(out.max_contact_stress_node[i])]) if stressed else None,
             contact_half_width_mm=half_width if stressed else None,
+            outputs={name: float(values[i]) for name, values in out.probes.items()},
         ))
     jump_speed = None
     below = not closed and bool(out.min_contact_force_n[np.argmin(rpm)] < 0)

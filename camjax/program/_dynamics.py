@@ -16,6 +16,7 @@ A speed sweep is one compiled call through the engine's ``chunked_map``.
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from typing import NamedTuple
@@ -45,6 +46,7 @@ from ..sdof import (
 )
 from ..sharding import resolve_devices, shard_batch
 from ._machine import NodeContact, contact_stress_squared, node_contact, torque_figures, torque_jets
+from ._probes import PROBES
 from ._spec import Program
 
 _MIN_PER_SEGMENT = 64
@@ -248,6 +250,7 @@ class Cycle(NamedTuple):
     max_contact_stress_radius_mm: jax.Array
     drive_torque_left: jax.Array
     drive_torque_right: jax.Array
+    probes: dict = {}  # the registered probes' values (camjax.program.register_probe)
 
 
 def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True,
@@ -327,6 +330,7 @@ class SpeedSummary(NamedTuple):
     max_contact_stress_mpa: np.ndarray
     max_contact_stress_node: np.ndarray
     max_contact_stress_radius_mm: np.ndarray
+    probes: dict = {}  # name -> values at every speed (camjax.program.register_probe)
 
 
 SUMMARY_OUTPUTS = ("max_payload_acceleration_m_s2", "min_contact_force_n", "max_contact_force_n",
@@ -391,11 +395,18 @@ def _node_arrays_cut(cycle: Cycle, intervals: int) -> Cycle:
         drive_torque_right=cycle.drive_torque_right[..., :intervals, :])
 
 
-@jax.jit
-def _cycles(rpm, turn: PaddedTurn) -> Cycle:
-    """The periodic steady state's whole ``Cycle`` at every speed of a block: one compiled
-    program per shape of the turn, whatever the program's values."""
-    return jax.vmap(lambda r: _cycle(turn.grid, turn.train, r, contact=turn.contact))(rpm)
+@functools.partial(jax.jit, static_argnames="probes")
+def _cycles(rpm, turn: PaddedTurn, probes: tuple[str, ...] = ()) -> Cycle:
+    """The periodic steady state's whole ``Cycle`` at every speed of a block, with the
+    values of the ``probes`` named: one compiled program per shape of the turn (and set of
+    probes), whatever the program's values."""
+
+    def one(r):
+        cycle = _cycle(turn.grid, turn.train, r, contact=turn.contact)
+        return cycle._replace(probes={name: jnp.asarray(PROBES[name].fn(cycle, turn), dtype=float)
+                                      for name in probes})
+
+    return jax.vmap(one)(rpm)
 
 
 @jax.jit
@@ -438,12 +449,15 @@ class SteadyState:
         """``summary`` of speeds already checked (``check_rpm``); the cycles computed on
         the way are kept for ``cycle`` (the flights read them)."""
         cycles = self.cycles(rpm)
-        return SpeedSummary(rpm, *(getattr(cycles, name) for name in SUMMARY_OUTPUTS))
+        return SpeedSummary(rpm, *(getattr(cycles, name) for name in SUMMARY_OUTPUTS), cycles.probes)
 
     def cycles(self, rpm: np.ndarray) -> Cycle:
         """The whole ``Cycle`` at every speed of ``rpm`` (checked), stacked on axis 0."""
         self._check_slowest(rpm)
         out = _node_arrays_cut(self._blocks(_cycles, rpm), self.grid.intervals)
+        for name, values in out.probes.items():
+            if not np.all(np.isfinite(values)):
+                raise ValueError(f"probe {name!r} is not finite at {rpm[~np.isfinite(values)][0]:g} rpm")
         raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm",
                         *(getattr(out, name) for name in SUMMARY_OUTPUTS[:9] if name != "residual_vibration_mm"))
         self._kept = {float(r): i for i, r in enumerate(rpm)}, out
@@ -481,7 +495,9 @@ class SteadyState:
         padded = np.pad(rpm, (0, -size % SPEED_BLOCK), mode="edge").reshape(-1, SPEED_BLOCK)
         devices = self.devices if SPEED_BLOCK % len(self.devices) == 0 else self.devices[:1]
         keep = keep or (lambda out: out)
-        outs = [keep(shard_batch(program, jnp.asarray(block), self.turn, devices=devices)) for block in padded]
+        probes = tuple(PROBES)
+        outs = [keep(shard_batch(program, jnp.asarray(block), self.turn, probes, devices=devices))
+                for block in padded]
         return jax.tree.map(lambda *x: np.concatenate([np.asarray(v) for v in x])[:size], *outs)
 
     def cycle(self, rpm: float, q_start=None) -> Cycle:

@@ -23,7 +23,7 @@ import numpy as np
 from ..sdof import psi_host
 from ._dynamics import SteadyState, check_rpm
 
-_BISECTIONS = 2  # rounds of 64-way subdivision before the secant: a bracket shrinks by 65^2
+_BISECTIONS = 3  # rounds of 64-way subdivision before the secant: a bracket shrinks by 65^3
 _SAMPLES_PER_INTERVAL = 8
 
 
@@ -171,8 +171,8 @@ class _Turns:
 
 def _first_roots(f, lo, hi) -> np.ndarray:
     """The first root of ``f`` in each row's ``[lo, hi]`` (``f(lo) > 0 >= f(hi)``); ``f`` maps
-    times ``(rows, points)`` to values.  Two rounds of 64-way subdivision shrink each
-    bracket 4225-fold around its first sign change; the root is then the secant's through
+    times ``(rows, points)`` to values.  Three rounds of 64-way subdivision shrink each
+    bracket 274,625-fold around its first sign change; the root is then the secant's through
     the bracket's ends (the force is smooth there: the error is of the bracket's square)."""
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     rows = np.arange(lo.size)
