@@ -57,4 +57,4 @@ def test_probe_names_are_checked():
     with pytest.raises(ValueError, match="no probe named"):
         cp.unregister_probe("nothing")
     with pytest.raises(AttributeError, match="no attribute 'nothing'"):
-        cp.SpeedReport(1.0, 0, 0, 0, 0, False, None, (), ()).nothing
+        _ = cp.SpeedReport(1.0, 0, 0, 0, 0, False, None, (), ()).nothing
