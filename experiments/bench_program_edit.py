@@ -66,6 +66,9 @@ def main(argv=None) -> int:
     parser.add_argument("--edits", type=int, default=3)
     parser.add_argument("--programs", default=",".join(PROGRAMS))
     parser.add_argument("--baseline", type=Path, help="another checkout to time in the same run")
+    parser.add_argument("--baseline-edits", type=int, default=1,
+                        help="edits timed on the baseline (default %(default)s: a slow baseline's first look "
+                        "and one edit)")
     parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # a child's output
     args = parser.parse_args(argv)
     programs = args.programs.split(",")
@@ -77,7 +80,8 @@ def main(argv=None) -> int:
         if root is None:
             continue
         env = dict(os.environ, PYTHONPATH=str(root))
-        child = subprocess.run([sys.executable, __file__, "--json", "--rpm", args.rpm, "--edits", str(args.edits),
+        edits = args.edits if label == "this" else min(args.edits, args.baseline_edits)
+        child = subprocess.run([sys.executable, __file__, "--json", "--rpm", args.rpm, "--edits", str(edits),
                                 "--programs", args.programs], env=env, capture_output=True, text=True)
         if child.returncode:
             print(child.stderr[-2000:], file=sys.stderr)
@@ -94,11 +98,12 @@ def main(argv=None) -> int:
         for k in range(args.edits + 1):
             cells = []
             for lab in runs:
-                row = runs[lab][name][k]
-                cells += [f"{row['seconds']:.3f}", str(row["compilations"])]
+                rows = runs[lab][name]
+                cells += [f"{rows[k]['seconds']:.3f}", str(rows[k]["compilations"])] if k < len(rows) else ["-", "-"]
             ratio = ""
             if len(runs) == 2:
-                ratio = f" {runs['this'][name][k]['seconds'] / runs['baseline'][name][k]['seconds']:.3f} |"
+                base = runs["baseline"][name]
+                ratio = f" {runs['this'][name][k]['seconds'] / base[k]['seconds']:.4f} |" if k < len(base) else " - |"
             print(f"| {name} | {'first' if k == 0 else k} | " + " | ".join(cells) + " |" + ratio)
         for lab in runs:
             jumps = {str(r["jump_speed_rpm"]) for r in runs[lab][name]}

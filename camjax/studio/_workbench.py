@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..cli._common import CliError, json_ready, parse_range
-from ..cli.program import DEFAULT_SPEED_FLUCTUATION, plot_speed, program_report, validity_warnings
+from ..cli.program import DEFAULT_SPEED_FLUCTUATION, plot_speed, program_report
 
 DEFAULT_RPM = "200:1400:7"
 """The speed range a workbench starts with (wide enough to show the examples' jump speeds)."""
@@ -133,7 +133,7 @@ class Workbench:
             steady = SteadyState(program, float(min(rpm)))
             report = json_ready(program_report(program, rpm, with_flight=self.with_flight, steady=steady,
                                                speed_fluctuation=self.speed_fluctuation))
-            hit = (program, steady, report, validity_warnings(program, report))
+            hit = (program, steady, report, list(report.get("warnings", ())))
             with _CACHE_LOCK:
                 self.cache[key] = hit
                 while len(self.cache) > CACHED_REPORTS:
