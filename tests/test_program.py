@@ -493,6 +493,28 @@ def test_strikes_closer_than_a_sample_get_the_next_samples_force():
     assert peaks[2] == rest[np.argmax(np.abs(rest))]
 
 
+def test_the_last_strike_of_a_turn_runs_its_peak_force_to_the_next_turns_first():
+    """The turn's last strike is followed by the next turn's first: its peak force runs on
+    across 360 degrees (the settled turn is periodic, so from the turn's start to its first
+    strike); it was cut off at 360 degrees."""
+    from types import SimpleNamespace
+
+    from camjax.program import GrooveTurn
+
+    ts = np.linspace(0.0, 2.0, 401)
+    u = np.mod(ts, 1.0)
+    acceleration = 5.0 * np.exp(-((u - 0.05) / 0.02) ** 2) - 0.5 * np.sin(2 * np.pi * u)  # periodic
+    strikes = np.array([0.3, 0.8, 1.3, 1.8])
+    response = SimpleNamespace(n_impacts=4, impact_tau=strikes, impact_velocity=np.ones(4),
+                               impact_flank=np.zeros(4, int), tau=ts, payload_acceleration=acceleration)
+    last, first = (GrooveTurn.from_response(600.0, response, 2, mass=1.0, stroke_m=1.0, period=1.0, turn=k)
+                   for k in (1, 0))
+    assert [i.peak_force_n for i in last.impacts] == [i.peak_force_n for i in first.impacts]
+    assert last.impacts[1].peak_force_n == pytest.approx(5.0 - 0.5 * np.sin(0.1 * np.pi), rel=1e-3)  # at 0.05 turns
+    window = (ts >= 1.8) | ((ts >= 1.0) & (ts <= 1.3))
+    assert last.impacts[1].peak_force_n == np.abs(acceleration[window]).max()
+
+
 def test_a_groove_turn_is_settled_when_its_strikes_repeat():
     """The settling criterion compares strikes turn by turn: flanks must match, angles
     within SETTLED_DEG and velocities within SETTLED_REL, else the change is infinite."""

@@ -112,8 +112,9 @@ class Impact:
     """One strike of the roller on a groove flank: angle (deg), velocity (m/s), peak force (N).
 
     ``peak_force_n`` is the train force of largest magnitude from the strike to the next
-    strike (sampled at 128 per natural period; signed: positive on the inner flank,
-    negative on the outer).  Strikes closer together than one sample (a chattering roller)
+    strike, the turn's last one running on across 360 degrees to the next turn's first
+    (sampled at 128 per natural period; signed: positive on the inner flank, negative on
+    the outer).  Strikes closer together than one sample (a chattering roller)
     get the force at the first sample after the strike.
     """
 
@@ -176,10 +177,17 @@ class GrooveTurn:
         ts = np.asarray(response.tau)
         force = mass * stroke_m / period**2 * np.asarray(response.payload_acceleration)
         impacts = []
-        for i in np.flatnonzero((tau >= turn) & (tau < turn + 1)):
-            end = tau[i + 1] if i + 1 < count else ts[-1]
+        here = np.flatnonzero((tau >= turn) & (tau < turn + 1))
+        for i in here:
             first = min(int(np.searchsorted(ts, tau[i])), ts.size - 1)
-            window = force[first:max(int(np.searchsorted(ts, end, side="right")), first + 1)]
+            if i + 1 < count:
+                window = force[first:max(int(np.searchsorted(ts, tau[i + 1], side="right")), first + 1)]
+            else:  # the run ends before the next strike: the turn is periodic, so the force
+                # from its end on to the next turn's first strike is the force from its start
+                # to its own first strike
+                wrap = force[int(np.searchsorted(ts, turn)):int(np.searchsorted(ts, tau[here[0]], side="right"))]
+                window = np.concatenate([force[first:max(int(np.searchsorted(ts, turn + 1, side="right")), first + 1)],
+                                         wrap])
             peak = float(window[np.argmax(np.abs(window))])
             impacts.append(Impact(float(360.0 * (tau[i] - turn)), FLANKS[int(flank[i])],
                                   float(velocity[i] * stroke_m / period), peak))
