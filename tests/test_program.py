@@ -493,6 +493,23 @@ def test_strikes_closer_than_a_sample_get_the_next_samples_force():
     assert peaks[2] == rest[np.argmax(np.abs(rest))]
 
 
+def test_a_groove_turns_motion_law_reads_each_join_once():
+    """The hand-over's law over the turn (``TurnLaw``) against the program's lift at every
+    join and between: at a join of two moving segments in motion (the feed cam's constant
+    velocity stroke) the velocity was counted from both segments (twice the stroke's)."""
+    from camjax.program import TurnLaw
+    from camjax.program._groove import stroke_mm
+
+    program = Program.load(example_path("feed"))
+    h = stroke_mm(program)
+    theta = np.concatenate([program.start_deg, np.linspace(0.0, 360.0, 97)[:-1] + 0.37])
+    s, v, a, _ = (np.asarray(x) for x in TurnLaw.of(program, h, 1).evaluate(theta / 360.0))
+    y, dy, ddy = program.lift(theta)  # after each join: the solver steps forward from it
+    assert np.abs(s - y / h).max() < 1e-12
+    assert np.abs(v - 360.0 * dy / h).max() < 1e-12 * 360.0 * np.abs(dy / h).max()
+    assert np.abs(a - 360.0**2 * ddy / h).max() < 1e-12 * 360.0**2 * np.abs(ddy / h).max()
+
+
 def test_the_last_strike_of_a_turn_runs_its_peak_force_to_the_next_turns_first():
     """The turn's last strike is followed by the next turn's first: its peak force runs on
     across 360 degrees (the settled turn is periodic, so from the turn's start to its first

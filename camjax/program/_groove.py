@@ -77,11 +77,21 @@ class TurnLaw(AbstractMotionLaw):
         return "program-turn"
 
     def evaluate(self, tau):
+        """``(s, v, a, j)`` at ``tau``: each instant read from the one moving segment it
+        belongs to by index (the last to start at or before it; a dwell after a segment
+        reads that segment's end), at its local time clipped to ``[0, 1]``.  Summing every
+        segment's contribution instead counted a join of two moving segments twice (both
+        read it inside) or not at all (a rounding put it outside both)."""
         u = jnp.mod(jnp.asarray(tau, dtype=float), 1.0)
+        k = jnp.searchsorted(jnp.asarray(self.start), u, side="right") - 1
         s = v = a = j = jnp.zeros_like(u)
-        for law, s0, f, h in zip(self.laws, self.start, self.width, self.lift):
-            si, vi, ai, ji = law.evaluate((u - s0) / f)
-            s, v, a, j = s + h * si, v + h * vi / f, a + h * ai / f**2, j + h * ji / f**3
+        lifted = 0.0  # the lift of the segments before
+        for i, (law, s0, f, h) in enumerate(zip(self.laws, self.start, self.width, self.lift)):
+            si, vi, ai, ji = law.evaluate(jnp.clip((u - s0) / f, 0.0, 1.0))
+            mine = k == i
+            s = jnp.where(mine, lifted + h * si, s)
+            v, a, j = (jnp.where(mine, h * x / f**p, y) for x, y, p in ((vi, v, 1), (ai, a, 2), (ji, j, 3)))
+            lifted += h
         return s, v, a, j
 
     def rise(self, tau):
