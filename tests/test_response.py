@@ -144,7 +144,7 @@ def test_residual_is_the_largest_acceleration_in_the_dwell(zeta):
     for n in (0.3, 0.7, 1.3, 2.6):
         w = 2 * math.pi * n
 
-        def rhs(t, y):
+        def rhs(t, y, w=w):
             return [y[1], float(law.a(t)) - w * w * y[0] - 2 * zeta * w * y[1]]
 
         sol = solve_ivp(rhs, (0, 1), [0.0, 0.0], method="DOP853", rtol=1e-12, atol=1e-14)

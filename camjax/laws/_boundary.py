@@ -20,7 +20,13 @@ import numpy as np
 
 from .._custom_types import Breakpoints, LawValues
 from ..checks import is_concrete, require
-from ._base import AbstractMotionLaw, AbstractSearchedPeaksLaw, float_leaf, polynomial_critical_points, polynomial_peaks
+from ._base import (
+    AbstractMotionLaw,
+    AbstractSearchedPeaksLaw,
+    float_leaf,
+    polynomial_critical_points,
+    polynomial_peaks,
+)
 from ._spline import BSplineLaw, max_abs_piecewise
 
 DEGREES = (5, 7)
