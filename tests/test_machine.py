@@ -368,3 +368,39 @@ def test_drive_torque_is_the_moment_of_the_normal_force(kind, extra):
     moment = 1e-3 * normal_force * (point[:, 0] * normal[:, 1] - point[:, 1] * normal[:, 0])
     assert np.abs(moment - h["drive_torque_n_m"]).max() < 1e-12 * np.abs(moment).max()
     assert np.abs(moment).max() > 1.0
+
+
+def test_one_sided_curvature_at_joins_of_any_angles():
+    """Harmonic rise straight into a harmonic return over angles that are not whole degrees
+    (a quarter of such joins read past their segment when the side was decided by
+    comparing rounded angles): every join's radius on both sides against the closed form
+    at ``y' = 0``, translating roller ``R^2 / (R - y'') - r_r`` and flat face
+    ``r_b + y + y''``; the Hertz factor at a join node a rounding off the join's angle
+    (as the dynamics grid places it) takes the side of the larger stress."""
+    from camjax.program._machine import node_contact
+
+    law = laws.get("harmonic")
+    rng = np.random.default_rng(7)
+    for _ in range(12):
+        up, down = np.round(rng.uniform(70.0, 140.0, 2), 1) + rng.uniform(0.0, 1e-3, 2)
+        rest = 360.0 - up - down
+        segments = (Segment(float(up), 10.0, law), Segment(float(down), -10.0, law), Segment(float(rest)))
+        # y'' at the ends (mm/rad^2): -h/2 (pi/beta)^2 at the nose, +h/2 (pi/beta)^2 at the return's end
+        nose = (-5.0 * (180.0 / up) ** 2, -5.0 * (180.0 / down) ** 2)
+        foot = (5.0 * (180.0 / down) ** 2, 0.0)
+        roller = Program("p", segments, Follower(**{**FOLLOWER, "base_radius_mm": 20.0, "roller_radius_mm": 3.0,
+                                                      "contact_width_mm": 10.0}))
+        flat = dict(FOLLOWER, kind="translating-flat", base_radius_mm=40.0)
+        flat.pop("roller_radius_mm")
+        flat = Program("p", segments, Follower(**flat))
+        for join, (lift, sides) in zip(cam_geometry(roller, [0.0]).joins[1:], [(10.0, nose), (0.0, foot)]):
+            big_r = 20.0 + 3.0 + lift
+            expected = [big_r**2 / (big_r - ydd) - 3.0 for ydd in sides]
+            assert [join.radius_before_mm, join.radius_after_mm] == pytest.approx(expected, rel=1e-12)
+            for theta in np.nextafter(join.angle_deg, [0.0, 360.0]):  # a rounding off the join
+                curvature = max(1 / 3.0 + 1 / rho for rho in expected)  # 1/R', the larger stress
+                factor = Materials().contact_modulus_mpa * curvature / (math.pi * 10.0)
+                assert node_contact(roller, [theta]).inner[0] == pytest.approx(factor, rel=1e-12)
+        for join, (lift, sides) in zip(cam_geometry(flat, [0.0]).joins[1:], [(10.0, nose), (0.0, foot)]):
+            assert [join.radius_before_mm, join.radius_after_mm] == pytest.approx(
+                [40.0 + lift + ydd for ydd in sides], rel=1e-12)

@@ -53,6 +53,25 @@ def test_rest_to_rest_boundary_polynomials_are_345_and_4567():
     assert c["Cj"] == pytest.approx(52.5, rel=1e-12)
 
 
+def test_peaks_of_a_quintic_whose_leading_coefficient_cancels():
+    """A quintic between constant velocities whose lift is the natural ``(v0 + v1) beta / 2``
+    (``v0 + v1 = 2`` normalised) is a cubic whose ``tau^5`` term cancels to round-off: its
+    peaks and displacement range against dense sampling of the polynomial solved directly
+    (the derivative's roots were spoilt by the round-off term: Ca 1.8e-15 for 1.364)."""
+    law = laws.get("polynomial5:0.5454545454545454,0.0,1.4545454545454546,0.0")
+    assert law.Ca == pytest.approx(15 / 11, rel=1e-12)  # a = 6 (v1 - v0) tau (1 - tau): 15/11 at 1/2
+    tau = np.linspace(0.0, 1.0, 200_001)
+    for v0 in (0.5454545454545454, 0.1, 0.3, 0.7, 1.0 / 3.0, 0.9, 1.25, 1.9, -0.4):
+        c = hermite_coefficients(5, [v0, 0.0], [2.0 - v0, 0.0])
+        law = laws.BoundaryPolynomial(v0=v0, v1=2.0 - v0)
+        peaks = law.peak_coefficients()
+        poly = np.polynomial.Polynomial(c)
+        for order, key in ((1, "Cv"), (2, "Ca"), (3, "Cj")):
+            assert peaks[key] == pytest.approx(np.abs(poly.deriv(order)(tau)).max(), rel=1e-9, abs=1e-12)
+        s = poly(tau)
+        assert law.displacement_range() == pytest.approx((s.min(), s.max()), abs=1e-9)
+
+
 @pytest.mark.parametrize("degree", [5, 7])
 def test_boundary_polynomial_meets_its_end_states(degree):
     rng = np.random.default_rng(degree)

@@ -1,7 +1,9 @@
 """Residual vibration by Gauss-Legendre quadrature over the law's smooth pieces.
 
-``R = w |int_0^1 a(u) exp(lambda (1 - u)) du| / (sqrt(1 - zeta^2) Ca)``: linear in the
-law's acceleration, so one matrix-vector product per batch of period ratios.
+The mode at the end of the rise, ``q = int_0^1 a(u) exp(lambda (1 - u)) du``, is linear in
+the law's acceleration, so one matrix-vector product per batch of period ratios; its
+envelope ``w |q| / sqrt(1 - zeta^2)`` is R undamped (the design objectives' smooth
+measure), and ``residual`` is the largest acceleration in the dwell it starts.
 """
 
 from __future__ import annotations
@@ -64,11 +66,18 @@ def _residual_components(law, period_ratios, damping: float) -> jax.Array:
 
 
 def residual_amplitude(law, period_ratios, damping: float = 0.0) -> jax.Array:
-    """``R * Ca`` (residual acceleration amplitude in units of h/T^2) at ``period_ratios``.
+    """``R * Ca`` (the largest residual acceleration in the dwell, units of h/T^2) at
+    ``period_ratios``: ``camjax.sdof.residual_of_mode`` of the mode at ``tau = 1``, whose
+    modulus times ``w / sqrt(1 - zeta^2)`` is the quadrature's (undamped, the two agree).
 
     ``period_ratios`` must be concrete (NumPy); the law may be traced.
     """
-    return _modulus(_residual_components(law, period_ratios, damping))
+    from ..sdof import residual_of_mode
+
+    omega = 2 * np.pi * np.atleast_1d(np.asarray(period_ratios, dtype=float))
+    c = _residual_components(law, period_ratios, damping)
+    q = (c[0] + 1j * c[1]) * jnp.asarray(np.sqrt(1.0 - damping**2) / omega)
+    return residual_of_mode(q, jnp.asarray(omega), damping, 1.0)
 
 
 def _modulus(components):

@@ -178,12 +178,31 @@ def static_breakpoints(points) -> tuple[float, ...]:
     return tuple(out)
 
 
+def polynomial_critical_points(coefficients: np.ndarray) -> np.ndarray:
+    """The ends of ``[0, 1]`` and every root of the derivative there: where a polynomial
+    (ascending coefficients) takes its extremes over ``[0, 1]``.
+
+    The derivative's leading coefficients that are round-off against the others (a
+    quintic whose top term cancels) are dropped before its roots are found: kept, they put
+    a huge root in the companion matrix and spoil the others.  On ``[0, 1]`` a dropped term
+    changes the derivative by at most ``1e-12`` of its largest coefficient.  Every root's
+    real part inside ``[0, 1]`` is a candidate, however far off the real axis (a near-double
+    root splits into a complex pair): evaluating the polynomial there never exceeds its true
+    extreme, and the true extremes are among the candidates.
+    """
+    d = np.polynomial.polynomial.polyder(np.asarray(coefficients, dtype=float))
+    scale = np.max(np.abs(d)) if d.size else 0.0
+    if not scale > 0:
+        return np.array([0.0, 1.0])
+    d = d[: int(np.nonzero(np.abs(d) > 1e-12 * scale)[0][-1]) + 1]
+    roots = np.polynomial.polynomial.polyroots(d).real if d.size > 1 else np.array([])
+    return np.concatenate([[0.0, 1.0], roots[(roots >= 0.0) & (roots <= 1.0)]])
+
+
 def polynomial_peaks(coefficients: np.ndarray) -> float:
     """``max |p(tau)|`` over ``[0, 1]`` of a polynomial (ascending coefficients), exactly."""
     poly = np.polynomial.Polynomial(coefficients)
-    roots = poly.deriv().roots() if poly.degree() > 0 else np.array([])
-    candidates = [0.0, 1.0] + [r.real for r in roots if abs(r.imag) < 1e-12 and 0 <= r.real <= 1]
-    return float(max(abs(poly(np.array(candidates)))))
+    return float(max(abs(poly(polynomial_critical_points(poly.coef)))))
 
 
 def number_text(value) -> str:

@@ -25,6 +25,7 @@ from ._base import (
     AbstractSearchedPeaksLaw,
     float_leaf,
     number_text,
+    polynomial_critical_points,
     polynomial_peaks,
 )
 from ._spline import BSplineLaw, max_abs_piecewise
@@ -137,9 +138,7 @@ class BoundaryPolynomial(AbstractSearchedPeaksLaw):
     def displacement_range(self) -> tuple[float, float]:
         """``(min s, max s)`` over ``[0, 1]``, exactly: outside ``[0, 1]`` the lift overshoots."""
         poly = np.polynomial.Polynomial(self._numpy_derivative(0))
-        roots = poly.deriv().roots()
-        taus = [0.0, 1.0] + [r.real for r in roots if abs(r.imag) < 1e-12 and 0 <= r.real <= 1]
-        values = poly(np.array(taus))
+        values = poly(polynomial_critical_points(poly.coef))
         return float(values.min()), float(values.max())
 
 

@@ -444,7 +444,7 @@ class Backlash(AbstractHybridModel):
         acceleration = jax.vmap(lambda t, y, m: model.phase_acceleration(t, y, law, m))(ts, sol.y, sol.mode)
         in_motion, peak = model._peaks(law, ts, sol)
         i_end = options.samples  # tau = 1
-        residual = residual_amplitude(e[i_end] - rest, de[i_end], model.omega, model.damping)
+        residual = residual_amplitude(e[i_end] - rest, de[i_end], model.omega, model.damping, options.dwell)
         # Impacts are the events that end a free flight, in order.
         impact = jnp.isfinite(sol.event_t) & (sol.event_mode[:, 0] == FREE)
         slot = jnp.where(impact, jnp.cumsum(impact) - 1, impact.shape[0])

@@ -53,10 +53,13 @@ class Metrics(eqx.Module):
     Attributes:
         ct: torsion factor, max |x''| over the rise and the following dwell, over Ca,
             refined between samples.
-        residual: amplitude of the payload-acceleration vibration at the start of the
-            dwell, over Ca: ``w^2`` times the amplitude of the free vibration of the
-            transmission that the state at ``tau = 1`` starts (it decays as
-            ``exp(-zeta w t)`` in a linear dwell).
+        residual: the residual vibration, over Ca: the largest ``|x''|`` in the dwell of
+            the free vibration of the transmission that the state at ``tau = 1`` starts
+            (``camjax.sdof.residual_of_mode``, in closed form from its crest times).
+            Undamped, with the dwell holding the first crest (half a natural period), it
+            is the vibration's amplitude ``w^2 |e|``; damped, each crest is
+            ``sqrt(1 - zeta^2)`` of the envelope ``exp(-zeta w t)``, taken at its time, so
+            the residual stays below the envelope's start and bounded as ``zeta -> 1``.
         peak_in_motion: max |x''| over the rise alone, over Ca.
     """
 

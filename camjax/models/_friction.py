@@ -201,7 +201,7 @@ class CoulombFriction(AbstractHybridModel):
                 (sol.result == RESULTS.successful) & ~jnp.all(held), RESULTS.invariant_violated, sol.result
             )
             stats = {"steps": sol.steps, "segments": sol.segments, "reached": sol.reached}
-        residual = _dwell_residual(model, x[i_end], dx[i_end], model._force(1.0, x[i_end], law))
+        residual = _dwell_residual(model, x[i_end], dx[i_end], model._force(1.0, x[i_end], law), options.dwell)
         return FrictionResponse(
             tau=ts,
             payload_acceleration=acc,
@@ -216,17 +216,18 @@ class CoulombFriction(AbstractHybridModel):
         )
 
 
-def _dwell_residual(model: CoulombFriction, x, dx, force):
-    """``w^2`` times the amplitude of the dwell's first slip, from the state at its start.
+def _dwell_residual(model: CoulombFriction, x, dx, force, dwell: float):
+    """The largest ``|x''|`` of the dwell's first slip, from the state at its start.
 
     Slipping the way ``s`` (the velocity's sign, or the force's from rest), the payload is
     a linear oscillator about ``1 - s mu / w^2``, so ``x''`` swings to ``w^2`` times its
-    amplitude about that centre; a payload at rest inside the stick band stays there
+    amplitude about that centre (damped, its largest value over the dwell:
+    ``camjax.sdof.residual_of_mode``); a payload at rest inside the stick band stays there
     (zero).  Without friction it is the SDOF's residual."""
     w, mu = model.omega, model.friction
     slip = jnp.where(dx != 0, jnp.sign(dx), jnp.sign(force))
     held = (dx == 0) & (jnp.abs(force) <= mu)
-    amplitude = residual_amplitude(1.0 - x - slip * mu / w**2, -dx, w, model.damping)
+    amplitude = residual_amplitude(1.0 - x - slip * mu / w**2, -dx, w, model.damping, dwell)
     return jnp.where(held, 0.0, amplitude)
 
 

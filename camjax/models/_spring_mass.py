@@ -38,7 +38,6 @@ from ..sdof import (
     SampledLaw,
     chunked_map,
     default_resolution,
-    dwell_peak,
     eigenvalue,
     integrate,
     mode_gain,
@@ -244,9 +243,8 @@ def _mode(law, model, options):
 def _metrics(q, grid, model: SpringMass, ca, dwell: float) -> Metrics:
     omega, zeta = model.omega, model.damping
     in_motion = peak_in_motion(q, grid, omega, zeta)
-    in_dwell = dwell_peak(q[-1], omega, zeta, dwell)
-    residual = residual_of_mode(q[-1], omega, zeta)
-    return Metrics(jnp.maximum(in_motion, in_dwell) / ca, residual / ca, in_motion / ca)
+    in_dwell = residual_of_mode(q[-1], omega, zeta, dwell)  # the residual: max |x''| in the dwell
+    return Metrics(jnp.maximum(in_motion, in_dwell) / ca, in_dwell / ca, in_motion / ca)
 
 
 def response_metrics(law: AbstractMotionLaw, model: SpringMass, options: SpringMassOptions) -> Metrics:

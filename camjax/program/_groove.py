@@ -85,11 +85,21 @@ class TurnLaw(AbstractMotionLaw):
         return "program-turn"
 
     def evaluate(self, tau):
+        """``(s, v, a, j)`` at ``tau``: each instant read from the one moving segment it
+        belongs to by index (the last to start at or before it; a dwell after a segment
+        reads that segment's end), at its local time clipped to ``[0, 1]``.  Summing every
+        segment's contribution instead counted a join of two moving segments twice (both
+        read it inside) or not at all (a rounding put it outside both)."""
         u = jnp.mod(jnp.asarray(tau, dtype=float), 1.0)
+        k = jnp.searchsorted(jnp.asarray(self.start), u, side="right") - 1
         s = v = a = j = jnp.zeros_like(u)
-        for law, s0, f, h in zip(self.laws, self.start, self.width, self.lift):
-            si, vi, ai, ji = law.evaluate((u - s0) / f)
-            s, v, a, j = s + h * si, v + h * vi / f, a + h * ai / f**2, j + h * ji / f**3
+        lifted = 0.0  # the lift of the segments before
+        for i, (law, s0, f, h) in enumerate(zip(self.laws, self.start, self.width, self.lift)):
+            si, vi, ai, ji = law.evaluate(jnp.clip((u - s0) / f, 0.0, 1.0))
+            mine = k == i
+            s = jnp.where(mine, lifted + h * si, s)
+            v, a, j = (jnp.where(mine, h * x / f**p, y) for x, y, p in ((vi, v, 1), (ai, a, 2), (ji, j, 3)))
+            lifted += h
         return s, v, a, j
 
     def rise(self, tau):
@@ -124,8 +134,9 @@ class Impact:
     """One strike of the roller on a groove flank: angle (deg), velocity (m/s), peak force (N).
 
     ``peak_force_n`` is the train force of largest magnitude from the strike to the next
-    strike (sampled at 128 per natural period; signed: positive on the inner flank,
-    negative on the outer).  Strikes closer together than one sample (a chattering roller)
+    strike, the turn's last one running on across 360 degrees to the next turn's first
+    (sampled at 128 per natural period; signed: positive on the inner flank, negative on
+    the outer).  Strikes closer together than one sample (a chattering roller)
     get the force at the first sample after the strike.
     """
 
@@ -188,10 +199,17 @@ class GrooveTurn:
         ts = np.asarray(response.tau)
         force = mass * stroke_m / period**2 * np.asarray(response.payload_acceleration)
         impacts = []
-        for i in np.flatnonzero((tau >= turn) & (tau < turn + 1)):
-            end = tau[i + 1] if i + 1 < count else ts[-1]
+        here = np.flatnonzero((tau >= turn) & (tau < turn + 1))
+        for i in here:
             first = min(int(np.searchsorted(ts, tau[i])), ts.size - 1)
-            window = force[first:max(int(np.searchsorted(ts, end, side="right")), first + 1)]
+            if i + 1 < count:
+                window = force[first:max(int(np.searchsorted(ts, tau[i + 1], side="right")), first + 1)]
+            else:  # the run ends before the next strike: the turn is periodic, so the force
+                # from its end on to the next turn's first strike is the force from its start
+                # to its own first strike
+                wrap = force[int(np.searchsorted(ts, turn)):int(np.searchsorted(ts, tau[here[0]], side="right"))]
+                window = np.concatenate([force[first:max(int(np.searchsorted(ts, turn + 1, side="right")), first + 1)],
+                                         wrap])
             peak = float(window[np.argmax(np.abs(window))])
             impacts.append(Impact(float(360.0 * (tau[i] - turn)), FLANKS[int(flank[i])],
                                   float(velocity[i] * stroke_m / period), peak))

@@ -36,10 +36,6 @@ _ANGLE_TOLERANCE_DEG = 1e-9
 _LIFT_TOLERANCE_MM = 1e-9
 
 
-_JOIN_SNAP_DEG = 1e-9
-"""Angles this close to a join (degrees) are read as the join itself (``Program.lift``)."""
-
-
 @dataclasses.dataclass(frozen=True)
 class Segment:
     """One stretch of the cam turn: a rise or return by ``law`` over ``angle_deg``, or a dwell.
@@ -349,28 +345,29 @@ class Program:
         if side not in ("before", "after"):
             raise ValueError(f"side must be 'before' or 'after', got {side!r}")
         theta = np.mod(np.asarray(theta_deg, dtype=float), 360.0)
-        # An angle within rounding of a join is that join: the side then decides the
-        # segment, not the last bit of an angle computed elsewhere (a grid node).
-        joins = np.append(self.start_deg, 360.0)
-        above = np.clip(np.searchsorted(joins, theta), 0, joins.size - 1)
-        for join in (joins[above], joins[np.maximum(above - 1, 0)]):
-            theta = np.where(np.abs(theta - join) <= _JOIN_SNAP_DEG, join, theta)
-        if side == "before":
-            theta = np.where(theta == 0.0, 360.0, theta)
-        else:
-            theta = np.where(theta == 360.0, 0.0, theta)
+        # Each angle's segment by index: an angle within the angle tolerance of a join is
+        # that join, read at the end of the segment before it (tau = 1) or the start of the
+        # one after (tau = 0); comparing rounded angles put a quarter of the joins past
+        # their segment (tau a hair above 1 reads the dwell beyond).
+        n = len(self.segments)
+        starts = self.start_deg
+        widths = np.array([seg.angle_deg for seg in self.segments], dtype=float)
+        bounds = np.append(starts, 360.0)
+        above = np.clip(np.searchsorted(bounds, theta), 1, n)  # the nearest join: above or below
+        nearest = np.where(bounds[above] - theta < theta - bounds[above - 1], above, above - 1)
+        at_join = np.abs(theta - bounds[nearest]) <= _ANGLE_TOLERANCE_DEG
+        index = np.clip(np.searchsorted(bounds, theta, side="right") - 1, 0, n - 1)
+        index = np.where(at_join, (nearest - 1) % n if side == "before" else nearest % n, index)
+        tau = np.clip((theta - starts[index]) / widths[index], 0.0, 1.0)
+        tau = np.where(at_join, 1.0 if side == "before" else 0.0, tau)
         y, dy, ddy = (np.zeros_like(theta) for _ in range(3))
-        for seg, start, y0 in zip(self.segments, self.start_deg, self.start_lift_mm):
-            if side == "before":
-                inside = (theta > start) & (theta <= start + seg.angle_deg)
-            else:
-                inside = (theta >= start) & (theta < start + seg.angle_deg)
+        for k, (seg, y0) in enumerate(zip(self.segments, self.start_lift_mm)):
+            inside = index == k
             if not inside.any():
                 continue
             y[inside] = y0
             if seg.moving:
-                tau = np.clip((theta[inside] - start) / seg.angle_deg, 0.0, 1.0)
-                s, v, a, _ = (np.asarray(x) for x in seg.law.evaluate(tau))
+                s, v, a, _ = (np.asarray(x) for x in seg.law.evaluate(tau[inside]))
                 y[inside] += seg.lift_mm * s
                 dy[inside] = seg.lift_mm * v / seg.angle_deg
                 ddy[inside] = seg.lift_mm * a / seg.angle_deg**2
