@@ -38,10 +38,6 @@ from camjax.program import (
 RPM = 300.0
 _CHEB_DEGREE = 24
 
-# The lead's defect (a segment that starts in motion reads zero velocity at its first grid
-# node): the drive torque there is zero, and every figure integrated from it is off.
-
-
 def mixed_segments():
     """Every segment kind over one turn (angles not whole degrees, the wrap in motion)."""
     return (
