@@ -45,7 +45,8 @@ MAX_ROWS = 1_000_000
 before any work."""
 
 _SAMPLES = 24  # interior points per piece at which the Hermite interpolation is checked
-_MIN_PIECE = 1e-9  # narrowest piece, as a fraction of its segment
+_MIN_PIECE = 1e-9
+_JERK_OFFSET = 1e-9  # the jerk is read this far (a fraction of the segment) after its angle  # narrowest piece, as a fraction of its segment
 _TWINCAT_FUNCTION = {"poly5": 15, "line": 1, "dwell": 1, "step": 1, "end": 0}
 """MC_MotionFunctionType of the piece starting at a knot: MOTIONFUNCTYPE_POLYNOM5_MM (15,
 motion to motion), MOTIONFUNCTYPE_POLYNOM1 (1, synchronous: a line, with zero slope in a
@@ -108,7 +109,12 @@ def _segment_jet(program: Program, index: int, tau) -> tuple[np.ndarray, ...]:
     if not seg.moving:
         zero = np.zeros_like(tau)
         return y0 + zero, zero, zero, zero
-    s, v, a, j = (np.asarray(x, dtype=float) for x in seg.law.evaluate(tau))
+    # the jerk just after each angle (before it at the segment's end), the side the rows
+    # take: at a law's breakpoint the jerk may step, and the law's own value there is
+    # either side's (or neither: the SCCA laws give 0 at their midpoint)
+    after = np.where(tau < 1.0, np.minimum(tau + _JERK_OFFSET, 1.0), 1.0 - _JERK_OFFSET)
+    s, v, a, _ = (np.asarray(x, dtype=float) for x in seg.law.evaluate(tau))
+    j = np.asarray(seg.law.evaluate(after)[3], dtype=float)
     h, beta = scale * seg.lift_mm, seg.angle_deg
     return y0 + h * s, h * v / beta, h * a / beta**2, h * j / beta**3
 
@@ -172,6 +178,10 @@ def _segment_knots(program: Program, index: int, tolerance: float) -> np.ndarray
 
 
 def _knots(program: Program, tolerance: float) -> DriveTable:
+    floor = 1e-11 * _scale(program)[0] * max(1.0, float(np.max(np.abs(np.append(program.start_lift_mm, 0.0)))))
+    if tolerance < floor:  # below the float rounding of the slave: no bisection can meet it
+        raise ValueError(f"tolerance = {tolerance:g} cannot be met: it is below the rounding of the "
+                         f"slave ({floor:.1g} {_scale(program)[1]}); raise it")
     rows = []  # (master, y, v, a, j, piece)
     # an acceleration this much apart either side of a join is rounding, not a step
     lifts = [abs(s.lift_mm) for s in program.segments]
