@@ -9,8 +9,14 @@ import numpy as np
 import pytest
 
 from camjax.cli import main
-from camjax.program import Program, drive_table, example_path, read_drive_table, write_drive_table
-from camjax.program import _drive
+from camjax.program import (
+    Program,
+    _drive,
+    drive_table,
+    example_path,
+    read_drive_table,
+    write_drive_table,
+)
 
 FORMATS = ("csv", "xyva", "codesys", "twincat")
 
@@ -148,7 +154,7 @@ def test_codesys_and_twincat_files_hold_the_xyva_knots(name, request, tmp_path):
     np.testing.assert_array_equal(points[:, 4:8], knots)
     np.testing.assert_array_equal(points[:, 0], np.arange(1, len(knots) + 1))
     assert set(points[:, 3]) == {1.0}
-    for (kind, left, _), k in zip(segments, distinct):
+    for (kind, _, _), k in zip(segments, distinct):
         assert points[k, 1] == (15 if kind == "Poly5" else 1)  # POLYNOM5_MM, POLYNOM1
     v, a = points[:, 6], points[:, 7]
     rest, smooth = np.abs(v) < 1e-12, np.abs(a) < 1e-12

@@ -22,7 +22,7 @@ from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
 from ._design import design_segment as design_segment
 from ._design import write_program as write_program
-from ._drive import FORMATS as DRIVE_TABLE_FORMATS
+from ._drive import DRIVE_TABLE_FORMATS as DRIVE_TABLE_FORMATS
 from ._drive import DriveTable as DriveTable
 from ._drive import drive_table as drive_table
 from ._drive import read_drive_table as read_drive_table

@@ -33,7 +33,7 @@ import numpy as np
 from ..laws import ConstantVelocity
 from ._spec import Program
 
-FORMATS = ("csv", "xyva", "codesys", "twincat")
+DRIVE_TABLE_FORMATS = ("csv", "xyva", "codesys", "twincat")
 """The drive-table formats ``write_drive_table`` writes and ``read_drive_table`` reads."""
 FILE_NAMES = {"csv": "drive-table.csv", "xyva": "drive-table-xyva.csv",
               "codesys": "drive-table-codesys.st", "twincat": "drive-table-twincat.csv"}
@@ -77,8 +77,8 @@ class DriveTable(NamedTuple):
 def check_arguments(format: str, step_deg: float, tolerance: float, names: dict | None = None) -> None:
     """A one-line ``ValueError`` naming the argument (or ``names[argument]``) that is bad."""
     names = names or {}
-    if format not in FORMATS:
-        raise ValueError(f"{names.get('format', 'format')} must be one of {', '.join(FORMATS)}, got {format!r}")
+    if format not in DRIVE_TABLE_FORMATS:
+        raise ValueError(f"{names.get('format', 'format')} must be one of {', '.join(DRIVE_TABLE_FORMATS)}, got {format!r}")
     what = names.get("step_deg", "step_deg")
     if not (isinstance(step_deg, int | float) and math.isfinite(step_deg) and step_deg > 0):
         raise ValueError(f"{what} must be a positive number of degrees, got {step_deg!r}")
@@ -258,7 +258,7 @@ def _text(program: Program, table: DriveTable, format: str) -> str:
 
 def write_drive_table(program: Program, path, format: str = "csv", *, step_deg: float = DEFAULT_STEP_DEG,
                       tolerance: float = DEFAULT_TOLERANCE) -> Path:
-    """Write ``program``'s motion as a drive table (``FORMATS``) to ``path``, atomically: the
+    """Write ``program``'s motion as a drive table (``DRIVE_TABLE_FORMATS``) to ``path``, atomically: the
     text goes to a temporary file beside ``path`` and is renamed over it only when whole."""
     table = drive_table(program, format, step_deg=step_deg, tolerance=tolerance)
     text = _text(program, table, format)
@@ -280,7 +280,7 @@ _BOUND = re.compile(r"Bound\(([^()]*)\)")
 
 def read_drive_table(path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(master, slave, velocity, acceleration)`` read back from a file of any of the
-    ``FORMATS`` (told apart by its first line); a ``ValueError`` names a file that is none."""
+    ``DRIVE_TABLE_FORMATS`` (told apart by its first line); a ``ValueError`` names a file that is none."""
     path = Path(path)
     text = path.read_text()
     first = text.split("\n", 1)[0]
