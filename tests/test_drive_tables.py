@@ -176,6 +176,17 @@ def test_read_drive_table_round_trips(format, feed, tmp_path):
         np.testing.assert_array_equal(got, expected)
 
 
+@pytest.mark.parametrize(("text", "message"), [("", "not a camjax drive table"),
+                                               ("x,y\n1,2\n", "not a camjax drive table"),
+                                               ("master_deg,slave_mm\n", "no drive-table rows"),
+                                               ("master_deg,a,b,c\n0,1,x,3\n", "not a number")])
+def test_read_drive_table_names_a_file_that_is_none(text, message, tmp_path):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=f"{re.escape(str(path))}: .*{message}"):
+        read_drive_table(path)
+
+
 def test_a_swinging_follower_slave_is_its_swing_angle_in_degrees(feed, tmp_path):
     follower = dataclasses.replace(feed.follower, kind="swinging-roller", arm_mm=98.0, pivot_mm=110.0)
     swinging = dataclasses.replace(feed, follower=follower)

@@ -284,18 +284,23 @@ def read_drive_table(path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
     path = Path(path)
     text = path.read_text()
     first = text.split("\n", 1)[0]
-    if first.startswith("(*"):
-        bounds = [tuple(float(x.replace("E", "e")) for x in m.split(",")) for m in _BOUND.findall(text)]
-        rows = [b for k, b in enumerate(bounds) if k == 0 or b != bounds[k - 1]]
-    else:
-        reader = list(csv.reader(text.splitlines()))
-        header = reader[0]
-        if header[:2] == list(_TWINCAT_COLUMNS[:2]):
-            rows = [tuple(float(x) for x in r[4:8]) for r in reader[1:] if r]
-        elif header and header[0] == "master_deg":
-            rows = [tuple(float(x) for x in r[:4]) for r in reader[1:] if r]
+    try:
+        if first.startswith("(*"):
+            bounds = [tuple(float(x) for x in m.split(",")) for m in _BOUND.findall(text)]
+            rows = [b for k, b in enumerate(bounds) if k == 0 or b != bounds[k - 1]]
         else:
-            raise ValueError(f"{path}: not a camjax drive table (first line {first[:60]!r})")
+            reader = list(csv.reader(text.splitlines())) or [[]]
+            header = reader[0]
+            if header[:2] == list(_TWINCAT_COLUMNS[:2]):
+                rows = [tuple(float(x) for x in r[4:8]) for r in reader[1:] if r]
+            elif header and header[0] == "master_deg":
+                rows = [tuple(float(x) for x in r[:4]) for r in reader[1:] if r]
+            else:
+                raise ValueError(f"{path}: not a camjax drive table (first line {first[:60]!r})")
+    except ValueError as error:
+        if str(error).startswith(f"{path}: "):
+            raise
+        raise ValueError(f"{path}: a drive table with a value that is not a number ({error})") from None
     if not rows or any(len(r) != 4 for r in rows):
         raise ValueError(f"{path}: no drive-table rows of master, slave, velocity, acceleration")
     master, slave, velocity, acceleration = (np.array(c) for c in zip(*rows))
