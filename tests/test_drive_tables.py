@@ -59,14 +59,15 @@ def _interpolate(knots, theta):
     return out
 
 
-@pytest.mark.parametrize("name", ["feed", "indexer"])
-def test_csv_rows_are_the_lift_and_the_jerk_its_derivative(name, request, tmp_path):
+@pytest.mark.parametrize(("name", "step"), [("feed", 0.1), ("indexer", 0.5)])
+def test_csv_rows_are_the_lift_and_the_jerk_its_derivative(name, step, request, tmp_path):
     program = request.getfixturevalue(name)
-    header, rows = _rows(write_drive_table(program, tmp_path / "t.csv", "csv", step_deg=0.5))
+    header, rows = _rows(write_drive_table(program, tmp_path / "t.csv", "csv", step_deg=step))
     assert header == ["master_deg", "slave_mm", "velocity_mm_per_deg", "acceleration_mm_per_deg2",
                       "jerk_mm_per_deg3"]
     master = rows[:, 0]
-    np.testing.assert_allclose(master, np.linspace(0.0, 360.0, 721), atol=1e-12)
+    np.testing.assert_allclose(master, np.linspace(0.0, 360.0, round(360 / step) + 1), atol=1e-12)
+    assert set(np.append(program.start_deg, 360.0)) <= set(master)  # the joins exactly
     y, dy, ddy = program.lift(master[:-1])  # each angle the segment after it
     end = program.lift(360.0, side="before")
     for column, expected in zip(rows.T[1:4], (y, dy, ddy)):

@@ -121,9 +121,10 @@ def _segment_jet(program: Program, index: int, tau) -> tuple[np.ndarray, ...]:
 
 def _samples(program: Program, step_deg: float) -> DriveTable:
     count = round(360.0 / step_deg)
-    master = np.arange(count + 1) * (360.0 / count)
-    master[-1] = 360.0
+    master = np.arange(count + 1) * 360.0 / count  # exact at every whole-degree join
     starts = np.append(program.start_deg, 360.0)
+    near = np.abs(master[:, None] - starts[None, :]) <= 1e-9  # a join within rounding is the join
+    master = np.where(near.any(axis=1), starts[np.argmax(near, axis=1)], master)
     # each angle belongs to the segment starting at or before it; 360 to the last one
     owner = np.clip(np.searchsorted(starts, master, side="right") - 1, 0, len(program.segments) - 1)
     out = [np.zeros_like(master) for _ in range(4)]
