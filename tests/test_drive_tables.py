@@ -118,6 +118,32 @@ def test_a_quintic_segment_is_one_piece_and_a_cv_stroke_a_line(feed):
     assert table.piece[0] == "dwell" and table.piece[-1] == "end"
 
 
+def test_an_acceleration_step_is_two_knots_at_one_angle(feed, tmp_path):
+    """Harmonic rise and return between dwells: the acceleration steps at all four joins."""
+    from camjax import laws
+    from camjax.program import Segment
+
+    harmonic = laws.get("harmonic")
+    segments = (Segment(90.0), Segment(90.0, 10.0, harmonic), Segment(90.0), Segment(90.0, -10.0, harmonic))
+    program = dataclasses.replace(feed, segments=segments)
+    _, knots = _rows(write_drive_table(program, tmp_path / "k.csv", "xyva"))
+    for join in (90.0, 180.0, 270.0):
+        pair = knots[knots[:, 0] == join]
+        assert pair.shape == (2, 4)
+        before, after = (program.lift(join, side=side) for side in ("before", "after"))
+        np.testing.assert_allclose(pair[:, 1:], [[float(x) for x in before], [float(x) for x in after]], atol=1e-12)
+        assert pair[0, 3] != pair[1, 3]
+    theta = np.linspace(0.0, 360.0, 36_001)
+    assert np.max(np.abs(_interpolate(knots, theta) - program.lift(theta)[0])) <= 1e-4
+    # CamBuilder: explicit bounds either side, so the step needs no repeated segment
+    segments_st = _codesys(write_drive_table(program, tmp_path / "k.st", "codesys"))
+    assert all(right[0] > left[0] for _, left, right in segments_st)
+    steps = [(a[2], b[1]) for a, b in zip(segments_st, segments_st[1:]) if a[2] != b[1]]
+    assert [(r[0], r[3], l[3]) for r, l in steps] == [(k, *knots[knots[:, 0] == k, 3]) for k in (90.0, 180.0, 270.0)]
+    for got, expected in zip(read_drive_table(tmp_path / "k.st"), knots.T):
+        np.testing.assert_array_equal(got, expected)
+
+
 def _codesys(path):
     """(kind, left bound, right bound) of each Append in a CamBuilder file."""
     pattern = re.compile(r"camBuilder\.Append\(SMCB\.(Poly5|Line)\(SMCB\.Bound\(([^)]*)\), SMCB\.Bound\(([^)]*)\)\)\);")
