@@ -50,6 +50,14 @@ def register(subparsers) -> None:
     add_format(parser)
     parser.add_argument("--out", metavar="DIR", help="write profile.csv, profile.dxf, response.csv, "
                         "summary.json and figures here (response.csv at up to 10 speeds)")
+    parser.add_argument("--drive-table", metavar="FORMAT", help="instead of the analysis, write the "
+                        "motion as a servo drive loads it to --out (csv, xyva, codesys or twincat; "
+                        "docs/drive-tables.md)")
+    parser.add_argument("--drive-step", type=float, default=0.1, metavar="DEG",
+                        help="master step of the csv drive table in degrees (default 0.1)")
+    parser.add_argument("--drive-tolerance", type=float, default=1e-4, metavar="TOL",
+                        help="most deviation of the knot tables' quintic interpolation from the motion, "
+                        "in mm (degrees for a swinging follower) (default 1e-4)")
     parser.set_defaults(func=run)
 
 
@@ -315,6 +323,8 @@ def run(args) -> int:
         SteadyState,
     )
 
+    if args.drive_table is not None:
+        return _drive_table(args)
     rpm = parse_range(args.rpm, "--rpm")
     if not all(r > 0 for r in rpm):
         raise CliError(f"--rpm: speeds must be positive, got {args.rpm!r}")
@@ -359,6 +369,27 @@ def run(args) -> int:
     else:
         print(_table(report, grooved=bool(program.follower.form_closed and program.follower.groove_clearance_mm
                                           and not args.no_flight)))
+    return 0
+
+
+def _drive_table(args) -> int:
+    """``--drive-table``: the motion as a servo drive loads it (kinematic: nothing else runs)."""
+    from ..program import Program, write_drive_table
+    from ..program._drive import FILE_NAMES, check_arguments
+
+    names = {"format": "--drive-table", "step_deg": "--drive-step", "tolerance": "--drive-tolerance"}
+    try:
+        check_arguments(args.drive_table, args.drive_step, args.drive_tolerance, names)
+    except ValueError as error:
+        raise CliError(str(error)) from None
+    if args.out is None:
+        raise CliError("--drive-table needs --out DIR: the directory the table is written to")
+    path = program_path(args.file)
+    with file_named(path):
+        program = Program.load(path)
+        out = output_dir(args.out)
+        print(write_drive_table(program, out / FILE_NAMES[args.drive_table], args.drive_table,
+                                step_deg=args.drive_step, tolerance=args.drive_tolerance))
     return 0
 
 

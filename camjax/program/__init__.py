@@ -7,7 +7,8 @@ list of speeds; ``response`` gives the histories over one turn at one speed; ``p
 ``write_csv`` and ``write_dxf`` export the cam's shape (roller or flat face); ``analyse``
 also sizes the drive (torque, energy, flywheel), the Hertz contact stress and the cam's
 ``Geometry``; ``analyse_machine`` adds the torques of several cams on one shaft
-(``Machine``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
+(``Machine``); ``write_drive_table`` writes the motion as servo drives load it
+(``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
 preload over a speed range).  The equations are in docs/program.md and docs/machine.md.
 """
 
@@ -21,6 +22,11 @@ from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
 from ._design import design_segment as design_segment
 from ._design import write_program as write_program
+from ._drive import DRIVE_TABLE_FORMATS as DRIVE_TABLE_FORMATS
+from ._drive import DriveTable as DriveTable
+from ._drive import drive_table as drive_table
+from ._drive import read_drive_table as read_drive_table
+from ._drive import write_drive_table as write_drive_table
 from ._dynamics import Cycle as Cycle
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
