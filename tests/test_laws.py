@@ -275,3 +275,14 @@ def test_fractions_holding_tracers_are_traced():
 def test_fractions_must_be_numbers(bad):
     with pytest.raises(TypeError, match="SCCA fractions must be a number or an array of numbers"):
         laws.SCCA(bad, 0.0, 0.5)
+
+
+@pytest.mark.parametrize("name", ["cycloidal", "modified-sine", "modified-trapezoid", "harmonic"])
+def test_scca_jerk_at_the_midpoint_is_its_limit(name):
+    """A law without a zero piece ends its half on the cosine: at tau = 1/2 exactly the jerk
+    is the limit from both sides (it read 0, the empty zero piece's), -Ca (pi/c)."""
+    law = laws.get(name)
+    a, b, c = (float(x) for x in law.fractions)
+    near = np.asarray(law.j(np.array([0.5 - 1e-9, 0.5, 0.5 + 1e-9])))
+    assert near[1] == pytest.approx(-float(law.Ca) * np.pi / c, rel=1e-12)
+    assert near[1] == pytest.approx(near[0], rel=1e-7) and near[1] == pytest.approx(near[2], rel=1e-7)

@@ -72,9 +72,14 @@ def _half_rise(tau, a, b, c):
     u4 = tau - t3
     zero = (s3 + v3 * u4, v3 * jnp.ones_like(tau), jnp.zeros_like(tau), jnp.zeros_like(tau))
 
+    # Without a zero piece (d = 0) the half ends on the cosine piece: the midpoint itself
+    # (tau = t3 = 1/2) reads the cosine's end, not the zero piece's (a jerk of 0 there).
+    ends_on_cosine = t3 >= 0.5 - 1e-12
+
     def pick(i):
         return jnp.where(
-            tau < t1, sine[i], jnp.where(tau < t2, const[i], jnp.where(tau < t3, cosine[i], zero[i]))
+            tau < t1, sine[i],
+            jnp.where(tau < t2, const[i], jnp.where((tau < t3) | ends_on_cosine, cosine[i], zero[i])),
         )
 
     return tuple(pick(i) for i in range(4)), s_half, v3
