@@ -38,9 +38,8 @@ def _kinematic(program: Program, rpm: np.ndarray) -> np.ndarray:
 
 
 def _period_ratios(program: Program, rpm: np.ndarray) -> np.ndarray:
-    f_n = program.follower.natural_frequency_hz
     fractions = np.array([program.segments[i].angle_deg / 360.0 for i in program.moving_segments()])
-    return f_n * 60.0 / rpm[:, None] * fractions[None, :]
+    return program.follower.vibrations_per_turn(rpm)[:, None] * fractions[None, :]
 
 
 @dataclasses.dataclass(frozen=True)

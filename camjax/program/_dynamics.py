@@ -92,12 +92,12 @@ def resolution(program: Program, rpm_min: float) -> int:
     """Intervals per turn: ``w h <= 0.5`` at the slowest speed, 64 per moving segment at
     least; a turn that would need more than ``MAX_GRID_INTERVALS`` is refused, with what
     to change."""
-    cycles = program.follower.natural_frequency_hz * 60.0 / rpm_min
+    cycles = program.follower.vibrations_per_turn(rpm_min)
     needed = 2 * math.pi * cycles / TARGET_PHASE_STEP
     shortest = min((program.segments[i].angle_deg / 360 for i in program.moving_segments()), default=1.0)
     intervals = 64 * math.ceil(max(needed, _MIN_PER_SEGMENT / shortest, 256) / 64)
     if intervals > MAX_GRID_INTERVALS:
-        slowest = 2 * math.pi * program.follower.natural_frequency_hz * 60.0 / (TARGET_PHASE_STEP * MAX_GRID_INTERVALS)
+        slowest = 2 * math.pi * program.follower.vibrations_per_turn(TARGET_PHASE_STEP * MAX_GRID_INTERVALS)
         raise ValueError(
             f"a turn at {rpm_min:g} rpm needs {intervals:,} grid intervals (the limit is "
             f"{MAX_GRID_INTERVALS:,}): the follower vibrates "
@@ -541,7 +541,7 @@ def check_rpm(rpm, program: Program | None = None) -> np.ndarray:
         raise ValueError(f"rpm must be positive and finite, got {rpm[~(np.isfinite(rpm) & (rpm > 0))][0]:g}")
     if program is not None:
         shortest = min((s.angle_deg / 360.0 for s in program.segments if s.moving), default=1.0)
-        ratio = program.follower.natural_frequency_hz * 60.0 / rpm.max() * shortest
+        ratio = program.follower.vibrations_per_turn(rpm.max()) * shortest
         why = [text for bad, text in (
             (rpm.max() > IMPLAUSIBLE_RPM, f"faster than any cam runs (above {IMPLAUSIBLE_RPM:,.0f} rpm)"),
             (ratio < IMPLAUSIBLE_PERIOD_RATIO, f"the shortest moving segment's period ratio is {ratio:.2g}, "

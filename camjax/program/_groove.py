@@ -158,7 +158,7 @@ def settling_turns(program: Program, rpm_max: float) -> int:
     """Turns from rest after which contact vibration has decayed by 1e-9 at every speed up
     to ``rpm_max`` (at least 2: the reported turn follows one full turn)."""
     f = program.follower
-    n = f.natural_frequency_hz * 60.0 / rpm_max
+    n = f.vibrations_per_turn(rpm_max)
     return 1 + max(1, math.ceil(_SETTLE / (2 * math.pi * f.damping_ratio * n)))
 
 
@@ -260,7 +260,7 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None,
 
     def run(r: float, count: int) -> GrooveTurn:
         period = 60.0 / r
-        model = Backlash(f.natural_frequency_hz * period, f.groove_clearance_mm / h, 0.0, f.damping_ratio)
+        model = Backlash(f.vibrations_per_turn(r), f.groove_clearance_mm / h, 0.0, f.damping_ratio)
         response = solve(TurnLaw.of(program, h, count), model.with_array_leaves(), dwell=count - 1,
                          samples=samples, max_segments=64 * count)  # a failure is a SolverError
         last, before = (GrooveTurn.from_response(r, response, count, f.mass_kg, 1e-3 * h, period, turn=k)
@@ -293,7 +293,7 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None,
 
 
 def _samples_per_turn(program: Program, rpm: float) -> int:
-    return _SAMPLES_PER_PERIOD * math.ceil(program.follower.natural_frequency_hz * 60.0 / rpm)
+    return _SAMPLES_PER_PERIOD * math.ceil(program.follower.vibrations_per_turn(rpm))
 
 
 def _check_work(program: Program, rpm: np.ndarray, samples: int, first: int, given: bool) -> None:
@@ -301,7 +301,7 @@ def _check_work(program: Program, rpm: np.ndarray, samples: int, first: int, giv
     if first * samples <= MAX_GROOVE_SAMPLES:
         return
     f = program.follower
-    cycles = f.natural_frequency_hz * 60.0 / float(rpm.min())
+    cycles = f.vibrations_per_turn(float(rpm.min()))
     if given:
         raise ValueError(f"{first} groove turns at {samples:,} samples a turn (the follower vibrates "
                          f"{cycles:.0f} times a turn at {rpm.min():g} rpm) are {first * samples:,} samples; "

@@ -42,7 +42,7 @@ def scan_speeds(program, rpm_lo: float, rpm_hi: float, per_cycle: float) -> np.n
     """``even_periods`` speeds: ``per_cycle`` for each natural-frequency cycle that one
     turn gains or loses across the range (every period ratio of the program moves by
     ``1/per_cycle`` between neighbours), 16 at least."""
-    cycles = program.follower.natural_frequency_hz * 60 * (1 / rpm_lo - 1 / rpm_hi)
+    cycles = program.follower.vibrations_per_turn(rpm_lo) - program.follower.vibrations_per_turn(rpm_hi)
     return even_periods(rpm_lo, rpm_hi, max(16, math.ceil(per_cycle * cycles) + 1))
 
 

@@ -91,9 +91,8 @@ class AbstractProgramObjective(AbstractObjective):
         return even_periods(self.rpm_lo, self.rpm_hi, EVALUATION_SAMPLES)
 
     def evaluation_ratios(self) -> np.ndarray:
-        f_n = self.program.follower.natural_frequency_hz
         angle = self.program.segments[self.segment - 1].angle_deg
-        return np.sort(f_n * angle / 360.0 * 60.0 / self.evaluation_speeds())
+        return np.sort(self.program.follower.vibrations_per_turn(self.evaluation_speeds()) * angle / 360.0)
 
 
 class MaxPreload(AbstractProgramObjective):

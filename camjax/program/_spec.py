@@ -127,6 +127,12 @@ class Follower:
         """``sqrt((k + k_s) / m) / (2 pi)``."""
         return math.sqrt((self.stiffness + self.spring_rate) / self.mass_kg) / (2 * math.pi)
 
+    def vibrations_per_turn(self, rpm):
+        """Natural vibrations of the follower per cam turn at ``rpm``, ``f_n 60 / rpm``: the
+        period ratio of the whole turn (a segment's is this times its angle over 360).  The
+        one place where a speed becomes a period ratio."""
+        return self.natural_frequency_hz * 60.0 / rpm
+
 
 _finite = finite_number  # a program file's numbers are checked as every other input
 
@@ -507,8 +513,8 @@ def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -
     seg = program.segments[segment - 1]
     if not seg.moving:
         raise ValueError(f"segment {segment} is a dwell: nothing to design")
-    ratio = program.follower.natural_frequency_hz * seg.angle_deg / 360.0 * 60.0
-    return ratio / rpm_hi, ratio / rpm_lo
+    per_turn = program.follower.vibrations_per_turn(np.array([rpm_hi, rpm_lo]))
+    return tuple(float(n) for n in per_turn * seg.angle_deg / 360.0)
 
 
 def example_path(name: str = "indexer") -> Path:
