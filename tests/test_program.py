@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import FOLLOWER, scipy_periodic_deflection, two_cycloids
+from helpers import FOLLOWER, program_lift, scipy_deflection, scipy_periodic_deflection, two_cycloids
 from scipy.integrate import solve_ivp
 
 import camjax
@@ -95,6 +95,43 @@ def test_start_up_converges_to_the_periodic_steady_state(cam, solver):
     assert first > 1.0  # the start from rest is visibly off the steady state
     assert last < 1e-8 * np.abs(steady.contact_force_n).max()
     assert np.abs(accel[-nodes:] - steady.payload_acceleration_m_s2[:-1]).max() < 1e-8 * np.abs(accel).max()
+
+
+def test_start_up_against_a_scipy_solve_from_rest(cam):
+    """``startup``'s contact force over the first two turns from rest (``e = e' = 0`` on the
+    base circle) against scipy's integration of ``m x'' = k (y - x) + c (y' - x') - k_s x``:
+    ``F_c = F_0 + k e + c e'`` at every tenth node."""
+    rpm = 700.0
+    s, accel, force = startup(cam, rpm, 2)
+    pick = np.arange(0, s.size, 10)
+    e, de = scipy_deflection(cam.follower, rpm, program_lift(cam), [0, 100, 180, 280, 360],
+                             s[pick] * 60.0 / rpm)
+    f = cam.follower
+    expected = f.preload_n + f.stiffness * e + f.damping * de
+    assert np.abs(force[pick] - expected).max() < 1e-7 * np.abs(expected).max()
+    # x'' = (k e + c e' - k_s x) / m with x = y - e.
+    y = cam.lift(np.mod(360.0 * s[pick], 360.0))[0] * 1e-3
+    payload = (f.stiffness * e + f.damping * de - f.spring_rate * (y - e)) / f.mass_kg
+    assert np.abs(accel[pick] - payload).max() < 1e-7 * np.abs(payload).max()
+
+
+def test_jump_speed_against_a_scipy_steady_state():
+    """The built-in indexer's jump speed: the least contact force of the periodic steady
+    state from scipy (``m x'' = k (y - x) + c (y' - x') - k_s x`` integrated over a turn from
+    three starts, then the fixed point, rtol 1e-9; ``F_c = F_0 + k e + c e'`` on 20,000
+    instants) is positive 1 rpm below the reported speed and negative 1 rpm above it (the
+    least force moves by about 1.4 N per rpm there)."""
+    program = Program.load(example_path())
+    speed = analyse(program, [300.0, 900.0], with_flight=False).jump_speed_rpm
+    assert 300.0 < speed < 900.0
+    f = program.follower
+    least = []
+    for rpm in (speed - 1.0, speed + 1.0):
+        times = np.linspace(0.0, 60.0 / rpm, 20000, endpoint=False)
+        e, de = scipy_periodic_deflection(f, rpm, program_lift(program), [0, 100, 180, 280, 360], times,
+                                          rtol=1e-9)
+        least.append(np.min(f.preload_n + f.stiffness * e + f.damping * de))
+    assert least[0] > 0 > least[1], least
 
 
 def _shooting(program, rpm, times):

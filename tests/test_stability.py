@@ -278,7 +278,7 @@ def test_float32_error_floor_is_reported(tmp_path):
     import sys
     from pathlib import Path
 
-    script = Path(__file__).resolve().parents[1] / "experiments" / "work_precision.py"
+    script = Path(__file__).resolve().parents[1] / "experiments" / "benchmarks" / "work_precision.py"
     spec = tmp_path / "spec.json"
     n = np.linspace(1.5, 10.0, 5)
     spec.write_text(json.dumps({"law": "cycloidal", "n": n.tolist()}))

@@ -8,7 +8,7 @@ same sweep with viscous damping added (Cycloidal and ModSine, ``zeta = 0.05``: d
 richer dissipation model change the answers?), and the error of the tanh regularisation
 against stick-slip as ``eps`` shrinks.
 
-    python experiments/friction.py [--n 5.25] [--dwell 1.0] [--quick]
+    python experiments/examples/friction.py [--n 5.25] [--dwell 1.0] [--quick]
 
 writes results/friction/ (friction_sweep.csv, summary.json, *.png, README.md).
 """
@@ -33,7 +33,7 @@ import numpy as np  # noqa: E402
 
 from camjax.models import CoulombFriction  # noqa: E402
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "friction"
+OUT = Path(__file__).resolve().parents[2] / "results" / "friction"
 SAMPLES = 2048  # per rise
 DAMPING_CHECK = 0.05  # viscous damping ratio of the comparison with a richer model
 

@@ -13,8 +13,8 @@ Panels (results/stability_atlas/atlas.png):
    ratios near the top, sampled at w h near 0.5, where a peak search that refines only the
    largest samples misses the crest (camjax's refines every interval, so none is skipped).
 
-    python experiments/stability_atlas.py            # about six minutes on 2 cores (under load)
-    python experiments/stability_atlas.py --quick    # a smoke run
+    python experiments/examples/stability_atlas.py            # about six minutes on 2 cores (under load)
+    python experiments/examples/stability_atlas.py --quick    # a smoke run
 """
 
 from __future__ import annotations
@@ -93,7 +93,7 @@ def float32_errors(n, law_name="modified-trapezoid"):
 
     spec = Path(f"/tmp/camjax_atlas_float32_{os.getpid()}.json")
     spec.write_text(json.dumps({"law": law_name, "n": n.tolist()}))
-    subprocess.run([sys.executable, str(HERE / "work_precision.py"), "--float32-worker", str(spec)],
+    subprocess.run([sys.executable, str(HERE.parent / "benchmarks" / "work_precision.py"), "--float32-worker", str(spec)],
                    env={**os.environ, "JAX_ENABLE_X64": "0"}, check=True)
     data = json.loads(spec.read_text())
     spec.unlink()

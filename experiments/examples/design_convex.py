@@ -7,7 +7,7 @@ the caps and band on grids, relaxes every constraint, so the LP value ``t`` over
 lower bound on ``max R`` of any spline of that size meeting the caps (``R = w|I|/Ca`` and
 ``Ca <= C``).  A gradient design within 5% of this bound is within 5% of the global optimum.
 
-Usage: python experiments/design_convex.py  (writes results/design_convex/)
+Usage: python experiments/examples/design_convex.py  (writes results/design_convex/)
 """
 
 from __future__ import annotations

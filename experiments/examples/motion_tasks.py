@@ -13,7 +13,7 @@ preload each needs (``SteadyState.summary(...).min_contact_force_n`` through
 ``min_preload_n``) against rpm.  A modified-sine (or any rest-to-rest) transition does not
 apply: both ends of the segment are in motion.
 
-    python experiments/motion_tasks.py [--rpm 400,650] [--band 500:650]
+    python experiments/examples/motion_tasks.py [--rpm 400,650] [--band 500:650]
 
 writes results/motion_tasks/ (feed_turn.png, feed_turn.csv, summary.json,
 reversal_preload.png, reversal_preload.csv, reversal_preload.json, designed/ with the
@@ -46,7 +46,7 @@ from camjax.program import (  # noqa: E402
     write_program,
 )
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "motion_tasks"
+OUT = Path(__file__).resolve().parents[2] / "results" / "motion_tasks"
 REVERSAL = 4  # the feed cam's G -> G segment (1-based)
 PLOT_RPM = (400.0, 700.0)  # the preload chart's speeds, wider than the design band
 PLOT_POINTS = 301

@@ -8,7 +8,7 @@ covers the simplex a + b + c + d = 1 (d the zero-acceleration fraction) in steps
 then in steps of 0.01 around the best point; every member is one row of a vmapped
 exact-path batch (``camjax.ct_curves`` stacks laws of one type).
 
-Usage: python experiments/design_caact.py  (writes results/design_caact/)
+Usage: python experiments/examples/design_caact.py  (writes results/design_caact/)
 """
 
 from __future__ import annotations
