@@ -2,6 +2,7 @@
 
 import argparse
 import json
+import math
 
 import jax
 import jax.numpy as jnp
@@ -157,6 +158,7 @@ def test_same_seed_same_design():
 
 @pytest.mark.slow
 def test_within_five_percent_of_the_convex_optimum():
+    """Slow: a whole 24-knot design at the default step count, and its 24-knot LP; the smaller designs of this file run by default."""
     bound, _ = D.ConvexBound(6.0, 12.0, knots=24).lower_bound(6.3, 100.0)
     result = D.design(D.MaxResidual(6.0, 12.0), caps=D.Caps(6.3, 100.0), knots=24,
                       progress=False)
@@ -165,6 +167,7 @@ def test_within_five_percent_of_the_convex_optimum():
 
 @pytest.mark.slow
 def test_cli_outputs_reproduce_when_the_law_is_loaded(tmp_path):
+    """Slow: the design command end to end (a 12-knot design, its figures and the comparison with every standard law)."""
     from camjax.cli import design as cli
 
     parser = argparse.ArgumentParser()
@@ -185,3 +188,23 @@ def test_cli_outputs_reproduce_when_the_law_is_loaded(tmp_path):
                                rtol=0, atol=1e-12)
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["coefficients"]["Ca"] <= 7.5
+
+
+def test_expected_residual_against_a_quadrature_of_the_closed_form():
+    """``ExpectedResidual``: the mean of the cycloidal law's undamped residual
+    ``2 n |sin(pi n)| / |n^2 - 1|`` over a normal ``n`` (8.5, 0.1), by scipy's quadrature
+    against the normal density; its training value is the same mean in units of Ca."""
+    from scipy.integrate import quad
+    from scipy.stats import norm
+
+    objective = D.ExpectedResidual(8.5, 0.1)
+    law = get("cycloidal")
+
+    def residual(n):
+        return 2 * n * abs(math.sin(math.pi * n)) / abs(n**2 - 1)
+
+    expected, _ = quad(lambda n: residual(n) * norm.pdf(n, 8.5, 0.1), 7.5, 9.5, points=[8.0, 9.0],
+                       epsabs=1e-13, epsrel=1e-12)
+    assert objective.report(law) == pytest.approx(expected, rel=1e-6)
+    value = float(objective.value(objective.features(law), float(law.Ca), 1.0))
+    assert value == pytest.approx(expected, rel=1e-6)

@@ -353,6 +353,29 @@ def test_cli_json_and_out_dir(tmp_path, capsys):
         assert (tmp_path / name).stat().st_size > 0
     assert math.isclose(json.loads((tmp_path / "summary.json").read_text())["jump_speed_rpm"],
                         report["jump_speed_rpm"])
+    # profile.csv read back: a roller without offset, its pitch curve at r_b + r_r + y(theta)
+    # from the lift alone, the profile one roller radius inside it, and the pitch curve's
+    # radius of curvature (r^2 + r'^2)^1.5 / (r^2 + 2 r'^2 - r r'') in r(theta) (radians).
+    program = Program.load(example_path())
+    rows = np.genfromtxt(tmp_path / "profile.csv", delimiter=",", names=True)
+    y, dy, ddy = program.lift(rows["theta_deg"])
+    r = 52.0 + y
+    np.testing.assert_allclose(np.hypot(rows["pitch_x_mm"], rows["pitch_y_mm"]), r, rtol=1e-9)
+    np.testing.assert_allclose(rows["lift_mm"], y, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(np.hypot(rows["pitch_x_mm"] - rows["profile_x_mm"],
+                                        rows["pitch_y_mm"] - rows["profile_y_mm"]), 12.0, rtol=1e-8)
+    dr, ddr = dy * 180 / math.pi, ddy * (180 / math.pi) ** 2
+    curvature = (r**2 + dr**2) ** 1.5 / (r**2 + 2 * dr**2 - r * ddr)
+    joins = np.isin(np.round(rows["theta_deg"], 9), [0.0, 100.0, 180.0, 280.0])  # y'' steps there
+    np.testing.assert_allclose(rows["pitch_radius_of_curvature_mm"][~joins], curvature[~joins], rtol=1e-7)
+    # response.csv read back: Newton on the payload at every node, m x'' = F_c - F_0 - k_s x,
+    # and the least node force at 900 rpm just above the refined least force of the report.
+    h = np.genfromtxt(tmp_path / "response.csv", delimiter=",", names=True)
+    f = program.follower
+    newton = (h["contact_force_n"] - f.preload_n - f.spring_rate_n_per_mm * h["payload_displacement_mm"]) / f.mass_kg
+    np.testing.assert_allclose(h["payload_acceleration_m_s2"], newton, rtol=0, atol=1e-7 * np.abs(newton).max())
+    fast_rows = h["rpm"] == 900.0
+    assert fast["min_contact_force_n"] <= h["contact_force_n"][fast_rows].min() < fast["min_contact_force_n"] + 1.0
 
 
 def test_swinging_roller_program_geometry():
@@ -475,10 +498,28 @@ def _scipy_groove(program, rpm, turns):
     return strikes
 
 
+def test_first_groove_turn_from_rest_against_scipy():
+    """``groove_turns`` over one turn from rest: every strike (angle, speed, flank) of the
+    grooved cam against scipy's phase-by-phase integration of the dead-zone follower."""
+    rpm = 600.0
+    program = groove_cam(0.1)
+    turn = camjax.program.groove_turns(program, [rpm], turns=1)[0]
+    reference = _scipy_groove(program, rpm, 1)
+    period = 60.0 / rpm
+    assert len(turn.impacts) == len(reference) >= 2
+    for got, (t, speed, flank) in zip(turn.impacts, reference):
+        assert got.angle_deg == pytest.approx(360.0 * t / period, abs=1e-6)
+        assert got.velocity_m_s == pytest.approx(speed, rel=1e-6)
+        assert got.flank == {0: "inner", 2: "outer"}[flank]
+
+
 @pytest.mark.slow
 def test_groove_clearance_hands_over_to_backlash(tmp_path, capsys):
     """The grooved cam's strikes against scipy; clearance -> 0 gives the contact-held flank
-    force; the report and the CLI list the strikes."""
+    force; the report and the CLI list the strikes.
+
+    Slow: the scipy reference integrates the dead-zone follower from rest over every turn the groove run takes to settle, impact by impact, in Python.
+    """
     rpm = 600.0
     program = groove_cam(0.1)
     turns = camjax.program.groove_turns(program, [rpm])[0]
@@ -550,7 +591,10 @@ def test_a_groove_turn_is_settled_when_its_strikes_repeat():
 @pytest.mark.slow
 def test_a_settled_groove_turn_does_not_move_with_more_turns():
     """Run from rest until the strikes repeat: twice the turns moves them by less than
-    SETTLED_DEG (a fixed count from the contact decay left them moving by 5e-4 deg)."""
+    SETTLED_DEG (a fixed count from the contact decay left them moving by 5e-4 deg).
+
+    Slow: two runs from rest, the second over twice the turns the first needed to settle.
+    """
     settled = camjax.program.groove_turns(groove_cam(0.1), [600.0])[0]
     assert settled.settled and settled.turns >= 2
     longer = camjax.program.groove_turns(groove_cam(0.1), [600.0], turns=2 * settled.turns)[0]

@@ -48,6 +48,7 @@ def test_axial_frequency_converges_to_rod_with_end_mass():
 
 @pytest.mark.slow
 def test_quasi_static_rigid_limit_and_constraints():
+    """Slow: the flexible follower's solves over whole turns, with and without its flexibility."""
     nominal = SwingingFollower(modes=3)
     stiff = SwingingFollower(modes=3, youngs_modulus=100 * nominal.youngs_modulus)
     turns = 0.2  # inside the 90-degree rise
@@ -201,6 +202,7 @@ def test_cli_rejects_bad_arguments(argv, message):
 
 @pytest.mark.slow
 def test_cli_json_report(tmp_path, capsys):
+    """Slow: the follower command end to end (four laws, their spectra and figures)."""
     import json
 
     assert _cli(["--law", "cycloidal", "--format", "json", "--out", str(tmp_path)]) == 0

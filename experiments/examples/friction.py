@@ -8,7 +8,7 @@ same sweep with viscous damping added (Cycloidal and ModSine, ``zeta = 0.05``: d
 richer dissipation model change the answers?), and the error of the tanh regularisation
 against stick-slip as ``eps`` shrinks.
 
-    python experiments/examples/friction.py [--n 5.25] [--dwell 1.0] [--quick]
+    python experiments/examples/friction.py [--n 5.25] [--dwell 1.0] [--quick] [--out DIR]
 
 writes results/friction/ (friction_sweep.csv, summary.json, *.png, README.md).
 """
@@ -71,11 +71,14 @@ def sweep(law, n, frictions, dwell, damping=0.0):
 
 
 def main():
+    global OUT
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=float, default=5.25, help="period ratio")
     parser.add_argument("--dwell", type=float, default=1.0, help="dwell, motion periods")
     parser.add_argument("--quick", action="store_true", help="two laws, few levels")
+    parser.add_argument("--out", type=Path, default=OUT, help="output folder (default: results/friction)")
     args = parser.parse_args()
+    OUT = args.out
     OUT.mkdir(parents=True, exist_ok=True)
     n, dwell = args.n, args.dwell
     w = 2 * np.pi * n
