@@ -14,8 +14,8 @@ NOTEBOOKS = sorted((Path(__file__).parents[1] / "notebooks").glob("*.py"))
 CHECKS = {
     # autodiff of the kinematic impact velocity against its central differences
     "backlash": "np.testing.assert_allclose(np.asarray(grad), np.asarray(fd), rtol=1e-5, atol=1e-9)",
-    # the cycloidal law's undamped residual against 2 n |sin(pi n)| / |n^2 - 1|
-    "ct_curves": "assert np.max(np.abs(cyc.residual - closed)) < 1e-9",
+    # the cycloidal law's undamped residual against 2 n |sin(pi n)| / |n^2 - 1| (0 / 0 at n = 1)
+    "ct_curves": "assert np.max(np.abs(cyc.residual - closed)[n > 1]) < 1e-9",
     # the designed law beats 4-5-6-7 over the band on 2000 ratios, and reads back equal
     "design": "assert designed.max() < 0.5 * reference.max()",
     # the events path's rest offset against the closed-form free vibration with friction
