@@ -288,6 +288,17 @@ def test_cli_reports_torque_stress_and_geometry_and_keeps_the_example_numbers(tm
     assert "max|T| N m" in table and "max p MPa" in table and "max pressure angle" in table
     header = (tmp_path / "out" / "response.csv").read_text().splitlines()[0]
     assert header.endswith("drive_torque_n_m,contact_stress_mpa")
+    # Read back: T = F_c dy/dtheta (dy/dtheta in m/rad) at every node, and on the base-circle
+    # dwell the Hertz stress of steel on steel (E* = 210 GPa / (2 (1 - 0.3^2))), 15 mm wide,
+    # 1/R' = 1/12 + 1/40.
+    h = np.genfromtxt(tmp_path / "out" / "response.csv", delimiter=",", names=True)
+    slope = 1e-3 * Program.load(text).lift(h["theta_deg"])[1] * 180 / math.pi
+    np.testing.assert_allclose(h["drive_torque_n_m"], h["contact_force_n"] * slope, rtol=1e-9,
+                               atol=1e-9 * np.abs(h["drive_torque_n_m"]).max())
+    dwell = (h["theta_deg"] > 290.0) & (h["theta_deg"] < 350.0)
+    e_star = 210e3 / (2 * (1 - 0.3**2))
+    hertz = np.sqrt(h["contact_force_n"][dwell] * e_star / (math.pi * 15.0 / (1 / 12.0 + 1 / 40.0)))
+    np.testing.assert_allclose(h["contact_stress_mpa"][dwell], hertz, rtol=1e-9)
     for name in ("drive_torque.png", "contact_stress.png", "torque_sweep.png"):
         assert (tmp_path / "out" / name).stat().st_size > 0
 

@@ -305,6 +305,15 @@ def test_feed_cli_every_output(tmp_path, capsys):
     for name in ("profile.csv", "profile.dxf", "response.csv", "summary.json", "svaj.png",
                  "contact_force.png", "sweep.png", "profile.png"):
         assert (tmp_path / name).stat().st_size > 0
+    # Read back: the pitch curve at r_b + r_r + y(theta) from the lift alone (no offset), and
+    # the summary's least contact force at or below every node force of response.csv.
+    rows = np.genfromtxt(tmp_path / "profile.csv", delimiter=",", names=True)
+    lift = Program.load(example_path("feed")).lift(rows["theta_deg"])[0]
+    np.testing.assert_allclose(np.hypot(rows["pitch_x_mm"], rows["pitch_y_mm"]), 52.0 + lift, rtol=1e-9)
+    h = np.genfromtxt(tmp_path / "response.csv", delimiter=",", names=True)
+    for speed in (slow, fast):
+        nodes = h["contact_force_n"][h["rpm"] == speed["rpm"]]
+        assert speed["min_contact_force_n"] <= nodes.min() < speed["min_contact_force_n"] + 1.0
     assert main(["program", "feed", "--rpm", "600", "--no-flight"]) == 0
     table = capsys.readouterr().out
     assert "segment 4 polynomial" in table and "overshoots its ends" in table
