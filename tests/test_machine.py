@@ -293,12 +293,12 @@ def test_cli_reports_torque_stress_and_geometry_and_keeps_the_example_numbers(tm
     # 1/R' = 1/12 + 1/40.
     h = np.genfromtxt(tmp_path / "out" / "response.csv", delimiter=",", names=True)
     slope = 1e-3 * Program.load(text).lift(h["theta_deg"])[1] * 180 / math.pi
-    np.testing.assert_allclose(h["drive_torque_n_m"], h["contact_force_n"] * slope, rtol=1e-9,
-                               atol=1e-9 * np.abs(h["drive_torque_n_m"]).max())
+    np.testing.assert_allclose(h["drive_torque_n_m"], h["contact_force_n"] * slope, rtol=2e-8,
+                               atol=1e-9 * np.abs(h["drive_torque_n_m"]).max())  # 10 digits each
     dwell = (h["theta_deg"] > 290.0) & (h["theta_deg"] < 350.0)
     e_star = 210e3 / (2 * (1 - 0.3**2))
     hertz = np.sqrt(h["contact_force_n"][dwell] * e_star / (math.pi * 15.0 / (1 / 12.0 + 1 / 40.0)))
-    np.testing.assert_allclose(h["contact_stress_mpa"][dwell], hertz, rtol=1e-9)
+    np.testing.assert_allclose(h["contact_stress_mpa"][dwell], hertz, rtol=2e-8)
     for name in ("drive_torque.png", "contact_stress.png", "torque_sweep.png"):
         assert (tmp_path / "out" / name).stat().st_size > 0
 
