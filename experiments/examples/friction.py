@@ -75,15 +75,15 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=float, default=5.25, help="period ratio")
     parser.add_argument("--dwell", type=float, default=1.0, help="dwell, motion periods")
-    parser.add_argument("--quick", action="store_true", help="two laws, few levels")
+    parser.add_argument("--quick", action="store_true", help="one law, few levels (a smoke run)")
     parser.add_argument("--out", type=Path, default=OUT, help="output folder (default: results/friction)")
     args = parser.parse_args()
     OUT = args.out
     OUT.mkdir(parents=True, exist_ok=True)
     n, dwell = args.n, args.dwell
     w = 2 * np.pi * n
-    frictions = np.linspace(0.0, 1.5, 7 if args.quick else 31)
-    laws = camjax.laws.standard_laws()[:2] if args.quick else camjax.laws.standard_laws()
+    frictions = np.linspace(0.0, 1.5, 4 if args.quick else 31)
+    laws = camjax.laws.standard_laws()[:1] if args.quick else camjax.laws.standard_laws()
 
     rows, summary, histories = [], {"period_ratio": n, "dwell": dwell, "laws": {}}, {}
     for law in laws:
