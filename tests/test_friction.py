@@ -96,10 +96,8 @@ def test_zero_friction_reproduces_exact_sdof(cycloidal):
     [
         ("cycloidal", 5.25, 0.5, 0.0),
         ("cycloidal", 3.3, 1.0, 0.02),
-        # Slow: each further law compiles the events path again; the cycloidal cases above
-        # run the same path by default.
-        pytest.param("modified-sine", 4.5, 2.0, 0.0, marks=pytest.mark.slow),
-        pytest.param("modified-trapezoid", 3.3, 1.0, 0.02, marks=pytest.mark.slow),
+        ("modified-sine", 4.5, 2.0, 0.0),
+        ("modified-trapezoid", 3.3, 1.0, 0.02),
     ],
 )
 def test_events_agree_with_piecewise_exact_dwell_and_rest_in_band(law_name, n, mu, zeta):
@@ -235,10 +233,8 @@ def _modified_sine_command():
     "n, sequence",
     [
         (7.01508, [0, 1, 0, 1, 0]),  # a stick of 9e-4 near tau = 0.9753
-        # Slow: each further ratio's scipy reference runs at max_step 1e-4 in Python; the
-        # short excursion above, the case that failed, runs by default.
-        pytest.param(7.0, [0, 1, -1, 0, 1, 0], marks=pytest.mark.slow),  # a reversal there
-        pytest.param(7.0152, [0, 1, 0], marks=pytest.mark.slow),  # past the grazing ratio
+        (7.0, [0, 1, -1, 0, 1, 0]),  # a reversal there
+        (7.0152, [0, 1, 0]),  # past the grazing ratio
     ],
 )
 def test_a_reversal_shorter_than_a_slip_step_is_found(n, sequence):
