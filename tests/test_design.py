@@ -159,7 +159,7 @@ def test_same_seed_same_design():
 
 @pytest.mark.slow
 def test_within_five_percent_of_the_convex_optimum():
-    """Slow: a whole 24-knot design at the default step count, and its 24-knot LP; the smaller designs of this file run by default."""
+    """Slow (30 s on the loaded 2-core machine, 2026-11-27): a whole 24-knot design at the default step count, and its 24-knot LP; the smaller designs of this file run by default."""
     bound, _ = D.ConvexBound(6.0, 12.0, knots=24).lower_bound(6.3, 100.0)
     result = D.design(D.MaxResidual(6.0, 12.0), caps=D.Caps(6.3, 100.0), knots=24,
                       progress=False)
@@ -168,7 +168,7 @@ def test_within_five_percent_of_the_convex_optimum():
 
 @pytest.mark.slow
 def test_cli_outputs_reproduce_when_the_law_is_loaded(tmp_path):
-    """Slow: the design command end to end (a 12-knot design, its figures and the comparison with every standard law)."""
+    """Slow (32 s on the loaded 2-core machine, 2026-11-27): the design command end to end (a 12-knot design, its figures and the comparison with every standard law)."""
     from camjax.cli import design as cli
 
     parser = argparse.ArgumentParser()

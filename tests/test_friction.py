@@ -269,7 +269,7 @@ def test_a_friction_sweep_solves_every_ratio():
 
 @pytest.mark.slow
 def test_a_dense_friction_sweep_solves_every_ratio():
-    """Slow: 800 event-driven stick-slip solves, to catch a rare ratio that fails; the vmap and the events path run by default on few ratios."""
+    """Slow (22 s on the loaded 2-core machine, 2026-11-27): 800 event-driven stick-slip solves, to catch a rare ratio that fails; the vmap and the events path run by default on few ratios."""
     n = np.linspace(1.0, 20.0, 400)
     for name in ("modified-sine", "cycloidal"):
         curve = camjax.ct_curve(camjax.laws.get(name), n, model=CoulombFriction(1.0, 0.3),
@@ -317,7 +317,7 @@ def test_vmap_over_period_ratios_equals_loop(cycloidal):
 
 @pytest.mark.slow
 def test_regularised_gradient_matches_finite_differences(cycloidal):
-    """Slow: reverse mode through the regularised diffrax solve compiles a program of its own."""
+    """Slow (25 s on the loaded 2-core machine, 2026-11-27): reverse mode through the regularised diffrax solve compiles a program of its own."""
     def offset(mu):
         model = CoulombFriction(5.25, mu)
         response = solve(cycloidal, model, samples=128, method="regularised", eps=1e-2, throw=False)
@@ -331,6 +331,6 @@ def test_regularised_gradient_matches_finite_differences(cycloidal):
 
 @pytest.mark.slow
 def test_a_failing_segment_names_where_it_failed(cycloidal):
-    """Slow: a step limit of 8 is a new static option, so the events path compiles again for one message."""
+    """Slow (14 s on the loaded 2-core machine, 2026-11-27): a step limit of 8 is a new static option, so the events path compiles again for one message."""
     with pytest.raises(camjax.SolverError, match=r"\(reached tau = 0\.\d+\) failed: the maximum number of solver steps"):
         solve(cycloidal, CoulombFriction(5.25, 0.5), samples=SAMPLES, max_steps=8)

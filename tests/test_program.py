@@ -520,7 +520,7 @@ def test_groove_clearance_hands_over_to_backlash(tmp_path, capsys):
     """The grooved cam's strikes against scipy; clearance -> 0 gives the contact-held flank
     force; the report and the CLI list the strikes.
 
-    Slow: the scipy reference integrates the dead-zone follower from rest over every turn the groove run takes to settle, impact by impact, in Python.
+    Slow (35 s on the loaded 2-core machine, 2026-11-27): the scipy reference integrates the dead-zone follower from rest over every turn the groove run takes to settle, impact by impact, in Python.
     """
     rpm = 600.0
     program = groove_cam(0.1)
@@ -595,7 +595,7 @@ def test_a_settled_groove_turn_does_not_move_with_more_turns():
     """Run from rest until the strikes repeat: twice the turns moves them by less than
     SETTLED_DEG (a fixed count from the contact decay left them moving by 5e-4 deg).
 
-    Slow: two runs from rest, the second over twice the turns the first needed to settle.
+    Slow (19 s on the loaded 2-core machine, 2026-11-27): two runs from rest, the second over twice the turns the first needed to settle.
     """
     settled = camjax.program.groove_turns(groove_cam(0.1), [600.0])[0]
     assert settled.settled and settled.turns >= 2

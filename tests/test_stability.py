@@ -132,7 +132,7 @@ def test_the_first_bad_entry_of_a_batch_is_the_one_named():
 def test_every_model_sweep_reports_its_failures_with_throw_false(model):
     """A step limit no ratio can meet: each model's sweep path returns the code per ratio.
 
-    Slow: a step limit of 8 is a new static option, so each model's sweep path compiles again.
+    Slow (16-29 s per model, 90 s in all on the loaded 2-core machine, 2026-11-27): a step limit of 8 is a new static option, so each model's sweep path compiles again.
     """
     method = "tsit5" if isinstance(model, camjax.SpringMass) else None
     curve = camjax.ct_curve(CYCLOIDAL, [1.5, 8.0], model=model, method=method, max_steps=8,
@@ -160,7 +160,7 @@ def test_detection_limit_is_where_the_growth_crosses_the_threshold():
 
 @pytest.mark.slow
 def test_stable_fixed_step_converges_at_second_order():
-    """Slow: one compiled fixed-step program per step count."""
+    """Slow (28 s on the loaded 2-core machine, 2026-11-27): one compiled fixed-step program per step count."""
     n = 2.5
     errors = []
     for steps in (2000, 4000):
@@ -217,7 +217,7 @@ def test_max_steps_exhaustion_raises():
 def test_adaptive_without_jump_ts_stays_accurate_on_an_acceleration_jump():
     """Parabolic (acceleration jump at 0.5): both ways meet the tolerance's accuracy.
 
-    Slow: Tsit5 at a tight tolerance, compiled twice (with and without ``jump_ts``).
+    Slow (38 s on the loaded 2-core machine, 2026-11-27): Tsit5 at a tight tolerance, compiled twice (with and without ``jump_ts``).
     """
     law = camjax.laws.get("parabolic")
     n = jnp.array([3.3, 7.9])
@@ -280,7 +280,7 @@ def test_measure_reports_errors_against_the_reference():
 def test_float32_error_floor_is_reported(tmp_path):
     """float32 (a child process) gives errors near 1e-4, far above float64's.
 
-    Slow: a child process imports JAX and compiles the exact path again in single precision.
+    Slow (30-34 s on the loaded 2-core machine, 2026-11-27): a child process imports JAX and compiles the exact path again in single precision.
     """
     import json
     import os
@@ -304,7 +304,7 @@ def test_float32_error_floor_is_reported(tmp_path):
 def test_gradient_through_diffrax_matches_exact_path():
     """d(R)/dn through Tsit5 (RecursiveCheckpointAdjoint) against the exact path's autodiff.
 
-    Slow: reverse mode through Tsit5 at rtol 1e-10 on a 512-interval grid compiles a large program.
+    Slow (52 s on the loaded 2-core machine, 2026-11-27): reverse mode through Tsit5 at rtol 1e-10 on a 512-interval grid compiles a large program.
     """
     import jax
 

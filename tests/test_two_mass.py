@@ -78,7 +78,7 @@ def test_energy_balance_motor_work_equals_stored_energy(law):
 
 @pytest.mark.slow
 def test_stiff_and_implicit_solvers_agree(law):
-    """Slow: Kvaerno5, an implicit solver, compiles apart from Dopri8."""
+    """Slow (21 s on the loaded 2-core machine, 2026-11-27): Kvaerno5, an implicit solver, compiles apart from Dopri8."""
     model = TwoMass(6.4, 3.0, 1.0)
     explicit = two_mass_response(law, model, **OPTIONS)
     implicit = two_mass_response(law, model, method="kvaerno5", **OPTIONS)
@@ -112,7 +112,7 @@ def test_step_limit_raises_solver_error(law):
 
 @pytest.mark.slow
 def test_gradient_of_ct_in_stiffness_ratio_matches_finite_differences(law):
-    """Slow: reverse mode through the two-mass Dopri8 solve compiles a program of its own."""
+    """Slow (22 s on the loaded 2-core machine, 2026-11-27): reverse mode through the two-mass Dopri8 solve compiles a program of its own."""
     def ct(k):
         return camjax.solve(law, TwoMass(4.0, k, 1.0), throw=False, **OPTIONS).metrics.ct
 
