@@ -26,8 +26,8 @@ QUICK = {
 SLOW = {"stability_atlas.py"}
 """Quick modes kept out of the default run: the stability atlas's still builds five panels
 (fixed-step maps, adaptive solvers with and without ``jump_ts``, a float32 child process,
-Tsit5 up to n = 300, four default grids), 138 s on the loaded 2-core machine against 18-74 s
-for the others."""
+Tsit5 up to n = 300, four default grids), 138 s on the loaded 2-core machine against 18-36 s
+for each of the others (2026-11-27)."""
 
 NOT_RUN = {
     "backlash.py": "no quick mode yet: its four parts (charts, dynamic impacts, solver limits, an optax design) take minutes",
