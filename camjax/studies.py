@@ -3,7 +3,7 @@
 Every method computes the Ct and residual curves of a law over a batch of period ratios
 in one compiled call (``camjax.models.batch_metrics``); its errors are measured against
 the exact path at a high resolution.  The full study, with scipy peers, float32 and the
-charts, is ``experiments/work_precision.py``; ``camjax bench`` runs the quick one.
+charts, is ``experiments/benchmarks/work_precision.py``; ``camjax bench`` runs the quick one.
 """
 
 from __future__ import annotations

@@ -106,7 +106,7 @@ for r in cp.analyse(feed, list(speeds), steady=steady, with_flight=False).speeds
 
 # %% [markdown]
 # ## Which reversal?
-# `experiments/motion_tasks.py` compares the preload the cam needs over 500-650 rpm with
+# `experiments/examples/motion_tasks.py` compares the preload the cam needs over 500-650 rpm with
 # the reversal as a quintic, as this septic and as a `CorrectedPolynomial` designed for it
 # (`camjax.program.design_segment(feed, 4, 500, 650, objective="preload")`, about 40 s):
 # docs/motion-tasks.md.

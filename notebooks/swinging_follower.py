@@ -2,7 +2,7 @@
 # # Swinging roller follower with a flexible rod
 # The cam profile from the motion program (theory of envelopes), the rod's natural
 # frequencies against the pinned-pinned Rayleigh beam, and one cam turn of the flexible
-# model (small by default; the full study is `experiments/swinging_follower.py`).
+# model (small by default; the full study is `experiments/examples/swinging_follower.py`).
 
 # %%
 import math

@@ -77,13 +77,13 @@ def compiled_programs():
         jax.monitoring.unregister_event_duration_listener(listener)
 
 
-def scipy_periodic_deflection(follower, rpm, lift, edges_deg, times):
+def scipy_periodic_deflection(follower, rpm, lift, edges_deg, times, rtol=1e-12):
     """Periodic deflection ``e, e'`` (m, m/s) of a cam program's physical SDOF at ``times``
     (s, within one turn), by scipy shooting: one turn from three starts, then the fixed point.
 
     ``follower`` is a ``camjax.program.Follower``; ``lift(theta_deg)`` gives the lift (mm) and
     its first two derivatives in degrees, whose second jumps only at ``edges_deg`` (0 to 360),
-    where each solve restarts.
+    where each solve restarts; ``rtol`` is the solver's (DOP853).
     """
     from scipy.integrate import solve_ivp
 
@@ -98,7 +98,7 @@ def scipy_periodic_deflection(follower, rpm, lift, edges_deg, times):
         edges = np.asarray(edges_deg, float) / rate
         z, out = np.asarray(z0, float), []
         for a, b in zip(edges[:-1], edges[1:]):
-            sol = solve_ivp(rhs, (a, b), z, method="DOP853", rtol=1e-12, atol=1e-16, dense_output=True)
+            sol = solve_ivp(rhs, (a, b), z, method="DOP853", rtol=rtol, atol=1e-16, dense_output=True)
             if t_eval is not None:
                 inside = t_eval[(t_eval >= a) & (t_eval < b)]
                 if inside.size:
@@ -109,3 +109,38 @@ def scipy_periodic_deflection(follower, rpm, lift, edges_deg, times):
     b, _ = run([0.0, 0.0])
     monodromy = np.column_stack([run(e)[0] - b for e in ([1.0, 0.0], [0.0, 1.0])])
     return run(np.linalg.solve(np.eye(2) - monodromy, b), times)[1]
+
+
+def scipy_deflection(follower, rpm, lift, edges_deg, times, start=(0.0, 0.0)):
+    """Deflection ``e, e'`` (m, m/s) of a cam program's physical SDOF at ``times`` (s, over
+    any number of turns) from the state ``start`` at ``t = 0``, by scipy (DOP853, rtol 1e-12):
+    ``m x'' = k (y - x) + c (y' - x') - k_s x`` in ``e = y - x``.  ``lift`` and ``edges_deg``
+    as in ``scipy_periodic_deflection`` (one turn; the edges repeat every turn)."""
+    from scipy.integrate import solve_ivp
+
+    m, k, ks, c = follower.mass_kg, follower.stiffness, follower.spring_rate, follower.damping
+    rate = 360.0 * rpm / 60.0  # deg/s
+    times = np.asarray(times, float)
+    turns = int(np.ceil(times.max() * rate / 360.0 + 1e-12))
+    edges = np.unique(np.concatenate([np.asarray(edges_deg, float) + 360.0 * j for j in range(turns)])) / rate
+
+    def rhs(t, z):
+        y, _, ddy = lift(rate * t)
+        return [z[1], 1e-3 * (ddy * rate**2 + ks / m * y) - c / m * z[1] - (k + ks) / m * z[0]]
+
+    z, out = np.asarray(start, float), np.empty((2, times.size))
+    for a, b in zip(edges[:-1], edges[1:]):
+        sol = solve_ivp(rhs, (a, b), z, method="DOP853", rtol=1e-12, atol=1e-16, dense_output=True)
+        inside = (times >= a) & (times <= b)
+        out[:, inside] = sol.sol(times[inside])
+        z = sol.y[:, -1]
+    return out
+
+
+def program_lift(program):
+    """``lift(theta_deg) -> (y, y', y'')`` of one angle from ``Program.lift``, for the scipy
+    references above."""
+    def lift(theta):
+        return tuple(float(v[0]) for v in program.lift(np.array([theta])))
+
+    return lift

@@ -7,7 +7,15 @@ import pytest
 
 import camjax
 from camjax import distributed
-from camjax.sdof import _batch, chunk_nodes, chunked_map, map_in_chunks, stack_laws
+from camjax.sdof import (
+    ACCELERATOR_CHUNK_NODES,
+    ACCELERATOR_STACK_EVALUATIONS,
+    CHUNK_NODES,
+    chunk_nodes,
+    chunked_map,
+    map_in_chunks,
+    stack_laws,
+)
 
 
 def _member(tree):
@@ -38,10 +46,10 @@ def test_chunked_map_sizes_chunks_by_nodes():
 
 def test_sizes_by_backend(monkeypatch):
     monkeypatch.setattr(jax, "default_backend", lambda: "cpu")
-    assert chunk_nodes() == _batch.CHUNK_NODES and stack_laws(1000, 192) == 1
+    assert chunk_nodes() == CHUNK_NODES and stack_laws(1000, 192) == 1
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
-    assert chunk_nodes() == _batch.ACCELERATOR_CHUNK_NODES
-    assert stack_laws(1000, 192) == _batch.ACCELERATOR_STACK_EVALUATIONS // 1000 == 65
+    assert chunk_nodes() == ACCELERATOR_CHUNK_NODES
+    assert stack_laws(1000, 192) == ACCELERATOR_STACK_EVALUATIONS // 1000 == 65
     assert stack_laws(10**6) == 1
     # a fine grid bounds the laws at once by nodes: 2**24 // (1000 * 4096)
     assert stack_laws(1000, 4096) == 4 and stack_laws(100, 2**20) == 1
@@ -80,6 +88,8 @@ def test_accelerator_sizes_give_the_cpu_curves(monkeypatch):
     stack = camjax.ct_curves(laws, n)
     jax.clear_caches()
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    from camjax.sdof import _batch  # the size is read where it is used: no public setter
+
     monkeypatch.setattr(_batch, "ACCELERATOR_STACK_EVALUATIONS", 5 * n.size)  # 3 chunks of 5, padded
     try:
         assert stack_laws(n.size) == 5

@@ -68,6 +68,20 @@ def test_ct_writes_tables_and_figures(capsys, tmp_path):
     assert rows[0] == "law,period_ratio,ct,residual,peak_in_motion,ca_ct,result" and len(rows) == 241
     assert all(row.endswith(",successful") for row in rows[1:])
     assert "| cycloidal |" in (tmp_path / "torsion_factor_fit.md").read_text()
+    # Read back: the cycloidal law's undamped residual is 2 n |sin(pi n)| / |n^2 - 1| (pi at
+    # n = 1), Ct and Ca*Ct those of ct_curve, for both laws.
+    table = np.genfromtxt(tmp_path / "ct.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    cyc = table[table["law"] == "cycloidal"]
+    n = cyc["period_ratio"]
+    np.testing.assert_allclose(n, np.linspace(1.0, 20.0, 120), rtol=1e-9)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        closed = np.where(n == 1.0, np.pi, 2 * n * np.abs(np.sin(np.pi * n)) / np.abs(n**2 - 1))
+    np.testing.assert_allclose(cyc["residual"], closed, rtol=0, atol=1e-8)
+    for name, law in (("cycloidal", laws.Cycloidal()), ("modified-sine", laws.ModifiedSine())):
+        rows = table[table["law"] == name]
+        curve = camjax.ct_curve(law, rows["period_ratio"])
+        np.testing.assert_allclose(rows["ct"], curve.ct, rtol=1e-9)
+        np.testing.assert_allclose(rows["ca_ct"], float(law.Ca) * curve.ct, rtol=1e-9)
 
 
 def test_ct_finishes_a_sweep_with_failed_ratios_and_names_them(capsys, tmp_path):

@@ -2,6 +2,7 @@
 
 import argparse
 import json
+import math
 
 import jax
 import jax.numpy as jnp
@@ -64,17 +65,18 @@ def test_objective_gradient_matches_finite_differences(objective):
 @pytest.mark.parametrize("objective", [D.MaxResidual(6.0, 12.0, samples=32, damping=0.02),
                                        D.MaxCaCt(7.2, 8.8, samples=2)], ids=lambda o: type(o).__name__)
 def test_linear_maps_reproduce_the_features(objective):
-    # A design trains on offset + matrix @ theta; that must be the objective's features.
+    # A design trains on offset + matrix @ c (``linear_maps``); that must be the objective's
+    # features for any coefficients c, not only near the start.
     knots = 10
-    to_coefficients = D._optimise._acceleration_coordinates(knots, 5)
 
-    def features(theta):
-        law = BSplineLaw(START.coefficients + to_coefficients @ theta)
+    def features(c):
+        law = BSplineLaw(c)
         return objective.features(law), D.Caps(7.0, 90.0).features(law)
 
-    theta = jnp.asarray(np.random.default_rng(2).standard_normal(knots)) * 0.3
-    linear = jax.tree.leaves(D._optimise._linearised(features, knots)(theta))
-    direct = jax.tree.leaves(features(theta))
+    offset, jacobian = D.linear_maps(features, knots)
+    c = START.coefficients + jnp.asarray(np.random.default_rng(2).standard_normal(knots)) * 0.05
+    linear = jax.tree.leaves(jax.tree.map(lambda b, m: b + m @ c, offset, jacobian))
+    direct = jax.tree.leaves(features(c))
     for got, want in zip(linear, direct):
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * float(jnp.max(jnp.abs(want))))
 
@@ -157,6 +159,7 @@ def test_same_seed_same_design():
 
 @pytest.mark.slow
 def test_within_five_percent_of_the_convex_optimum():
+    """Slow (30 s on the loaded 2-core machine, 2026-11-27): a whole 24-knot design at the default step count, and its 24-knot LP; the smaller designs of this file run by default."""
     bound, _ = D.ConvexBound(6.0, 12.0, knots=24).lower_bound(6.3, 100.0)
     result = D.design(D.MaxResidual(6.0, 12.0), caps=D.Caps(6.3, 100.0), knots=24,
                       progress=False)
@@ -165,6 +168,7 @@ def test_within_five_percent_of_the_convex_optimum():
 
 @pytest.mark.slow
 def test_cli_outputs_reproduce_when_the_law_is_loaded(tmp_path):
+    """Slow (32 s on the loaded 2-core machine, 2026-11-27): the design command end to end (a 12-knot design, its figures and the comparison with every standard law)."""
     from camjax.cli import design as cli
 
     parser = argparse.ArgumentParser()
@@ -185,3 +189,23 @@ def test_cli_outputs_reproduce_when_the_law_is_loaded(tmp_path):
                                rtol=0, atol=1e-12)
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["coefficients"]["Ca"] <= 7.5
+
+
+def test_expected_residual_against_a_quadrature_of_the_closed_form():
+    """``ExpectedResidual``: the mean of the cycloidal law's undamped residual
+    ``2 n |sin(pi n)| / |n^2 - 1|`` over a normal ``n`` (8.5, 0.1), by scipy's quadrature
+    against the normal density; its training value is the same mean in units of Ca."""
+    from scipy.integrate import quad
+    from scipy.stats import norm
+
+    objective = D.ExpectedResidual(8.5, 0.1)
+    law = get("cycloidal")
+
+    def residual(n):
+        return 2 * n * abs(math.sin(math.pi * n)) / abs(n**2 - 1)
+
+    expected, _ = quad(lambda n: residual(n) * norm.pdf(n, 8.5, 0.1), 7.5, 9.5, points=[8.0, 9.0],
+                       epsabs=1e-13, epsrel=1e-12)
+    assert objective.report(law) == pytest.approx(expected, rel=1e-6)
+    value = float(objective.value(objective.features(law), float(law.Ca), 1.0))
+    assert value == pytest.approx(expected, rel=1e-6)

@@ -124,6 +124,7 @@ def test_off_the_cpu_one_band_takes_the_finest_grid(monkeypatch):
 
 @pytest.mark.slow
 def test_banded_sweep_within_tolerance_of_ct_curve():
+    """Slow: a banded stacked sweep at two phase steps compiles one program per band and step, and ``ct_curve`` one per law family."""
     laws = [SCCA(0.5, 0.0, 0.5), SCCA(0.99, 0.0, 0.01), SCCA(0.0, 1.0, 0.0)]
     n, template, options = prepare_sweep(np.linspace(1.0, 30.0, 60))
     stack = jax.tree.map(lambda *x: jnp.stack(x), *laws)

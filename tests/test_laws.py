@@ -286,3 +286,27 @@ def test_scca_jerk_at_the_midpoint_is_its_limit(name):
     near = np.asarray(law.j(np.array([0.5 - 1e-9, 0.5, 0.5 + 1e-9])))
     assert near[1] == pytest.approx(-float(law.Ca) * np.pi / c, rel=1e-12)
     assert near[1] == pytest.approx(near[0], rel=1e-7) and near[1] == pytest.approx(near[2], rel=1e-7)
+
+
+@pytest.mark.parametrize("degree, zero_jerk", [(5, False), (7, True), (3, False)])
+def test_bspline_law_is_scipys_bspline(degree, zero_jerk):
+    """``BSplineLaw``'s ``s, v, a, j`` on its clamped uniform basis against
+    ``scipy.interpolate.BSpline`` of the same knots and control points (and its derivatives)."""
+    from scipy.interpolate import BSpline
+
+    from camjax.laws import BSplineLaw
+
+    free = np.random.default_rng(degree).uniform(0.1, 0.9, 9)
+    law = BSplineLaw(np.sort(free), degree=degree, zero_jerk=zero_jerk)
+    fixed = 4 if zero_jerk else 3
+    control = np.concatenate([np.zeros(fixed), np.sort(free), np.ones(fixed)])
+    interior = control.size - degree  # uniform interior knots, clamped ends
+    knots = np.concatenate([np.zeros(degree), np.linspace(0.0, 1.0, interior + 1), np.ones(degree)])
+    np.testing.assert_allclose(law.knots, knots, rtol=0, atol=1e-15)
+    reference = BSpline(knots, control, degree)
+    tau = (np.arange(256) + 0.5) / 256  # off the knots, where a cubic's jerk steps
+    s, v, a, j = (np.asarray(x) for x in law.evaluate(jnp.asarray(tau)))
+    for order, got in enumerate((s, v, a, j)):
+        want = reference.derivative(order)(tau) if order else reference(tau)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * max(1.0, np.abs(want).max()),
+                                   err_msg=f"derivative {order}")

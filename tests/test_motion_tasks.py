@@ -325,6 +325,15 @@ def test_feed_cli_every_output(tmp_path, capsys):
     for name in ("profile.csv", "profile.dxf", "response.csv", "summary.json", "svaj.png",
                  "contact_force.png", "sweep.png", "profile.png"):
         assert (tmp_path / name).stat().st_size > 0
+    # Read back: the pitch curve at r_b + r_r + y(theta) from the lift alone (no offset), and
+    # the summary's least contact force at or below every node force of response.csv.
+    rows = np.genfromtxt(tmp_path / "profile.csv", delimiter=",", names=True)
+    lift = Program.load(example_path("feed")).lift(rows["theta_deg"])[0]
+    np.testing.assert_allclose(np.hypot(rows["pitch_x_mm"], rows["pitch_y_mm"]), 52.0 + lift, rtol=1e-9)
+    h = np.genfromtxt(tmp_path / "response.csv", delimiter=",", names=True)
+    for speed in (slow, fast):
+        nodes = h["contact_force_n"][h["rpm"] == speed["rpm"]]
+        assert speed["min_contact_force_n"] <= nodes.min() < speed["min_contact_force_n"] + 1.0
     assert main(["program", "feed", "--rpm", "600", "--no-flight"]) == 0
     table = capsys.readouterr().out
     assert "segment 4 polynomial" in table and "overshoots its ends" in table
@@ -404,20 +413,34 @@ def test_design_a_segment_in_motion_keeps_its_joins(feed, tmp_path, capsys):
         in capsys.readouterr().err
 
 
-def test_the_program_residual_objective_is_the_steady_states_residual(feed):
+def test_the_program_residual_objective_is_the_residual_vibration(feed):
     """``MaxProgramResidual`` trains on the residual modes of the whole program: their
-    moduli at the training speeds are the steady state's ``residual_vibration_mm`` there
-    (every dwell and constant-velocity start), and its training value is a smooth maximum
-    of them that tends to the largest as the sharpness grows."""
-    from camjax.program import MaxProgramResidual, SteadyState
+    moduli at a training speed are the free vibration's amplitude at every dwell and
+    constant-velocity start (0, 80 and 300 deg) from a scipy shooting solve of the physical
+    equation (about the static point of a dwell's lift, 0 here; about the steady motion
+    ``e_p = A + B t`` of the working stroke); its training value is a smooth maximum of them
+    that tends to the largest as the sharpness grows."""
+    from camjax.program import MaxProgramResidual
 
     objective = MaxProgramResidual(feed, 4, 500.0, 650.0)
     law = feed.segments[3].law
     features = np.asarray(objective.features(law))
-    speeds = objective.speeds()
-    expected = SteadyState(feed, 500.0).summary(speeds).residual_vibration_mm
-    np.testing.assert_allclose(np.hypot(features[0], features[1]), expected, rtol=1e-9, atol=1e-15)
-    top = float(np.max(expected))
+    moduli = np.hypot(features[0], features[1])
+    rpm = float(objective.speeds()[0])
+    f = feed.follower
+    omega = 2 * math.pi * f.natural_frequency_hz
+    zeta = f.damping / (2 * f.mass_kg * omega)
+    omega_d = omega * math.sqrt(1 - zeta**2)
+    rate = 360.0 * rpm / 60.0
+    forcing = f.spring_rate / f.mass_kg
+    slope = forcing * 1e-3 * 0.3 * rate / omega**2  # B: the stroke's 0.3 mm/deg
+    offset = (forcing * 1e-3 * 8.0 - 2 * zeta * omega * slope) / omega**2  # A: from its 8 mm
+    e, de = scipy_periodic(feed, rpm, np.array([0.0, 80.0, 300.0]) / rate)
+    free = e - [0.0, offset, 0.0]
+    free_rate = de - [0.0, slope, 0.0]
+    amplitude = 1e3 * np.hypot(free, (free_rate + zeta * omega * free) / omega_d)
+    np.testing.assert_allclose(moduli[0], amplitude, rtol=1e-6)
+    top = float(np.max(moduli))
     assert float(objective.value(objective.features(law), 1.0, 2000.0)) == pytest.approx(top, rel=5e-3)
     assert float(objective.value(objective.features(law), 1.0, 8.0)) < top
 

@@ -45,9 +45,30 @@ def bounded_peak(value, widths, left, right):
                        jnp.max(jnp.abs(value)))
 
 
-def test_refined_peak_is_the_dense_answer():
-    args = sampled(lambda t: jnp.sin(7 * t) + 0.1 * t, jnp.linspace(0.0, 1.0, 21))
-    np.testing.assert_array_equal(refined_peak(*args), dense_peak(*args))
+@pytest.mark.parametrize("amplitude, omega, phase", [(1.7, 7.0, 0.4), (-0.3, 23.0, 2.9), (2.5, 61.0, -1.1)])
+def test_refined_peak_of_a_sampled_cosine_is_its_amplitude(amplitude, omega, phase):
+    """``max |A cos(w t + phi)|`` on [0, 1] is ``|A|`` (a crest lies inside for ``w > 2 pi``),
+    within the septic's ``(w h)^8 / 1e7``; the samples alone fall short by up to ``1 - cos(w h / 2)``."""
+    t = jnp.linspace(0.0, 1.0, 41)
+    args = sampled(lambda t: amplitude * jnp.cos(omega * t + phase), t)
+    h = 1.0 / 40
+    assert abs(float(refined_peak(*args)) - abs(amplitude)) <= abs(amplitude) * max((omega * h) ** 8 / 1e7, 1e-14)
+    assert float(jnp.max(jnp.abs(args[0]))) < abs(amplitude) * (1 - 1e-6)  # the refinement did the work
+
+
+def test_refined_peak_of_a_polynomial_is_exact_between_nodes():
+    """A septic is its own septic Hermite interpolant: ``f = 1 - 5 u^2 + 3 u^7`` with
+    ``u = t - 0.537`` has its maximum 1 at ``u = 0`` (``f' = u (21 u^5 - 10)``, the other root
+    at ``u = 0.86`` outside), between the nodes 0.525 and 0.55 of [0.3, 0.8], where
+    ``0 < f < 1`` at both ends."""
+    def f(t):
+        return 1.0 - 5.0 * (t - 0.537) ** 2 + 3.0 * (t - 0.537) ** 7
+
+    t = jnp.linspace(0.3, 0.8, 21)
+    args = sampled(f, t)
+    assert float(jnp.max(jnp.abs(args[0]))) < 1.0 - 1e-4  # the samples miss the crest
+    np.testing.assert_allclose(float(refined_peak(*args)), 1.0, rtol=1e-13)
+    np.testing.assert_allclose(float(bounded_peak(*args)), 1.0, rtol=1e-13)
 
 
 SIGNALS = {
@@ -129,21 +150,30 @@ def test_nan_anywhere_gives_nan():
         assert np.isnan(bounded_peak(*broken)), (which, index)
 
 
+@pytest.fixture
+def peak_search_kind():
+    """``camjax.sdof.set_peak_search``, put back to the default ("bounded") afterwards."""
+    from camjax.sdof import set_peak_search
+
+    yield set_peak_search
+    set_peak_search("bounded")
+
+
 @pytest.mark.parametrize("damping", [0.0, 0.2])
-def test_sdof_peak_in_motion_bounded_equals_dense(monkeypatch, damping):
+def test_sdof_peak_in_motion_bounded_equals_dense(peak_search_kind, damping):
     """The Ct kernel's two searches (``camjax.sdof.set_peak_search``) agree, on a law with
     a plateau (many equal crests) and one without, across n in [1, 60]: within
     ``PEAK_TOLERANCE``, by which the bounded search leaves a plateau's equal crests after
     the first (about 1.5e-12 here)."""
     from camjax import laws
-    from camjax.sdof import _peaks, motion_grid, peak_in_motion, propagate
+    from camjax.sdof import motion_grid, peak_in_motion, propagate
 
     n = jnp.linspace(1.0, 60.0, 97)
     for name in ("modified-trapezoid", "poly4567"):
         grid = motion_grid(laws.as_law(name), 384)  # w h <= 0.98 at n = 60, within the SDOF path's step
 
         def peaks(kind, grid=grid):
-            monkeypatch.setitem(_peaks._peak_search, "kind", kind)
+            peak_search_kind(kind)
 
             def one(x):
                 w = 2 * jnp.pi * x
@@ -156,17 +186,17 @@ def test_sdof_peak_in_motion_bounded_equals_dense(monkeypatch, damping):
 
 def _sdof_signal(spec, n, zeta, resolution=192):
     """A law's grid, and at period ratio ``n`` the payload acceleration's node values and
-    five one-sided derivatives per interval end (``peak_in_motion``'s input, exactly)."""
+    five one-sided derivatives per interval end (``peak_in_motion``'s input)."""
     from camjax import laws
-    from camjax.sdof import motion_grid, propagate
-    from camjax.sdof._peaks import _output_columns, eigenvalue, mode_gain
+    from camjax.sdof import eigenvalue, gain_derivatives, mode_gain, motion_grid, propagate
 
     grid = motion_grid(laws.as_law(spec), resolution)
     w = 2 * jnp.pi * n
     q = propagate(grid, w, zeta, resolved=True)
-    values, left, right = _output_columns(mode_gain(w, zeta), eigenvalue(w, zeta), q,
-                                          *grid.one_sided(5))
-    return grid, q, values, jnp.stack(left, axis=1), jnp.stack(right, axis=1)
+    gain, lam = mode_gain(w, zeta), eigenvalue(w, zeta)
+    one_left, one_right = grid.one_sided(5)
+    return (grid, q, jnp.real(gain * q), gain_derivatives(gain, lam, q[:-1], one_left),
+            gain_derivatives(gain, lam, q[1:], one_right))
 
 
 @pytest.mark.parametrize("spec", ["parabolic", "scca:0.2,0.6,0.2", "modified-trapezoid"])
@@ -174,7 +204,7 @@ def _sdof_signal(spec, n, zeta, resolution=192):
 def test_plateau_bound_bounds_every_constant_interval_and_is_exact_at_crests(spec, zeta):
     """Finite exactly on the intervals of constant acceleration, never below the interval's
     own maximum (degree 11, refined), and undamped equal to it where a crest lies inside."""
-    from camjax.sdof._peaks import plateau_bound
+    from camjax.sdof import plateau_bound
 
     for n in (3.7, 17.3, 29.0):
         grid, _, values, left, right = _sdof_signal(spec, n, zeta)
@@ -193,35 +223,33 @@ def test_plateau_bound_bounds_every_constant_interval_and_is_exact_at_crests(spe
 
 
 @pytest.mark.parametrize("spec", ["parabolic", "scca:0.2,0.6,0.2"])
-def test_plateaus_close_after_their_first_crest(monkeypatch, spec):
-    """Undamped, the crests of a constant-acceleration piece tie.  With the plateau bound
-    at most three rounds of refinement settle the peak, against 7-15 with the Bernstein
-    bounds alone (rounds counted as the search runs); the same answer."""
-    from camjax.sdof import _peaks
+def test_plateaus_close_after_their_first_crest(spec):
+    """Undamped, the crests of a constant-acceleration piece tie.  ``peak_search`` with the
+    plateau bound (``camjax.sdof.plateau_bound``, as ``peak_in_motion`` takes it) settles the
+    peak in at most three rounds of refinement, against 7-15 with the Bernstein bounds
+    alone (rounds counted as the search runs); the same answer, the dense one."""
+    from camjax.sdof import plateau_bound
 
-    search, plateau_bound = _peaks.peak_search, _peaks.plateau_bound
-
-    def rounds(q, grid, w, bounded):
+    def rounds(values, widths, left, right, bound):
         calls = []
 
-        def counted(bound, hermite_of, largest, tolerance=0.0):
-            def hermite(index):
-                jax.debug.callback(lambda: calls.append(1))
-                return hermite_of(index)
+        def hermite_of(index):
+            jax.debug.callback(lambda: calls.append(1))
+            return hermite_data(values[index], widths[index], left[index], right[index],
+                                values[index + 1])
 
-            return search(bound, hermite, largest, tolerance)
-
-        monkeypatch.setattr(_peaks, "peak_search", counted)
-        monkeypatch.setattr(_peaks, "plateau_bound", plateau_bound if bounded else
-                            lambda *a: jnp.full_like(plateau_bound(*a), jnp.inf))
-        peak = jax.block_until_ready(_peaks.peak_in_motion(q, grid, w, 0.0))
+        peak = jax.block_until_ready(peak_search(bound, hermite_of, jnp.max(jnp.abs(values)),
+                                                 PEAK_TOLERANCE))
         return peak, len(calls) - 1  # the last call evaluates the winner
 
     for n in (17.3, 29.0):
-        grid, q, values, left, right = _sdof_signal(spec, n, 0.0)
-        dense = jnp.max(interval_peaks(septic_coefficients(values, grid.widths, left, right)))
+        grid, _, values, left, right = _sdof_signal(spec, n, 0.0)
         w = 2 * jnp.pi * n
-        (fast, few), (slow, many) = rounds(q, grid, w, True), rounds(q, grid, w, False)
+        bernstein = bernstein_bound(values, grid.widths, left[:, :3].T, right[:, :3].T)
+        bernstein = bernstein + 1e-5 * jnp.max(bernstein)  # the septic's bound for degree 11
+        plateau = jnp.minimum(bernstein, plateau_bound(values, left[:, 0], right[:, 0], grid.forcing, w, 0.0))
+        dense = jnp.max(interval_peaks(septic_coefficients(values, grid.widths, left, right)))
+        (fast, few), (slow, many) = (rounds(values, grid.widths, left, right, b) for b in (plateau, bernstein))
         assert few <= 3 and many >= 7, (n, few, many)
         np.testing.assert_allclose([fast, slow], dense, rtol=PEAK_TOLERANCE, atol=0)
 
@@ -229,7 +257,7 @@ def test_plateaus_close_after_their_first_crest(monkeypatch, spec):
 def test_plateau_bound_does_not_depend_on_the_signals_scale():
     """The slopes' product and the envelope's squares underflowed near 1e-160 (the bound
     fell 9e-6 below the crest); signs and hypot keep it at any scale."""
-    from camjax.sdof._peaks import plateau_bound
+    from camjax.sdof import plateau_bound
 
     grid, _, values, left, right = _sdof_signal("parabolic", 7.3, 0.0)
     w = 2 * jnp.pi * 7.3
@@ -243,19 +271,21 @@ def test_plateau_bound_does_not_depend_on_the_signals_scale():
 def test_equal_samples_give_an_exact_constant_with_the_interpolants_gradient():
     """``to_monomial`` of equal samples is ``(a, 0, ..., 0)`` exactly (NumPy and JAX);
     its derivatives in the samples stay those of the interpolant."""
-    from camjax.sdof import to_monomial
-    from camjax.sdof._grid import _TO_MONOMIAL
+    from camjax.sdof import GAUSS_POINTS, INTERPOLATION_DEGREE, to_monomial
+
+    # The interpolant through the samples at the Gauss points, from the Vandermonde matrix.
+    to_monomial_matrix = np.linalg.inv(np.vander(GAUSS_POINTS, INTERPOLATION_DEGREE + 1, increasing=True))
 
     samples = np.array([[0.3] * 6, [1.0, 1.0, 1.0, 1.0, 1.0, 1.0 + 1e-15], [-7.1] * 6])
     for result in (to_monomial(samples), np.asarray(to_monomial(jnp.asarray(samples)))):
         np.testing.assert_array_equal(result[[0, 2]], [[0.3, 0, 0, 0, 0, 0], [-7.1, 0, 0, 0, 0, 0]])
-        np.testing.assert_allclose(result[1], samples[1] @ _TO_MONOMIAL.T, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(result[1], samples[1] @ to_monomial_matrix.T, rtol=0, atol=1e-12)
         assert np.all(result[1][1:] != 0)  # unequal samples: the interpolant as it is
     huge = np.array([[np.inf] * 6, [1e308] * 6])  # NumPy and JAX alike, no NaN
     for result in (to_monomial(huge), np.asarray(to_monomial(jnp.asarray(huge)))):
         np.testing.assert_array_equal(result, [[np.inf, 0, 0, 0, 0, 0], [1e308, 0, 0, 0, 0, 0]])
     jacobian = jax.jacobian(lambda s: to_monomial(s))(jnp.full(6, 0.3))
-    np.testing.assert_allclose(jacobian, _TO_MONOMIAL, rtol=1e-15)
+    np.testing.assert_allclose(jacobian, to_monomial_matrix, rtol=1e-15)
 
 
 def test_set_peak_search_refuses_an_unknown_kind():
@@ -275,13 +305,13 @@ def test_sdof_peak_at_the_grid_step_against_septics_eight_times_finer(damping):
     from camjax.metrics import refined_peak
     from camjax.sdof import (
         MAX_PHASE_STEP,
-        _peaks,
         default_resolution,
         mode_gain,
         motion_grid,
         output_jets,
         peak_in_motion,
         propagate,
+        set_peak_search,
     )
 
     n = jnp.linspace(0.5, 60.0, 41)
@@ -298,13 +328,13 @@ def test_sdof_peak_at_the_grid_step_against_septics_eight_times_finer(damping):
 
         expected = np.asarray(jax.jit(jax.vmap(reference))(n))
         for kind in ("bounded", "dense"):
-            _peaks.set_peak_search(kind)
+            set_peak_search(kind)
             try:
                 got = jax.jit(jax.vmap(lambda x, grid=grid: peak_in_motion(
                     propagate(grid, 2 * jnp.pi * x, damping, resolved=True), grid,
                     2 * jnp.pi * x, damping)))(n)
             finally:
-                _peaks.set_peak_search("bounded")
+                set_peak_search("bounded")
             np.testing.assert_allclose(np.asarray(got), expected, rtol=1e-11, atol=0,
                                        err_msg=f"{name}, {kind}")
 

@@ -5,7 +5,13 @@ import math
 
 import numpy as np
 import pytest
-from helpers import FOLLOWER, scipy_periodic_deflection, two_cycloids
+from helpers import (
+    FOLLOWER,
+    program_lift,
+    scipy_deflection,
+    scipy_periodic_deflection,
+    two_cycloids,
+)
 from scipy.integrate import solve_ivp
 
 import camjax
@@ -105,6 +111,43 @@ def test_start_up_converges_to_the_periodic_steady_state(cam, solver):
     assert first > 1.0  # the start from rest is visibly off the steady state
     assert last < 1e-8 * np.abs(steady.contact_force_n).max()
     assert np.abs(accel[-nodes:] - steady.payload_acceleration_m_s2[:-1]).max() < 1e-8 * np.abs(accel).max()
+
+
+def test_start_up_against_a_scipy_solve_from_rest(cam):
+    """``startup``'s contact force over the first two turns from rest (``e = e' = 0`` on the
+    base circle) against scipy's integration of ``m x'' = k (y - x) + c (y' - x') - k_s x``:
+    ``F_c = F_0 + k e + c e'`` at every tenth node."""
+    rpm = 700.0
+    s, accel, force = startup(cam, rpm, 2)
+    pick = np.arange(0, s.size, 10)
+    e, de = scipy_deflection(cam.follower, rpm, program_lift(cam), [0, 100, 180, 280, 360],
+                             s[pick] * 60.0 / rpm)
+    f = cam.follower
+    expected = f.preload_n + f.stiffness * e + f.damping * de
+    assert np.abs(force[pick] - expected).max() < 1e-7 * np.abs(expected).max()
+    # x'' = (k e + c e' - k_s x) / m with x = y - e.
+    y = cam.lift(np.mod(360.0 * s[pick], 360.0))[0] * 1e-3
+    payload = (f.stiffness * e + f.damping * de - f.spring_rate * (y - e)) / f.mass_kg
+    assert np.abs(accel[pick] - payload).max() < 1e-7 * np.abs(payload).max()
+
+
+def test_jump_speed_against_a_scipy_steady_state():
+    """The built-in indexer's jump speed: the least contact force of the periodic steady
+    state from scipy (``m x'' = k (y - x) + c (y' - x') - k_s x`` integrated over a turn from
+    three starts, then the fixed point, rtol 1e-9; ``F_c = F_0 + k e + c e'`` on 20,000
+    instants) is positive 1 rpm below the reported speed and negative 1 rpm above it (the
+    least force moves by about 1.4 N per rpm there)."""
+    program = Program.load(example_path())
+    speed = jump_speed_rpm(SteadyState(program, 300.0), 300.0, 900.0)  # what analyse reports
+    assert 300.0 < speed < 900.0
+    f = program.follower
+    least = []
+    for rpm in (speed - 1.0, speed + 1.0):
+        times = np.linspace(0.0, 60.0 / rpm, 20000, endpoint=False)
+        e, de = scipy_periodic_deflection(f, rpm, program_lift(program), [0, 100, 180, 280, 360], times,
+                                          rtol=1e-9)
+        least.append(np.min(f.preload_n + f.stiffness * e + f.damping * de))
+    assert least[0] > 0 > least[1], least
 
 
 def _shooting(program, rpm, times):
@@ -326,6 +369,29 @@ def test_cli_json_and_out_dir(tmp_path, capsys):
         assert (tmp_path / name).stat().st_size > 0
     assert math.isclose(json.loads((tmp_path / "summary.json").read_text())["jump_speed_rpm"],
                         report["jump_speed_rpm"])
+    # profile.csv read back: a roller without offset, its pitch curve at r_b + r_r + y(theta)
+    # from the lift alone, the profile one roller radius inside it, and the pitch curve's
+    # radius of curvature (r^2 + r'^2)^1.5 / (r^2 + 2 r'^2 - r r'') in r(theta) (radians).
+    program = Program.load(example_path())
+    rows = np.genfromtxt(tmp_path / "profile.csv", delimiter=",", names=True)
+    y, dy, ddy = program.lift(rows["theta_deg"])
+    r = 52.0 + y
+    np.testing.assert_allclose(np.hypot(rows["pitch_x_mm"], rows["pitch_y_mm"]), r, rtol=1e-9)
+    np.testing.assert_allclose(rows["lift_mm"], y, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(np.hypot(rows["pitch_x_mm"] - rows["profile_x_mm"],
+                                        rows["pitch_y_mm"] - rows["profile_y_mm"]), 12.0, rtol=1e-8)
+    dr, ddr = dy * 180 / math.pi, ddy * (180 / math.pi) ** 2
+    curvature = (r**2 + dr**2) ** 1.5 / (r**2 + 2 * dr**2 - r * ddr)
+    joins = np.isin(np.round(rows["theta_deg"], 9), [0.0, 100.0, 180.0, 280.0])  # y'' steps there
+    np.testing.assert_allclose(rows["pitch_radius_of_curvature_mm"][~joins], curvature[~joins], rtol=1e-7)
+    # response.csv read back: Newton on the payload at every node, m x'' = F_c - F_0 - k_s x,
+    # and the least node force at 900 rpm just above the refined least force of the report.
+    h = np.genfromtxt(tmp_path / "response.csv", delimiter=",", names=True)
+    f = program.follower
+    newton = (h["contact_force_n"] - f.preload_n - f.spring_rate_n_per_mm * h["payload_displacement_mm"]) / f.mass_kg
+    np.testing.assert_allclose(h["payload_acceleration_m_s2"], newton, rtol=0, atol=1e-7 * np.abs(newton).max())
+    fast_rows = h["rpm"] == 900.0
+    assert fast["min_contact_force_n"] <= h["contact_force_n"][fast_rows].min() < fast["min_contact_force_n"] + 1.0
 
 
 def test_swinging_roller_program_geometry():
@@ -448,10 +514,30 @@ def _scipy_groove(program, rpm, turns):
     return strikes
 
 
+def test_first_groove_turn_from_rest_against_scipy():
+    """``groove_turns`` for a fixed count from rest (the least it runs, two turns): every
+    strike (angle, speed, flank) of the last turn against scipy's phase-by-phase
+    integration of the dead-zone follower from rest."""
+    rpm = 600.0
+    program = groove_cam(0.1)
+    turn = camjax.program.groove_turns(program, [rpm], turns=1)[0]
+    last = turn.turns - 1  # the turns run (at least two), whose last one is reported
+    period = 60.0 / rpm
+    reference = [r for r in _scipy_groove(program, rpm, turn.turns) if r[0] >= last * period]
+    assert len(turn.impacts) == len(reference) >= 2
+    for got, (t, speed, flank) in zip(turn.impacts, reference):
+        assert got.angle_deg == pytest.approx(360.0 * (t / period - last), abs=1e-6)
+        assert got.velocity_m_s == pytest.approx(speed, rel=1e-6)
+        assert got.flank == {0: "inner", 2: "outer"}[flank]
+
+
 @pytest.mark.slow
 def test_groove_clearance_hands_over_to_backlash(tmp_path, capsys):
     """The grooved cam's strikes against scipy; clearance -> 0 gives the contact-held flank
-    force; the report and the CLI list the strikes."""
+    force; the report and the CLI list the strikes.
+
+    Slow (35 s on the loaded 2-core machine, 2026-11-27): the scipy reference integrates the dead-zone follower from rest over every turn the groove run takes to settle, impact by impact, in Python.
+    """
     rpm = 600.0
     program = groove_cam(0.1)
     turns = camjax.program.groove_turns(program, [rpm])[0]
@@ -562,7 +648,10 @@ def test_a_groove_turn_is_settled_when_its_strikes_repeat():
 @pytest.mark.slow
 def test_a_settled_groove_turn_does_not_move_with_more_turns():
     """Run from rest until the strikes repeat: twice the turns moves them by less than
-    SETTLED_DEG (a fixed count from the contact decay left them moving by 5e-4 deg)."""
+    SETTLED_DEG (a fixed count from the contact decay left them moving by 5e-4 deg).
+
+    Slow (19 s on the loaded 2-core machine, 2026-11-27): two runs from rest, the second over twice the turns the first needed to settle.
+    """
     settled = camjax.program.groove_turns(groove_cam(0.1), [600.0])[0]
     assert settled.settled and settled.turns >= 2
     longer = camjax.program.groove_turns(groove_cam(0.1), [600.0], turns=2 * settled.turns)[0]

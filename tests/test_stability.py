@@ -130,7 +130,10 @@ def test_the_first_bad_entry_of_a_batch_is_the_one_named():
     camjax.SpringMass(1.0, 0.0),
 ], ids=lambda m: type(m).__name__)
 def test_every_model_sweep_reports_its_failures_with_throw_false(model):
-    """A step limit no ratio can meet: each model's sweep path returns the code per ratio."""
+    """A step limit no ratio can meet: each model's sweep path returns the code per ratio.
+
+    Slow (16-29 s per model, 90 s in all on the loaded 2-core machine, 2026-11-27): a step limit of 8 is a new static option, so each model's sweep path compiles again.
+    """
     method = "tsit5" if isinstance(model, camjax.SpringMass) else None
     curve = camjax.ct_curve(CYCLOIDAL, [1.5, 8.0], model=model, method=method, max_steps=8,
                             throw=False)
@@ -157,6 +160,7 @@ def test_detection_limit_is_where_the_growth_crosses_the_threshold():
 
 @pytest.mark.slow
 def test_stable_fixed_step_converges_at_second_order():
+    """Slow (28 s on the loaded 2-core machine, 2026-11-27): one compiled fixed-step program per step count."""
     n = 2.5
     errors = []
     for steps in (2000, 4000):
@@ -211,7 +215,10 @@ def test_max_steps_exhaustion_raises():
 
 @pytest.mark.slow
 def test_adaptive_without_jump_ts_stays_accurate_on_an_acceleration_jump():
-    """Parabolic (acceleration jump at 0.5): both ways meet the tolerance's accuracy."""
+    """Parabolic (acceleration jump at 0.5): both ways meet the tolerance's accuracy.
+
+    Slow (38 s on the loaded 2-core machine, 2026-11-27): Tsit5 at a tight tolerance, compiled twice (with and without ``jump_ts``).
+    """
     law = camjax.laws.get("parabolic")
     n = jnp.array([3.3, 7.9])
     reference = camjax.ct_curve(law, n, resolution=4096).residual
@@ -271,14 +278,17 @@ def test_measure_reports_errors_against_the_reference():
 
 @pytest.mark.slow
 def test_float32_error_floor_is_reported(tmp_path):
-    """float32 (a child process) gives errors near 1e-4, far above float64's."""
+    """float32 (a child process) gives errors near 1e-4, far above float64's.
+
+    Slow (30-34 s on the loaded 2-core machine, 2026-11-27): a child process imports JAX and compiles the exact path again in single precision.
+    """
     import json
     import os
     import subprocess
     import sys
     from pathlib import Path
 
-    script = Path(__file__).resolve().parents[1] / "experiments" / "work_precision.py"
+    script = Path(__file__).resolve().parents[1] / "experiments" / "benchmarks" / "work_precision.py"
     spec = tmp_path / "spec.json"
     n = np.linspace(1.5, 10.0, 5)
     spec.write_text(json.dumps({"law": "cycloidal", "n": n.tolist()}))
@@ -292,7 +302,10 @@ def test_float32_error_floor_is_reported(tmp_path):
 
 @pytest.mark.slow
 def test_gradient_through_diffrax_matches_exact_path():
-    """d(R)/dn through Tsit5 (RecursiveCheckpointAdjoint) against the exact path's autodiff."""
+    """d(R)/dn through Tsit5 (RecursiveCheckpointAdjoint) against the exact path's autodiff.
+
+    Slow (52 s on the loaded 2-core machine, 2026-11-27): reverse mode through Tsit5 at rtol 1e-10 on a 512-interval grid compiles a large program.
+    """
     import jax
 
     options = SpringMassOptions(method="tsit5", rtol=1e-10, atol=1e-12, resolution=512)

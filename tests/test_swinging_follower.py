@@ -46,8 +46,10 @@ def test_axial_frequency_converges_to_rod_with_end_mass():
     assert np.min(np.abs(freqs / exact - 1)) < 1e-4
 
 
-@pytest.mark.slow
 def test_quasi_static_rigid_limit_and_constraints():
+    """The forced response in the rise against the closed-form pinned-pinned beam under its
+    inertia load (a rod 100 times stiffer, where the response is quasi-static), and the
+    deflections' 1/E scaling.  Runs by default: 9 s on the loaded 2-core machine."""
     nominal = SwingingFollower(modes=3)
     stiff = SwingingFollower(modes=3, youngs_modulus=100 * nominal.youngs_modulus)
     turns = 0.2  # inside the 90-degree rise
@@ -201,6 +203,7 @@ def test_cli_rejects_bad_arguments(argv, message):
 
 @pytest.mark.slow
 def test_cli_json_report(tmp_path, capsys):
+    """Slow: the follower command end to end (four laws, their spectra and figures)."""
     import json
 
     assert _cli(["--law", "cycloidal", "--format", "json", "--out", str(tmp_path)]) == 0

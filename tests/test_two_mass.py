@@ -78,6 +78,7 @@ def test_energy_balance_motor_work_equals_stored_energy(law):
 
 @pytest.mark.slow
 def test_stiff_and_implicit_solvers_agree(law):
+    """Slow (21 s on the loaded 2-core machine, 2026-11-27): Kvaerno5, an implicit solver, compiles apart from Dopri8."""
     model = TwoMass(6.4, 3.0, 1.0)
     explicit = two_mass_response(law, model, **OPTIONS)
     implicit = two_mass_response(law, model, method="kvaerno5", **OPTIONS)
@@ -102,14 +103,16 @@ def test_bad_parameters_are_clear_errors(law):
         two_mass_ct_curve(law, [0.0], 1.0, 1.0)
 
 
-@pytest.mark.slow
 def test_step_limit_raises_solver_error(law):
+    """A step limit no solve can meet is a ``SolverError`` (7 s on the loaded 2-core
+    machine, most of it compiling the solve for the new static limit)."""
     with pytest.raises(camjax.SolverError):
         two_mass_ct_curve(law, [6.4], 3.0, 1.0, samples=1024, max_steps=10)
 
 
 @pytest.mark.slow
 def test_gradient_of_ct_in_stiffness_ratio_matches_finite_differences(law):
+    """Slow (22 s on the loaded 2-core machine, 2026-11-27): reverse mode through the two-mass Dopri8 solve compiles a program of its own."""
     def ct(k):
         return camjax.solve(law, TwoMass(4.0, k, 1.0), throw=False, **OPTIONS).metrics.ct
 
@@ -117,3 +120,40 @@ def test_gradient_of_ct_in_stiffness_ratio_matches_finite_differences(law):
     h = 1e-4
     fd = (float(ct(jnp.asarray(3.0 + h))) - float(ct(jnp.asarray(3.0 - h)))) / (2 * h)
     assert g == pytest.approx(fd, rel=1e-4)
+
+
+def test_coupled_response_against_scipy_in_physical_coordinates():
+    """At k = 3, m = 1 (far from both limits), against scipy (DOP853, rtol 1e-12) of the
+    equations in the camshaft angle and the payload position from rest at speed:
+    ``theta'' = w_i^2 (tau - theta) - m w^2 (s(theta) - x) v(theta)``, ``x'' = w^2 (s(theta) - x)``,
+    ``theta(0) = x(0) = x'(0) = 0``, ``theta'(0) = 1``, with the cycloidal law in closed form."""
+    from scipy.integrate import solve_ivp
+
+    n, k, m = 4.0, 3.0, 1.0
+    model = TwoMass(n, k, m)
+    response = camjax.solve(camjax.laws.Cycloidal(), model, samples=256)
+    w = 2 * np.pi * n
+    wi2 = k * m * w**2
+
+    def law(theta):
+        if theta <= 0.0:
+            return 0.0, 0.0
+        if theta >= 1.0:
+            return 1.0, 0.0
+        return theta - np.sin(2 * np.pi * theta) / (2 * np.pi), 1.0 - np.cos(2 * np.pi * theta)
+
+    def rhs(t, z):
+        theta, dtheta, x, dx = z
+        s, v = law(theta)
+        e = s - x
+        return [dtheta, wi2 * (t - theta) - m * w**2 * e * v, dx, w**2 * e]
+
+    tau = np.asarray(response.tau)
+    sol = solve_ivp(rhs, (0.0, tau[-1]), [0.0, 1.0, 0.0, 0.0], method="DOP853", rtol=1e-12, atol=1e-14,
+                    t_eval=tau)
+    theta, _, x, _ = sol.y
+    e = np.array([law(t)[0] for t in theta]) - x
+    np.testing.assert_allclose(np.asarray(response.twist), tau - theta, rtol=0, atol=1e-7 * np.abs(tau - theta).max())
+    np.testing.assert_allclose(np.asarray(response.payload_acceleration), w**2 * e, rtol=0,
+                               atol=1e-6 * np.abs(w**2 * e).max())
+    assert np.abs(tau - theta).max() > 1e-3  # the camshaft does lag

@@ -28,7 +28,7 @@ def register(subparsers) -> None:
         description=(
             "Time each method over a batch of period ratios and measure its max Ct and R "
             "error against the exact path at high resolution. Timings are of this machine "
-            "and this run; the full study is experiments/work_precision.py."
+            "and this run; the full study is experiments/benchmarks/work_precision.py."
         ),
     )
     add_law_option(parser, default=DEFAULT_LAWS)

@@ -290,7 +290,7 @@ class AbstractHybridModel(AbstractModel):
 
     def sweeps_in_turn(self, options) -> bool:
         """Phase by phase, ratios differ in their count of phases and steps.  Warm sweeps of
-        16 ratios (``experiments/sweep_in_turn.py``): friction's events 13.9 s in lockstep,
+        16 ratios (``experiments/benchmarks/sweep_in_turn.py``): friction's events 13.9 s in lockstep,
         0.21 s in turn; backlash 1.78 s and 0.11 s."""
         return True
 

@@ -16,9 +16,12 @@ studies, and a cam program's turn at machine speed (``camjax.program``):
   ``refined_extremes``), the dwell's peak and the residual vibration;
 - the same equation through diffrax (``integrate``, ``sdof_term``);
 - one chunked vmap for batches (``chunked_map``), its chunks sized by backend
-  (``chunk_nodes``, ``stack_laws``).
+  (``chunk_nodes``, ``stack_laws``; their sizes ``CHUNK_NODES`` on a CPU,
+  ``ACCELERATOR_CHUNK_NODES`` and ``ACCELERATOR_STACK_EVALUATIONS`` elsewhere, read-only here).
 """
 
+from ._batch import ACCELERATOR_CHUNK_NODES as ACCELERATOR_CHUNK_NODES
+from ._batch import ACCELERATOR_STACK_EVALUATIONS as ACCELERATOR_STACK_EVALUATIONS
 from ._batch import CHUNK_NODES as CHUNK_NODES
 from ._batch import chunk_nodes as chunk_nodes
 from ._batch import chunked_map as chunked_map

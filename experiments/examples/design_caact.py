@@ -8,7 +8,7 @@ covers the simplex a + b + c + d = 1 (d the zero-acceleration fraction) in steps
 then in steps of 0.01 around the best point; every member is one row of a vmapped
 exact-path batch (``camjax.ct_curves`` stacks laws of one type).
 
-Usage: python experiments/design_caact.py  (writes results/design_caact/)
+Usage: python experiments/examples/design_caact.py  (writes results/design_caact/)
 """
 
 from __future__ import annotations
@@ -74,8 +74,9 @@ def lp_lower_bound(n1, n2, max_jerk, knots=KNOTS, samples=64, directions=32):
     """
     ratios = np.linspace(n1, n2, samples)
     law_of = lambda c: BSplineLaw(c)  # noqa: E731
+    features = D.MaxCaCt(n1, n2, samples=samples).features  # x'' and the dwell's mode, linear in c
     (b, e_b), (m, e_m) = (tuple(np.asarray(x) for x in pair) for pair in D.linear_maps(
-        lambda c: D._objectives._payload_acceleration(law_of(c), ratios, 0.0), knots))
+        lambda c: features(law_of(c)), knots))
     m, b = m.reshape(b.size, knots), b.reshape(-1)
     e_m, e_b = e_m.reshape(e_b.size, knots), e_b.reshape(-1)
     omega = 2 * np.pi * ratios

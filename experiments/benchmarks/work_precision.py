@@ -5,12 +5,12 @@ time, steps, and the max error of Ct and R (units of Ca) against the exact path 
 high resolution.  Peers: scipy ``solve_ivp`` (timed on a subset of the period ratios and
 scaled to the whole batch) and float32 (a subprocess with ``JAX_ENABLE_X64=0``).
 
-    python experiments/work_precision.py                       # n in [1, 30], 1000 ratios
-    python experiments/work_precision.py --n-max 100 --resolutions 2560 --tag range100
-    python experiments/work_precision.py --level full --n-count 200 --laws parabolic --tag full200-parabolic
-    python experiments/work_precision.py --level none --laws harmonic --tag peers   # scipy, float32 only
-    python experiments/work_precision.py --level quick --n-count 50   # a smoke run
-    python experiments/work_precision.py --combine full200-poly4567,full200-parabolic --tag full200
+    python experiments/benchmarks/work_precision.py                       # n in [1, 30], 1000 ratios
+    python experiments/benchmarks/work_precision.py --n-max 100 --resolutions 2560 --tag range100
+    python experiments/benchmarks/work_precision.py --level full --n-count 200 --laws parabolic --tag full200-parabolic
+    python experiments/benchmarks/work_precision.py --level none --laws harmonic --tag peers   # scipy, float32 only
+    python experiments/benchmarks/work_precision.py --level quick --n-count 50   # a smoke run
+    python experiments/benchmarks/work_precision.py --combine full200-poly4567,full200-parabolic --tag full200
 
 Writes results/work_precision/<tag>.csv, .md, .json and .png; ``--combine`` merges the
 ``.json`` of runs over the same period ratios (one law per process, say) into one table,

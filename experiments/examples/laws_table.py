@@ -5,7 +5,7 @@ Writes results/laws/: ``laws_table.md`` (the table of docs/laws.md), ``laws.json
 the period ratio, undamped SDOF, as in the dynamics chapter of Rothbart's Cam Design
 Handbook).  One ``ct_curves`` call per grid; the whole run takes seconds.
 
-    python experiments/laws_table.py [--out results/laws]
+    python experiments/examples/laws_table.py [--out results/laws]
 """
 
 from __future__ import annotations

@@ -9,8 +9,8 @@ c cores k devices get at most c / k each (``per_device_bound``; 0.5 for 4 device
 2-core machine, which therefore cannot show scaling beyond 2 devices); the figures say
 how many cores there were and what the load was.
 
-    python experiments/bench_sharding.py                # writes results/sharding/bench.json
-    python experiments/bench_sharding.py --laws 16 --count 500
+    python experiments/benchmarks/bench_sharding.py                # writes results/sharding/bench.json
+    python experiments/benchmarks/bench_sharding.py --laws 16 --count 500
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ def main() -> None:
     parser.add_argument("--count", type=int, default=400, help="period ratios in [1, 30]")
     parser.add_argument("--ratios", type=int, default=4000, help="ratios of the one-law run")
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--out", type=Path, default=HERE.parent / "results" / "sharding")
+    parser.add_argument("--out", type=Path, default=HERE.parents[1] / "results" / "sharding")
     args = parser.parse_args()
     flag = f"--xla_force_host_platform_device_count={max(args.devices)}"
     os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {flag}".strip()

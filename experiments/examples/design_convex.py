@@ -7,13 +7,13 @@ the caps and band on grids, relaxes every constraint, so the LP value ``t`` over
 lower bound on ``max R`` of any spline of that size meeting the caps (``R = w|I|/Ca`` and
 ``Ca <= C``).  A gradient design within 5% of this bound is within 5% of the global optimum.
 
-Usage: python experiments/design_convex.py  (writes results/design_convex/)
+Usage: python experiments/examples/design_convex.py [OUT] [--quick]  (writes results/design_convex/)
 """
 
 from __future__ import annotations
 
+import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -28,17 +28,27 @@ def convex_lower_bound(n1, n2, max_ca, max_jerk, knots=24, **kwargs):
     return D.ConvexBound(n1, n2, knots, **kwargs).lower_bound(max_ca, max_jerk)
 
 
-def main(out=Path("results/design_convex")):
-    """The three cases of the issue against their LP bounds, one design each."""
+def main(argv=None):
+    """The three cases of the issue against their LP bounds, one design each (``--quick``:
+    one 10-knot case with a 60-step design, a smoke run)."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", nargs="?", type=Path, default=Path("results/design_convex"))
+    parser.add_argument("--out", dest="out_option", type=Path, help="the same as the positional OUT")
+    parser.add_argument("--quick", action="store_true", help="one small case (a smoke run)")
+    args = parser.parse_args(argv)
+    out = args.out_option or args.out
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     cases = [(6, 12, 7.5, 100.0, 24), (6, 12, 6.3, 100.0, 24), (6, 12, 7.5, 100.0, 32)]
+    if args.quick:
+        cases = [(6, 12, 7.5, 100.0, 10)]
     for n1, n2, ca, cj, knots in cases:
         t0 = time.perf_counter()
         bound, lp_law = convex_lower_bound(n1, n2, ca, cj, knots)
         t_lp = time.perf_counter() - t0
         lp_true = float(jnp.max(D.residual(lp_law, np.linspace(n1, n2, 2000))))
-        res = D.design(D.MaxResidual(n1, n2), caps=D.Caps(ca, cj), knots=knots, progress=False)
+        res = D.design(D.MaxResidual(n1, n2), caps=D.Caps(ca, cj), knots=knots, progress=False,
+                       **({"steps": 60} if args.quick else {}))
         r = res.values[f"max R over [{n1:g}, {n2:g}]"]
         rows.append(dict(band=[n1, n2], max_ca=ca, max_jerk=cj, knots=knots, lp_bound=bound,
                          lp_law_max_r=lp_true, design_max_r=r, ratio=r / bound,
@@ -57,4 +67,4 @@ def main(out=Path("results/design_convex")):
 
 
 if __name__ == "__main__":
-    main(*(Path(a) for a in sys.argv[1:]))
+    main()

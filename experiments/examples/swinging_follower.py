@@ -1,6 +1,6 @@
 """The swinging roller-follower study: flexible rod, four laws, spectra, parameter effects.
 
-    python experiments/swinging_follower.py [--sets base,omega640,...] [--modes-study] [--sdof]
+    python experiments/examples/swinging_follower.py [--sets base,omega640,...] [--modes-study] [--sdof]
 
 Writes results/swinging_follower/: profile.png, time_histories_<set>.png, spectra_<set>.png,
 peaks.csv, peaks.md, summary.json (one entry per parameter set), modes.csv, sdof.csv.

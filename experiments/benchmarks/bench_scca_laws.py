@@ -6,7 +6,7 @@ median of ``--repeats`` warm calls, with the per-law time.  Run it in two checko
 compare revisions (one process each, in turn; the machine's speed drifts between
 processes, so repeat the pair).
 
-    python experiments/bench_scca_laws.py [--laws 256] [--repeats 3] [--devices 1]
+    python experiments/benchmarks/bench_scca_laws.py [--laws 256] [--repeats 3] [--devices 1]
 
 ``--devices``: CPU devices (``camjax.sharding.use_cpu_cores``; default one per core), over
 which ``ct_curves`` splits the stack.

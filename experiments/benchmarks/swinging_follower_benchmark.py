@@ -1,6 +1,6 @@
 """Speed and accuracy of the swinging-follower simulation (three cam turns, base set).
 
-    nice -n 5 python experiments/swinging_follower_benchmark.py [--no-vmap] [--old-vmap]
+    nice -n 5 python experiments/benchmarks/swinging_follower_benchmark.py [--no-vmap] [--old-vmap]
 
 For each variant (solver, step-size controller, full model or axial sin modes dropped, i.e.
 treated quasi-statically) it reports the compile time (trace + XLA: first call minus the best
@@ -103,7 +103,7 @@ def main():
     parser.add_argument("--no-vmap", action="store_true", help="skip the vmapped four-law study")
     parser.add_argument("--old-vmap", action="store_true", help="also time the vmapped study with the old default")
     args = parser.parse_args()
-    report = {"command": "nice -n 5 python experiments/swinging_follower_benchmark.py", "cpus": os.cpu_count()}
+    report = {"command": "nice -n 5 python experiments/benchmarks/swinging_follower_benchmark.py", "cpus": os.cpu_count()}
     report["load_before"] = os.getloadavg()
     base = SwingingFollower()
     order = float(base.fundamental_frequency()) / base.omega

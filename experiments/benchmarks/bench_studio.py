@@ -7,7 +7,7 @@ Starts ``camjax studio FILE --no-browser --port 0`` in a fresh process, then tim
 - a sequence of edits that keep the program's shape (the number and kinds of segments):
   each ``POST /api/program`` (the report) and the ``GET /api/curves`` after it.
 
-    python experiments/bench_studio.py [--file feed] [--rpm 200:1400:7] [--edits 4]
+    python experiments/benchmarks/bench_studio.py [--file feed] [--rpm 200:1400:7] [--edits 4]
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import time
 import urllib.request
 from pathlib import Path
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _get(url: str):

@@ -16,9 +16,9 @@ time and CPU time, throughput in (law, ratio) evaluations per second per core an
 second (the figure that survives a shared machine), peak memory
 (``resource.getrusage``) and the machine load (``uptime``).
 
-    python experiments/scca_atlas.py                   # the full atlas (long: see the docs)
-    python experiments/scca_atlas.py --quick           # a small grid for development
-    python experiments/scca_atlas.py --analyse-only    # redo the figures from --work
+    python experiments/examples/scca_atlas.py                   # the full atlas (long: see the docs)
+    python experiments/examples/scca_atlas.py --quick           # a small grid for development
+    python experiments/examples/scca_atlas.py --analyse-only    # redo the figures from --work
 """
 
 from __future__ import annotations
@@ -295,7 +295,7 @@ def main() -> None:
     parser.add_argument("--no-cache", action="store_true",
                         help="do not use camjax's persistent compilation cache (a cold run)")
     parser.add_argument("--work", type=Path, help="chunk directory (default: under --out)")
-    parser.add_argument("--out", type=Path, default=HERE.parent / "results" / "scca_atlas")
+    parser.add_argument("--out", type=Path, default=HERE.parents[1] / "results" / "scca_atlas")
     parser.add_argument("--analyse-only", action="store_true",
                         help="skip the sweeps; analyse what --work holds")
     parser.add_argument("--devices", type=int, default=os.cpu_count(),

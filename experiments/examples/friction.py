@@ -8,7 +8,7 @@ same sweep with viscous damping added (Cycloidal and ModSine, ``zeta = 0.05``: d
 richer dissipation model change the answers?), and the error of the tanh regularisation
 against stick-slip as ``eps`` shrinks.
 
-    python experiments/friction.py [--n 5.25] [--dwell 1.0] [--quick]
+    python experiments/examples/friction.py [--n 5.25] [--dwell 1.0] [--quick] [--out DIR]
 
 writes results/friction/ (friction_sweep.csv, summary.json, *.png, README.md).
 """
@@ -33,7 +33,7 @@ import numpy as np  # noqa: E402
 
 from camjax.models import CoulombFriction  # noqa: E402
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "friction"
+OUT = Path(__file__).resolve().parents[2] / "results" / "friction"
 SAMPLES = 2048  # per rise
 DAMPING_CHECK = 0.05  # viscous damping ratio of the comparison with a richer model
 
@@ -71,16 +71,19 @@ def sweep(law, n, frictions, dwell, damping=0.0):
 
 
 def main():
+    global OUT
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=float, default=5.25, help="period ratio")
     parser.add_argument("--dwell", type=float, default=1.0, help="dwell, motion periods")
-    parser.add_argument("--quick", action="store_true", help="two laws, few levels")
+    parser.add_argument("--quick", action="store_true", help="one law, few levels (a smoke run)")
+    parser.add_argument("--out", type=Path, default=OUT, help="output folder (default: results/friction)")
     args = parser.parse_args()
+    OUT = args.out
     OUT.mkdir(parents=True, exist_ok=True)
     n, dwell = args.n, args.dwell
     w = 2 * np.pi * n
-    frictions = np.linspace(0.0, 1.5, 7 if args.quick else 31)
-    laws = camjax.laws.standard_laws()[:2] if args.quick else camjax.laws.standard_laws()
+    frictions = np.linspace(0.0, 1.5, 4 if args.quick else 31)
+    laws = camjax.laws.standard_laws()[:1] if args.quick else camjax.laws.standard_laws()
 
     rows, summary, histories = [], {"period_ratio": n, "dwell": dwell, "laws": {}}, {}
     for law in laws:

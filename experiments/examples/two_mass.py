@@ -10,7 +10,7 @@ shaft, driven at constant speed; payload on the output transmission), inertia ra
    envelopes of ModSine and Cycloidal cross (``camjax.ca_ct_crossings``), against the
    note's 6.4 (a rigid-input claim).
 
-    python experiments/two_mass.py [--inertia-ratio 1.0] [--quick]
+    python experiments/examples/two_mass.py [--inertia-ratio 1.0] [--quick] [--out DIR]
 
 writes results/two_mass/ (ct_vs_stiffness.csv, ca_ct_curves.csv, summary.json, *.png).
 """
@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 
 from camjax.models import TwoMass  # noqa: E402
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "two_mass"
+OUT = Path(__file__).resolve().parents[2] / "results" / "two_mass"
 LAWS = ("modified-sine", "modified-trapezoid", "cycloidal")
 OPTIONS = dict(samples=1024, rtol=1e-8, atol=1e-10)  # chart accuracy, ~1e-6 in Ct
 
@@ -58,10 +58,13 @@ def envelope_crossings(a, b):
 
 
 def main():
+    global OUT
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--inertia-ratio", type=float, default=1.0)
     parser.add_argument("--quick", action="store_true", help="coarse grids")
+    parser.add_argument("--out", type=Path, default=OUT, help="output folder (default: results/two_mass)")
     args = parser.parse_args()
+    OUT = args.out
     m = args.inertia_ratio
     OUT.mkdir(parents=True, exist_ok=True)
     laws = {name: camjax.laws.get(name) for name in LAWS}

@@ -13,7 +13,7 @@ preload each needs (``SteadyState.summary(...).min_contact_force_n`` through
 ``min_preload_n``) against rpm.  A modified-sine (or any rest-to-rest) transition does not
 apply: both ends of the segment are in motion.
 
-    python experiments/motion_tasks.py [--rpm 400,650] [--band 500:650]
+    python experiments/examples/motion_tasks.py [--rpm 400,650] [--band 500:650] [--quick] [--out DIR]
 
 writes results/motion_tasks/ (feed_turn.png, feed_turn.csv, summary.json,
 reversal_preload.png, reversal_preload.csv, reversal_preload.json, designed/ with the
@@ -46,7 +46,7 @@ from camjax.program import (  # noqa: E402
     write_program,
 )
 
-OUT = Path(__file__).resolve().parents[1] / "results" / "motion_tasks"
+OUT = Path(__file__).resolve().parents[2] / "results" / "motion_tasks"
 REVERSAL = 4  # the feed cam's G -> G segment (1-based)
 PLOT_RPM = (400.0, 700.0)  # the preload chart's speeds, wider than the design band
 PLOT_POINTS = 301
@@ -109,10 +109,15 @@ def compare_reversals(program: Program, rpm_lo: float, rpm_hi: float) -> dict:
 
 
 def main() -> None:
+    global OUT
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rpm", default="400,650", help="two speeds (rpm)")
     parser.add_argument("--band", default="500:650", help="the reversal's design band LO:HI (rpm)")
+    parser.add_argument("--quick", action="store_true",
+                        help="the steady state only: no reversal design (a smoke run)")
+    parser.add_argument("--out", type=Path, default=OUT, help="output folder (default: results/motion_tasks)")
     args = parser.parse_args()
+    OUT = args.out
     band = [float(x) for x in args.band.split(":")]
     speeds = [float(x) for x in args.rpm.split(",")]
     OUT.mkdir(parents=True, exist_ok=True)
@@ -153,7 +158,8 @@ def main() -> None:
         print(f"{s['rpm']:g} rpm: max|x''| {s['max_payload_acceleration_m_s2']:.4g} m/s2, min Fc "
               f"{s['min_contact_force_n']:.4g} N, min preload {s['min_preload_n']:.4g} N, residual "
               + ", ".join(f"{r:.3g}" for r in s["residual_vibration_mm"]) + " mm")
-    compare_reversals(program, *band)
+    if not args.quick:
+        compare_reversals(program, *band)
     print(f"wrote {OUT}")
 
 

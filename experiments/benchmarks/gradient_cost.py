@@ -8,7 +8,7 @@ exact path's autodiff on a fine grid (resolution 8192), checked against its own 
 differences.  Times are the best of three warm calls over a batch of period ratios; the
 compile time is listed apart.
 
-    python experiments/gradient_cost.py            # writes results/gradient_cost/
+    python experiments/benchmarks/gradient_cost.py            # writes results/gradient_cost/
 """
 
 from __future__ import annotations

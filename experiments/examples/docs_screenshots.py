@@ -6,7 +6,7 @@ Each page's rendered DOM must hold what a reader comes for (the page title, the 
 signature of ``ct_curve``, the notebook's executed figures); the screenshots go to
 ``docs/screenshots/`` (docs/development.md shows the home page's).
 
-    mkdocs build --strict && python experiments/docs_screenshots.py
+    mkdocs build --strict && python experiments/examples/docs_screenshots.py
 
 Chromium comes from Debian's packages (``apt-get install chromium``); ``--browser`` names
 another binary.  Exits 1 with the failed checks if a page does not render as expected.
@@ -25,7 +25,7 @@ import tempfile
 import threading
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 # (screenshot name, path in the site, window height, strings the rendered DOM must contain)
 PAGES = [

@@ -1,7 +1,7 @@
 """Warm time of one law's 1000-ratio Ct curve through ``camjax.ct_curve`` (what a user's
 second call costs), against the bare kernel on a pre-sampled law, in one process.
 
-    python experiments/warm_curve.py [--repeats 5]
+    python experiments/benchmarks/warm_curve.py [--repeats 5]
 """
 
 from __future__ import annotations

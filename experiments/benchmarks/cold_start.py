@@ -9,7 +9,7 @@ ratios travel better than seconds).  Writes results/cold_start/<name>.md and .js
 name being the date and the short commit of the timed checkout, then ``--label`` if given
 (``2026-11-23-5a18caf-follower``), so that every record says when and what it measured.
 
-    python experiments/cold_start.py [--repeats 3] [--only ct,help] [--root DIR]
+    python experiments/benchmarks/cold_start.py [--repeats 3] [--only ct,help] [--root DIR]
                                      [--baseline DIR] [--label follower]
 
 ``--root`` times another checkout (its code is put first on ``PYTHONPATH``); ``--baseline``
@@ -104,7 +104,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--only", help="comma-separated command names (default: all)")
-    parser.add_argument("--root", default=str(Path(__file__).resolve().parents[1]),
+    parser.add_argument("--root", default=str(Path(__file__).resolve().parents[2]),
                         help="checkout whose camjax is timed")
     parser.add_argument("--baseline", help="another checkout, timed in turn with --root")
     parser.add_argument("--label", help="what the run compares, appended to the file name")

@@ -14,7 +14,7 @@ Three parts, all in one process (so the ratios between them survive a shared mac
    of laws (20 random face laws and 10 extreme ones), undamped and at zeta = 0.05: the
    largest relative error in Ct and absolute error in R (units of Ca).
 
-    python experiments/bench_atlas.py        # writes results/scca_atlas/bench.json
+    python experiments/benchmarks/bench_atlas.py        # writes results/scca_atlas/bench.json
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ HERE = Path(__file__).resolve().parent
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--out", type=Path, default=HERE.parent / "results" / "scca_atlas")
+    parser.add_argument("--out", type=Path, default=HERE.parents[1] / "results" / "scca_atlas")
     args = parser.parse_args()
     os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "")
                                + " --xla_force_host_platform_device_count=1").strip()

@@ -5,7 +5,7 @@ compile included.  Each case runs in its own fresh interpreter (nothing compiled
 the same process then designs again with another Ca cap (compiled code reused), which
 is the baseline the cold figure is compared with.
 
-Usage: python experiments/design_speed.py  (writes results/design_speed/)
+Usage: python experiments/benchmarks/design_speed.py  (writes results/design_speed/)
 """
 
 from __future__ import annotations

@@ -12,9 +12,9 @@ On a backend other than the CPU, ``--configs`` times each pair ``K:E`` of
 ``camjax.sdof._batch.ACCELERATOR_CHUNK_NODES = 2**K`` and ``ACCELERATOR_STACK_EVALUATIONS = E``
 (``17:1``: the CPU's chunks, a stack's laws one at a time) in one process (compiled anew for each), with the device's peak memory where it reports one.
 
-    python experiments/device_check.py --write-reference ref.npz            # on the CPU
-    python experiments/device_check.py --reference ref.npz --out results.json
-    python experiments/device_check.py --reference ref.npz --configs 17:1 24:65536
+    python experiments/benchmarks/device_check.py --write-reference ref.npz            # on the CPU
+    python experiments/benchmarks/device_check.py --reference ref.npz --out results.json
+    python experiments/benchmarks/device_check.py --reference ref.npz --configs 17:1 24:65536
 """
 
 from __future__ import annotations

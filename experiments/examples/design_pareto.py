@@ -3,9 +3,9 @@ against Ca, for designed splines, their LP lower bound, the standard laws and th
 polynomial family s = I_tau(k, k), k = 3..7.
 
 Each Ca cap gets one design (24 knots, Cj <= 100) and one LP bound (the global optimum
-of the convex problem, experiments/design_convex.py).  R is in units of the law's own Ca.
+of the convex problem, experiments/examples/design_convex.py).  R is in units of the law's own Ca.
 
-Usage: python experiments/design_pareto.py  (writes results/design_pareto/)
+Usage: python experiments/examples/design_pareto.py  (writes results/design_pareto/)
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ longest, with the whole loop state selected at every trip.  This times both form
 same program in one process, for the models whose sweeps run diffrax, checks that they
 agree, and prints the ratio; ``AbstractModel.sweeps_in_turn`` picks the faster per model.
 
-    python experiments/sweep_in_turn.py [--count 16] [--repeats 3]
+    python experiments/benchmarks/sweep_in_turn.py [--count 16] [--repeats 3]
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ speed and the flights, timed (wall) with the number of XLA compilations it cause
 measurement on another checkout (its code first on ``PYTHONPATH``) in a subprocess of
 the same run, and prints both side by side with their ratios.
 
-    python experiments/bench_program_edit.py [--rpm 300:900:101] [--edits 3] [--baseline DIR]
+    python experiments/benchmarks/bench_program_edit.py [--rpm 300:900:101] [--edits 3] [--baseline DIR]
 """
 
 from __future__ import annotations
@@ -76,7 +76,7 @@ def main(argv=None) -> int:
         print(json.dumps(measure(args.rpm, args.edits, programs)))
         return 0
     runs = {}
-    for label, root in (("this", Path(__file__).resolve().parents[1]), ("baseline", args.baseline)):
+    for label, root in (("this", Path(__file__).resolve().parents[2]), ("baseline", args.baseline)):
         if root is None:
             continue
         env = dict(os.environ, PYTHONPATH=str(root))

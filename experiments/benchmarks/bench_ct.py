@@ -6,7 +6,7 @@ the exact path and of the diffrax path (Tsit5), and the time of a scipy ``solve_
 at Python speed), all in this process; each compared with the exact path at 4x the
 default resolution.  Writes results/bench_ct/results.md and .json.
 
-    python experiments/bench_ct.py [--scipy-subset 40]
+    python experiments/benchmarks/bench_ct.py [--scipy-subset 40]
 """
 
 from __future__ import annotations
