@@ -48,6 +48,7 @@ COMMANDS = {
                "--max-ca", "7.5", "--max-jerk", "100", "--out", "{out}"],
     "follower": ["-m", "camjax", "follower", "--law", "cycloidal"],
     "program": ["-m", "camjax", "program", "--rpm", "200:1200:101", "--no-flight"],
+    "program-feed": ["-m", "camjax", "program", "feed", "--rpm", "300:900:101"],
 }
 
 
