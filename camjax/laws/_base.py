@@ -90,6 +90,8 @@ class AbstractMotionLaw(eqx.Module):
             flat = tau.ravel()
             padded = np.pad(flat, (0, bucket(flat.size) - flat.size), constant_values=0.5)
             out = _compiled_evaluate(self, jnp.asarray(padded))
+            if not is_concrete(out):  # concrete inputs inside another trace: staged with it
+                return tuple(x[: flat.size].reshape(tau.shape) for x in out)
             return tuple(jnp.asarray(np.asarray(x)[: flat.size].reshape(tau.shape)) for x in out)
         return self._evaluate(jnp.asarray(tau, dtype=float))
 
