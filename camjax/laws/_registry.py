@@ -118,6 +118,9 @@ def get(name: str) -> AbstractMotionLaw:
         if key in table:
             return table[key]()
     family, _, text = key.partition(":")
+    if family == "table":
+        raise ValueError(f"law {name!r} is a lift table, fitted to points: camjax.laws.TableLaw.fit(angle_deg, "
+                         'lift_mm), or in a program law = "table" with file = "....csv" or points')
     if key.startswith(("polynomial5:", "polynomial7:")):
         degree = int(key[10])
         values = _parse_numbers(key[12:], float, name)
