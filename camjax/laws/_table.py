@@ -30,7 +30,7 @@ _LOG_PENALTY = (-14.0, 12.0)  # bisection range of log10 of the relative penalty
 _BISECTIONS = 30
 
 
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, eq=False)
 class TableFit:
     """Where a ``TableLaw`` came from and how well it fits (lengths in mm, angles in degrees).
 
@@ -54,6 +54,14 @@ class TableFit:
     source: str = "points"
     turn: tuple | None = None
     """A piece of a whole cam's periodic table: that table's points (the program writes it back)."""
+
+    # A record, not a part of the law's function: every record compares equal, so that laws
+    # of the same knots share their compiled code (it is a static field of ``TableLaw``).
+    def __eq__(self, other):
+        return isinstance(other, TableFit)
+
+    def __hash__(self):
+        return hash(TableFit)
 
 
 class TableLaw(AbstractSearchedPeaksLaw):
@@ -267,11 +275,18 @@ def _peak_acceleration(edges, taylor) -> float:
 def noise_estimate(y) -> float:
     """The points' scatter (mm) from their sixth differences (robust: the median), which a
     smooth curve sampled finely leaves near zero and independent noise ``sigma`` makes
-    about ``sqrt(924) sigma``."""
+    about ``sqrt(924) sigma``; 0 where those differences are not noise's.  Noise gives
+    neighbouring sixth differences a correlation of -792/924 (they share five points with
+    alternating signs); a smooth curve sampled coarsely gives near +1 (that is spacing,
+    not noise: the spacing check catches it)."""
     y = np.asarray(y, float)
     if y.size < 3 * MIN_POINTS:
         return 0.0
-    return float(np.median(np.abs(np.diff(y, 6))) / 0.6745 / math.sqrt(924.0))
+    d = np.diff(y, 6)
+    power = float(np.sum(d * d))
+    if power == 0 or float(np.sum(d[:-1] * d[1:])) / power > -0.5:
+        return 0.0
+    return float(np.median(np.abs(d)) / 0.6745 / math.sqrt(924.0))
 
 
 def table_checks(x, y, smoothing_mm, deviation, taylor, *, ends=None, period=None) -> TableFit:
@@ -288,7 +303,7 @@ def table_checks(x, y, smoothing_mm, deviation, taylor, *, ends=None, period=Non
         (_, smooth), _ = spline_fit(x, y, reference_tol, ends=ends, period=period)
         reference = _peak_acceleration(edges, smooth)
     spacing = 1.0
-    if x.size >= 2 * MIN_POINTS + 1 and (period is None or x.size % 2 == 0):
+    if noise == 0 and x.size >= 2 * MIN_POINTS + 1 and (period is None or x.size % 2 == 0):
         keep = np.arange(0, x.size, 2)
         if period is None and keep[-1] != x.size - 1:
             keep = np.append(keep, x.size - 1)
