@@ -93,34 +93,37 @@ def test_whole_cam_table_gives_the_cams_accelerations_forces_and_jump(indexer_an
     assert got.warnings == ()
 
 
+def _peak_acceleration(program):
+    """The cam's largest |y''| over the turn (mm/deg^2), from its segments' exact peaks."""
+    return max(row["peak_acceleration_mm_per_deg2"] for row in segment_kinematics(program))
+
+
 def test_noisy_table_needs_smoothing(indexer_and_table):
     indexer, angle, lift, want = indexer_and_table
     noisy = lift + np.random.default_rng(7).normal(0.0, 0.001, lift.size)  # a micrometre of noise
-    kinematic = _speeds(want, "max_kinematic_acceleration_m_s2")
+    exact = _peak_acceleration(indexer)
 
     # Interpolated, the noise's second derivative swamps the cam's acceleration.
-    raw = analyse(Program.from_table("raw", angle, noisy, indexer.follower), RPM, with_flight=False)
-    assert np.all(_speeds(raw, "max_kinematic_acceleration_m_s2") > 3 * kinematic)
-    assert any("scatter" in w and "smoothing_mm" in w for w in raw.warnings)
+    raw = Program.from_table("raw", angle, noisy, indexer.follower)
+    assert _peak_acceleration(raw) > 3 * exact
+    assert any("scatter" in w and "smoothing_mm" in w for w in design_warnings(raw))
 
-    # Within the noise's sigma: the follower's own accelerations, forces and jump speed hold,
-    # the cam's acceleration is still the noise's (its largest points lie 3 sigma out).
-    sigma = analyse(Program.from_table("sigma", angle, noisy, indexer.follower, smoothing_mm=0.001),
-                    RPM, with_flight=False)
-    assert _speeds(sigma, "max_payload_acceleration_m_s2") == pytest.approx(
-        _speeds(want, "max_payload_acceleration_m_s2"), rel=0.10)
-    assert sigma.jump_speed_rpm == pytest.approx(want.jump_speed_rpm, rel=0.03)
-    assert max(s["fit_deviation_mm"] for s in sigma.segments) == pytest.approx(0.001, rel=1e-3)
-    assert any("scatter" in w for w in sigma.warnings)
+    # Within three sigma of the points: the cam's acceleration within 10%, and no warning.
+    smooth = Program.from_table("3 sigma", angle, noisy, indexer.follower, smoothing_mm=0.003)
+    assert _peak_acceleration(smooth) == pytest.approx(exact, rel=0.10)
+    assert design_warnings(smooth) == []
 
-    # Within three sigma: the cam's acceleration too.
-    smooth = analyse(Program.from_table("3 sigma", angle, noisy, indexer.follower, smoothing_mm=0.003),
-                     RPM, with_flight=False)
-    assert _speeds(smooth, "max_kinematic_acceleration_m_s2") == pytest.approx(kinematic, rel=0.10)
+    # Within the noise's sigma: the follower's own accelerations, forces and jump speed hold
+    # (the train filters the noise), the cam's acceleration is still the noise's (the
+    # largest points lie three sigma out, and the fit must reach within one of them).
+    sigma = Program.from_table("sigma", angle, noisy, indexer.follower, smoothing_mm=0.001)
+    assert _peak_acceleration(sigma) > 2 * exact
+    got = analyse(sigma, RPM, with_flight=False)
     for key in ("max_payload_acceleration_m_s2", "min_contact_force_n", "max_contact_force_n"):
-        assert _speeds(smooth, key) == pytest.approx(_speeds(want, key), rel=0.10), key
-    assert smooth.jump_speed_rpm == pytest.approx(want.jump_speed_rpm, rel=0.03)
-    assert smooth.warnings == ()
+        assert _speeds(got, key) == pytest.approx(_speeds(want, key), rel=0.10), key
+    assert got.jump_speed_rpm == pytest.approx(want.jump_speed_rpm, rel=0.03)
+    assert max(s["fit_deviation_mm"] for s in got.segments) == pytest.approx(0.001, rel=1e-3)
+    assert any("scatter" in w for w in got.warnings)
 
 
 def test_sparse_table_warns():

@@ -16,8 +16,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..laws._table import MAX_POINTS, MIN_POINTS, TableFit, TableLaw, evaluate_pieces, spline_fit, table_checks
 from ..checks import finite_number
+from ..laws._table import (
+    MAX_POINTS,
+    MIN_POINTS,
+    TableFit,
+    TableLaw,
+    evaluate_pieces,
+    spline_fit,
+    table_checks,
+)
 
 COLUMNS = ("angle_deg", "lift_mm")
 _LIFT_MATCH_MM = 1e-6
