@@ -3,6 +3,7 @@ the closed-form laws and the analytic program they were sampled from."""
 
 import dataclasses
 import math
+import re
 import tomllib
 
 import jax
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 
 from camjax import laws
+from camjax.cli import main
 from camjax.laws import TableLaw
 from camjax.program import Program, analyse, design_warnings, example_path, segment_kinematics
 
@@ -178,12 +180,15 @@ GOOD = "angle_deg,lift_mm\n" + _rows(ANGLES, LIFTS)
     ("angle_deg,lift_mm\n" + _rows(np.linspace(0, 360, 37), np.sin(np.linspace(0, np.pi, 37))), "", True,
      r"lift\.csv: the last angle_deg \(360\) must be below 360"),
 ])
-def test_bad_tables_name_the_file_and_row(tmp_path, csv, extra, whole, message):
+def test_bad_tables_name_the_file_and_row(tmp_path, capsys, csv, extra, whole, message):
     path = _program_with(tmp_path, csv, extra, whole)
     with pytest.raises(ValueError, match=message) as caught:
         Program.load(path)
     assert "\n" not in str(caught.value)
     assert str(caught.value).startswith(str(path))
+    assert main(["program", str(path), "--no-flight"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert re.search(message, err) and "\n" not in err and "Traceback" not in err
 
 
 def test_inline_points_and_their_errors():
