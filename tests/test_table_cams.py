@@ -177,6 +177,8 @@ GOOD = "angle_deg,lift_mm\n" + _rows(ANGLES, LIFTS)
     ("angle,lift\n" + _rows(ANGLES, LIFTS), "", False, r"lift\.csv: line 1: the header must name the columns"),
     ("angle_deg,lift_mm\n" + _rows(np.linspace(0, 180, 19), np.sin(np.linspace(0, np.pi, 19))), "", True,
      r"lift\.csv: the table ends at 180 deg and does not close over the turn"),
+    ("angle_deg,lift_mm\n" + _rows(np.arange(0, 360, 10), 1 + np.cos(np.radians(np.arange(0, 360, 10)))), "", True,
+     r"lift\.csv: angle 0 must be on the base circle .* at 180 deg 0 mm"),
     ("angle_deg,lift_mm\n" + _rows(np.linspace(0, 360, 37), np.sin(np.linspace(0, np.pi, 37))), "", True,
      r"lift\.csv: the last angle_deg \(360\) must be below 360"),
 ])

@@ -326,7 +326,7 @@ class Program:
         angle, lift = _table_arrays(angle_deg, lift_mm)
         if smoothing_mm is not None and _finite(smoothing_mm, "smoothing_mm") <= 0:
             raise ValueError(f"smoothing_mm must be a positive tolerance in mm, got {smoothing_mm:g}")
-        segments = [Segment(a, h, law) for a, h, law in turn_segments(angle, lift, smoothing_mm, "the table", "table")]
+        segments = [Segment(a, h, law) for a, h, law in turn_segments(angle, lift, smoothing_mm, "points", "from_table")]
         return cls(name, tuple(segments), follower, materials)
 
     def to_toml(self, law_files: dict[int, str] | None = None) -> str:
@@ -560,7 +560,8 @@ def _law(i: int, name, base: Path | None) -> AbstractMotionLaw:
     try:
         return laws.get(name)
     except ValueError as error:
-        raise ValueError(f'segment {i}: {error}, or "polynomial" (with degree, start, end)') from None
+        raise ValueError(f'segment {i}: {error}, or "polynomial" (with degree, start, end), '
+                         'or "table" (with file or points)') from None
 
 
 def with_law(program: Program, segment: int, law) -> Program:

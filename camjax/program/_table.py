@@ -179,6 +179,12 @@ def turn_segments(angle, lift, smoothing_mm: float | None, source: str, where: s
     except ValueError as error:
         raise ValueError(f"{where}: {source}: {error}") from None
     info = table_checks(angle / 360.0, lift, smoothing_mm, deviation, taylor, period=1.0)
+    slack = max(1e-6, smoothing_mm or 0.0, 3 * info.noise_mm)
+    low = int(np.argmin(lift))
+    if lift[low] < lift[0] - slack:
+        raise ValueError(f"{where}: {source}: angle 0 must be on the base circle (the program's lift "
+                         f"is measured from it), but the lift there is {lift[0]:g} mm and at "
+                         f"{angle[low]:g} deg {lift[low]:g} mm; start the table at its lowest point")
     top = int(np.argmax(lift))
     if top == 0 or np.ptp(lift) == 0:
         raise ValueError(f"{where}: {source}: the highest lift must lie after angle 0 (angle 0 is "
