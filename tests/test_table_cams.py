@@ -52,6 +52,16 @@ def test_table_law_is_the_exact_spline_of_a_sampled_cycloid():
         laws.get("table")
 
 
+def test_table_law_saves_and_loads(tmp_path):
+    angle = np.linspace(0.0, 90.0, 31)
+    law = TableLaw.fit(angle, -15.0 * cycloid(angle / 90.0)[0])  # a return
+    back = laws.load(laws.save(law, tmp_path / "law.json"))
+    tau = np.linspace(0.0, 1.0, 77)
+    assert isinstance(back, TableLaw)
+    assert np.asarray(back.a(tau)) == pytest.approx(np.asarray(law.a(tau)), abs=1e-13)
+    assert np.asarray(law.s(tau)) == pytest.approx(cycloid(tau)[0], abs=1e-6)
+
+
 def test_segment_table_file_in_a_program(tmp_path):
     indexer = Program.load(example_path("indexer"))
     angle = np.arange(0.0, 100.0 + 1e-9, 0.5)
