@@ -103,6 +103,12 @@ def test_whole_cam_table_gives_the_cams_accelerations_forces_and_jump(indexer_an
     assert got.jump_speed_rpm == pytest.approx(want.jump_speed_rpm, rel=0.005)
     assert max(s["fit_deviation_mm"] for s in got.segments) < 1e-12
     assert got.warnings == ()
+    # Written back, it is one periodic table again (inline), and reads the same.
+    text = table.to_toml()
+    assert "[[segment]]" not in text
+    again = Program.from_dict(tomllib.loads(text))
+    theta = np.linspace(0.0, 360.0, 721)
+    assert np.max(np.abs(again.lift(theta)[2] - table.lift(theta)[2])) < 1e-12
 
 
 def _peak_acceleration(program):

@@ -258,7 +258,8 @@ MAX_HALF_WIDTH_RATIO = 0.1
 
 def design_warnings(program: Program, report=None) -> list[str]:
     """Where the input or a result lies outside what the design rules and the models hold,
-    one line each (empty where all is well): the program's own numbers, and with ``report``
+    one line each (empty where all is well): the program's own numbers (a lift table's noise
+    or spacing, ``table_warnings``, among them), and with ``report``
     (``analyse``'s ``Report`` or its ``as_dict()``) the pressure angle and the Hertz contact.
 
     Each is a warning, not an error: the numbers are computed, but they are not to be

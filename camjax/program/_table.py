@@ -203,7 +203,7 @@ def turn_segments(angle, lift, smoothing_mm: float | None, source: str, where: s
         fit = dataclasses.replace(
             info, points=points, source=source, smoothing_mm=smoothing_mm,
             deviation_mm=_deviation(edges, taylor, angle / 360.0, lift, mine), turn=turn)
-        out.append((360.0 * width, float(rise), TableLaw(pieces / rise, (edges[first:last + 1] - x0) / width, fit)))
+        out.append((float(360.0 * width), float(rise), TableLaw(pieces / rise, (edges[first:last + 1] - x0) / width, fit)))
     return out
 
 
