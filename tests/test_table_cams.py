@@ -188,7 +188,7 @@ GOOD = "angle_deg,lift_mm\n" + _rows(ANGLES, LIFTS)
     (GOOD.replace("\n5.0,", "\nfive,"), "", False, r"lift\.csv: line 3: angle_deg 'five' is not a number"),
     ("angle_deg;lift_mm\n" + _rows(ANGLES, LIFTS, ";").replace(".", ","), "", False,
      r"lift\.csv: line 2: angle_deg '0,0' is not a number \(decimals take '\.', not ','\)"),
-    (GOOD, "smoothing_mm = 1e-18", False, r"smoothing_mm = 1e-18 cannot be met"),
+    (GOOD, "smoothing_mm = 1e-18", False, r"lift\.csv: smoothing_mm = 1e-18 cannot be met: even the interpolating spline is .* mm from point \d+ \(angle_deg [\d.]+\)"),
     (GOOD, "lift_mm = 21", False, r"lift_mm = 21 but lift\.csv rises 20 mm"),
     ("angle,lift\n" + _rows(ANGLES, LIFTS), "", False, r"lift\.csv: line 1: the header must name the columns"),
     ("angle_deg,lift_mm\n" + _rows(np.linspace(0, 180, 19), np.sin(np.linspace(0, np.pi, 19))), "", True,

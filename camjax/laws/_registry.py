@@ -190,7 +190,7 @@ def rest_to_rest_fault(law: AbstractMotionLaw) -> str | None:
 
 def rest_to_rest_names() -> str:
     """The laws the rest-to-rest tools take, as their errors list them."""
-    return ", ".join(names() + list(FAMILIES) + ["polynomial5/7 with V0 = V1 = 0", "B-spline laws (law files)"])
+    return ", ".join(names() + list(FAMILIES) + ["polynomial5/7 with V0 = V1 = 0", "B-spline and table laws (law files)"])
 
 
 def rest_to_rest(law, tool: str, what: str = "law") -> AbstractMotionLaw:

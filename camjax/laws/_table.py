@@ -109,7 +109,7 @@ class TableLaw(AbstractSearchedPeaksLaw):
         rise = y[-1] - y0 if lift is None else float(lift)
         if rise == 0:
             raise ValueError("the table's last lift equals its first: a rise needs a lift")
-        curve, deviation = spline_fit(tau, y, smoothing_mm, ends=(y0, y0 + rise))
+        curve, deviation = spline_fit(tau, y, smoothing_mm, ends=(y0, y0 + rise), angle_scale=beta)
         edges, taylor = curve
         coefficients = (taylor - np.eye(1, DEGREE + 1)[0] * y0) / rise
         info = table_checks(tau, y, smoothing_mm, deviation, taylor, ends=(y0, y0 + rise))
@@ -170,7 +170,8 @@ def _jerk_energy(knots: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return jerk.T @ (w[:, None] * jerk)
 
 
-def spline_fit(x, y, smoothing_mm=None, *, ends=None, period: float | None = None):
+def spline_fit(x, y, smoothing_mm=None, *, ends=None, period: float | None = None,
+               angle_scale: float | None = None):
     """A quintic spline with knots at the points ``x`` (increasing) near the lifts ``y``.
 
     ``ends=(y_first, y_last)``: clamped at ``x[0]`` and ``x[-1]`` (those lifts, ``v = a = 0``
@@ -178,6 +179,7 @@ def spline_fit(x, y, smoothing_mm=None, *, ends=None, period: float | None = Non
     where ``smoothing_mm`` is ``None``, else the least ``int j^2`` within ``smoothing_mm``
     of every point.  Returns ``((edges, taylor), deviation)``: the knots, each piece's
     Taylor coefficients about its midpoint (``(pieces, 6)``), and the largest ``|f(x) - y|``.
+    ``angle_scale`` (degrees per unit of ``x``) puts the point's angle in a tolerance's error.
     """
     x, y = np.asarray(x, float), np.asarray(y, float)
     n = x.size
@@ -235,9 +237,11 @@ def spline_fit(x, y, smoothing_mm=None, *, ends=None, period: float | None = Non
     coefficients, deviation = solve(None)
     if smoothing_mm is not None:
         if deviation > smoothing_mm:
+            k = int(np.argmax(np.abs(collocation @ coefficients - y)))
+            angle = (x[k] - x[0]) * (angle_scale or 1.0)
             raise ValueError(f"smoothing_mm = {smoothing_mm:g} cannot be met: even the interpolating "
-                             f"spline is {deviation:.3g} mm from a point (round-off); give a larger "
-                             "tolerance or none")
+                             f"spline is {deviation:.3g} mm from point {k + 1} (angle_deg {angle:g}); "
+                             "give a larger tolerance or none")
         lo, hi = _LOG_PENALTY
         best = solve(hi)
         if best[1] > smoothing_mm:

@@ -175,7 +175,7 @@ def turn_segments(angle, lift, smoothing_mm: float | None, source: str, where: s
                          f"over the turn (its gap to 360 is more than twice its widest spacing, "
                          f"{widest:g} deg); give the whole turn")
     try:
-        (edges, taylor), deviation = spline_fit(angle / 360.0, lift, smoothing_mm, period=1.0)
+        (edges, taylor), deviation = spline_fit(angle / 360.0, lift, smoothing_mm, period=1.0, angle_scale=360.0)
     except ValueError as error:
         raise ValueError(f"{where}: {source}: {error}") from None
     info = table_checks(angle / 360.0, lift, smoothing_mm, deviation, taylor, period=1.0)
