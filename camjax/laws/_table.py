@@ -37,7 +37,7 @@ class TableFit:
     ``points``: the table's ``(angle_deg, lift_mm)`` rows that the law covers, angles from
     the law's start; ``deviation_mm``: the fit's largest distance from them;
     ``smoothing_mm``: the tolerance it was smoothed to (``None``: interpolating);
-    ``noise_mm``: the points' scatter estimated from their sixth differences;
+    ``noise_mm``: the points' scatter (``noise_estimate``);
     ``acceleration_ratio``: the fit's peak acceleration over that of a fit smoothed to
     three times the scatter (near 1 where the points' noise does not reach the
     acceleration); ``spacing_ratio``: the same over a fit through every other point (near
@@ -276,21 +276,28 @@ def _peak_acceleration(edges, taylor) -> float:
     return float(np.max(np.abs(evaluate_pieces(edges, taylor, x, 2))))
 
 
-def noise_estimate(y) -> float:
-    """The points' scatter (mm) from their sixth differences (robust: the median), which a
-    smooth curve sampled finely leaves near zero and independent noise ``sigma`` makes
-    about ``sqrt(924) sigma``; 0 where those differences are not noise's.  Noise gives
-    neighbouring sixth differences a correlation of -792/924 (they share five points with
-    alternating signs); a smooth curve sampled coarsely gives near +1 (that is spacing,
-    not noise: the spacing check catches it)."""
-    y = np.asarray(y, float)
+def noise_estimate(x, y) -> float:
+    """The points' scatter (mm): over every 7 neighbouring points, the part of ``y`` that no
+    quintic through them explains (a unit null vector of their degree-5 Vandermonde matrix:
+    the sixth difference over ``sqrt(924)`` for equal spacing), whose robust spread (the
+    median) is ``sigma`` for independent noise and near 0 for a smooth curve sampled
+    finely.  0 where those residuals are not noise's: noise gives neighbouring windows a
+    correlation near -792/924 (they share six points with alternating weights); a smooth
+    curve sampled coarsely gives near +1 (that is spacing, not noise: its own check)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
     if y.size < 3 * MIN_POINTS:
         return 0.0
-    d = np.diff(y, 6)
-    power = float(np.sum(d * d))
-    if power == 0 or float(np.sum(d[:-1] * d[1:])) / power > -0.5:
+    window = np.arange(y.size - 6)[:, None] + np.arange(7)
+    local = x[window] - x[window].mean(axis=1, keepdims=True)
+    local /= np.max(np.abs(local), axis=1, keepdims=True)
+    vandermonde = local[..., None] ** np.arange(DEGREE + 1)
+    null = np.linalg.svd(vandermonde, full_matrices=True)[0][..., -1]
+    null *= np.sign(null[:, -1:])  # one sign convention, as the sixth difference's +1 last
+    r = np.sum(null * y[window], axis=1)
+    power = float(np.sum(r * r))
+    if power == 0 or float(np.sum(r[:-1] * r[1:])) / power > -0.5:
         return 0.0
-    return float(np.median(np.abs(d)) / 0.6745 / math.sqrt(924.0))
+    return float(np.median(np.abs(r)) / 0.6745)
 
 
 def table_checks(x, y, smoothing_mm, deviation, taylor, *, ends=None, period=None) -> TableFit:
@@ -299,7 +306,7 @@ def table_checks(x, y, smoothing_mm, deviation, taylor, *, ends=None, period=Non
     x, y = np.asarray(x, float), np.asarray(y, float)
     edges = np.append(x, x[0] + period) if period is not None else x
     peak = _peak_acceleration(edges, taylor)
-    noise = noise_estimate(y)
+    noise = noise_estimate(x, y)
     noise = noise if noise > 1e-7 * max(1.0, float(np.ptp(y))) else 0.0
     reference_tol = max(smoothing_mm or 0.0, 3 * noise) or None
     reference = peak
