@@ -196,7 +196,9 @@ def _motion_lines(report: dict) -> list[str]:
             lines.append(
                 f"segment {g['segment']} {g['kind']} ({g['law']}): peak y' {g['peak_velocity_mm_per_deg']:.4g} "
                 f"mm/deg, y'' {g['peak_acceleration_mm_per_deg2']:.4g} mm/deg2, y''' "
-                f"{g['peak_jerk_mm_per_deg3']:.4g} mm/deg3" + (", overshoots its ends" if g["overshoot"] else ""))
+                f"{g['peak_jerk_mm_per_deg3']:.4g} mm/deg3" + (", overshoots its ends" if g["overshoot"] else "")
+                + ("" if g.get("fit_deviation_mm") is None else
+                   f", table fit within {g['fit_deviation_mm']:.3g} mm of its points"))
     lines += [f"join {j['before']}|{j['after']} at {j['angle_deg']:g} deg: {j['state']} {j['continuity']}, "
               f"y' {j['velocity_mm_per_deg']:.4g} mm/deg" for j in report["joins"]]
     return lines

@@ -35,3 +35,5 @@ from ._scca import Parabolic as Parabolic
 from ._scca import SimpleHarmonic as SimpleHarmonic
 from ._scca import constant_velocity_variant as constant_velocity_variant
 from ._spline import BSplineLaw as BSplineLaw
+from ._table import TableFit as TableFit
+from ._table import TableLaw as TableLaw

@@ -1,4 +1,4 @@
-"""Save and load motion laws as JSON: B-spline laws by their coefficients, others by name."""
+"""Save and load motion laws as JSON: B-spline and table laws by their coefficients, others by name."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from ._base import AbstractMotionLaw
 from ._boundary import CorrectedPolynomial
 from ._registry import get
 from ._spline import BSplineLaw
+from ._table import TableLaw
 
 FORMAT = "camjax-law"
 VERSION = 1
@@ -30,6 +31,14 @@ def to_dict(law: AbstractMotionLaw) -> dict:
             "knots": [float(x) for x in law.knots],
             "control_points": [float(x) for x in np.asarray(law.control_points)],
             "coefficients": [float(x) for x in np.asarray(law.coefficients)],
+        }
+    if isinstance(law, TableLaw):
+        return {
+            "format": FORMAT,
+            "version": VERSION,
+            "kind": "table",
+            "edges": list(law.edges),
+            "coefficients": np.asarray(law.coefficients, dtype=float).tolist(),
         }
     if isinstance(law, CorrectedPolynomial):
         return {
@@ -65,8 +74,14 @@ def from_dict(data: dict) -> AbstractMotionLaw:
                                        spline_degree=int(data["spline_degree"]))
         except KeyError as missing:
             raise ValueError(f"corrected-polynomial law description lacks {missing}") from None
+    if kind == "table":
+        try:
+            return TableLaw(np.asarray(data["coefficients"], dtype=float), data["edges"])
+        except KeyError as missing:
+            raise ValueError(f"table law description lacks {missing}") from None
     if kind != "bspline":
-        raise ValueError(f"unknown law kind {kind!r}; expected 'bspline', 'corrected-polynomial' or 'named'")
+        raise ValueError(f"unknown law kind {kind!r}; expected 'bspline', 'table', 'corrected-polynomial' "
+                         "or 'named'")
     try:
         law = BSplineLaw(
             jnp.asarray(np.asarray(data["coefficients"], dtype=float)),

@@ -118,6 +118,9 @@ def get(name: str) -> AbstractMotionLaw:
         if key in table:
             return table[key]()
     family, _, text = key.partition(":")
+    if family == "table":
+        raise ValueError(f"law {name!r} is a lift table, fitted to points: camjax.laws.TableLaw.fit(angle_deg, "
+                         'lift_mm), or in a program law = "table" with file = "....csv" or points')
     if key.startswith(("polynomial5:", "polynomial7:")):
         degree = int(key[10])
         values = _parse_numbers(key[12:], float, name)
@@ -187,7 +190,7 @@ def rest_to_rest_fault(law: AbstractMotionLaw) -> str | None:
 
 def rest_to_rest_names() -> str:
     """The laws the rest-to-rest tools take, as their errors list them."""
-    return ", ".join(names() + list(FAMILIES) + ["polynomial5/7 with V0 = V1 = 0", "B-spline laws (law files)"])
+    return ", ".join(names() + list(FAMILIES) + ["polynomial5/7 with V0 = V1 = 0", "B-spline and table laws (law files)"])
 
 
 def rest_to_rest(law, tool: str, what: str = "law") -> AbstractMotionLaw:

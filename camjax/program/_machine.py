@@ -258,7 +258,8 @@ MAX_HALF_WIDTH_RATIO = 0.1
 
 def design_warnings(program: Program, report=None) -> list[str]:
     """Where the input or a result lies outside what the design rules and the models hold,
-    one line each (empty where all is well): the program's own numbers, and with ``report``
+    one line each (empty where all is well): the program's own numbers (a lift table's noise
+    or spacing, ``table_warnings``, among them), and with ``report``
     (``analyse``'s ``Report`` or its ``as_dict()``) the pressure angle and the Hertz contact.
 
     Each is a warning, not an error: the numbers are computed, but they are not to be
@@ -289,6 +290,7 @@ def design_warnings(program: Program, report=None) -> list[str]:
     if f.contact_width_mm is not None and f.contact_width_mm > 20 * f.base_radius_mm:
         out.append(f"follower.contact_width_mm = {f.contact_width_mm:g} is more than ten times the "
                    f"base circle's diameter: check the unit (mm)")
+    out += table_warnings(program)
     if report is None:
         return out
     worst = max((s for s in report["speeds"] if s.get("contact_half_width_mm")),
@@ -303,4 +305,37 @@ def design_warnings(program: Program, report=None) -> list[str]:
                        "where Hertz theory holds: its stress "
                        f"({worst['max_contact_stress_mpa']:.3g} MPa) is not to be trusted; check "
                        "follower.contact_width_mm and the moduli")
+    return out
+
+
+NOISY_ACCELERATION_RATIO = 1.2
+"""A table fit's peak acceleration this many times that of a fit smoothed to three times the
+points' scatter: the noise, not the cam, sets its accelerations."""
+COARSE_SPACING_CHANGE = 0.05
+"""A change of the peak acceleration this large when every other point of a table is
+dropped: the spacing does not resolve the acceleration."""
+
+
+def table_warnings(program: Program) -> list[str]:
+    """The lift tables' warnings: points noisy or sparse enough to make the accelerations
+    unreliable (``camjax.laws.TableFit``'s two checks), once per table."""
+    out, seen = [], set()
+    for i, seg in enumerate(program.segments, 1):
+        fit = getattr(seg.law, "fit_info", None)
+        if fit is None or (fit.turn is not None and fit.turn in seen):
+            continue
+        where = "the cam's lift table" if fit.turn is not None else f"segment {i}: the lift table"
+        if fit.turn is not None:
+            seen.add(fit.turn)
+        where += f" ({fit.source})"
+        if fit.acceleration_ratio > NOISY_ACCELERATION_RATIO:
+            out.append(f"{where}: the points scatter by about {fit.noise_mm:.2g} mm; the fit's peak "
+                       f"acceleration is {fit.acceleration_ratio:.3g} times that of a fit within "
+                       f"{3 * fit.noise_mm:.2g} mm of them, so its accelerations and forces follow the "
+                       f"noise: set smoothing_mm = {3 * fit.noise_mm:.2g} (about three times the scatter)")
+        elif abs(fit.spacing_ratio - 1) > COARSE_SPACING_CHANGE:
+            spacing = max(b[0] - a[0] for a, b in zip(fit.points[:-1], fit.points[1:]))
+            out.append(f"{where}: its points (up to {spacing:.3g} deg apart) are too sparse for its "
+                       f"acceleration: a fit through every other point changes the peak acceleration "
+                       f"by {100 * abs(fit.spacing_ratio - 1):.3g}%; give points closer together")
     return out

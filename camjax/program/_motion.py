@@ -244,7 +244,9 @@ def displacement_range(law: AbstractMotionLaw) -> tuple[float, float]:
 
 
 def segment_kinematics(program) -> list[dict]:
-    """Per segment: kind, peak |y'|, |y''|, |y'''| (mm/deg^k) and whether the lift overshoots its ends."""
+    """Per segment: kind, peak |y'|, |y''|, |y'''| (mm/deg^k) whether the lift overshoots its
+    ends, and for a lift table (``TableLaw``) the fit's largest distance from its points
+    (``fit_deviation_mm``, else ``None``)."""
     out = []
     for i, seg in enumerate(program.segments, 1):
         row = {"segment": i, "law": None if seg.law is None else seg.law.name,
@@ -254,7 +256,8 @@ def segment_kinematics(program) -> list[dict]:
                else "return",
                "angle_deg": float(seg.angle_deg), "lift_mm": float(seg.lift_mm),
                "peak_velocity_mm_per_deg": 0.0, "peak_acceleration_mm_per_deg2": 0.0,
-               "peak_jerk_mm_per_deg3": 0.0, "overshoot": False}
+               "peak_jerk_mm_per_deg3": 0.0, "overshoot": False,
+               "fit_deviation_mm": getattr(getattr(seg.law, "fit_info", None), "deviation_mm", None)}
         if seg.moving:
             peaks = seg.law.peak_coefficients()
             h, beta = abs(seg.lift_mm), seg.angle_deg

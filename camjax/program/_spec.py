@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import laws
 from ..checks import finite_number, is_concrete, read_toml
-from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity
+from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity, TableLaw
 from ._motion import (
     END_STATE_KEYS,
     MATCH,
@@ -26,12 +26,16 @@ from ._motion import (
     joins,
     resolve_segments,
 )
+from ._table import points_toml, read_points, table_points, turn_segments
+from ._table import segment_law as table_segment_law
 
 FOLLOWER_KINDS = ("translating-roller", "swinging-roller", "translating-flat", "swinging-flat")
 MAX_SEGMENTS = 360
 """Most segments of a program (a degree each on average): each is sampled, checked and
 reported apart, so 100,000 slivers took minutes and megabytes of output; more is refused
 before any work."""
+TABLE_KEYS = ("file", "points", "smoothing_mm")
+"""A ``law = "table"`` segment's keys (and a whole cam's, in ``[program]``)."""
 _ANGLE_TOLERANCE_DEG = 1e-9
 _LIFT_TOLERANCE_MM = 1e-9
 
@@ -284,12 +288,22 @@ class Program:
         """A program from the TOML structure (``program``, ``segment`` list, ``follower``)."""
         _no_unknown(data, {"program", "segment", "follower", "materials"}, "top level")
         header = data.get("program", {})
-        _no_unknown(header, {"name"}, "[program]")
+        _no_unknown(header, {"name", *TABLE_KEYS}, "[program]")
         segments_data = data.get("segment")
-        if not isinstance(segments_data, list) or not segments_data:
-            raise ValueError("no [[segment]] tables: a program needs at least one segment")
-        _segment_count(len(segments_data))
-        segments = [_segment(i, s, base) for i, s in enumerate(segments_data, 1)]
+        if any(k in header for k in ("file", "points")):
+            # A whole cam from one periodic table, in place of segments.
+            if segments_data is not None:
+                raise ValueError("[program] table: a whole cam's table replaces the [[segment]] tables; "
+                                 "give one or the other")
+            segments = _turn_segments(header, base)
+        elif "smoothing_mm" in header:
+            raise ValueError("[program] smoothing_mm belongs to a whole cam's table (file or points)")
+        else:
+            if not isinstance(segments_data, list) or not segments_data:
+                raise ValueError("no [[segment]] tables: a program needs at least one segment "
+                                 "(or [program] file = a whole cam's lift table)")
+            _segment_count(len(segments_data))
+            segments = [_segment(i, s, base) for i, s in enumerate(segments_data, 1)]
         follower_data = data.get("follower")
         if not isinstance(follower_data, dict):
             raise ValueError("no [follower] table")
@@ -305,13 +319,33 @@ class Program:
         return cls(str(header.get("name", "program")), tuple(segments), Follower(**follower_data),
                    Materials(**materials))
 
+    @classmethod
+    def from_table(cls, name: str, angle_deg, lift_mm, follower: Follower, *,
+                   smoothing_mm: float | None = None, materials: Materials = Materials()) -> Program:
+        """A whole cam from one periodic lift table: ``angle_deg`` from 0 to below 360, the
+        lift there (mm; the program's lift is measured from the lift at 0 degrees), fitted
+        by a periodic quintic spline through the points, or within ``smoothing_mm`` of them."""
+        angle, lift = _table_arrays(angle_deg, lift_mm)
+        if smoothing_mm is not None and _finite(smoothing_mm, "smoothing_mm") <= 0:
+            raise ValueError(f"smoothing_mm must be a positive tolerance in mm, got {smoothing_mm:g}")
+        segments = [Segment(a, h, law) for a, h, law in turn_segments(angle, lift, smoothing_mm, "points", "from_table")]
+        return cls(name, tuple(segments), follower, materials)
+
     def to_toml(self, law_files: dict[int, str] | None = None) -> str:
         """The program as TOML text: laws by registry name, or by ``law_files[i]`` (1-based)."""
         law_files = law_files or {}
         lines = ["[program]", f'name = "{self.name}"', ""]
-        for i, seg in enumerate(self.segments, 1):
+        turn = _turn_table(self)
+        if turn is not None:
+            lines[-1:-1] = [f"points = {points_toml(turn.turn)}"] + (
+                [] if turn.smoothing_mm is None else [f"smoothing_mm = {turn.smoothing_mm!r}"])
+        for i, seg in enumerate(() if turn is not None else self.segments, 1):
             lines.append("[[segment]]")
-            if is_polynomial(seg):
+            if isinstance(seg.law, TableLaw) and seg.law.fit_info is not None:
+                fit = seg.law.fit_info
+                lines += ['law = "table"', f"lift_mm = {seg.lift_mm!r}", f"points = {points_toml(fit.points)}"]
+                lines += [] if fit.smoothing_mm is None else [f"smoothing_mm = {fit.smoothing_mm!r}"]
+            elif is_polynomial(seg):
                 lines += ['law = "polynomial"', f"degree = {seg.law.degree}", f"lift_mm = {seg.lift_mm!r}"]
                 lines += [f"{key} = " + ('"match"' if spec == MATCH else spec.toml())
                           for key, spec in (("start", seg.start), ("end", seg.end))]
@@ -443,11 +477,22 @@ def _no_unknown(table, allowed: set[str], where: str) -> None:
 
 
 def _segment(i: int, data, base: Path | None) -> Segment:
-    _no_unknown(data, {"law", "lift_mm", "angle_deg", "degree", "start", "end"}, f"segment {i}")
+    _no_unknown(data, {"law", "lift_mm", "angle_deg", "degree", "start", "end", *TABLE_KEYS}, f"segment {i}")
     if "angle_deg" not in data:
         raise ValueError(f"segment {i}: needs angle_deg")
     lift = data.get("lift_mm", 0.0)
     law = None
+    if data.get("law") == "table":
+        extra = sorted({"degree", "start", "end"} & set(data))
+        if extra:
+            raise ValueError(f'segment {i}: {", ".join(extra)} belong(s) to law = "polynomial"')
+        angle = _positive(data["angle_deg"], f"segment {i}: angle_deg")
+        given = _finite(data["lift_mm"], f"segment {i}: lift_mm") if "lift_mm" in data else None
+        lift, law = table_segment_law(f"segment {i}", angle, given, data, base)
+        return Segment(angle_deg=angle, lift_mm=lift, law=law)
+    table_keys = sorted(set(TABLE_KEYS) & set(data))
+    if table_keys:
+        raise ValueError(f'segment {i}: {", ".join(table_keys)} belong(s) to law = "table"')
     if "law" in data:
         if "lift_mm" not in data:
             raise ValueError(f"segment {i}: law given without lift_mm")
@@ -463,6 +508,31 @@ def _segment(i: int, data, base: Path | None) -> Segment:
     if extra:
         raise ValueError(f'segment {i}: {", ".join(extra)} belong(s) to law = "polynomial"')
     return Segment(angle_deg=data["angle_deg"], lift_mm=lift, law=law)
+
+
+def _turn_segments(header: dict, base: Path | None) -> list[Segment]:
+    """The rise and return of a whole cam's periodic table (``[program] file`` or ``points``)."""
+    angle, lift, source = table_points(header, "[program]", base)
+    smoothing = header.get("smoothing_mm")
+    if smoothing is not None and _finite(smoothing, "[program] smoothing_mm") <= 0:
+        raise ValueError(f"[program] smoothing_mm must be a positive tolerance in mm, got {smoothing:g}")
+    return [Segment(a, h, law) for a, h, law in turn_segments(angle, lift, smoothing, source)]
+
+
+def _table_arrays(angle_deg, lift_mm):
+    """Checked ``(angle, lift)`` arrays of a table given in Python (as a program file's points)."""
+    angle, lift = (np.asarray(x, dtype=float).ravel() for x in (angle_deg, lift_mm))
+    if angle.shape != lift.shape:
+        raise ValueError(f"angle_deg and lift_mm must have the same length, got {angle.size} and {lift.size}")
+    return read_points(np.stack([angle, lift], axis=1).tolist(), "table")
+
+
+def _turn_table(program: Program):
+    """The whole-cam table a program was cut from (its laws' ``fit_info``), or ``None``."""
+    fits = [getattr(s.law, "fit_info", None) for s in program.segments]
+    if fits and all(f is not None and f.turn is not None for f in fits) and len({f.turn for f in fits}) == 1:
+        return fits[0]
+    return None
 
 
 def _end_state(i: int, key: str, value) -> str | EndState:
@@ -493,7 +563,8 @@ def _law(i: int, name, base: Path | None) -> AbstractMotionLaw:
     try:
         return laws.get(name)
     except ValueError as error:
-        raise ValueError(f'segment {i}: {error}, or "polynomial" (with degree, start, end)') from None
+        raise ValueError(f'segment {i}: {error}, or "polynomial" (with degree, start, end), '
+                         'or "table" (with file or points)') from None
 
 
 def with_law(program: Program, segment: int, law) -> Program:
