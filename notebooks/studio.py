@@ -23,4 +23,10 @@ frame
 # of `camjax program --format json`).  Stop the server when done:
 
 # %%
+import json
+import urllib.request
+
+with urllib.request.urlopen(f"{frame.studio.url.rstrip('/')}/api/report?session=notebook") as answer:
+    served = json.load(answer)
+print(f"jump speed served to the page: {served['jump_speed_rpm']:.2f} rpm")
 frame.studio.stop()

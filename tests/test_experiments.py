@@ -16,6 +16,7 @@ EXAMPLES = ROOT / "experiments" / "examples"
 QUICK = {
     "design_convex.py": ["--quick"],
     "friction.py": ["--quick"],
+    "laws_table.py": ["--quick"],
     "motion_tasks.py": ["--quick"],
     "scca_atlas.py": ["--quick", "--no-cache", "--devices", "1"],
     "stability_atlas.py": ["--quick"],

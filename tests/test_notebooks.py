@@ -34,6 +34,11 @@ np.testing.assert_allclose(radius, cam.follower.base_radius_mm + cam.follower.ro
 assert np.abs(force[-(force.size // 3):] - settled[-(force.size // 3):]).max() < 1e-6 * np.abs(settled).max()
 """,
     # the rod's first mode against the Rayleigh beam's closed form
+    "studio": """
+import camjax.program as cp_check
+direct = cp_check.analyse(cam, np.linspace(200.0, 1400.0, 7)).jump_speed_rpm
+assert abs(served["jump_speed_rpm"] - direct) <= 1e-9 * direct, (served["jump_speed_rpm"], direct)
+""",
     "swinging_follower": "assert abs(float(model.fundamental_frequency()) - closed_form) <= 1e-9 * closed_form",
 }
 """Per notebook: Python run in its kernel after its last cell, asserting on what it computed."""

@@ -68,7 +68,7 @@ SCRIPT = textwrap.dedent(
     # single-device curve (the same exact path through ct_curve)
     loads = peak_loads(law, single.period_ratio[1:], devices=4)
     errors["peak-loads"] = float(np.max(np.abs(loads - single.ca_ct[1:]) / single.ca_ct[1:]))
-    # the program speed sweep: 70 speeds on 4 devices (18 each, padded)
+    # the program speed sweep: 70 speeds in blocks of 32, each split over the 4 devices
     cam = Program("two-cycloids", (Segment(100, 20.0, law), Segment(80),
                                    Segment(100, -20.0, law), Segment(80)),
                   Follower(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0,
@@ -78,7 +78,8 @@ SCRIPT = textwrap.dedent(
     assert len(split.devices) == 4
     rpm = np.linspace(300.0, 900.0, 70)
     a, b = solo.summary(rpm), split.summary(rpm)
-    errors["program"] = max(float(np.max(np.abs(x - y) / np.abs(x).max())) for x, y in zip(a, b))
+    errors["program"] = max(float(np.max(np.abs(x - y) / np.abs(x).max())) for x, y in zip(a, b)
+                            if not isinstance(x, dict))  # the probes (none registered here)
     print("ERRORS", errors)
     assert all(e <= 1e-12 for e in errors.values()), errors
     # The sharded stack equals each law alone (not just the same program twice): another

@@ -35,14 +35,18 @@ def test_the_command_line_refuses_with_exit_2_and_one_line(tmp_path, capsys):
     assert "\n" not in err and "Traceback" not in err and "grid intervals" in err
 
 
-def test_a_lift_table_of_3600_segments_runs_in_bounded_memory():
-    """3600 segments of 0.1 degree (a lift table imported as segments) asked for 40 GB: the
-    engine selected each interval's weights by a product with an intervals x pieces
-    matrix.  Many pieces now gather them instead (the same numbers, next test)."""
+def test_a_program_of_the_most_segments_runs_in_bounded_memory():
+    """3600 segments of 0.1 degree asked for 40 GB: the engine selected each interval's
+    weights by a product with an intervals x pieces matrix.  Many pieces now gather them
+    instead (the same numbers, next test); a program takes at most ``MAX_SEGMENTS`` (360)
+    segments, and 360 of a degree each run in bounded memory."""
+    from camjax.program import MAX_SEGMENTS
+
     law = laws.get("cycloidal")
-    segments = tuple(Segment(0.1, 0.01 if i % 2 == 0 else -0.01, law) for i in range(3600))
+    segments = tuple(Segment(360.0 / MAX_SEGMENTS, 0.01 if i % 2 == 0 else -0.01, law)
+                     for i in range(MAX_SEGMENTS))
     out = SteadyState(Program("table", segments, Follower(**FOLLOWER)), 600.0).summary([600.0])
-    # 0.01 mm wiggles at 36,000 per second barely move a 2000 N/mm train: the force stays
+    # 0.01 mm wiggles at 3,600 per second barely move a 2000 N/mm train: the force stays
     # within a few N/mm of the preload's static value.
     assert 100.0 < float(out.min_contact_force_n[0]) <= 300.0 <= float(out.max_contact_force_n[0]) < 500.0
 

@@ -39,13 +39,14 @@ NAMED = ["freudenstein-1-3", "freudenstein-1-3-5", "triple-harmonic-modified-sin
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="results/laws")
+    parser.add_argument("--quick", action="store_true", help="a tenth of the period ratios (a smoke run)")
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
     rest = laws.names() + FAMILY_EXAMPLES
-    band = np.linspace(*BAND, 1501)
-    wide = np.linspace(1.0, 20.0, 3801)
+    band = np.linspace(*BAND, 151 if args.quick else 1501)
+    wide = np.linspace(1.0, 20.0, 381 if args.quick else 3801)
     start = time.perf_counter()
     worst = camjax.ct_curves({name: name for name in rest}, band)  # keyed by the names given
     curves = camjax.ct_curves({name: name for name in sorted(set(CLASSIC + NAMED))}, wide)
