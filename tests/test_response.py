@@ -12,8 +12,7 @@ from scipy.integrate import solve_ivp
 import camjax
 from camjax import laws
 from camjax.metrics import PEAK_TOLERANCE
-from camjax.models import response_metrics
-from camjax.models._spring_mass import TRACED_RESOLUTION
+from camjax.models import TRACED_RESOLUTION, response_metrics
 
 
 def cycloidal_residual(n):

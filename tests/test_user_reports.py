@@ -12,8 +12,7 @@ import pytest
 import camjax
 from camjax import distributed
 from camjax.cli import main
-from camjax.program import Program, analyse, example_path
-from camjax.program._dynamics import check_rpm
+from camjax.program import Program, analyse, check_rpm, example_path
 
 
 @pytest.fixture(autouse=True)

@@ -30,6 +30,7 @@ from ._drive import write_drive_table as write_drive_table
 from ._dynamics import Cycle as Cycle
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
+from ._dynamics import check_rpm as check_rpm
 from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
 from ._export import MAX_PROFILE_POINTS as MAX_PROFILE_POINTS
