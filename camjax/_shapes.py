@@ -14,3 +14,10 @@ def bucket(size: int, minimum: int = 16) -> int:
     size = max(int(size), minimum)
     step = max(1, 2 ** (size.bit_length() - 1) // 4)
     return step * -(-size // step)
+
+
+def power_of_two(size: int, minimum: int = 256) -> int:
+    """``size`` rounded up to a power of two (at least ``minimum``): coarser buckets, for
+    small programs that are traced anew in every process (a law evaluated on the host),
+    where fewer shapes save more tracing than the padding costs."""
+    return max(int(minimum), 1 << max(0, int(size) - 1).bit_length())

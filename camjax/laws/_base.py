@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._custom_types import ArrayLike, Breakpoints, LawValues
-from .._shapes import bucket
+from .._shapes import power_of_two
 from ..checks import is_concrete
 
 
@@ -88,7 +88,7 @@ class AbstractMotionLaw(eqx.Module):
             # the points padded to a bucketed count keep it to a few sizes.
             tau = np.asarray(tau, dtype=float)
             flat = tau.ravel()
-            padded = np.pad(flat, (0, bucket(flat.size) - flat.size), constant_values=0.5)
+            padded = np.pad(flat, (0, power_of_two(flat.size) - flat.size), constant_values=0.5)
             out = _compiled_evaluate(self, jnp.asarray(padded))
             if not is_concrete(out):  # concrete inputs inside another trace: staged with it
                 return tuple(x[: flat.size].reshape(tau.shape) for x in out)

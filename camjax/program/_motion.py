@@ -42,12 +42,30 @@ class EndState:
         return "{ " + ", ".join(items) + " }"
 
 
+_ENDS: dict[int, tuple] = {}
+
+
+def _law_ends(law) -> tuple:
+    """``((v, a, j) at tau = 0, at tau = 1)`` of a concrete law, kept per law object: a
+    program's joins ask each law for its ends many times, and every evaluation under
+    ``ensure_compile_time_eval`` runs the law's formulas op by op."""
+    kept = _ENDS.get(id(law))
+    if kept is not None and kept[0] is law:
+        return kept[1]
+    with jax.ensure_compile_time_eval():  # concrete even when a design traces around it
+        _, v, a, j = (np.asarray(x, dtype=float) for x in law.evaluate(np.array([0.0, 1.0])))
+    ends = tuple((float(v[k]), float(a[k]), float(j[k])) for k in (0, 1))
+    if len(_ENDS) >= 256:
+        _ENDS.clear()
+    _ENDS[id(law)] = (law, ends)
+    return ends
+
+
 def law_state(seg, at_end: bool) -> tuple[float, float, float]:
     """``(v, a, j)`` of a segment at its start or end (mm/deg, mm/deg^2, mm/deg^3); zeros for a dwell."""
     if not seg.moving:
         return 0.0, 0.0, 0.0
-    with jax.ensure_compile_time_eval():  # concrete even when a design traces around it
-        _, v, a, j = (float(x[1 if at_end else 0]) for x in seg.law.evaluate(np.array([0.0, 1.0])))
+    v, a, j = _law_ends(seg.law)[1 if at_end else 0]
     beta, h = seg.angle_deg, seg.lift_mm
     return h * v / beta, h * a / beta**2, h * j / beta**3
 
