@@ -92,7 +92,7 @@ def main(argv=None) -> int:
     print(f"# analyse over --rpm {args.rpm} with jump speed and flights; commit {commit}, "
           f"{time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores")
     print("| program | edit | " + " | ".join(f"{lab} s | {lab} compilations" for lab in runs) +
-          (" | ratio |" if len(runs) == 2 else ""))
+          (" | ratio |" if len(runs) == 2 else " |"))
     print("|---" * (2 + 2 * len(runs) + (len(runs) == 2)) + "|")
     for name in programs:
         for k in range(args.edits + 1):
