@@ -11,7 +11,8 @@ adapter from physical units to that engine: time runs in turns (``s = t / T``,
 program on the engine's grid (``camjax.sdof.piecewise_grid``) and mixed per speed; the
 engine's periodic start (``q(0) = F / (1 - E)``) gives the steady state exactly, and its
 gains and refined extremes give the payload acceleration and contact force in SI units.
-A speed sweep is one compiled call through the engine's ``chunked_map``.
+A speed sweep runs in blocks of ``SPEED_BLOCK`` speeds through one compiled program per
+shape of the turn, whose values are its arguments (``PaddedTurn``).
 """
 
 from __future__ import annotations
@@ -422,8 +423,8 @@ class SteadyState:
     (its grid, forcing, follower and contact factors) are arguments of module-level compiled
     functions, padded to bucketed shapes (``bucket``), so another program of the same
     shape, or an edited one, reuses the compiled program in this process and from JAX's
-    persistent cache.  A batch of speeds is one compiled call through the engine's
-    ``chunked_map``, its width padded to a bucket too; the speeds are split over
+    persistent cache.  The speeds run in blocks of ``SPEED_BLOCK`` through one compiled
+    program (the whole ``Cycle`` at every speed of a block); each block is split over
     ``devices`` (default: every local device; see ``camjax.sharding.shard_batch``), with
     results equal to one device's.  A response that is not finite is a ``SolverError``
     (``RESULTS.nonfinite``).
@@ -523,6 +524,7 @@ class SteadyState:
         beta = float(self.train.ks / self.train.m) * (60.0 / rpm) ** 2
         motion = self.grid.with_forcing(np.asarray(self.grid.motion.forcing) + beta * np.asarray(self.grid.lift))
         return mode_between(motion, q_nodes, self.lam(rpm), np.mod(np.atleast_1d(np.asarray(s, dtype=float)), 1.0))
+
 
 
 IMPLAUSIBLE_RPM, IMPLAUSIBLE_PERIOD_RATIO = 100_000.0, 0.05

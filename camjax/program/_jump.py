@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from ..sdof import psi_host
+from ..sdof import eigenvalue, psi_host, step_within_host
 from ._dynamics import SteadyState, check_rpm
 
 _BISECTIONS = 3  # rounds of 64-way subdivision before the secant: a bracket shrinks by 65^3
@@ -98,14 +98,13 @@ class _Turns:
 
     The lift is read from the turn's grid (its degree-5 interpolant of ``y`` per interval,
     the one the steady state was computed from: within 1e-12 of the laws); the deflection
-    is the engine's exact step from the node before (``camjax.sdof.mode_between``'s).
+    is the engine's exact step from the node before (``camjax.sdof.step_within_host``).
     """
 
     def __init__(self, steady: SteadyState, rpm: np.ndarray):
         grid, tr = steady.grid, steady.train
         self.period = 60.0 / np.asarray(rpm, dtype=float)
-        w, zeta = float(tr.omega) * self.period, float(tr.zeta)
-        self.lam = -zeta * w + 1j * w * math.sqrt(1.0 - zeta**2)  # per turn
+        self.lam = np.asarray(eigenvalue(tr.omega_per_turn(np.asarray(rpm, dtype=float)), tr.zeta))  # per turn
         self.q = steady.cycles_at(rpm).q
         self.nodes = np.asarray(grid.nodes)
         self.piece = np.asarray(grid.motion.piece)
@@ -138,10 +137,8 @@ class _Turns:
         """``e`` (m) and ``e'`` (m/s) of the steady state."""
         k, delta = self._locate(rows, t)
         lam = self.lam[rows]
-        z = lam * delta
-        powers = (delta / self.widths[k])[..., None] ** np.arange(6)
         forcing = self.acceleration[k] + self.beta[rows][..., None] * self.lift_coefficients[k]
-        q = np.exp(z) * self.q[rows, k] + delta * np.sum(forcing * powers * psi_host(z), axis=-1)
+        q = step_within_host(self.q[rows, k], forcing, self.widths[k], delta, lam)
         e = q.imag / lam.imag
         return 1e-3 * e, 1e-3 * (q.real + lam.real * e) / self.period[rows]
 

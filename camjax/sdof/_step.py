@@ -232,9 +232,14 @@ def mode_between(grid: MotionGrid, q_nodes, lam, t) -> np.ndarray:
     nodes = np.asarray(grid.nodes)
     piece = np.asarray(grid.piece)
     k = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, piece.size - 1)
-    delta = t - nodes[k]
     h = np.asarray(grid.piece_width)[piece[k]]
+    return step_within_host(np.asarray(q_nodes)[k], np.asarray(grid.forcing)[k], h, t - nodes[k], lam)
+
+
+def step_within_host(q_start, forcing, widths, delta, lam) -> np.ndarray:
+    """The mode ``delta`` into intervals of ``widths`` with forcing rows ``forcing``
+    (``(..., 6)``) from the mode ``q_start`` at their starts: ``propagate``'s exact step over
+    part of an interval, in NumPy on the host (every argument broadcasts, ``lam`` too)."""
     weights = psi_host(lam * delta)
-    powers = (delta / h)[:, None] ** np.arange(INTERPOLATION_DEGREE + 1)
-    kick = delta * np.sum(np.asarray(grid.forcing)[k] * powers * weights, axis=1)
-    return np.exp(lam * delta) * np.asarray(q_nodes)[k] + kick
+    powers = (delta / widths)[..., None] ** np.arange(INTERPOLATION_DEGREE + 1)
+    return np.exp(lam * delta) * q_start + delta * np.sum(forcing * powers * weights, axis=-1)
