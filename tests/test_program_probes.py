@@ -58,3 +58,43 @@ def test_probe_names_are_checked():
         cp.unregister_probe("nothing")
     with pytest.raises(AttributeError, match="no attribute 'nothing'"):
         _ = cp.SpeedReport(1.0, 0, 0, 0, 0, False, None, (), ()).nothing
+
+
+def test_a_probe_lands_in_the_table_csv_json_and_summary_like_a_built_in_output(probe, capsys, tmp_path):
+    """Every place ``camjax program`` writes per-speed outputs reads the one registry
+    (``OUTPUTS``): the probe's value, against the mean lift's closed form, in each."""
+    import json
+
+    expected = _expected(cp.Program.load(cp.example_path("indexer")))
+    args = ["program", "indexer", "--rpm", "300,450", "--no-flight"]
+    assert main([*args, "--format", "json", "--out", str(tmp_path), "--points", "8"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    written = json.loads((tmp_path / "summary.json").read_text())
+    assert written == printed
+    for speed in printed["speeds"]:
+        assert speed["mean_contact_force_n"] == pytest.approx(expected, rel=2e-5)
+    assert main([*args, "--format", "csv"]) == 0
+    header, *rows = list(csv.reader(io.StringIO(capsys.readouterr().out)))
+    place = header.index("mean_contact_force_n")  # after the built-in outputs, before the lists
+    assert header[place - 1] == "contact_half_width_mm" and header[place + 1] == "period_ratio_1"
+    assert [float(r[place]) for r in rows] == pytest.approx([expected] * 2, rel=2e-5)
+    assert main(args) == 0
+    lines = capsys.readouterr().out.splitlines()
+    title = next(i for i, line in enumerate(lines) if "mean Fc N" in line)
+    assert lines[title].split() == ["rpm", "mean", "Fc", "N"]
+    for line, rpm in zip(lines[title + 1:title + 3], (300, 450)):
+        assert float(line.split()[0]) == rpm
+        assert float(line.split()[1]) == pytest.approx(expected, rel=1e-5)  # 6 digits printed
+
+
+def test_every_scalar_field_of_the_speed_report_is_a_registered_output():
+    """The registry and the typed report agree: each built-in output is a field of
+    ``SpeedReport`` and each scalar field (not ``rpm``, the lists or the flights) is one."""
+    import dataclasses
+
+    structured = {"rpm", "residual_vibration_mm", "period_ratios", "flights", "impacts",
+                  "impacts_change_deg", "outputs"}
+    fields = [f.name for f in dataclasses.fields(cp.SpeedReport) if f.name not in structured]
+    built_in = [name for name, output in cp.OUTPUTS.items() if output.built_in]
+    assert sorted(built_in) == sorted(fields)
+    assert all(output.label and output.doc for output in cp.OUTPUTS.values())

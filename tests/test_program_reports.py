@@ -145,17 +145,17 @@ def test_a_program_past_the_segment_limit_is_refused_before_any_work(tmp_path, c
 
 
 def test_a_long_program_is_summarised_in_text_and_whole_in_json_and_csv():
-    from camjax.cli.program import SHOWN, _csv, _table
+    from camjax.cli.program import SHOWN, _table
 
     program = Program.from_dict(_sliced_indexer(20))  # 42 segments, 40 of them dwells
-    report = analyse(program, [300.0], with_flight=False).as_dict()
+    report = analyse(program, [300.0], with_flight=False)
     text = _table(report)
-    assert len(report["joins"]) == 42 and len(report["segments"]) == 42
-    assert len(report["speeds"][0]["residual_vibration_mm"]) == 40
+    assert len(report.joins) == 42 and len(report.segments) == 42
+    assert len(report.speeds[0].residual_vibration_mm) == 40
     assert len(text.splitlines()) < 30 and max(map(len, text.splitlines())) < 250
     assert "42 segments (1 rise, 40 dwell, 1 return)" in text
     assert "42 joins:" in text and "40 from " in text
-    header, row = _csv(report).splitlines()
+    header, row = report.to_csv().splitlines()
     assert header.count("residual_vibration_mm_") == 40 and len(row.split(",")) == len(header.split(","))
     assert SHOWN < 40
 

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from camjax import program as cp
+from camjax._plain import json_ready
 from camjax.cli import main
-from camjax.cli._common import json_ready
 from camjax.studio import kinematics, parse_program, studio
 
 RPM = "400:1000:4"  # brackets the feed cam's jump speed (about 660 rpm)

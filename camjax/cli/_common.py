@@ -8,9 +8,12 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
-import math
 import re
 from pathlib import Path
+
+from .._plain import json_ready
+from .._plain import parse_float_list as _parse_float_list
+from .._plain import parse_range as _parse_range
 
 RANGE_METAVAR = "START:STOP:COUNT|V1,V2,..."
 
@@ -160,65 +163,23 @@ def file_named(path):
 
 def parse_float_list(text: str, what: str) -> list[float]:
     """``"1,2.5,4"`` as floats, or a ``CliError`` naming ``what``."""
-    try:
-        values = [float(x) for x in text.split(",") if x.strip()]
-    except ValueError:
-        raise CliError(f"{what}: cannot read {text!r} as comma-separated numbers") from None
-    if not values:
-        raise CliError(f"{what}: no values given")
-    if not all(math.isfinite(v) for v in values):
-        raise CliError(f"{what}: values must be finite, got {text!r}")
-    return values
+    with options_named():
+        return _parse_float_list(text, what)
 
 
 def parse_range(text: str, what: str):
-    """``START:STOP:COUNT`` (inclusive, ascending linspace) or ``V1,V2,...`` as an array.
-
-    A range runs upward: ``START`` above ``STOP`` is refused (list values to go down).
-    """
-    import numpy as np
-
-    if ":" in text:
-        parts = text.split(":")
-        if len(parts) != 3:
-            raise CliError(f"{what}: expected START:STOP:COUNT, got {text!r}")
-        start, stop = parse_float_list(parts[0], what)[0], parse_float_list(parts[1], what)[0]
-        try:
-            count = int(parts[2])
-        except ValueError:
-            raise CliError(f"{what}: COUNT must be an integer, got {parts[2]!r}") from None
-        if count < 1:
-            raise CliError(f"{what}: COUNT must be at least 1, got {count}")
-        if what == "--n":
-            from ..checks import period_ratio_count
-
-            with options_named():
-                period_ratio_count(count, what)
-        if start > stop or (start == stop and count > 1):
-            raise CliError(f"{what}: START must be below STOP in START:STOP:COUNT, got {text!r} "
-                           "(ranges run upward; give V1,V2,... for another order)")
-        return np.linspace(start, stop, count)
-    return np.asarray(parse_float_list(text, what))
+    """``camjax._plain.parse_range`` (``START:STOP:COUNT`` or ``V1,V2,...``) with its
+    ``ValueError`` as a ``CliError``; ``--n`` counts are checked as period ratios."""
+    check_count = None
+    if what == "--n":
+        from ..checks import period_ratio_count as check_count
+    with options_named():
+        return _parse_range(text, what, check_count)
 
 
 def add_format(parser: argparse.ArgumentParser, choices=("table", "json", "csv")) -> None:
     parser.add_argument("--format", choices=choices, default=choices[0],
                         help="output format on standard output")
-
-
-def json_ready(value):
-    """Nested lists of floats for JSON, with inf and NaN as null."""
-    import numpy as np
-
-    if isinstance(value, dict):
-        return {k: json_ready(v) for k, v in value.items()}
-    if isinstance(value, list | tuple | np.ndarray):
-        return [json_ready(v) for v in value]
-    if isinstance(value, float | np.floating):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
 
 
 def dump_json(value, path: Path | None = None) -> str:

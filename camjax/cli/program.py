@@ -2,17 +2,15 @@
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import sys
 import warnings
 from pathlib import Path
 
-from ._common import CliError, add_format, dump_json, file_named, output_dir, parse_range
+from .._plain import DEFAULT_SPEED_FLUCTUATION
+from ._common import CliError, add_format, file_named, output_dir, parse_range
 
 DEFAULT_RPM = "600"
-DEFAULT_SPEED_FLUCTUATION = 0.05  # camjax.program.DEFAULT_SPEED_FLUCTUATION (not imported: JAX loads late)
 
 
 def register(subparsers) -> None:
@@ -61,34 +59,6 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-_COLUMNS = (
-    ("rpm", "rpm", "{:.6g}"),
-    ("max_payload_acceleration_m_s2", "max|x''| m/s2", "{:.6g}"),
-    ("max_kinematic_acceleration_m_s2", "max|y''| m/s2", "{:.6g}"),
-    ("min_contact_force_n", "min Fc N", "{:.6g}"),
-    ("max_contact_force_n", "max Fc N", "{:.6g}"),
-    ("min_preload_n", "min preload N", "{:.6g}"),
-    ("jump", "jump", "{}"),
-)
-_DRIVE_COLUMNS = (
-    ("rpm", "rpm", "{:.6g}"),
-    ("max_drive_torque_n_m", "max|T| N m", "{:.6g}"),
-    ("rms_drive_torque_n_m", "rms T N m", "{:.6g}"),
-    ("mean_drive_torque_n_m", "mean T N m", "{:.6g}"),
-    ("energy_fluctuation_j", "dE J", "{:.6g}"),
-    ("flywheel_inertia_kg_m2", "flywheel kg m2", "{:.6g}"),
-)
-_CONTACT_COLUMNS = (
-    ("max_contact_stress_mpa", "max p MPa", "{:.6g}"),
-    ("max_contact_stress_deg", "at deg", "{:.5g}"),
-    ("contact_half_width_mm", "half-width mm", "{:.4g}"),
-)
-
-
-def _cell(value, fmt):
-    return "-" if value is None else fmt.format(value)
-
-
 SHOWN = 12
 """Most entries (numbers in a cell, segment and join lines) the text table lists one by one;
 a longer list is summarised (the JSON and CSV outputs hold every entry)."""
@@ -101,10 +71,24 @@ def _numbers(values, fmt="{:.4g}") -> str:
     return " ".join(fmt.format(v) for v in values) or "-"
 
 
-def _rows(speeds: list, columns) -> list[str]:
-    lines = ["".join(f"{title:>16}" for _, title, _ in columns)]
-    lines += ["".join(f"{_cell(s[key], fmt):>16}" for key, _, fmt in columns) for s in speeds]
-    return lines
+def _header(columns) -> str:
+    return f"{'rpm':>16}" + "".join(f"{p.label:>16}" for p in columns)
+
+
+def _row(speed, columns) -> str:
+    return f"{speed.rpm:>16.6g}" + "".join(f"{p.cell(getattr(speed, p.name)):>16}" for p in columns)
+
+
+def _rows(speeds, columns) -> list[str]:
+    """A block of the table: ``rpm`` and ``columns`` (outputs of ``camjax.program.OUTPUTS``)."""
+    return [_header(columns)] + [_row(s, columns) for s in speeds]
+
+
+def _block(report, table: str) -> tuple:
+    """The outputs of ``report`` that the block ``table`` of the text table prints (an
+    optional one only where some speed has a value)."""
+    return tuple(p for p in report.columns() if p.table == table
+                 and not (p.optional and all(getattr(s, p.name) is None for s in report.speeds)))
 
 
 def _geometry_lines(g: dict) -> list[str]:
@@ -127,20 +111,23 @@ def _geometry_lines(g: dict) -> list[str]:
     return lines
 
 
-def _table(report: dict, grooved: bool = False) -> str:
-    lines = [f"program {report['program']}"]
-    lines.append("".join(f"{title:>16}" for _, title, _ in _COLUMNS) + "  period ratios   residual mm")
-    for s in report["speeds"]:
-        lines.append("".join(f"{_cell(s[key], fmt):>16}" for key, _, fmt in _COLUMNS)
-                     + f"  {_numbers(s['period_ratios'], '{:.3f}'):<15} {_numbers(s['residual_vibration_mm'])}")
+def _table(typed, grooved: bool = False) -> str:
+    """The text table of a program's ``Report``: a block of rows per ``table`` of its outputs
+    (``camjax.program.OUTPUTS``), then the flights, strikes, motion, jump speed and geometry."""
+    report = typed.as_dict()
+    lines = [f"program {typed.program}"]
+    columns = _block(typed, "speed")
+    lines.append(_header(columns) + "  period ratios   residual mm")
+    for s in typed.speeds:
+        lines.append(_row(s, columns) + f"  {_numbers(s.period_ratios, '{:.3f}'):<15} "
+                     f"{_numbers(s.residual_vibration_mm)}")
     lines.append("Fc: contact force of the periodic steady state with contact held (linear); period "
                  "ratios per moving segment; residual: vibration amplitude at the start of each dwell "
                  "and constant-velocity stroke")
-    stressed = any(s["max_contact_stress_mpa"] is not None for s in report["speeds"])
-    lines += _rows(report["speeds"], _DRIVE_COLUMNS + (_CONTACT_COLUMNS if stressed else ()))
-    probes = _probe_columns(report)
-    if probes:
-        lines += _rows(report["speeds"], (_DRIVE_COLUMNS[0], *probes))
+    for table in dict.fromkeys(p.table for p in typed.columns() if p.table != "speed"):
+        columns = _block(typed, table)
+        if columns:
+            lines += _rows(typed.speeds, columns)
     if grooved:
         lines.append("the strikes below are the groove's, with its clearance (the Backlash model): "
                      "their forces are not bounded by the contact-held Fc above")
@@ -169,20 +156,13 @@ def _table(report: dict, grooved: bool = False) -> str:
     return "\n".join(lines)
 
 
-def _probe_columns(report: dict) -> tuple:
-    """Columns of the registered probes the report carries (``camjax.program.register_probe``)."""
-    from ..program import PROBES
-
-    first = report["speeds"][0] if report["speeds"] else {}
-    return tuple((name, probe.label, "{:.6g}") for name, probe in PROBES.items() if name in first)
-
-
-def _machine_table(report: dict) -> str:
-    lines = [f"machine {report['machine']}"]
-    for cam in report["cams"]:
-        lines += ["", f"cam at phase {cam['phase_deg']:g} deg:", _table(cam)]
+def _machine_table(report) -> str:
+    """The text table of a ``MachineReport``: each cam's, then the shaft's totals."""
+    lines = [f"machine {report.machine}"]
+    for phase, cam in zip(report.phases_deg, report.cams):
+        lines += ["", f"cam at phase {phase:g} deg:", _table(cam)]
     lines += ["", "shaft (sum of the cams' torques):"]
-    lines += _rows(report["shaft"]["speeds"], _DRIVE_COLUMNS)
+    lines += _rows(report.shaft, report.columns())
     return "\n".join(lines)
 
 
@@ -228,102 +208,15 @@ def _motion_summary(report: dict) -> list[str]:
     return lines
 
 
-def _csv(report: dict) -> str:
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    keys = [key for key, _, _ in _COLUMNS + _DRIVE_COLUMNS[1:] + _CONTACT_COLUMNS + _probe_columns(report)]
-    segments = len(report["speeds"][0]["period_ratios"])
-    dwells = len(report["speeds"][0]["residual_vibration_mm"])
-    writer.writerow(keys + [f"period_ratio_{i + 1}" for i in range(segments)]
-                    + [f"residual_vibration_mm_{i + 1}" for i in range(dwells)]
-                    + ["jump_speed_rpm", "jump_below_range"])
-    for s in report["speeds"]:
-        writer.writerow(["" if s[k] is None else s[k] for k in keys] + list(s["period_ratios"])
-                        + list(s["residual_vibration_mm"])
-                        + [report["jump_speed_rpm"] or "", report["jump_below_range"]])
-    return buffer.getvalue().rstrip()
-
-
-def plot_speed(report: dict, chosen: float | None) -> float:
-    """The speed whose turn the figures draw: ``chosen``, else the speed given nearest the
-    jump speed (the first that jumps when the jump lies below the range), else the highest."""
-    speeds = [s["rpm"] for s in report["speeds"]]
-    if chosen is not None:
-        return chosen
-    if report["jump_below_range"]:
-        return min(speeds)
-    if report["jump_speed_rpm"] is not None:
-        return min(speeds, key=lambda r: abs(r - report["jump_speed_rpm"]))
-    return max(speeds)
-
-
-def _write_outputs(out: Path, program, steady, report: dict, rpm, points: int, plot_rpm: float) -> None:
-    from ..program import groove_turns, profile, response, save_figures, write_csv, write_dxf
-
-    dump_json(report, out / "summary.json")
-    prof = profile(program, points)
-    write_csv(prof, out / "profile.csv", outer=program.follower.form_closed)
-    write_dxf(prof, out / "profile.dxf", outer=program.follower.form_closed)
-    histories = [(float(r), response(program, float(r), steady=steady)) for r in list(rpm)[:10]]
-    with (out / "response.csv").open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        keys = list(histories[0][1])
-        writer.writerow(["rpm", *keys])
-        for r, h in histories:
-            for i in range(h["theta_deg"].size):
-                writer.writerow([r] + [f"{h[k][i]:.10g}" for k in keys])
-    shown = next((h for r, h in histories if r == plot_rpm), None)
-    shown = shown if shown is not None else response(program, plot_rpm, steady=steady)
-    groove = None
-    if program.follower.form_closed and program.follower.groove_clearance_mm:
-        groove = groove_turns(program, [plot_rpm])[0]
-    save_figures(out, program, report, (plot_rpm, shown), prof, histories=histories, groove=groove)
-
-
-def _write_machine(out: Path, machine, report: dict, rpm, points: int) -> None:
-    from ..program import SteadyState, shaft_figures
-
-    dump_json(report, out / "summary.json")
-    for i, ((program, _), cam) in enumerate(zip(machine.cams, report["cams"]), 1):
-        folder = out / f"cam{i}-{program.name}"
-        folder.mkdir(exist_ok=True)
-        _write_outputs(folder, program, SteadyState(program, float(min(rpm))), cam, rpm, points,
-                       plot_speed(cam, None))
-    shaft_figures(out, machine, report, rpm)
-
-
 def program_path(text: str | None, default: str = "indexer") -> Path:
-    """The program file ``text`` names: a path, or a built-in example's name ('indexer',
-    'feed') where no such file exists; without ``text``, the example ``default``."""
-    from ..program import example_path
+    """``camjax.program.program_path`` (imported when called: JAX loads late)."""
+    from ..program import program_path as path_of
 
-    if not text:
-        return example_path(default)
-    path = Path(text)
-    if text.isidentifier() and not path.exists() and example_path(text).exists():
-        return example_path(text)  # a built-in example by name
-    return path
-
-
-def program_report(program, rpm, *, with_flight: bool = True, steady=None,
-                   speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION) -> dict:
-    """The report that ``camjax program --format json`` prints (before ``json_ready``):
-    ``camjax.program.analyse`` at the speeds ``rpm``, as plain types."""
-    from ..program import analyse
-
-    return analyse(program, rpm, with_flight=with_flight, steady=steady,
-                   speed_fluctuation=speed_fluctuation).as_dict()
+    return path_of(text, default)
 
 
 def run(args) -> int:
-    from ..program import (
-        MAX_GROOVE_SAMPLES,
-        MAX_PROFILE_POINTS,
-        MAX_TURNS,
-        SETTLED_DEG,
-        Program,
-        SteadyState,
-    )
+    from ..program import MAX_PROFILE_POINTS, Program, SteadyState, analyse, write_report
 
     if args.drive_table is not None:
         return _drive_table(args)
@@ -348,26 +241,16 @@ def run(args) -> int:
         program = Program.load(path)
         out = output_dir(args.out)
         steady = SteadyState(program, float(min(rpm)))
-        report = program_report(program, rpm, with_flight=not args.no_flight, steady=steady,
-                                speed_fluctuation=args.speed_fluctuation)
+        report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
+                         speed_fluctuation=args.speed_fluctuation)
         if out is not None:
-            _write_outputs(out, program, steady, report, rpm, args.points, plot_speed(report, args.plot_rpm))
-    for line in dict.fromkeys([*_messages(caught), *report["warnings"]]):
+            write_report(out, program, report, steady=steady, points=args.points, plot_rpm=args.plot_rpm)
+    for line in dict.fromkeys([*_messages(caught), *report.warnings]):
         print(f"warning: {line}", file=sys.stderr)
-    for s in report["speeds"]:
-        change = s["impacts_change_deg"]
-        if change is not None and not change <= SETTLED_DEG:
-            print(f"warning: at {s['rpm']:g} rpm the groove's strikes had not settled within "
-                  f"the longest run allowed ({MAX_TURNS} turns, {MAX_GROOVE_SAMPLES:,} samples; "
-                  + (f"they still move by {change:.3g} deg per turn" if math.isfinite(change) else
-                     "they still differ in number or flank from turn to turn")
-                  + "): the roller chatters without a "
-                  "period, and the last turn is reported; a narrower groove "
-                  "(groove_clearance_mm) or more damping settles sooner", file=sys.stderr)
     if args.format == "json":
-        print(dump_json(report))
+        print(report.to_json())
     elif args.format == "csv":
-        print(_csv(report))
+        print(report.to_csv())
     else:
         print(_table(report, grooved=bool(program.follower.form_closed and program.follower.groove_clearance_mm
                                           and not args.no_flight)))
@@ -412,31 +295,25 @@ def is_machine(path: Path) -> bool:
 
 
 def _run_machine(args, path: Path, rpm) -> int:
-    from ..program import Machine, analyse_machine
+    from ..program import Machine, analyse_machine, write_machine_report
 
     with file_named(path), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         machine = Machine.load(path)
         out = output_dir(args.out)
         report = analyse_machine(machine, rpm, with_flight=not args.no_flight,
-                                 speed_fluctuation=args.speed_fluctuation).as_dict()
+                                 speed_fluctuation=args.speed_fluctuation)
         if out is not None:
-            _write_machine(out, machine, report, rpm, args.points)
+            write_machine_report(out, machine, report, points=args.points)
     for line in _messages(caught):
         print(f"warning: {line}", file=sys.stderr)
-    for cam in report["cams"]:
-        for line in cam.get("warnings", []):
-            print(f"warning: cam {cam['program']} at phase {cam['phase_deg']:g} deg: {line}", file=sys.stderr)
+    for phase, cam in zip(report.phases_deg, report.cams):
+        for line in cam.warnings:
+            print(f"warning: cam {cam.program} at phase {phase:g} deg: {line}", file=sys.stderr)
     if args.format == "json":
-        print(dump_json(report))
+        print(report.to_json())
     elif args.format == "csv":
-        buffer = io.StringIO()
-        writer = csv.writer(buffer)
-        keys = [key for key, _, _ in _DRIVE_COLUMNS]
-        writer.writerow(keys)
-        for s in report["shaft"]["speeds"]:
-            writer.writerow([s[k] for k in keys])
-        print(buffer.getvalue().rstrip())
+        print(report.to_csv())
     else:
         print(_machine_table(report))
     return 0

@@ -6,7 +6,8 @@ every flight of a turn (``flights``) and a grooved cam's strikes (``groove_turns
 list of speeds; ``response`` gives the histories over one turn at one speed; ``profile``,
 ``write_csv`` and ``write_dxf`` export the cam's shape (roller or flat face); ``analyse``
 also sizes the drive (torque, energy, flywheel), the Hertz contact stress and the cam's
-``Geometry``; ``analyse_machine`` adds the torques of several cams on one shaft
+``Geometry``; ``write_report`` writes a report's files (``summary.json``, ``response.csv``,
+the profile, the figures); ``analyse_machine`` adds the torques of several cams on one shaft
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
 (``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
 preload over a speed range).  The equations are in docs/program.md and docs/machine.md.
@@ -66,6 +67,7 @@ from ._machine import design_warnings as design_warnings
 from ._motion import EndState as EndState
 from ._motion import Join as Join
 from ._motion import segment_kinematics as segment_kinematics
+from ._probes import OUTPUTS as OUTPUTS
 from ._probes import PROBES as PROBES
 from ._probes import Probe as Probe
 from ._probes import register_probe as register_probe
@@ -82,8 +84,12 @@ from ._spec import Materials as Materials
 from ._spec import Program as Program
 from ._spec import Segment as Segment
 from ._spec import example_path as example_path
+from ._spec import program_path as program_path
 from ._spec import segment_band as segment_band
 from ._spec import with_law as with_law
+from ._writers import RESPONSE_SPEEDS as RESPONSE_SPEEDS
+from ._writers import write_machine_report as write_machine_report
+from ._writers import write_report as write_report
 
 if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
     from ._figures import save_figures as save_figures

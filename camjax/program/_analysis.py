@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import csv
 import dataclasses
+import io
+import json
 
 import numpy as np
 
+from .._plain import json_ready, plot_speed
 from ._dynamics import SteadyState, check_rpm
 from ._groove import Impact, groove_turns
 from ._jump import Flight, flights_at, jump_speed_rpm, min_preload_n
@@ -18,6 +22,7 @@ from ._machine import (
     flywheel_inertia_kg_m2,
 )
 from ._motion import Join, segment_kinematics
+from ._probes import OUTPUTS, Probe
 from ._spec import Program
 
 
@@ -70,6 +75,9 @@ class SpeedReport:
         contact_half_width_mm: the Hertz contact half-width there, ``2 R' p_max / E*``.
         outputs: the registered probes' values (``camjax.program.register_probe``), also
             read as attributes (``speed.rms_contact_force_n``) and flat in ``as_dict``.
+
+    Every scalar field above but ``rpm`` is a built-in output of ``camjax.program.OUTPUTS``
+    (its label, unit and doc line), read from there by the table and the CSV.
     """
 
     rpm: float
@@ -145,6 +153,42 @@ class Report:
                 "geometry": None if self.geometry is None else self.geometry.as_dict(),
                 "speed_fluctuation": self.speed_fluctuation, "warnings": list(self.warnings)}
 
+    def columns(self) -> tuple[Probe, ...]:
+        """The per-speed outputs this report holds, in the registry's order (``OUTPUTS``):
+        every built-in one and the probes registered when it was computed."""
+        held = self.speeds[0].outputs if self.speeds else {}
+        return tuple(p for p in OUTPUTS.values() if p.built_in or p.name in held)
+
+    def to_json(self) -> str:
+        """The report as JSON text (``camjax program --format json``, ``summary.json``):
+        ``as_dict`` with inf and NaN as null."""
+        return json.dumps(json_ready(self.as_dict()), indent=1)
+
+    def to_csv(self) -> str:
+        """One row per speed (``camjax program --format csv``): ``rpm``, every column of
+        ``columns`` (empty where there is no value), each moving segment's period ratio,
+        each residual vibration, and the jump speed."""
+        buffer = io.StringIO()
+        writer = csv.writer(buffer)
+        keys = ["rpm"] + [p.name for p in self.columns()]
+        first = self.speeds[0]
+        writer.writerow(keys + [f"period_ratio_{i + 1}" for i in range(len(first.period_ratios))]
+                        + [f"residual_vibration_mm_{i + 1}" for i in range(len(first.residual_vibration_mm))]
+                        + ["jump_speed_rpm", "jump_below_range"])
+        for s in self.speeds:
+            writer.writerow([_blank(getattr(s, k)) for k in keys] + list(s.period_ratios)
+                            + list(s.residual_vibration_mm) + [self.jump_speed_rpm or "", self.jump_below_range])
+        return buffer.getvalue().rstrip()
+
+    def plot_rpm(self, chosen: float | None = None) -> float:
+        """The speed whose turn the figures draw: ``chosen``, else the speed given nearest
+        the jump speed (the lowest when the jump lies below the range), else the highest."""
+        return plot_speed(self, chosen)
+
+
+def _blank(value):
+    return "" if value is None else value
+
 
 def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadyState | None = None,
             devices=None, speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION) -> Report:
@@ -177,32 +221,37 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     theta_nodes = 360.0 * steady.grid.nodes
     lost = np.flatnonzero(out.min_contact_force_n < 0) if with_flight and not closed else np.zeros(0, int)
     found = dict(zip(lost.tolist(), flights_at(steady, rpm[lost]) if lost.size else []))
+    stress = out.max_contact_stress_mpa
+    half_width = 2 * out.max_contact_stress_radius_mm * stress / program.materials.contact_modulus_mpa
+    computed = {  # each built-in output of the registry (OUTPUTS) at every speed
+        "max_payload_acceleration_m_s2": out.max_payload_acceleration_m_s2,
+        "max_kinematic_acceleration_m_s2": kinematic,
+        "min_contact_force_n": out.min_contact_force_n,
+        "max_contact_force_n": out.max_contact_force_n,
+        "min_preload_n": None if closed else preload,
+        "jump": None if closed else out.min_contact_force_n < 0,
+        "max_drive_torque_n_m": out.max_drive_torque_n_m,
+        "rms_drive_torque_n_m": out.rms_drive_torque_n_m,
+        "mean_drive_torque_n_m": out.mean_drive_torque_n_m,
+        "energy_fluctuation_j": out.energy_fluctuation_j,
+        "flywheel_inertia_kg_m2": flywheel,
+        "max_contact_stress_mpa": stress if stressed else None,
+        "max_contact_stress_deg": theta_nodes[np.asarray(out.max_contact_stress_node, int)] if stressed else None,
+        "contact_half_width_mm": half_width if stressed else None,
+    }
+    built_in = {p.name: computed[p.name] for p in OUTPUTS.values() if p.built_in}
     speeds = []
     for i, r in enumerate(rpm):
-        stress = float(out.max_contact_stress_mpa[i])
-        half_width = 2 * float(out.max_contact_stress_radius_mm[i]) * stress / program.materials.contact_modulus_mpa
-        jump = bool(out.min_contact_force_n[i] < 0) and not closed
+        values = {name: None if v is None else v[i].item() for name, v in built_in.items()}
+        values["jump"] = bool(values["jump"])  # false for a form-closed cam
         speeds.append(SpeedReport(
             rpm=float(r),
-            max_payload_acceleration_m_s2=float(out.max_payload_acceleration_m_s2[i]),
-            max_kinematic_acceleration_m_s2=float(kinematic[i]),
-            min_contact_force_n=float(out.min_contact_force_n[i]),
-            max_contact_force_n=float(out.max_contact_force_n[i]),
-            jump=jump,
-            min_preload_n=None if closed else float(preload[i]),
+            **values,
             residual_vibration_mm=tuple(float(v) for v in out.residual_vibration_mm[i]),
             period_ratios=tuple(float(v) for v in ratios[i]),
             flights=tuple(found[i]) if i in found else None,
             impacts=None if turns[i] is None else tuple(turns[i].impacts),
             impacts_change_deg=None if turns[i] is None else turns[i].change_deg,
-            max_drive_torque_n_m=float(out.max_drive_torque_n_m[i]),
-            rms_drive_torque_n_m=float(out.rms_drive_torque_n_m[i]),
-            mean_drive_torque_n_m=float(out.mean_drive_torque_n_m[i]),
-            energy_fluctuation_j=float(out.energy_fluctuation_j[i]),
-            flywheel_inertia_kg_m2=float(flywheel[i]),
-            max_contact_stress_mpa=stress if stressed else None,
-            max_contact_stress_deg=float(theta_nodes[int(out.max_contact_stress_node[i])]) if stressed else None,
-            contact_half_width_mm=half_width if stressed else None,
             outputs={name: float(values[i]) for name, values in out.probes.items()},
         ))
     jump_speed = None

@@ -63,31 +63,33 @@ def contact_force(program: Program, rpm: float, history: dict, groove=None) -> p
     return fig
 
 
-def sweep(program: Program, report: dict) -> plt.Figure:
-    """Against speed: the preload needed, with the preload fitted and the jump speed (a
-    spring-loaded cam), or the flank forces (a form-closed one); peak accelerations."""
-    speeds = report["speeds"]
-    rpm = [s["rpm"] for s in speeds]
+def sweep(program: Program, report) -> plt.Figure:
+    """Against speed (a ``Report``): the preload needed, with the preload fitted and the
+    jump speed (a spring-loaded cam), or the flank forces (a form-closed one); peak
+    accelerations."""
+    speeds = report.speeds
+    rpm = [s.rpm for s in speeds]
+    jump = report.jump_speed_rpm
     fig, (a, b) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, constrained_layout=True)
     if program.follower.form_closed:
-        a.plot(rpm, [s["max_contact_force_n"] for s in speeds], marker=".", label="max (inner flank)")
-        a.plot(rpm, [s["min_contact_force_n"] for s in speeds], marker=".", label="min (outer flank < 0)")
+        a.plot(rpm, [s.max_contact_force_n for s in speeds], marker=".", label="max (inner flank)")
+        a.plot(rpm, [s.min_contact_force_n for s in speeds], marker=".", label="min (outer flank < 0)")
         a.axhline(0.0, color="k", lw=0.8)
         a.set_ylabel("flank force, contact held (N)")
         a.legend(fontsize=8)
     else:
-        a.plot(rpm, [s["min_preload_n"] for s in speeds], marker=".", label="preload needed")
+        a.plot(rpm, [s.min_preload_n for s in speeds], marker=".", label="preload needed")
         a.axhline(program.follower.preload_n, color="C1", lw=0.8, ls="--", label="preload fitted")
-        if report["jump_speed_rpm"] is not None:
+        if jump is not None:
             for ax in (a, b):
-                ax.axvline(report["jump_speed_rpm"], color="C3", lw=0.8)
-            a.annotate(f"jump {report['jump_speed_rpm']:.0f} rpm", (report["jump_speed_rpm"], 0.0),
+                ax.axvline(jump, color="C3", lw=0.8)
+            a.annotate(f"jump {jump:.0f} rpm", (jump, 0.0),
                        xytext=(4, 4), textcoords="offset points", fontsize=8, color="C3")
         a.set_ylabel("preload needed (N)")
         a.legend(fontsize=8)
     a.set_title(f"{program.name}: periodic steady state against speed")
-    b.plot(rpm, [s["max_payload_acceleration_m_s2"] for s in speeds], marker=".", label="payload")
-    b.plot(rpm, [s["max_kinematic_acceleration_m_s2"] for s in speeds], marker=".", label="cam (kinematic)")
+    b.plot(rpm, [s.max_payload_acceleration_m_s2 for s in speeds], marker=".", label="payload")
+    b.plot(rpm, [s.max_kinematic_acceleration_m_s2 for s in speeds], marker=".", label="cam (kinematic)")
     b.set_ylabel("max |acceleration| (m/s^2)")
     b.set_xlabel("speed (rpm)")
     b.legend(fontsize=8)
@@ -133,12 +135,12 @@ def over_turn(title: str, key: str, label: str, histories: list[tuple[float, dic
     return fig
 
 
-def torque_sweep(speeds: list[dict], title: str) -> plt.Figure:
-    """Peak and RMS drive torque against speed (``SpeedReport`` or shaft dicts)."""
+def torque_sweep(speeds, title: str) -> plt.Figure:
+    """Peak and RMS drive torque against speed (``SpeedReport``s or ``ShaftSpeedReport``s)."""
     fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
-    rpm = [s["rpm"] for s in speeds]
-    ax.plot(rpm, [s["max_drive_torque_n_m"] for s in speeds], marker=".", label="peak |T|")
-    ax.plot(rpm, [s["rms_drive_torque_n_m"] for s in speeds], marker=".", label="RMS T")
+    rpm = [s.rpm for s in speeds]
+    ax.plot(rpm, [s.max_drive_torque_n_m for s in speeds], marker=".", label="peak |T|")
+    ax.plot(rpm, [s.rms_drive_torque_n_m for s in speeds], marker=".", label="RMS T")
     ax.set_xlabel("speed (rpm)")
     ax.set_ylabel("drive torque (N m)")
     ax.set_title(title)
@@ -147,9 +149,9 @@ def torque_sweep(speeds: list[dict], title: str) -> plt.Figure:
     return fig
 
 
-def save_figures(out: Path, program: Program, report: dict, history: tuple, prof: Profile,
+def save_figures(out: Path, program: Program, report, history: tuple, prof: Profile,
                  *, histories: list[tuple[float, dict]] = (), groove=None) -> None:
-    """The figures of ``camjax program --out``: svaj and contact force of the turn
+    """The figures of ``camjax program --out`` for a ``Report``: svaj and contact force of the turn
     ``history`` (``(rpm, response)``; ``groove`` that speed's ``GrooveTurn`` for a grooved
     cam), drive torque (and contact stress) over the turn at up to four of ``histories``,
     the sweeps against speed, the profile."""
@@ -162,14 +164,14 @@ def save_figures(out: Path, program: Program, report: dict, history: tuple, prof
     if program.follower.contact_width_mm is not None:
         plot.save(over_turn(f"{program.name}: Hertz contact stress", "contact_stress_mpa",
                             "contact stress (MPa)", histories), out / "contact_stress.png")
-    if len(report["speeds"]) > 1:
+    if len(report.speeds) > 1:
         plot.save(sweep(program, report), out / "sweep.png")
-        plot.save(torque_sweep(report["speeds"], f"{program.name}: drive torque"), out / "torque_sweep.png")
+        plot.save(torque_sweep(report.speeds, f"{program.name}: drive torque"), out / "torque_sweep.png")
     plot.save(cam(prof, program.name), out / "profile.png")
 
 
-def shaft_figures(out: Path, machine, report: dict, rpm) -> None:
-    """The shaft's torque over the turn at up to four speeds, and against speed."""
+def shaft_figures(out: Path, machine, report, rpm) -> None:
+    """The shaft's torque over the turn at up to four speeds, and against speed (a ``MachineReport``)."""
     from ._dynamics import SteadyState
     from ._shaft import shaft_torque
 
@@ -181,6 +183,6 @@ def shaft_figures(out: Path, machine, report: dict, rpm) -> None:
         histories.append((float(r), {"theta_deg": 360.0 * nodes, "drive_torque_n_m": values}))
     plot.save(over_turn(f"{machine.name}: shaft torque", "drive_torque_n_m", "drive torque (N m)", histories),
               out / "shaft_torque.png")
-    if len(report["shaft"]["speeds"]) > 1:
-        plot.save(torque_sweep(report["shaft"]["speeds"], f"{machine.name}: shaft torque"),
+    if len(report.shaft) > 1:
+        plot.save(torque_sweep(report.shaft, f"{machine.name}: shaft torque"),
                   out / "shaft_torque_sweep.png")

@@ -24,14 +24,13 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
+from .._plain import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
 from ..metrics import interval_peaks, septic_coefficients
 from ._export import _angle_ranges, shape
 from ._spec import Program
 
 TORQUE_PER_FORCE_VELOCITY = 1e-3 / (2 * math.pi)
 """N m of drive torque per N of contact force and mm per turn of lift velocity."""
-DEFAULT_SPEED_FLUCTUATION = 0.05
-"""Coefficient of speed fluctuation ``Cs = (Omega_max - Omega_min) / Omega_mean`` for the flywheel."""
 _HILBERT = 1.0 / (np.arange(8)[:, None] + np.arange(8)[None, :] + 1.0)
 
 
@@ -260,7 +259,8 @@ def design_warnings(program: Program, report=None) -> list[str]:
     """Where the input or a result lies outside what the design rules and the models hold,
     one line each (empty where all is well): the program's own numbers (a lift table's noise
     or spacing, ``table_warnings``, among them), and with ``report``
-    (``analyse``'s ``Report`` or its ``as_dict()``) the pressure angle and the Hertz contact.
+    (``analyse``'s ``Report`` or its ``as_dict()``) the pressure angle, the Hertz contact and a
+    grooved cam's strikes that did not settle.
 
     Each is a warning, not an error: the numbers are computed, but they are not to be
     trusted as they stand.  ``camjax program`` prints them.
@@ -305,6 +305,24 @@ def design_warnings(program: Program, report=None) -> list[str]:
                        "where Hertz theory holds: its stress "
                        f"({worst['max_contact_stress_mpa']:.3g} MPa) is not to be trusted; check "
                        "follower.contact_width_mm and the moduli")
+    out += _unsettled_grooves(report["speeds"])
+    return out
+
+
+def _unsettled_grooves(speeds) -> list[str]:
+    """A grooved cam's strikes that still moved from turn to turn after the longest run."""
+    from ._groove import MAX_GROOVE_SAMPLES, MAX_TURNS, SETTLED_DEG
+
+    out = []
+    for s in speeds:
+        change = s.get("impacts_change_deg")
+        if change is not None and not change <= SETTLED_DEG:
+            out.append(f"at {s['rpm']:g} rpm the groove's strikes had not settled within the longest run "
+                       f"allowed ({MAX_TURNS} turns, {MAX_GROOVE_SAMPLES:,} samples; "
+                       + (f"they still move by {change:.3g} deg per turn" if math.isfinite(change) else
+                          "they still differ in number or flank from turn to turn")
+                       + "): the roller chatters without a period, and the last turn is reported; a "
+                       "narrower groove (groove_clearance_mm) or more damping settles sooner")
     return out
 
 

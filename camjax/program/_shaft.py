@@ -10,12 +10,16 @@ RMS, peak and energy fluctuation are those of the exact sum of the interpolants.
 
 from __future__ import annotations
 
+import csv
 import dataclasses
+import io
+import json
 import math
 from pathlib import Path
 
 import numpy as np
 
+from .._plain import json_ready
 from ..checks import read_toml
 from ..metrics import septic_coefficients
 from ._analysis import Report, analyse
@@ -26,6 +30,7 @@ from ._machine import (
     flywheel_inertia_kg_m2,
     torque_figures,
 )
+from ._probes import OUTPUTS
 from ._spec import Program, _no_unknown
 
 
@@ -116,6 +121,24 @@ class MachineReport:
         return {"machine": self.machine, "speed_fluctuation": self.speed_fluctuation,
                 "cams": [dict(phase_deg=phase, **r.as_dict()) for phase, r in zip(self.phases_deg, self.cams)],
                 "shaft": {"speeds": [s.as_dict() for s in self.shaft]}}
+
+    def to_json(self) -> str:
+        """The report as JSON text (``camjax program MACHINE --format json``, ``summary.json``)."""
+        return json.dumps(json_ready(self.as_dict()), indent=1)
+
+    def columns(self) -> tuple:
+        """The shaft's per-speed outputs: the built-in outputs (``OUTPUTS``) it holds."""
+        fields = {f.name for f in dataclasses.fields(ShaftSpeedReport)}
+        return tuple(p for p in OUTPUTS.values() if p.built_in and p.name in fields)
+
+    def to_csv(self) -> str:
+        """The shaft's totals, one row per speed (``camjax program MACHINE --format csv``)."""
+        buffer = io.StringIO()
+        writer = csv.writer(buffer)
+        keys = ["rpm"] + [p.name for p in self.columns()]
+        writer.writerow(keys)
+        writer.writerows([getattr(s, k) for k in keys] for s in self.shaft)
+        return buffer.getvalue().rstrip()
 
 
 def _jets(coefficients, sigma, h):

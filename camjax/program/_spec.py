@@ -591,3 +591,14 @@ def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -
 def example_path(name: str = "indexer") -> Path:
     """Path of a program file shipped with camjax (``camjax/program/examples``)."""
     return Path(__file__).parent / "examples" / f"{name}.toml"
+
+
+def program_path(text: str | None, default: str = "indexer") -> Path:
+    """The program file ``text`` names: a path, or a built-in example's name ('indexer',
+    'feed') where no such file exists; without ``text``, the example ``default``."""
+    if not text:
+        return example_path(default)
+    path = Path(text)
+    if text.isidentifier() and not path.exists() and example_path(text).exists():
+        return example_path(text)  # a built-in example by name
+    return path

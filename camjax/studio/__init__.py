@@ -21,8 +21,7 @@ from ._workbench import rigid_contact_force_n as rigid_contact_force_n
 def studio(program=None, *, rpm: str = DEFAULT_RPM, host: str = "127.0.0.1", port: int = 0) -> Studio:
     """A studio for ``program`` (a ``Program``, a program file's path, or a built-in
     example's name; default the ``feed`` example), serving on a background thread."""
-    from ..cli.program import program_path
-    from ..program import Program
+    from ..program import Program, program_path
 
     base = None
     if isinstance(program, Program):

@@ -1,7 +1,7 @@
 """One workbench's state: the program (as TOML text), the speed range and its report.
 
-Everything the page shows comes from the public program API (``camjax.program``) and the
-report of ``camjax program --format json`` (``camjax.cli.program.program_report``).
+Everything the page shows comes from the public program API (``camjax.program``): the
+report is ``camjax.program.analyse``'s, as ``camjax program --format json`` prints it.
 """
 
 from __future__ import annotations
@@ -16,8 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cli._common import CliError, json_ready, parse_range
-from ..cli.program import DEFAULT_SPEED_FLUCTUATION, plot_speed, program_report
+from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, parse_range, plot_speed
 
 DEFAULT_RPM = "200:1400:7"
 """The speed range a workbench starts with (wide enough to show the examples' jump speeds)."""
@@ -49,7 +48,7 @@ def parse_speeds(text: str) -> np.ndarray:
     """The speed range ``text`` (``START:STOP:COUNT`` or ``V1,V2,...``, rpm), or a ValueError."""
     try:
         rpm = parse_range(str(text), "rpm")
-    except CliError as error:
+    except ValueError as error:
         raise ValueError(str(error)) from None
     if not all(r > 0 for r in rpm):
         raise ValueError(f"rpm: speeds must be positive, got {text!r}")
@@ -120,7 +119,7 @@ class Workbench:
         """Replace the program (and the speeds): the new report, or a ValueError that
         leaves the last good state as it was.  The same program (the same TOML structure,
         whatever its layout and comments) at the same speeds is analysed once per ``cache``."""
-        from ..program import Program, SteadyState
+        from ..program import Program, SteadyState, analyse
 
         rpm_text = self.rpm_text if rpm_text is None else str(rpm_text)
         data = parse_toml(toml)
@@ -131,8 +130,8 @@ class Workbench:
         hit = self.cache.get(key)
         if hit is None:
             steady = SteadyState(program, float(min(rpm)))
-            report = json_ready(program_report(program, rpm, with_flight=self.with_flight, steady=steady,
-                                               speed_fluctuation=self.speed_fluctuation))
+            report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
+                                        speed_fluctuation=self.speed_fluctuation))
             hit = (program, steady, report, list(report.get("warnings", ())))
             with _CACHE_LOCK:
                 self.cache[key] = hit

@@ -1,0 +1,64 @@
+"""The files of a program's report: ``summary.json``, the profile, ``response.csv``, figures.
+
+What ``camjax program --out DIR`` writes, from the typed ``Report`` (``MachineReport`` for
+a machine file); the figures import matplotlib on first use.
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+from ._analysis import Report, response
+from ._dynamics import SteadyState
+from ._export import profile, write_csv, write_dxf
+from ._groove import groove_turns
+from ._spec import Program
+
+RESPONSE_SPEEDS = 10
+"""Most speeds whose histories over the turn ``response.csv`` holds (the first ones)."""
+
+
+def write_report(out, program: Program, report: Report, *, steady: SteadyState | None = None,
+                 points: int = 3600, plot_rpm: float | None = None) -> None:
+    """Write ``report`` of ``program`` to the directory ``out``: ``summary.json``
+    (``Report.to_json``), ``profile.csv`` and ``profile.dxf`` (``points`` points),
+    ``response.csv`` (``response`` at the first ``RESPONSE_SPEEDS`` speeds) and the figures
+    (``save_figures``; the turn at ``plot_rpm``, default ``Report.plot_rpm``)."""
+    from ._figures import save_figures
+
+    out = Path(out)
+    plot_rpm = report.plot_rpm(plot_rpm)
+    steady = steady or SteadyState(program, min(s.rpm for s in report.speeds))
+    (out / "summary.json").write_text(report.to_json() + "\n")
+    prof = profile(program, points)
+    write_csv(prof, out / "profile.csv", outer=program.follower.form_closed)
+    write_dxf(prof, out / "profile.dxf", outer=program.follower.form_closed)
+    histories = [(s.rpm, response(program, s.rpm, steady=steady)) for s in report.speeds[:RESPONSE_SPEEDS]]
+    with (out / "response.csv").open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        keys = list(histories[0][1])
+        writer.writerow(["rpm", *keys])
+        for r, h in histories:
+            for i in range(h["theta_deg"].size):
+                writer.writerow([r] + [f"{h[k][i]:.10g}" for k in keys])
+    shown = next((h for r, h in histories if r == plot_rpm), None)
+    shown = shown if shown is not None else response(program, plot_rpm, steady=steady)
+    groove = None
+    if program.follower.form_closed and program.follower.groove_clearance_mm:
+        groove = groove_turns(program, [plot_rpm])[0]
+    save_figures(out, program, report, (plot_rpm, shown), prof, histories=histories, groove=groove)
+
+
+def write_machine_report(out, machine, report, *, points: int = 3600) -> None:
+    """Write a ``MachineReport`` of ``machine`` to ``out``: its ``summary.json``, each cam's
+    files (``write_report``) in ``cam<i>-<name>/`` and the shaft's figures."""
+    from ._figures import shaft_figures
+
+    out = Path(out)
+    (out / "summary.json").write_text(report.to_json() + "\n")
+    for i, ((program, _), cam) in enumerate(zip(machine.cams, report.cams), 1):
+        folder = out / f"cam{i}-{program.name}"
+        folder.mkdir(exist_ok=True)
+        write_report(folder, program, cam, points=points)
+    shaft_figures(out, machine, report, [s.rpm for s in report.shaft])
