@@ -7,8 +7,10 @@ a machine file); the figures import matplotlib on first use.
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
+from .._plain import json_ready
 from ._analysis import Report, response
 from ._dynamics import SteadyState
 from ._export import profile, write_csv, write_dxf
@@ -20,9 +22,9 @@ RESPONSE_SPEEDS = 10
 
 
 def write_report(out, program: Program, report: Report, *, steady: SteadyState | None = None,
-                 points: int = 3600, plot_rpm: float | None = None) -> None:
+                 points: int = 3600, plot_rpm: float | None = None, summary: dict | None = None) -> None:
     """Write ``report`` of ``program`` to the directory ``out``: ``summary.json``
-    (``Report.to_json``), ``profile.csv`` and ``profile.dxf`` (``points`` points),
+    (``Report.to_json``, or the JSON of ``summary`` where given), ``profile.csv`` and ``profile.dxf`` (``points`` points),
     ``response.csv`` (``response`` at the first ``RESPONSE_SPEEDS`` speeds) and the figures
     (``save_figures``; the turn at ``plot_rpm``, default ``Report.plot_rpm``)."""
     from ._figures import save_figures
@@ -30,7 +32,8 @@ def write_report(out, program: Program, report: Report, *, steady: SteadyState |
     out = Path(out)
     plot_rpm = report.plot_rpm(plot_rpm)
     steady = steady or SteadyState(program, min(s.rpm for s in report.speeds))
-    (out / "summary.json").write_text(report.to_json() + "\n")
+    text = report.to_json() if summary is None else json.dumps(json_ready(summary), indent=1)
+    (out / "summary.json").write_text(text + "\n")
     prof = profile(program, points)
     write_csv(prof, out / "profile.csv", outer=program.follower.form_closed)
     write_dxf(prof, out / "profile.dxf", outer=program.follower.form_closed)
@@ -52,13 +55,15 @@ def write_report(out, program: Program, report: Report, *, steady: SteadyState |
 
 def write_machine_report(out, machine, report, *, points: int = 3600) -> None:
     """Write a ``MachineReport`` of ``machine`` to ``out``: its ``summary.json``, each cam's
-    files (``write_report``) in ``cam<i>-<name>/`` and the shaft's figures."""
+    files (``write_report``, its summary with its ``phase_deg``) in ``cam<i>-<name>/`` and
+    the shaft's figures."""
     from ._figures import shaft_figures
 
     out = Path(out)
     (out / "summary.json").write_text(report.to_json() + "\n")
-    for i, ((program, _), cam) in enumerate(zip(machine.cams, report.cams), 1):
+    summaries = report.as_dict()["cams"]
+    for i, ((program, _), cam, summary) in enumerate(zip(machine.cams, report.cams, summaries), 1):
         folder = out / f"cam{i}-{program.name}"
         folder.mkdir(exist_ok=True)
-        write_report(folder, program, cam, points=points)
+        write_report(folder, program, cam, points=points, summary=summary)
     shaft_figures(out, machine, report, [s.rpm for s in report.shaft])
