@@ -134,7 +134,8 @@ class Report:
     ``jump_below_range`` is true and the jump speed lies below the range); ``segments``
     (``segment_kinematics``) and ``joins`` (``Program.joins``) describe the motion itself,
     at any speed; the cam's ``Geometry`` and the coefficient of speed fluctuation the
-    flywheel is sized for."""
+    flywheel is sized for.  ``to_json`` and ``to_csv`` write it as ``camjax program`` prints
+    it, its per-speed columns read from the registry ``OUTPUTS`` (``columns``)."""
 
     program: str
     speeds: tuple[SpeedReport, ...]
