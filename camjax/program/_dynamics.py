@@ -90,28 +90,36 @@ class CycleGrid(NamedTuple):
 
 
 def resolution(program: Program, rpm_min: float) -> int:
-    """Intervals per turn: ``w h <= 0.5`` at the slowest speed, 64 per moving segment at
-    least; a turn that would need more than ``MAX_GRID_INTERVALS`` is refused, with what
-    to change."""
-    cycles = program.follower.vibrations_per_turn(rpm_min)
-    needed = 2 * math.pi * cycles / TARGET_PHASE_STEP
+    """Intervals per turn the slowest speed asks for: ``w h <= 0.5`` at ``rpm_min``, 64 per
+    moving segment at least (``cycle_grid`` adds what each law piece needs)."""
+    needed = 2 * math.pi * program.follower.vibrations_per_turn(rpm_min) / TARGET_PHASE_STEP
     shortest = min((program.segments[i].angle_deg / 360 for i in program.moving_segments()), default=1.0)
-    intervals = 64 * math.ceil(max(needed, _MIN_PER_SEGMENT / shortest, 256) / 64)
-    if intervals > MAX_GRID_INTERVALS:
-        slowest = 2 * math.pi * program.follower.vibrations_per_turn(TARGET_PHASE_STEP * MAX_GRID_INTERVALS)
-        raise ValueError(
-            f"a turn at {rpm_min:g} rpm needs {intervals:,} grid intervals (the limit is "
-            f"{MAX_GRID_INTERVALS:,}): the follower vibrates "
-            f"{cycles:,.0f} times per turn; run at {slowest:.3g} rpm or faster, or lower "
-            f"follower.stiffness_n_per_mm"
-            + ("" if needed >= _MIN_PER_SEGMENT / shortest else
-               f", or widen the shortest segment ({360 * shortest:g} degrees)"))
-    return intervals
+    return 64 * math.ceil(max(needed, _MIN_PER_SEGMENT / shortest, 256) / 64)
 
 
-def cycle_grid(program: Program, intervals: int) -> CycleGrid:
-    """Sample the program's lift and acceleration on the engine's grid of about
-    ``intervals`` per turn (every law piece gets at least four)."""
+def check_grid_size(program: Program, rpm_min: float, intervals: int) -> None:
+    """The one refusal of a turn whose grid would pass ``MAX_GRID_INTERVALS``, before any
+    work, with what to change: the speed or the stiffness where the follower's vibration
+    asks for the intervals, the shortest segments where the laws' pieces do."""
+    if intervals <= MAX_GRID_INTERVALS:
+        return
+    cycles = program.follower.vibrations_per_turn(rpm_min)
+    by_speed = 2 * math.pi * cycles / TARGET_PHASE_STEP > MAX_GRID_INTERVALS / 2
+    slowest = 2 * math.pi * program.follower.vibrations_per_turn(TARGET_PHASE_STEP * MAX_GRID_INTERVALS)
+    shortest = min(s.angle_deg for s in program.segments)
+    remedies = ([f"run at {slowest:.3g} rpm or faster, or lower follower.stiffness_n_per_mm"] if by_speed else [])
+    remedies.append(f"widen or merge the shortest segments ({len(program.segments)} segments, the shortest "
+                    f"{shortest:g} degrees)")
+    raise ValueError(f"a turn at {rpm_min:g} rpm needs {intervals:,} grid intervals (the limit is "
+                     f"{MAX_GRID_INTERVALS:,}): the follower vibrates {cycles:,.0f} times per turn; "
+                     + "; or ".join(remedies))
+
+
+def cycle_grid(program: Program, rpm_min: float) -> CycleGrid:
+    """Sample the program's lift and acceleration on the engine's grid for speeds from
+    ``rpm_min`` up (``resolution``; every law piece gets at least four intervals); a grid
+    past the limit is refused before it is built (``check_grid_size``)."""
+    intervals = resolution(program, rpm_min)
     edges, counts, first_piece = [0.0], [], []
     for seg, start_deg in zip(program.segments, program.start_deg):
         s0, f = start_deg / 360.0, seg.angle_deg / 360.0
@@ -123,10 +131,7 @@ def cycle_grid(program: Program, intervals: int) -> CycleGrid:
     edges[-1] = 1.0
     counts = np.asarray(counts)
     total = int(counts.sum())
-    if total > MAX_GRID_INTERVALS:
-        raise ValueError(f"the program's {len(program.segments)} segments need {total:,} grid "
-                         f"intervals per turn (the limit is {MAX_GRID_INTERVALS:,}): merge short "
-                         "segments or use fewer of them")
+    check_grid_size(program, rpm_min, total)
     motion, times = piecewise_grid(np.asarray(edges), counts)
     piece_start = np.concatenate([[0], np.cumsum(counts)])
     starts = piece_start[first_piece]
@@ -435,7 +440,7 @@ class SteadyState:
         self.train = Train.of(program)
         self.rpm_min = float(check_rpm(rpm_min)[0])
         self.devices = resolve_devices(devices)
-        self.grid = cycle_grid(program, resolution(program, self.rpm_min))
+        self.grid = cycle_grid(program, self.rpm_min)
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
         self.turn = PaddedTurn.of(self.grid, self.train, self.contact)
 
@@ -583,7 +588,7 @@ def node_contact_force(program: Program, rpm, laws: dict | None = None, *, rpm_m
     if rpm_min is None:
         rpm_min = float(np.min(np.asarray(rpm)))
     with jax.ensure_compile_time_eval():
-        grid = cycle_grid(program, resolution(program, rpm_min))
+        grid = cycle_grid(program, rpm_min)
     for segment, law in (laws or {}).items():
         grid = with_segment_law(grid, program, segment - 1, law)
     train = Train.of(program)
