@@ -84,6 +84,8 @@ from ._spec import Segment as Segment
 from ._spec import example_path as example_path
 from ._spec import segment_band as segment_band
 from ._spec import with_law as with_law
+from ._turn import JOIN_TOLERANCE_DEG as JOIN_TOLERANCE_DEG
+from ._turn import Turn as Turn
 
 if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
     from ._figures import save_figures as save_figures
