@@ -87,6 +87,8 @@ from ._spec import example_path as example_path
 from ._spec import program_path as program_path
 from ._spec import segment_band as segment_band
 from ._spec import with_law as with_law
+from ._turn import JOIN_TOLERANCE_DEG as JOIN_TOLERANCE_DEG
+from ._turn import Turn as Turn
 from ._writers import RESPONSE_SPEEDS as RESPONSE_SPEEDS
 from ._writers import write_machine_report as write_machine_report
 from ._writers import write_report as write_report

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..laws import ConstantVelocity
 from ._spec import Program
+from ._turn import JOIN_TOLERANCE_DEG
 
 DRIVE_TABLE_FORMATS = ("csv", "xyva", "codesys", "twincat")
 """The drive-table formats ``write_drive_table`` writes and ``read_drive_table`` reads."""
@@ -102,37 +103,33 @@ def _scale(program: Program) -> tuple[float, str]:
 
 def _segment_jet(program: Program, index: int, tau) -> tuple[np.ndarray, ...]:
     """Slave and its three derivatives per degree inside segment ``index`` at ``tau`` in [0, 1]."""
-    seg = program.segments[index]
     scale, _ = _scale(program)
     tau = np.asarray(tau, dtype=float)
-    y0 = scale * float(program.start_lift_mm[index])
-    if not seg.moving:
-        zero = np.zeros_like(tau)
-        return y0 + zero, zero, zero, zero
     # the jerk just after each angle (before it at the segment's end), the side the rows
     # take: at a law's breakpoint the jerk may step, and the law's own value there is
     # either side's (or neither: the SCCA laws give 0 at their midpoint)
     after = np.where(tau < 1.0, np.minimum(tau + _JERK_OFFSET, 1.0), 1.0 - _JERK_OFFSET)
-    s, v, a, _ = (np.asarray(x, dtype=float) for x in seg.law.evaluate(tau))
-    j = np.asarray(seg.law.evaluate(after)[3], dtype=float)
-    h, beta = scale * seg.lift_mm, seg.angle_deg
-    return y0 + h * s, h * v / beta, h * a / beta**2, h * j / beta**3
+    y, v, a, _ = program.turn.segment_jet(index, tau)
+    j = program.turn.segment_jet(index, after)[3]
+    return tuple(scale * np.asarray(x, dtype=float) for x in (y, v, a, j))
 
 
 def _samples(program: Program, step_deg: float) -> DriveTable:
     count = round(360.0 / step_deg)
     master = np.arange(count + 1) * 360.0 / count  # exact at every whole-degree join
+    # each angle read after it (the last, 360, before it: the turn's end), the joins
+    # within rounding snapped to the join (``Turn.locate``)
+    owner, tau = program.turn.locate(master[:-1], "after")
+    last, last_tau = program.turn.locate(master[-1:], "before")
+    owner, tau = np.append(owner, last), np.append(tau, last_tau)
     starts = np.append(program.start_deg, 360.0)
-    near = np.abs(master[:, None] - starts[None, :]) <= 1e-9  # a join within rounding is the join
+    near = np.abs(master[:, None] - starts[None, :]) <= JOIN_TOLERANCE_DEG
     master = np.where(near.any(axis=1), starts[np.argmax(near, axis=1)], master)
-    # each angle belongs to the segment starting at or before it; 360 to the last one
-    owner = np.clip(np.searchsorted(starts, master, side="right") - 1, 0, len(program.segments) - 1)
     out = [np.zeros_like(master) for _ in range(4)]
-    for i, seg in enumerate(program.segments):
+    for i in range(len(program.segments)):
         inside = owner == i
         if inside.any():
-            tau = np.clip((master[inside] - starts[i]) / seg.angle_deg, 0.0, 1.0)
-            for column, values in zip(out, _segment_jet(program, i, tau)):
+            for column, values in zip(out, _segment_jet(program, i, tau[inside])):
                 column[inside] = values
     return DriveTable(master, *out, ("sample",) * master.size, _scale(program)[1])
 

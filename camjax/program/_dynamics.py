@@ -90,28 +90,36 @@ class CycleGrid(NamedTuple):
 
 
 def resolution(program: Program, rpm_min: float) -> int:
-    """Intervals per turn: ``w h <= 0.5`` at the slowest speed, 64 per moving segment at
-    least; a turn that would need more than ``MAX_GRID_INTERVALS`` is refused, with what
-    to change."""
-    cycles = program.follower.vibrations_per_turn(rpm_min)
-    needed = 2 * math.pi * cycles / TARGET_PHASE_STEP
+    """Intervals per turn the slowest speed asks for: ``w h <= 0.5`` at ``rpm_min``, 64 per
+    moving segment at least (``cycle_grid`` adds what each law piece needs)."""
+    needed = 2 * math.pi * program.follower.vibrations_per_turn(rpm_min) / TARGET_PHASE_STEP
     shortest = min((program.segments[i].angle_deg / 360 for i in program.moving_segments()), default=1.0)
-    intervals = 64 * math.ceil(max(needed, _MIN_PER_SEGMENT / shortest, 256) / 64)
-    if intervals > MAX_GRID_INTERVALS:
-        slowest = 2 * math.pi * program.follower.vibrations_per_turn(TARGET_PHASE_STEP * MAX_GRID_INTERVALS)
-        raise ValueError(
-            f"a turn at {rpm_min:g} rpm needs {intervals:,} grid intervals (the limit is "
-            f"{MAX_GRID_INTERVALS:,}): the follower vibrates "
-            f"{cycles:,.0f} times per turn; run at {slowest:.3g} rpm or faster, or lower "
-            f"follower.stiffness_n_per_mm"
-            + ("" if needed >= _MIN_PER_SEGMENT / shortest else
-               f", or widen the shortest segment ({360 * shortest:g} degrees)"))
-    return intervals
+    return 64 * math.ceil(max(needed, _MIN_PER_SEGMENT / shortest, 256) / 64)
 
 
-def cycle_grid(program: Program, intervals: int) -> CycleGrid:
-    """Sample the program's lift and acceleration on the engine's grid of about
-    ``intervals`` per turn (every law piece gets at least four)."""
+def check_grid_size(program: Program, rpm_min: float, intervals: int) -> None:
+    """The one refusal of a turn whose grid would pass ``MAX_GRID_INTERVALS``, before any
+    work, with what to change: the speed or the stiffness where the follower's vibration
+    asks for the intervals, the shortest segments where the laws' pieces do."""
+    if intervals <= MAX_GRID_INTERVALS:
+        return
+    cycles = program.follower.vibrations_per_turn(rpm_min)
+    by_speed = 2 * math.pi * cycles / TARGET_PHASE_STEP > MAX_GRID_INTERVALS / 2
+    slowest = 2 * math.pi * program.follower.vibrations_per_turn(TARGET_PHASE_STEP * MAX_GRID_INTERVALS)
+    shortest = min(s.angle_deg for s in program.segments)
+    remedies = ([f"run at {slowest:.3g} rpm or faster, or lower follower.stiffness_n_per_mm"] if by_speed else [])
+    remedies.append(f"widen or merge the shortest segments ({len(program.segments)} segments, the shortest "
+                    f"{shortest:g} degrees)")
+    raise ValueError(f"a turn at {rpm_min:g} rpm needs {intervals:,} grid intervals (the limit is "
+                     f"{MAX_GRID_INTERVALS:,}): the follower vibrates {cycles:,.0f} times per turn; "
+                     + "; or ".join(remedies))
+
+
+def cycle_grid(program: Program, rpm_min: float) -> CycleGrid:
+    """Sample the program's lift and acceleration on the engine's grid for speeds from
+    ``rpm_min`` up (``resolution``; every law piece gets at least four intervals); a grid
+    past the limit is refused before it is built (``check_grid_size``)."""
+    intervals = resolution(program, rpm_min)
     edges, counts, first_piece = [0.0], [], []
     for seg, start_deg in zip(program.segments, program.start_deg):
         s0, f = start_deg / 360.0, seg.angle_deg / 360.0
@@ -123,10 +131,7 @@ def cycle_grid(program: Program, intervals: int) -> CycleGrid:
     edges[-1] = 1.0
     counts = np.asarray(counts)
     total = int(counts.sum())
-    if total > MAX_GRID_INTERVALS:
-        raise ValueError(f"the program's {len(program.segments)} segments need {total:,} grid "
-                         f"intervals per turn (the limit is {MAX_GRID_INTERVALS:,}): merge short "
-                         "segments or use fewer of them")
+    check_grid_size(program, rpm_min, total)
     motion, times = piecewise_grid(np.asarray(edges), counts)
     piece_start = np.concatenate([[0], np.cumsum(counts)])
     starts = piece_start[first_piece]
@@ -134,24 +139,10 @@ def cycle_grid(program: Program, intervals: int) -> CycleGrid:
     left = np.asarray(motion.nodes)[:-1]
     acc, lift = np.zeros_like(times), np.zeros_like(times)
     lift_nodes, velocity_nodes = np.zeros(total + 1), np.zeros(total + 1)
-    for seg, start_deg, y0, a, b in zip(program.segments, program.start_deg, program.start_lift_mm,
-                                        starts, stops):
-        s0, f = start_deg / 360.0, seg.angle_deg / 360.0
-        lift[a:b], lift_nodes[a:b] = y0, y0
-        if not seg.moving:
-            continue
-        # The nodes a..b-1 belong to this segment by index: their local time is clipped
-        # to [0, 1], so a node that rounds a hair before the segment's start reads the
-        # segment's own start (not the dwell before it).
-        tau_gauss, tau_left = (times[a:b] - s0) / f, np.clip((left[a:b] - s0) / f, 0.0, 1.0)
-        # One evaluation of the law per segment (eager JAX calls are slow).
-        s_all, v_all, a_all = (np.asarray(x) for x in
-                               seg.law.evaluate(np.concatenate([tau_gauss.ravel(), tau_left]))[:3])
-        n_gauss = tau_gauss.size
-        lift[a:b] = y0 + seg.lift_mm * s_all[:n_gauss].reshape(tau_gauss.shape)
-        acc[a:b] = seg.lift_mm * a_all[:n_gauss].reshape(tau_gauss.shape) / f**2
-        lift_nodes[a:b] = y0 + seg.lift_mm * s_all[n_gauss:]
-        velocity_nodes[a:b] = seg.lift_mm * v_all[n_gauss:] / f
+    for k, (a, b) in enumerate(zip(starts, stops)):
+        lift_g, acc_g, lift_nodes[a:b], velocity_nodes[a:b] = _segment_samples(
+            program.turn, k, times[a:b], left[a:b])
+        lift[a:b], acc[a:b] = lift_g, acc_g
     velocity_nodes[-1] = velocity_nodes[0]  # the turn closes on its start
     return CycleGrid(
         motion=motion._replace(forcing=to_monomial(acc)),
@@ -161,6 +152,22 @@ def cycle_grid(program: Program, intervals: int) -> CycleGrid:
         segment_start=np.asarray(starts),
         residual_start=np.asarray([starts[i] for i in program.residual_segments()], dtype=int),
     )
+
+
+def _segment_samples(turn, k: int, gauss, left, law=None):
+    """Segment ``k``'s lift and acceleration at its Gauss points ``gauss`` and its lift and
+    velocity at the left nodes ``left`` of its intervals (times in turns; mm and per
+    turn).  The nodes belong to the segment by index: their local time is clipped to
+    ``[0, 1]``, so a node that rounds a hair before the segment's start reads the segment's
+    own start (not the dwell before it).  One evaluation of the law per segment."""
+    s0, f = turn.start_deg[k] / 360.0, turn.angle_deg[k] / 360.0
+    tau_gauss = (gauss - s0) / f
+    tau_left = np.clip((left - s0) / f, 0.0, 1.0)
+    xp = np if law is None else jnp
+    y, dy, ddy, _ = turn.segment_jet(k, xp.concatenate([xp.ravel(tau_gauss), tau_left]), law)
+    n = tau_gauss.size
+    return (y[:n].reshape(tau_gauss.shape), 360.0**2 * ddy[:n].reshape(tau_gauss.shape),
+            y[n:], 360.0 * dy[n:])
 
 
 def with_segment_law(grid: CycleGrid, program: Program, index: int, law) -> CycleGrid:
@@ -177,22 +184,17 @@ def with_segment_law(grid: CycleGrid, program: Program, index: int, law) -> Cycl
         raise ValueError(f"segment {index + 1}: the new law's breakpoints differ from the grid's")
     stop = grid.segment_start[index + 1] if index + 1 < len(program.segments) else grid.intervals
     rows = slice(int(grid.segment_start[index]), int(stop))
-    s0, f = program.start_deg[index] / 360.0, seg.angle_deg / 360.0
-    y0, lift = program.start_lift_mm[index], seg.lift_mm
-    tau_left = np.clip((grid.nodes[rows] - s0) / f, 0.0, 1.0)  # by index, as in cycle_grid
-    h = grid.piece_width[np.asarray(grid.motion.piece)[rows]] / f
-    tau_gauss = tau_left[:, None] + h[:, None] * GAUSS_POINTS
-    s, v, a, _ = law.evaluate(jnp.asarray(np.concatenate([tau_gauss.ravel(), tau_left])))
-    n_gauss = tau_gauss.size
-    acceleration = to_monomial(lift * a[:n_gauss].reshape(tau_gauss.shape) / f**2)
-    lift_samples = to_monomial(y0 + lift * s[:n_gauss].reshape(tau_gauss.shape))
-    velocity_nodes = jnp.asarray(grid.velocity_nodes).at[rows].set(lift * v[n_gauss:] / f)
+    left = grid.nodes[rows]
+    h = grid.piece_width[np.asarray(grid.motion.piece)[rows]]
+    gauss = left[:, None] + h[:, None] * GAUSS_POINTS
+    lift_samples, acceleration, lift_nodes, velocity = _segment_samples(program.turn, index, gauss, left, law)
+    velocity_nodes = jnp.asarray(grid.velocity_nodes).at[rows].set(velocity)
     if index == 0:  # the closing node repeats the first one's velocity (periodic)
         velocity_nodes = velocity_nodes.at[-1].set(velocity_nodes[0])
     return grid._replace(
-        motion=grid.with_forcing(jnp.asarray(grid.motion.forcing).at[rows].set(acceleration)),
-        lift=jnp.asarray(grid.lift).at[rows].set(lift_samples),
-        lift_nodes=jnp.asarray(grid.lift_nodes).at[rows].set(y0 + lift * s[n_gauss:]),
+        motion=grid.with_forcing(jnp.asarray(grid.motion.forcing).at[rows].set(to_monomial(acceleration))),
+        lift=jnp.asarray(grid.lift).at[rows].set(to_monomial(lift_samples)),
+        lift_nodes=jnp.asarray(grid.lift_nodes).at[rows].set(lift_nodes),
         velocity_nodes=velocity_nodes,
     )
 
@@ -438,7 +440,7 @@ class SteadyState:
         self.train = Train.of(program)
         self.rpm_min = float(check_rpm(rpm_min)[0])
         self.devices = resolve_devices(devices)
-        self.grid = cycle_grid(program, resolution(program, self.rpm_min))
+        self.grid = cycle_grid(program, self.rpm_min)
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
         self.turn = PaddedTurn.of(self.grid, self.train, self.contact)
 
@@ -586,7 +588,7 @@ def node_contact_force(program: Program, rpm, laws: dict | None = None, *, rpm_m
     if rpm_min is None:
         rpm_min = float(np.min(np.asarray(rpm)))
     with jax.ensure_compile_time_eval():
-        grid = cycle_grid(program, resolution(program, rpm_min))
+        grid = cycle_grid(program, rpm_min)
     for segment, law in (laws or {}).items():
         grid = with_segment_law(grid, program, segment - 1, law)
     train = Train.of(program)

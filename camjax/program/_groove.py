@@ -34,6 +34,7 @@ from ..errors import SolverError
 from ..laws import AbstractMotionLaw
 from ._dynamics import check_rpm
 from ._spec import Program
+from ._turn import Turn
 
 _SETTLE = math.log(1e9)  # decay of the contact vibration over the first turns tried
 SETTLED_DEG = 1e-6
@@ -54,53 +55,37 @@ FLANKS = {0: "inner", 2: "outer"}
 class TurnLaw(AbstractMotionLaw):
     """A program's lift over ``turns`` turns, normalised, as the hybrid models' motion law.
 
-    ``s(tau) = y(T tau) / h``, periodic with period 1 (``tau`` in turns).  ``breakpoints``
-    lists the segment ends and the laws' breakpoints over all ``turns`` turns (the hybrid
-    solver's step control lands on them), so unlike a rise they run past 1.  ``Ca`` (and
-    ``Cv``, ``Cj``) are exact: the largest of each segment's ``|lift| C / (h f^k)``.
+    ``s(tau) = y(T tau) / h``, periodic with period 1 (``tau`` in turns), read from the
+    program's ``Turn``.  ``breakpoints`` lists the segment ends and the laws' breakpoints
+    over all ``turns`` turns (the hybrid solver's step control lands on them), so unlike a
+    rise they run past 1.  ``Ca`` (and ``Cv``, ``Cj``) are exact: the largest of each
+    segment's ``|lift| C / (h f^k)``.
     """
 
-    laws: tuple
-    start: tuple = eqx.field(static=True)  # segment start, in turns
-    width: tuple = eqx.field(static=True)  # segment duration, in turns
-    lift: tuple = eqx.field(static=True)  # segment lift / h
+    turn: Turn
+    stroke_mm: float = eqx.field(static=True)
+    points: tuple = eqx.field(static=True)  # the turn's breakpoints, in turns
     peaks: tuple = eqx.field(static=True)  # (Cv, Ca, Cj)
     turns: int = eqx.field(static=True, default=1)
 
     @classmethod
     def of(cls, program: Program, stroke_mm: float, turns: int) -> TurnLaw:
-        moving = program.moving_segments()
-        segs = [program.segments[i] for i in moving]
-        start = tuple(float(program.start_deg[i]) / 360.0 for i in moving)
-        width = tuple(s.angle_deg / 360.0 for s in segs)
-        lift = tuple(s.lift_mm / stroke_mm for s in segs)
+        segs = [program.segments[i] for i in program.moving_segments()]
         peaks = tuple(
-            max(abs(h) * float(getattr(s.law, c)) / f**k for s, f, h in zip(segs, width, lift))
+            max(abs(s.lift_mm) / stroke_mm * float(getattr(s.law, c)) / (s.angle_deg / 360.0) ** k for s in segs)
             for k, c in ((1, "Cv"), (2, "Ca"), (3, "Cj"))
         )
-        return cls(tuple(s.law for s in segs), start, width, lift, peaks, int(turns))
+        points = tuple((program.turn.breakpoints_deg() / 360.0).tolist())
+        return cls(program.turn, float(stroke_mm), points, peaks, int(turns))
 
     @property
     def name(self) -> str:
         return "program-turn"
 
     def evaluate(self, tau):
-        """``(s, v, a, j)`` at ``tau``: each instant read from the one moving segment it
-        belongs to by index (the last to start at or before it; a dwell after a segment
-        reads that segment's end), at its local time clipped to ``[0, 1]``.  Summing every
-        segment's contribution instead counted a join of two moving segments twice (both
-        read it inside) or not at all (a rounding put it outside both)."""
-        u = jnp.mod(jnp.asarray(tau, dtype=float), 1.0)
-        k = jnp.searchsorted(jnp.asarray(self.start), u, side="right") - 1
-        s = v = a = j = jnp.zeros_like(u)
-        lifted = 0.0  # the lift of the segments before
-        for i, (law, s0, f, h) in enumerate(zip(self.laws, self.start, self.width, self.lift)):
-            si, vi, ai, ji = law.evaluate(jnp.clip((u - s0) / f, 0.0, 1.0))
-            mine = k == i
-            s = jnp.where(mine, lifted + h * si, s)
-            v, a, j = (jnp.where(mine, h * x / f**p, y) for x, y, p in ((vi, v, 1), (ai, a, 2), (ji, j, 3)))
-            lifted += h
-        return s, v, a, j
+        """``(s, v, a, j)`` at ``tau`` (in turns): the turn's jet, normalised."""
+        y, dy, ddy, dddy = self.turn.jet(360.0 * jnp.asarray(tau, dtype=float))
+        return tuple(x * 360.0**p / self.stroke_mm for p, x in enumerate((y, dy, ddy, dddy)))
 
     def rise(self, tau):
         return self.evaluate(tau)
@@ -110,11 +95,7 @@ class TurnLaw(AbstractMotionLaw):
         return None
 
     def breakpoints(self):
-        points = set()
-        for law, s0, f in zip(self.laws, self.start, self.width):
-            inner = [s0 + f * b for b in law.breakpoints()] if isinstance(law.breakpoints(), tuple) else []
-            points.update([s0, s0 + f, *inner])
-        return tuple(sorted(k + p for k in range(self.turns) for p in points if 0 < k + p < self.turns))
+        return tuple(sorted(k + p for k in range(self.turns) for p in self.points if 0 < k + p < self.turns))
 
     @property
     def Cv(self):

@@ -22,7 +22,6 @@ from ._dynamics import (
     _cycle,
     cycle_grid,
     residual_modes,
-    resolution,
     with_segment_law,
 )
 from ._jump import even_periods, min_preload_n, scan_speeds
@@ -51,7 +50,7 @@ def _segment_grid(objective, law):
     placeholder = jax.tree.map(lambda x: np.zeros(np.shape(x)) if isinstance(x, jax.core.Tracer) else x, law)
     program = with_law(objective.program, objective.segment, placeholder)
     with jax.ensure_compile_time_eval():
-        grid = _same_points(cycle_grid(program, resolution(program, objective.rpm_lo)), objective.program)
+        grid = _same_points(cycle_grid(program, objective.rpm_lo), objective.program)
     return program, with_segment_law(grid, program, objective.segment - 1, law), Train.of(program)
 
 

@@ -28,6 +28,7 @@ from ._motion import (
 )
 from ._table import points_toml, read_points, table_points, turn_segments
 from ._table import segment_law as table_segment_law
+from ._turn import JOIN_TOLERANCE_DEG, Turn
 
 FOLLOWER_KINDS = ("translating-roller", "swinging-roller", "translating-flat", "swinging-flat")
 MAX_SEGMENTS = 360
@@ -36,7 +37,6 @@ reported apart, so 100,000 slivers took minutes and megabytes of output; more is
 before any work."""
 TABLE_KEYS = ("file", "points", "smoothing_mm")
 """A ``law = "table"`` segment's keys (and a whole cam's, in ``[program]``)."""
-_ANGLE_TOLERANCE_DEG = 1e-9
 _LIFT_TOLERANCE_MM = 1e-9
 
 
@@ -256,7 +256,7 @@ class Program:
             if lift < -_LIFT_TOLERANCE_MM:
                 raise ValueError(f"segment {i}: the cumulative lift goes below zero ({lift:g} mm)")
         total = sum(seg.angle_deg for seg in self.segments)
-        if abs(total - 360.0) > _ANGLE_TOLERANCE_DEG:
+        if abs(total - 360.0) > JOIN_TOLERANCE_DEG:
             raise ValueError(f"segment angles sum to {total:g} degrees, not 360")
         if abs(lift) > _LIFT_TOLERANCE_MM:
             raise ValueError(f"the cumulative lift ends at {lift:g} mm, not back at zero (the base circle)")
@@ -367,63 +367,36 @@ class Program:
     # -- the lift over the turn ----------------------------------------------------------
 
     @property
+    def turn(self) -> Turn:
+        """The lift over the turn (``Turn``): the one object every reader of the motion asks."""
+        turn = self.__dict__.get("_turn")
+        if turn is None:
+            turn = Turn.of(self.segments)
+            object.__setattr__(self, "_turn", turn)  # a cache: the fields are frozen
+        return turn
+
+    @property
     def start_deg(self) -> np.ndarray:
         """Cam angle at the start of each segment (degrees)."""
-        return np.concatenate([[0.0], np.cumsum([s.angle_deg for s in self.segments])[:-1]])
+        return self.turn.start_deg
 
     @property
     def start_lift_mm(self) -> np.ndarray:
         """Lift at the start of each segment (mm)."""
-        return np.concatenate([[0.0], np.cumsum([s.lift_mm for s in self.segments])[:-1]])
+        return self.turn.start_lift_mm
 
     def lift(self, theta_deg, side: str = "after") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Lift (mm) and its first two derivatives in cam angle (mm/deg, mm/deg^2), periodic.
 
         At a join of two segments the derivatives are the next segment's (``side="after"``)
-        or the one ending there (``side="before"``): where the acceleration steps they differ.
+        or the one ending there (``side="before"``): where the acceleration steps they differ
+        (``Turn.locate`` decides).
         """
-        if side not in ("before", "after"):
-            raise ValueError(f"side must be 'before' or 'after', got {side!r}")
-        theta = np.mod(np.asarray(theta_deg, dtype=float), 360.0)
-        # Each angle's segment by index: an angle within the angle tolerance of a join is
-        # that join, read at the end of the segment before it (tau = 1) or the start of the
-        # one after (tau = 0); comparing rounded angles put a quarter of the joins past
-        # their segment (tau a hair above 1 reads the dwell beyond).
-        n = len(self.segments)
-        starts = self.start_deg
-        widths = np.array([seg.angle_deg for seg in self.segments], dtype=float)
-        bounds = np.append(starts, 360.0)
-        above = np.clip(np.searchsorted(bounds, theta), 1, n)  # the nearest join: above or below
-        nearest = np.where(bounds[above] - theta < theta - bounds[above - 1], above, above - 1)
-        at_join = np.abs(theta - bounds[nearest]) <= _ANGLE_TOLERANCE_DEG
-        index = np.clip(np.searchsorted(bounds, theta, side="right") - 1, 0, n - 1)
-        index = np.where(at_join, (nearest - 1) % n if side == "before" else nearest % n, index)
-        tau = np.clip((theta - starts[index]) / widths[index], 0.0, 1.0)
-        tau = np.where(at_join, 1.0 if side == "before" else 0.0, tau)
-        y, dy, ddy = (np.zeros_like(theta) for _ in range(3))
-        for k, (seg, y0) in enumerate(zip(self.segments, self.start_lift_mm)):
-            inside = index == k
-            if not inside.any():
-                continue
-            y[inside] = y0
-            if seg.moving:
-                s, v, a, _ = (np.asarray(x) for x in seg.law.evaluate(tau[inside]))
-                y[inside] += seg.lift_mm * s
-                dy[inside] = seg.lift_mm * v / seg.angle_deg
-                ddy[inside] = seg.lift_mm * a / seg.angle_deg**2
-        return y, dy, ddy
+        return self.turn.jet(theta_deg, side)[:3]
 
     def lift_curve(self) -> LiftCurve:
         """The lift as a pytree (laws as leaves) for ``camjax.geometry`` and other JAX code."""
-        moving = [i for i, seg in enumerate(self.segments) if seg.moving]
-        scale = 1.0 / self.follower.arm_mm if self.follower.swinging else 1.0
-        return LiftCurve(
-            laws=tuple(self.segments[i].law for i in moving),
-            start_deg=tuple(float(self.start_deg[i]) for i in moving),
-            angle_deg=tuple(float(self.segments[i].angle_deg) for i in moving),
-            lift_mm=tuple(float(self.segments[i].lift_mm) for i in moving),
-            scale=scale,
-        )
+        return LiftCurve(self.turn, 1.0 / self.follower.arm_mm if self.follower.swinging else 1.0)
 
     def displacement(self, theta):
         """Follower displacement at cam angle ``theta`` (radians), jittable: see ``LiftCurve``."""
@@ -441,25 +414,16 @@ class Program:
 
 
 class LiftCurve(eqx.Module):
-    """The program's lift over the turn as a JAX pytree, ``camjax.geometry``'s program interface.
+    """The follower's displacement over the turn as a JAX pytree, ``camjax.geometry``'s
+    program interface: the turn's lift in mm for a translating follower, radians of swing
+    for a swinging one (``scale = 1/arm``)."""
 
-    The lift is the sum of each moving segment's contribution ``lift * s(tau)`` (0 before
-    the segment, ``lift`` after it), so dwells need no term.  ``displacement`` is in mm
-    for a translating follower and radians of swing for a swinging one (``scale = 1/arm``).
-    """
-
-    laws: tuple
-    start_deg: tuple = eqx.field(static=True)
-    angle_deg: tuple = eqx.field(static=True)
-    lift_mm: tuple = eqx.field(static=True)
+    turn: Turn
     scale: float = eqx.field(static=True)
 
     def displacement(self, theta):
-        theta_deg = jnp.mod(jnp.asarray(theta, dtype=float) * (180 / math.pi), 360.0)
-        y = jnp.zeros_like(theta_deg)
-        for law, start, angle, lift in zip(self.laws, self.start_deg, self.angle_deg, self.lift_mm):
-            y = y + lift * law.s((theta_deg - start) / angle)
-        return self.scale * y
+        theta_deg = jnp.asarray(theta, dtype=float) * (180 / math.pi)
+        return self.scale * self.turn.jet(theta_deg)[0]
 
 
 def _segment_count(count: int) -> None:

@@ -56,16 +56,9 @@ def parse_speeds(text: str) -> np.ndarray:
 
 
 def kinematics(program, theta_deg: np.ndarray) -> dict[str, np.ndarray]:
-    """Lift and its first three derivatives in cam angle (mm/deg^k) at ``theta_deg``:
-    ``Program.lift`` and each segment's law's jerk (zero in the dwells)."""
-    y, dy, ddy = program.lift(theta_deg)
-    jerk = np.zeros_like(y)
-    theta = np.mod(theta_deg, 360.0)
-    for seg, start in zip(program.segments, program.start_deg):
-        inside = (theta >= start) & (theta < start + seg.angle_deg)
-        if seg.moving and inside.any():
-            j = np.asarray(seg.law.evaluate((theta[inside] - start) / seg.angle_deg)[3])
-            jerk[inside] = seg.lift_mm * j / seg.angle_deg**3
+    """Lift and its first three derivatives in cam angle (mm/deg^k) at ``theta_deg``, from
+    the program's turn (``Program.turn``)."""
+    y, dy, ddy, jerk = program.turn.jet(theta_deg)
     return {"lift_mm": y, "velocity_mm_per_deg": dy, "acceleration_mm_per_deg2": ddy,
             "jerk_mm_per_deg3": jerk}
 
