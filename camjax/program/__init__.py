@@ -33,6 +33,9 @@ from ._dynamics import SteadyState as SteadyState
 from ._dynamics import check_rpm as check_rpm
 from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
+from ._dxf_import import DxfProfile as DxfProfile
+from ._dxf_import import lift_from_dxf as lift_from_dxf
+from ._dxf_import import read_dxf_profile as read_dxf_profile
 from ._export import MAX_PROFILE_POINTS as MAX_PROFILE_POINTS
 from ._export import Profile as Profile
 from ._export import profile as profile
