@@ -4,7 +4,8 @@
 ``analyse`` reports the periodic steady state, contact force, minimum preload, jump speed,
 every flight of a turn (``flights``) and a grooved cam's strikes (``groove_turns``) over a
 list of speeds; ``response`` gives the histories over one turn at one speed; ``profile``,
-``write_csv`` and ``write_dxf`` export the cam's shape (roller or flat face); ``analyse``
+``write_csv`` and ``write_dxf`` export the cam's shape (roller or flat face) and
+``lift_from_dxf`` (``Program.from_dxf``) reads a drawn profile back as its lift; ``analyse``
 also sizes the drive (torque, energy, flywheel), the Hertz contact stress and the cam's
 ``Geometry``; ``analyse_machine`` adds the torques of several cams on one shaft
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
