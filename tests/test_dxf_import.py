@@ -9,6 +9,7 @@ import re
 import ezdxf
 import numpy as np
 import pytest
+from ezdxf.math import rational_bspline_from_arc
 
 from camjax.cli import main
 from camjax.program import Program, analyse, example_path, lift_from_dxf, profile, read_dxf_profile, write_dxf
@@ -56,21 +57,40 @@ def _eccentric_lift(f, theta):
     return l * (psi0 - psi)
 
 
+def _eccentric_drawing(path, entity):
+    """The eccentric circle as a CIRCLE, a closed LWPOLYLINE of two half-circle bulges, or
+    an exact rational SPLINE."""
+    doc = ezdxf.new(units=ezdxf.units.MM)
+    msp = doc.modelspace()
+    if entity == "CIRCLE":
+        msp.add_circle((C, 0.0), R)
+    elif entity == "LWPOLYLINE":
+        msp.add_lwpolyline([(C + R, 0.0, 0, 0, 1.0), (C - R, 0.0, 0, 0, 1.0)], format="xyseb", close=True)
+    else:
+        arc = rational_bspline_from_arc(center=(C, 0.0), radius=R, start_angle=0.0, end_angle=360.0)
+        msp.add_rational_spline([tuple(p) for p in arc.control_points], arc.weights(), degree=arc.degree,
+                                knots=arc.knots())
+    doc.saveas(path)
+    return path
+
+
+@pytest.mark.parametrize("entity", ["CIRCLE", "LWPOLYLINE", "SPLINE"])
 @pytest.mark.parametrize("follower", [
     dict(kind="translating-roller", offset_mm=8.0),
     dict(kind="swinging-roller", arm_mm=90.0, pivot_mm=110.0),
     dict(kind="translating-flat"),
     dict(kind="swinging-flat", arm_mm=100.0, pivot_mm=120.0),
 ], ids=lambda f: f["kind"])
-def test_eccentric_circle_lift_is_the_closed_form(tmp_path, follower):
-    path = _drawing(tmp_path / "ecc.dxf", [("CAM", (C, 0.0), R)])
+def test_eccentric_circle_lift_is_the_closed_form(tmp_path, follower, entity):
+    path = _eccentric_drawing(tmp_path / "ecc.dxf", entity)
+    assert read_dxf_profile(path).entity == entity
     f = dataclasses.replace(FEED.follower, base_radius_mm=R - C, **follower)
     angle, lift = lift_from_dxf(path, f, points=720)
     assert angle[0] == 0.0 and angle[-1] == pytest.approx(359.5)
     exact = _eccentric_lift(f, np.radians(angle))
     assert np.ptp(exact) > 9.0 * (f.arm_mm / 110.0 if f.swinging else 1.0)  # a real stroke
-    # ezdxf flattens the circle within 1e-4 mm; the lift follows within that (over the
-    # pressure angle's cosine, below 1.2 here)
+    # ezdxf flattens the circle within 1e-4 mm (its vertices on it); the lift follows within
+    # that (over the pressure angle's cosine, below 1.2 here)
     np.testing.assert_allclose(lift, exact, atol=1.2e-4)
 
 

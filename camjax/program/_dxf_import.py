@@ -119,21 +119,38 @@ def _to_mm(doc) -> float:
 
 
 def _flattened(entity, path: Path) -> np.ndarray | None:
-    """The closed entity's polygon (last vertex not repeated), or ``None`` if it is open."""
+    """The closed entity's polygon (last vertex not repeated), or ``None`` if it is open.
+
+    A SPLINE is flattened by its own NURBS evaluation (``Spline.flattening``: a rational one
+    as well); the rest through ``ezdxf.path``, whose arcs (circles, ellipses, bulges) become
+    cubic Bezier curves first: 128 of them keep a circle within 1e-11 of its radius
+    (ezdxf's default, one per quarter, strays 2.7e-4 of it)."""
     import ezdxf.path
 
-    # Arcs (circles, ellipses, bulges) become cubic Bezier curves first: 128 of them keep a
-    # circle within 1e-11 of its radius (ezdxf's one per quarter strays 2.7e-4 of it).
-    curve = ezdxf.path.make_path(entity, segments=_ARC_BEZIERS)
-    if len(curve) == 0 or not curve.is_closed:
+    where = f"{path}: {entity.dxftype()} on layer {entity.dxf.layer!r}"
+    try:
+        if entity.dxftype() == "SPLINE":
+            vertices, flagged = entity.flattening(FLATTEN_MM), bool(entity.closed)
+        else:
+            curve = ezdxf.path.make_path(entity, segments=_ARC_BEZIERS)
+            if len(curve) == 0:
+                return None
+            vertices, flagged = curve.flattening(FLATTEN_MM), False
+        points = []
+        for v in vertices:
+            points.append((v.x, v.y))
+            if len(points) > MAX_VERTICES:
+                raise ValueError(f"{where} flattens to more than {MAX_VERTICES:,} points")
+    except (TypeError, AttributeError, ZeroDivisionError, ezdxf.DXFError) as error:
+        raise ValueError(f"{where} cannot be read as a curve ({error})") from None
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    if len(points) < 2:
         return None
-    points = []
-    for v in curve.flattening(FLATTEN_MM):
-        points.append((v.x, v.y))
-        if len(points) > MAX_VERTICES:
-            raise ValueError(f"{path}: {entity.dxftype()} on layer {entity.dxf.layer!r} flattens to more "
-                             f"than {MAX_VERTICES:,} points")
-    points = np.asarray(points, dtype=float)[:-1]
+    size = float(np.max(np.ptp(points, axis=0)))
+    if np.hypot(*(points[-1] - points[0])) <= 1e-9 * max(size, 1.0):
+        points = points[:-1]
+    elif not flagged:
+        return None
     keep = np.r_[True, np.any(np.diff(points, axis=0) != 0, axis=1)]
     points = points[keep]
     return points if len(points) >= 3 else None
