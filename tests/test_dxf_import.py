@@ -12,7 +12,15 @@ import pytest
 from ezdxf.math import rational_bspline_from_arc
 
 from camjax.cli import main
-from camjax.program import Program, analyse, example_path, lift_from_dxf, profile, read_dxf_profile, write_dxf
+from camjax.program import (
+    Program,
+    analyse,
+    example_path,
+    lift_from_dxf,
+    profile,
+    read_dxf_profile,
+    write_dxf,
+)
 
 FEED = Program.load(example_path("feed"))
 INDEXER = Program.load(example_path("indexer"))
