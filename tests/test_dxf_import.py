@@ -195,6 +195,15 @@ def test_bad_drawings_are_one_line_errors_naming_the_file(tmp_path):
         with pytest.raises(ValueError, match=message) as caught:
             lift_from_dxf(path, follower, points=360)
         assert "\n" not in str(caught.value), path
+    ecc = _eccentric_drawing(tmp_path / "ecc.dxf", "CIRCLE")
+    inside = dataclasses.replace(f, kind="swinging-flat", base_radius_mm=R - C, arm_mm=100.0, pivot_mm=45.0)
+    with pytest.raises(ValueError, match=r"ecc\.dxf: CIRCLE on layer '0': the pivot \(pivot_mm = 45\) lies within "
+                                         r"the profile's largest radius \(50 mm\); move the pivot out"):
+        lift_from_dxf(ecc, inside, points=72)
+    # its base circle faces the follower (on +y) at 270 degrees, not at 0
+    with pytest.raises(ValueError, match=r"ecc\.dxf: .*angle 0 must be on the base circle.*; in the drawing, the "
+                                         r"follower stands at angle 0 .*turn the profile"):
+        Program.from_dxf("ecc", ecc, dataclasses.replace(f, base_radius_mm=R - C), points=72)
     (tmp_path / "text.dxf").write_text("angle_deg,lift_mm\n0,0\n")
     with pytest.raises(ValueError, match=r"text\.dxf: not a readable DXF file"):
         lift_from_dxf(tmp_path / "text.dxf", f)
