@@ -64,7 +64,6 @@ def read_dxf_profile(path, layer: str | None = None) -> DxfProfile:
     ``ValueError`` naming the file.
     """
     import ezdxf
-    import ezdxf.path
 
     path = Path(path)
     if not path.is_file():
@@ -95,7 +94,8 @@ def read_dxf_profile(path, layer: str | None = None) -> DxfProfile:
         closed = on_profile or closed
     if len(closed) > 1:
         names = ", ".join(f"{e.dxftype()} on layer {e.dxf.layer!r}" for e, _ in closed)
-        hint = "draw the profile alone on its own layer" if layer is not None else "choose one by its layer"
+        hint = ("draw the profile alone on its own layer" if layer is not None else
+                "choose one by its layer (dxf_layer in a program file, layer= in Python)")
         raise ValueError(f"{path}: {len(closed)} closed curves{where} ({names}); {hint}")
     entity, points = closed[0]
     points = points * scale
