@@ -4,7 +4,8 @@
 ``analyse`` reports the periodic steady state, contact force, minimum preload, jump speed,
 every flight of a turn (``flights``) and a grooved cam's strikes (``groove_turns``) over a
 list of speeds; ``response`` gives the histories over one turn at one speed; ``profile``,
-``write_csv`` and ``write_dxf`` export the cam's shape (roller or flat face); ``analyse``
+``write_csv`` and ``write_dxf`` export the cam's shape (roller or flat face) and
+``lift_from_dxf`` (``Program.from_dxf``) reads a drawn profile back as its lift; ``analyse``
 also sizes the drive (torque, energy, flywheel), the Hertz contact stress and the cam's
 ``Geometry``; ``write_report`` writes a report's files (``summary.json``, ``response.csv``,
 the profile, the figures); ``analyse_machine`` adds the torques of several cams on one shaft
@@ -28,6 +29,9 @@ from ._drive import DriveTable as DriveTable
 from ._drive import drive_table as drive_table
 from ._drive import read_drive_table as read_drive_table
 from ._drive import write_drive_table as write_drive_table
+from ._dxf_import import DxfProfile as DxfProfile
+from ._dxf_import import lift_from_dxf as lift_from_dxf
+from ._dxf_import import read_dxf_profile as read_dxf_profile
 from ._dynamics import Cycle as Cycle
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState

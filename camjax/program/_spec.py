@@ -37,6 +37,8 @@ reported apart, so 100,000 slivers took minutes and megabytes of output; more is
 before any work."""
 TABLE_KEYS = ("file", "points", "smoothing_mm")
 """A ``law = "table"`` segment's keys (and a whole cam's, in ``[program]``)."""
+DXF_KEYS = ("dxf", "dxf_layer", "dxf_points")
+"""``[program]`` keys of a whole cam drawn in a DXF file (with ``smoothing_mm``)."""
 _LIFT_TOLERANCE_MM = 1e-9
 
 
@@ -288,9 +290,12 @@ class Program:
         """A program from the TOML structure (``program``, ``segment`` list, ``follower``)."""
         _no_unknown(data, {"program", "segment", "follower", "materials"}, "top level")
         header = data.get("program", {})
-        _no_unknown(header, {"name", *TABLE_KEYS}, "[program]")
+        _no_unknown(header, {"name", *TABLE_KEYS, *DXF_KEYS}, "[program]")
         segments_data = data.get("segment")
-        if any(k in header for k in ("file", "points")):
+        dxf = _dxf_header(header, segments_data)
+        if dxf is not None:
+            segments = []  # from the follower, below
+        elif any(k in header for k in ("file", "points")):
             # A whole cam from one periodic table, in place of segments.
             if segments_data is not None:
                 raise ValueError("[program] table: a whole cam's table replaces the [[segment]] tables; "
@@ -316,6 +321,8 @@ class Program:
             raise ValueError("[follower] roller_radius_mm: a flat-faced follower has no roller")
         materials = data.get("materials", {})
         _no_unknown(materials, {f.name for f in dataclasses.fields(Materials)}, "[materials]")
+        if dxf is not None:
+            segments, follower_data = _dxf_segments(dxf, header, follower_data, base)
         return cls(str(header.get("name", "program")), tuple(segments), Follower(**follower_data),
                    Materials(**materials))
 
@@ -330,6 +337,21 @@ class Program:
             raise ValueError(f"smoothing_mm must be a positive tolerance in mm, got {smoothing_mm:g}")
         segments = [Segment(a, h, law) for a, h, law in turn_segments(angle, lift, smoothing_mm, "points", "from_table")]
         return cls(name, tuple(segments), follower, materials)
+
+    @classmethod
+    def from_dxf(cls, name: str, path, follower: Follower, *, points: int | None = None, layer: str | None = None,
+                 smoothing_mm: float | None = None, materials: Materials = Materials()) -> Program:
+        """A whole cam from its profile drawn in a DXF file (``write_dxf``'s inverse): the
+        lift ``lift_from_dxf`` finds for ``follower`` at ``points`` angles, through
+        ``from_table`` (``smoothing_mm`` as there).  Errors are one-line ``ValueError``s
+        naming the file."""
+        from ._dxf_import import DEFAULT_POINTS, lift_from_dxf
+
+        angle, lift = lift_from_dxf(path, follower, points=DEFAULT_POINTS if points is None else points, layer=layer)
+        try:
+            return cls.from_table(name, angle, lift, follower, smoothing_mm=smoothing_mm, materials=materials)
+        except ValueError as error:
+            raise ValueError(f"{path}: {_dxf_table_error(error)}") from None
 
     def to_toml(self, law_files: dict[int, str] | None = None) -> str:
         """The program as TOML text: laws by registry name, or by ``law_files[i]`` (1-based)."""
@@ -481,6 +503,58 @@ def _turn_segments(header: dict, base: Path | None) -> list[Segment]:
     if smoothing is not None and _finite(smoothing, "[program] smoothing_mm") <= 0:
         raise ValueError(f"[program] smoothing_mm must be a positive tolerance in mm, got {smoothing:g}")
     return [Segment(a, h, law) for a, h, law in turn_segments(angle, lift, smoothing, source)]
+
+
+def _dxf_header(header: dict, segments_data) -> str | None:
+    """``[program] dxf``'s path, checked against the keys it excludes, or ``None``."""
+    if "dxf" not in header:
+        extra = sorted(k for k in DXF_KEYS if k in header)
+        if extra:
+            raise ValueError(f"[program] {', '.join(extra)} belong(s) to dxf = \"....dxf\"")
+        return None
+    if any(k in header for k in ("file", "points")):
+        raise ValueError("[program] dxf: the cam's profile replaces a lift table (file or points); give one")
+    if segments_data is not None:
+        raise ValueError("[program] dxf: the cam's profile replaces the [[segment]] tables; give one or the other")
+    if not isinstance(header["dxf"], str):
+        raise ValueError(f"[program] dxf must be a path, got {header['dxf']!r}")
+    return header["dxf"]
+
+
+def _dxf_segments(name: str, header: dict, follower_data: dict, base: Path | None):
+    """A whole cam's segments from ``[program] dxf`` (path relative to the program file) and
+    the follower's fields, ``base_radius_mm`` taken from the profile when not given."""
+    from ._dxf_import import DEFAULT_POINTS, lift_from_dxf, read_dxf_profile
+
+    path = Path(name) if base is None else base / name
+    layer = header.get("dxf_layer")
+    if layer is not None and not isinstance(layer, str):
+        raise ValueError(f"[program] dxf_layer must be a layer name, got {layer!r}")
+    points = header.get("dxf_points", DEFAULT_POINTS)
+    smoothing = header.get("smoothing_mm")
+    if smoothing is not None and _finite(smoothing, "[program] smoothing_mm") <= 0:
+        raise ValueError(f"[program] smoothing_mm must be a positive tolerance in mm, got {smoothing:g}")
+    try:
+        if "base_radius_mm" not in follower_data:
+            follower_data = {**follower_data, "base_radius_mm": read_dxf_profile(path, layer).base_radius_mm}
+        angle, lift = lift_from_dxf(path, Follower(**follower_data), points=points, layer=layer)
+    except ValueError as error:
+        message = str(error).replace("points must", "dxf_points must", 1)
+        raise ValueError(f"[program] dxf: {message}") from None
+    try:
+        return [Segment(a, h, law) for a, h, law in turn_segments(angle, lift, smoothing, name)], follower_data
+    except ValueError as error:
+        raise ValueError(_dxf_table_error(error)) from None
+
+
+def _dxf_table_error(error: ValueError) -> str:
+    """A whole-cam table's error said of a DXF profile: its angle 0 is where the follower is
+    drawn (on the +y axis for a translating follower), not a table's first row."""
+    message = str(error)
+    if "angle 0 must be on the base circle" in message or "highest lift must lie after angle 0" in message:
+        message += ("; in the drawing, the follower stands at angle 0 (a translating one on the +y axis): "
+                    "turn the profile so that the base circle is there")
+    return message
 
 
 def _table_arrays(angle_deg, lift_mm):

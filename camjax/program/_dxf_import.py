@@ -1,0 +1,354 @@
+"""A cam's profile read from a DXF drawing, and the lift table it implies for a follower.
+
+The inverse of ``write_dxf``: the profile is a closed curve in mm in the cam-fixed frame of
+``camjax.geometry`` (cam centre at the origin, the cam turning counter-clockwise, the
+follower at angle 0 where the program's angle 0 puts it).  The curve is flattened by ezdxf
+(``ezdxf.path``) into a polygon whose vertices lie on it; at each cam angle the polygon is
+turned by the angle into the fixed frame and the follower is placed where it touches it:
+
+- translating roller: the highest roller centre on the line ``x = offset`` whose roller
+  touches the polygon (the upper end of the polygon's roller-radius neighbourhood on the
+  line: an endpoint circle or an edge's offset line, exactly);
+- swinging roller: likewise on the circle of the arm about the pivot, the arm swung as far
+  out as the polygon pushes it;
+- translating flat face: the polygon's support function in the follower's direction;
+- swinging flat face: the tangent from the pivot to the polygon.
+
+The base circle is the largest circle about the centre inside the profile (its least
+distance from the centre); the follower's ``base_radius_mm`` must agree with it, since the
+lift is measured from it and the cam's geometry (pressure angle, curvature) depends on it.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+FLATTEN_MM = 1e-4
+"""Largest distance of ezdxf's flattened polygon from a curved entity (arc, spline), mm."""
+MAX_VERTICES = 200_000
+"""Most polygon vertices of a profile: more is refused before the lift is computed."""
+REACH_TOLERANCE_MM = 1e-3
+"""How far a profile point may stay off the follower (a roller bridging a hollow, a flat
+face bridging a dent) before the profile is not a cam for that follower."""
+BASE_RADIUS_TOLERANCE_MM = 0.01
+"""How closely the follower's ``base_radius_mm`` must match the profile's base circle."""
+DEFAULT_POINTS = 720
+"""Cam angles of the lift table by default (0.5 degree apart): the whole-cam table's
+quintic spline through them follows the lift within 1e-7 mm on the example cams, and a
+denser table costs its fit far more time than it gains."""
+_CURVES = ("LWPOLYLINE", "POLYLINE", "SPLINE", "CIRCLE", "ELLIPSE")
+_CHUNK = 128
+_ARC_BEZIERS = 128
+
+
+class DxfProfile(NamedTuple):
+    """The closed profile read from a DXF file: polygon vertices (counter-clockwise, mm),
+    the entity's layer and type, and its base radius (least distance from the centre)."""
+
+    points: np.ndarray
+    layer: str
+    entity: str
+    base_radius_mm: float
+
+
+def read_dxf_profile(path, layer: str | None = None) -> DxfProfile:
+    """The cam profile in a DXF file: the one closed curve (on ``layer`` if given; else the
+    one on layer ``PROFILE``, ``write_dxf``'s, if there is one; else the only closed curve).
+
+    Several closed curves with no way to choose between them, none, a file that is not a
+    DXF, or a profile that does not enclose the cam centre are each a one-line
+    ``ValueError`` naming the file.
+    """
+    import ezdxf
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{path}: DXF file not found")
+    try:
+        doc = ezdxf.readfile(path)
+    except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as error:
+        detail = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise ValueError(f"{path}: not a readable DXF file ({detail})") from None
+    scale = _to_mm(doc)
+    entities = [e for e in doc.modelspace() if e.dxftype() in _CURVES]
+    if layer is not None:
+        entities = [e for e in entities if e.dxf.layer == layer]
+    closed, open_ = [], 0
+    for entity in entities:
+        points = _flattened(entity, path)
+        if points is None:
+            open_ += 1
+        else:
+            closed.append((entity, points))
+    where = f" on layer {layer!r}" if layer is not None else ""
+    if not closed:
+        found = f"{open_} open curve(s)" if open_ else f"no {', '.join(_CURVES)}"
+        raise ValueError(f"{path}: no closed profile{where} ({found}); the cam's profile is one closed "
+                         "polyline, spline, circle or ellipse")
+    if len(closed) > 1 and layer is None:
+        on_profile = [c for c in closed if c[0].dxf.layer == "PROFILE"]
+        closed = on_profile or closed
+    if len(closed) > 1:
+        names = ", ".join(f"{e.dxftype()} on layer {e.dxf.layer!r}" for e, _ in closed)
+        hint = ("draw the profile alone on its own layer" if layer is not None else
+                "choose one by its layer (dxf_layer in a program file, layer= in Python)")
+        raise ValueError(f"{path}: {len(closed)} closed curves{where} ({names}); {hint}")
+    entity, points = closed[0]
+    points = points * scale
+    if _signed_area(points) < 0:
+        points = points[::-1]
+    name = f"{path}: {entity.dxftype()} on layer {entity.dxf.layer!r}"
+    if not _encloses_origin(points):
+        raise ValueError(f"{name} does not enclose the cam centre (the origin): the profile must be "
+                         "drawn about the cam's centre")
+    radius = float(np.min(np.hypot(points[:, 0], points[:, 1])))
+    return DxfProfile(points, str(entity.dxf.layer), entity.dxftype(), radius)
+
+
+def _to_mm(doc) -> float:
+    import ezdxf.units
+
+    units = doc.header.get("$INSUNITS", 0)
+    if units in (0, ezdxf.units.MM):
+        return 1.0
+    return float(ezdxf.units.conversion_factor(units, ezdxf.units.MM))
+
+
+def _flattened(entity, path: Path) -> np.ndarray | None:
+    """The closed entity's polygon (last vertex not repeated), or ``None`` if it is open.
+
+    A SPLINE is flattened by its own NURBS evaluation (``Spline.flattening``: a rational one
+    as well); the rest through ``ezdxf.path``, whose arcs (circles, ellipses, bulges) become
+    cubic Bezier curves first: 128 of them keep a circle within 1e-11 of its radius
+    (ezdxf's default, one per quarter, strays 2.7e-4 of it)."""
+    import ezdxf.path
+
+    where = f"{path}: {entity.dxftype()} on layer {entity.dxf.layer!r}"
+    try:
+        if entity.dxftype() == "SPLINE":
+            vertices, flagged = entity.flattening(FLATTEN_MM), bool(entity.closed)
+        else:
+            curve = ezdxf.path.make_path(entity, segments=_ARC_BEZIERS)
+            if len(curve) == 0:
+                return None
+            vertices, flagged = curve.flattening(FLATTEN_MM), False
+        points = []
+        for v in vertices:
+            points.append((v.x, v.y))
+            if len(points) > MAX_VERTICES:
+                raise ValueError(f"{where} flattens to more than {MAX_VERTICES:,} points")
+    except (TypeError, AttributeError, ZeroDivisionError, ezdxf.DXFError) as error:
+        raise ValueError(f"{where} cannot be read as a curve ({error})") from None
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    if len(points) < 2:
+        return None
+    size = float(np.max(np.ptp(points, axis=0)))
+    if np.hypot(*(points[-1] - points[0])) <= 1e-9 * max(size, 1.0):
+        points = points[:-1]
+    elif not flagged:
+        return None
+    keep = np.r_[True, np.any(np.diff(points, axis=0) != 0, axis=1)]
+    points = points[keep]
+    return points if len(points) >= 3 else None
+
+
+def _signed_area(p: np.ndarray) -> float:
+    q = np.roll(p, -1, axis=0)
+    return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
+
+
+def _encloses_origin(p: np.ndarray) -> bool:
+    """Winding number of the polygon about the origin is not zero (and the origin is off it)."""
+    angle = np.arctan2(p[:, 1], p[:, 0])
+    if np.min(np.hypot(p[:, 0], p[:, 1])) == 0:
+        return False
+    turn = np.sum(np.mod(np.diff(np.r_[angle, angle[0]]) + np.pi, 2 * np.pi) - np.pi)
+    return abs(turn) > np.pi
+
+
+def lift_from_dxf(path, follower, *, points: int = DEFAULT_POINTS, layer: str | None = None):
+    """``(angle_deg, lift_mm)`` of the cam drawn in a DXF file under ``follower`` (a
+    ``camjax.program.Follower``): ``points`` angles evenly over the turn from 0, the lift
+    measured from the follower's base circle (for a swinging follower the arc of the roller
+    centre or the face's swing times ``arm_mm``, as ``Program.lift``).
+
+    The profile is ``read_dxf_profile``'s.  A ``ValueError`` naming the file says why a
+    profile is not a cam for this follower: its base circle is not ``base_radius_mm``, the
+    roller cannot reach a hollow narrower than itself, a flat face meets a non-convex
+    profile, the follower does not reach the profile or its pivot lies inside it.
+    """
+    from ..laws._table import MAX_POINTS, MIN_POINTS
+    from ._spec import _check_follower
+
+    if isinstance(points, bool) or not isinstance(points, (int, np.integer)) or not MIN_POINTS <= points <= MAX_POINTS:
+        raise ValueError(f"points must be a whole number of cam angles from {MIN_POINTS} to {MAX_POINTS:,}, "
+                         f"got {points!r}")
+    _check_follower(follower)
+    cam = read_dxf_profile(path, layer)
+    name = f"{Path(path)}: {cam.entity} on layer {cam.layer!r}"
+    f = follower
+    if abs(cam.base_radius_mm - f.base_radius_mm) > BASE_RADIUS_TOLERANCE_MM:
+        raise ValueError(f"{name}: its base circle (least distance from the centre) is "
+                         f"{cam.base_radius_mm:.6g} mm, not the follower's base_radius_mm = {f.base_radius_mm:g}; "
+                         f"set base_radius_mm = {cam.base_radius_mm:.6g}")
+    theta = np.radians(np.arange(int(points)) * 360.0 / int(points))
+    q = cam.points
+    r_max = float(np.max(np.hypot(q[:, 0], q[:, 1])))
+    if f.swinging and f.pivot_mm <= r_max:
+        raise ValueError(f"{name}: the pivot (pivot_mm = {f.pivot_mm:g}) lies within the profile's "
+                         f"largest radius ({r_max:.6g} mm); move the pivot out")
+    if f.kind == "translating-roller":
+        lift, centres = _translating_roller(q, theta, f)
+    elif f.kind == "swinging-roller":
+        lift, centres = _swinging_roller(q, theta, f)
+    elif f.kind == "translating-flat":
+        lift, centres = _chunked(q, theta, lambda x: np.max(x[..., 1], axis=1)) - f.base_radius_mm, None
+    else:
+        lift, centres = _swinging_flat(q, theta, f), None
+    missed = ~np.isfinite(lift)
+    if missed.any():
+        raise ValueError(f"{name}: the follower does not reach the profile at cam angle "
+                         f"{np.degrees(theta[np.argmax(missed)]):.6g} deg; check offset_mm, arm_mm and pivot_mm")
+    if f.flat_face:
+        _check_convex(q, name, f.kind)
+    else:
+        _check_reach(q, centres, f.roller_radius_mm, name)
+    # The polygon's chords dip inside the base circle by their sag (its vertices lie on it);
+    # no follower goes inside the base circle of a true profile.
+    return np.degrees(theta), np.maximum(lift, 0.0)
+
+
+def _rotated(q: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """The profile's vertices in the fixed frame at each cam angle, ``(n, m, 2)``."""
+    c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+    return np.stack([c * q[:, 0] - s * q[:, 1], s * q[:, 0] + c * q[:, 1]], axis=-1)
+
+
+def _chunked(q, theta, one) -> np.ndarray:
+    return np.concatenate([one(_rotated(q, theta[i:i + _CHUNK])) for i in range(0, theta.size, _CHUNK)])
+
+
+def _edges(x: np.ndarray):
+    """Start points, unit directions and lengths of the closed polygon's edges."""
+    a = x
+    step = np.roll(x, -1, axis=-2) - a
+    length = np.hypot(step[..., 0], step[..., 1])
+    return a, step / length[..., None], length
+
+
+def _translating_roller(q, theta, f):
+    """Highest roller centre on ``x = offset`` that touches the polygon at each angle."""
+    e, r = f.offset_mm, f.roller_radius_mm
+
+    def one(x):
+        dx = x[..., 0] - e
+        cap = np.where(np.abs(dx) <= r, x[..., 1] + np.sqrt(np.maximum(r * r - dx * dx, 0.0)), -np.inf)
+        a, t, length = _edges(x)
+        nu = np.stack([t[..., 1], -t[..., 0]], axis=-1)
+        nu = np.where(nu[..., 1:2] < 0, -nu, nu)  # the offset line above the edge
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = (e - a[..., 0] - r * nu[..., 0]) / t[..., 0]
+        side = np.where((u >= 0) & (u <= length), a[..., 1] + r * nu[..., 1] + u * t[..., 1], -np.inf)
+        return np.max(np.maximum(cap, side), axis=1)
+
+    height = _chunked(q, theta, one)
+    lift = height - math.sqrt((f.base_radius_mm + r) ** 2 - e * e)
+    centres = np.stack([e * np.cos(theta) + height * np.sin(theta), -e * np.sin(theta) + height * np.cos(theta)], axis=1)
+    return lift, centres
+
+
+def _swinging_roller(q, theta, f):
+    """The arm swung as far out as the polygon pushes the roller, at each angle: the least
+    arm direction (about the pivot, above the pivot-centre line) whose roller touches it."""
+    d, l, r = f.pivot_mm, f.arm_mm, f.roller_radius_mm
+    rp = f.base_radius_mm + r
+    gamma0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
+    pivot = np.array([d, 0.0])
+
+    def direction(z):
+        return np.where(z[..., 1] > 0, np.arctan2(z[..., 1], z[..., 0]), np.inf)  # (0, pi) only
+
+    def one(x):
+        w = x - pivot
+        rho = np.hypot(w[..., 0], w[..., 1])
+        c = (l * l + rho * rho - r * r) / (2 * l * rho)
+        phi = np.arctan2(w[..., 1], w[..., 0])
+        half = np.arccos(np.clip(c, -1.0, 1.0))
+        best = np.full(x.shape[0], np.inf)
+        for sign in (-1.0, 1.0):
+            psi = phi + sign * half
+            z = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
+            best = np.minimum(best, np.min(np.where(np.abs(c) <= 1, direction(z), np.inf), axis=1))
+        a, t, length = _edges(x)
+        nu = np.stack([t[..., 1], -t[..., 0]], axis=-1)
+        for side in (-1.0, 1.0):
+            start = a + side * r * nu - pivot
+            b = np.sum(t * start, axis=-1)
+            disc = b * b - (np.sum(start * start, axis=-1) - l * l)
+            root = np.sqrt(np.maximum(disc, 0.0))
+            for u in (-b - root, -b + root):
+                ok = (disc >= 0) & (u >= 0) & (u <= length)
+                best = np.minimum(best, np.min(np.where(ok, direction(start + u[..., None] * t), np.inf), axis=1))
+        return best
+
+    psi = _chunked(q, theta, one)
+    lift = l * ((math.pi - gamma0) - psi)
+    centre = np.stack([d + l * np.cos(psi), l * np.sin(psi)], axis=1)
+    c, s = np.cos(theta), np.sin(theta)
+    centres = np.stack([c * centre[:, 0] + s * centre[:, 1], -s * centre[:, 0] + c * centre[:, 1]], axis=1)
+    return lift, centres
+
+
+def _swinging_flat(q, theta, f):
+    """The face through the pivot tangent to the polygon: its normal's angle is the least
+    direction of a vertex seen from the pivot, less 90 degrees."""
+    d = f.pivot_mm
+
+    def one(x):
+        phi = np.mod(np.arctan2(x[..., 1], x[..., 0] - d), 2 * np.pi)
+        return np.min(phi, axis=1)
+
+    beta = _chunked(q, theta, one) - math.pi / 2
+    return f.arm_mm * (math.acos(f.base_radius_mm / d) - beta)
+
+
+def _polar_deg(p: np.ndarray) -> float:
+    return float(np.mod(np.degrees(np.arctan2(p[1], p[0])), 360.0))
+
+
+def _check_reach(q: np.ndarray, centres: np.ndarray, r: float, name: str) -> None:
+    """Every profile vertex lies a roller radius from the roller centres' path (the pitch
+    polygon), within the tolerance plus the sag of its chords over a hollow (``h^2 / 8 r``)."""
+    a, t, length = _edges(centres)
+    gap = np.empty(len(q))
+    for i in range(0, len(q), _CHUNK):
+        p = q[i:i + _CHUNK, None, :] - a[None]
+        u = np.clip(np.sum(p * t[None], axis=-1), 0.0, length[None])
+        foot = p - u[..., None] * t[None]
+        gap[i:i + _CHUNK] = np.min(np.hypot(foot[..., 0], foot[..., 1]), axis=1) - r
+    tolerance = REACH_TOLERANCE_MM + float(np.max(length)) ** 2 / (8 * r)
+    worst = int(np.argmax(gap))
+    if gap[worst] > tolerance:
+        raise ValueError(f"{name}: the roller (roller_radius_mm = {r:g}) cannot reach the profile near "
+                         f"{_polar_deg(q[worst]):.4g} deg on the cam (it stays {gap[worst]:.4g} mm off): a hollow "
+                         "whose radius is smaller than the roller; use a smaller roller")
+
+
+def _check_convex(q: np.ndarray, name: str, kind: str) -> None:
+    """A flat face touches only the profile's convex hull: every vertex must lie on it."""
+    from scipy.spatial import ConvexHull
+
+    hull = q[ConvexHull(q).vertices]  # counter-clockwise
+    a, t, _ = _edges(hull)
+    normal = np.stack([t[:, 1], -t[:, 0]], axis=-1)
+    offset = np.sum(normal * a, axis=-1)
+    depth = np.min(offset[None] - q @ normal.T, axis=1)
+    worst = int(np.argmax(depth))
+    if depth[worst] > REACH_TOLERANCE_MM:
+        raise ValueError(f"{name}: the profile is not convex near {_polar_deg(q[worst]):.4g} deg on the cam "
+                         f"({depth[worst]:.4g} mm inside its convex hull): a {kind} follower's face cannot "
+                         "touch it")
