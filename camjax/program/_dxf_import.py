@@ -182,7 +182,7 @@ def lift_from_dxf(path, follower, *, points: int = DEFAULT_POINTS, layer: str | 
     profile, the follower does not reach the profile or its pivot lies inside it.
     """
     from ..laws._table import MAX_POINTS, MIN_POINTS
-    from ._spec import _check_follower
+    from ._follower import _check_follower
 
     if isinstance(points, bool) or not isinstance(points, (int, np.integer)) or not MIN_POINTS <= points <= MAX_POINTS:
         raise ValueError(f"points must be a whole number of cam angles from {MIN_POINTS} to {MAX_POINTS:,}, "

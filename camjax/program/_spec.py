@@ -15,8 +15,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import laws
-from ..checks import finite_number, is_concrete, read_toml
+from ..checks import is_concrete, read_toml
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity, TableLaw
+from ._follower import FOLLOWER_KINDS as FOLLOWER_KINDS
+from ._follower import Follower, Materials, _check_follower, _finite, _positive
 from ._motion import (
     END_STATE_KEYS,
     MATCH,
@@ -30,7 +32,6 @@ from ._table import points_toml, read_points, table_points, turn_segments
 from ._table import segment_law as table_segment_law
 from ._turn import JOIN_TOLERANCE_DEG, Turn
 
-FOLLOWER_KINDS = ("translating-roller", "swinging-roller", "translating-flat", "swinging-flat")
 MAX_SEGMENTS = 360
 """Most segments of a program (a degree each on average): each is sampled, checked and
 reported apart, so 100,000 slivers took minutes and megabytes of output; more is refused
@@ -71,153 +72,6 @@ class Segment:
     def constant_velocity(cls, angle_deg: float, lift_mm: float) -> Segment:
         """The follower moving at ``lift_mm / angle_deg`` mm/deg over the whole segment."""
         return cls(angle_deg, lift_mm, ConstantVelocity())
-
-
-@dataclasses.dataclass(frozen=True)
-class Follower:
-    """The follower train, referred to the roller (lengths in mm, forces in N).
-
-    ``spring_rate_n_per_mm=None`` is a form-closed (grooved) cam: no return spring, no
-    preload, no jump; ``groove_clearance_mm`` (form-closed only) is how much wider than
-    the roller its groove is: the roller then crosses it when the train force changes sign.  For ``kind="swinging-roller"`` the lift is the arc length of the
-    roller centre (swing angle times ``arm_mm``) and ``pivot_mm`` is the cam-centre to pivot
-    distance.  A flat-faced follower (``"translating-flat"``, ``"swinging-flat"``) has no
-    roller: the swinging face is a plane through the pivot and its lift is the swing angle
-    times ``arm_mm``.  ``contact_width_mm`` is the width of the line contact (the roller's, or
-    the cam's under a flat face) for the Hertz stress; without it no stress is reported.
-    """
-
-    mass_kg: float
-    stiffness_n_per_mm: float
-    damping_ratio: float = 0.0
-    spring_rate_n_per_mm: float | None = None
-    preload_n: float = 0.0
-    base_radius_mm: float = 40.0
-    roller_radius_mm: float = 10.0
-    offset_mm: float = 0.0
-    kind: str = "translating-roller"
-    arm_mm: float | None = None
-    pivot_mm: float | None = None
-    groove_clearance_mm: float | None = None
-    contact_width_mm: float | None = None
-
-    @property
-    def flat_face(self) -> bool:
-        return self.kind.endswith("-flat")
-
-    @property
-    def swinging(self) -> bool:
-        return self.kind.startswith("swinging")
-
-    @property
-    def form_closed(self) -> bool:
-        return self.spring_rate_n_per_mm is None
-
-    @property
-    def spring_rate(self) -> float:
-        """Return-spring rate in N/m (0 for a form-closed cam)."""
-        return 0.0 if self.form_closed else 1e3 * self.spring_rate_n_per_mm
-
-    @property
-    def stiffness(self) -> float:
-        """Train stiffness in N/m."""
-        return 1e3 * self.stiffness_n_per_mm
-
-    @property
-    def damping(self) -> float:
-        """Train damping ``c = 2 zeta sqrt(k m)`` in N s/m."""
-        return 2 * self.damping_ratio * math.sqrt(self.stiffness * self.mass_kg)
-
-    @property
-    def natural_frequency_hz(self) -> float:
-        """``sqrt((k + k_s) / m) / (2 pi)``."""
-        return math.sqrt((self.stiffness + self.spring_rate) / self.mass_kg) / (2 * math.pi)
-
-    def vibrations_per_turn(self, rpm):
-        """Natural vibrations of the follower per cam turn at ``rpm``, ``f_n 60 / rpm``: the
-        period ratio of the whole turn (a segment's is this times its angle over 360).  The
-        one place where a speed becomes a period ratio."""
-        return self.natural_frequency_hz * 60.0 / rpm
-
-
-_finite = finite_number  # a program file's numbers are checked as every other input
-
-
-def _positive(value, what: str) -> float:
-    value = _finite(value, what)
-    if value <= 0:
-        raise ValueError(f"{what} must be positive, got {value:g}")
-    return value
-
-
-def _check_follower(f: Follower) -> None:
-    if f.kind not in FOLLOWER_KINDS:
-        raise ValueError(f"follower.kind must be one of {', '.join(FOLLOWER_KINDS)}, got {f.kind!r}")
-    for name in ("mass_kg", "stiffness_n_per_mm", "base_radius_mm", "roller_radius_mm"):
-        _positive(getattr(f, name), f"follower.{name}")
-    zeta = _finite(f.damping_ratio, "follower.damping_ratio")
-    if not 0 <= zeta < 1:
-        raise ValueError(f"follower.damping_ratio must be in [0, 1), got {zeta:g}")
-    if not f.form_closed:
-        _positive(f.spring_rate_n_per_mm, "follower.spring_rate_n_per_mm")
-    if f.groove_clearance_mm is not None:
-        if not f.form_closed:
-            raise ValueError("follower.groove_clearance_mm: only a form-closed cam (no "
-                             "spring_rate_n_per_mm) has a groove")
-        _positive(f.groove_clearance_mm, "follower.groove_clearance_mm")
-    if _finite(f.preload_n, "follower.preload_n") < 0:
-        raise ValueError(f"follower.preload_n must be non-negative, got {f.preload_n:g}")
-    if f.contact_width_mm is not None:
-        _positive(f.contact_width_mm, "follower.contact_width_mm")
-    offset = _finite(f.offset_mm, "follower.offset_mm")
-    if f.kind == "translating-roller" and abs(offset) >= f.base_radius_mm + f.roller_radius_mm:
-        raise ValueError("follower.offset_mm: |offset| must be below base_radius_mm + roller_radius_mm")
-    if f.flat_face and f.groove_clearance_mm is not None:
-        raise ValueError("follower.groove_clearance_mm: a flat-faced follower runs on no groove")
-    if f.kind == "translating-flat" and offset != 0:
-        raise ValueError("follower.offset_mm: a flat face's profile does not depend on an offset; "
-                         "leave it 0")
-    if f.swinging:
-        for name in ("arm_mm", "pivot_mm"):
-            if getattr(f, name) is None:
-                raise ValueError(f"follower.{name} is missing: a {f.kind} follower needs "
-                                 "arm_mm and pivot_mm")
-    if f.kind == "swinging-flat":
-        _positive(f.arm_mm, "follower.arm_mm")
-        if _positive(f.pivot_mm, "follower.pivot_mm") <= f.base_radius_mm:
-            raise ValueError("follower.pivot_mm: the pivot must lie outside the base circle "
-                             "(pivot_mm > base_radius_mm) for its face to touch it")
-    if f.kind == "swinging-roller":
-        arm = _positive(f.arm_mm, "follower.arm_mm")
-        pivot = _positive(f.pivot_mm, "follower.pivot_mm")
-        rp = f.base_radius_mm + f.roller_radius_mm
-        if not abs(pivot - arm) < rp < pivot + arm:
-            raise ValueError("follower.arm_mm, pivot_mm: the arm cannot reach the base circle "
-                             "(|pivot - arm| < base + roller < pivot + arm fails)")
-
-
-@dataclasses.dataclass(frozen=True)
-class Materials:
-    """Elastic constants of the cam and the follower (roller or face) for the Hertz stress."""
-
-    cam_youngs_modulus_gpa: float = 210.0
-    cam_poisson_ratio: float = 0.3
-    follower_youngs_modulus_gpa: float = 210.0
-    follower_poisson_ratio: float = 0.3
-
-    def __post_init__(self):
-        for part in ("cam", "follower"):
-            _positive(getattr(self, f"{part}_youngs_modulus_gpa"), f"materials.{part}_youngs_modulus_gpa")
-            nu = _finite(getattr(self, f"{part}_poisson_ratio"), f"materials.{part}_poisson_ratio")
-            if not -1.0 < nu < 0.5:
-                raise ValueError(f"materials.{part}_poisson_ratio must be in (-1, 0.5), got {nu:g}")
-
-    @property
-    def contact_modulus_mpa(self) -> float:
-        """``E*`` with ``1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2``, in MPa (N/mm^2)."""
-        compliance = sum((1 - getattr(self, f"{p}_poisson_ratio") ** 2) / getattr(self, f"{p}_youngs_modulus_gpa")
-                         for p in ("cam", "follower"))
-        return 1e3 / compliance
 
 
 @dataclasses.dataclass(frozen=True)
