@@ -384,8 +384,8 @@ def test_raw_options_with_a_traced_ratio_past_the_grid_raise_when_run():
 def test_sampled_laws_are_kept_by_value_and_the_oldest_dropped():
     """``SampledLaw.of`` returns the kept sampling for a law of equal values (a law named
     again is a new object), samples anew for other values, resolution or padding, and
-    keeps no more than ``SAMPLED_LAWS_KEPT``."""
-    from camjax.sdof import SampledLaw, _grid
+    keeps exactly ``SAMPLED_LAWS_KEPT``, the least recently used dropped first."""
+    from camjax.sdof import SAMPLED_LAWS_KEPT, SampledLaw
 
     first = SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256)
     assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256) is first
@@ -393,9 +393,12 @@ def test_sampled_laws_are_kept_by_value_and_the_oldest_dropped():
     assert other is not first and not np.allclose(other.grid.forcing, first.grid.forcing)
     assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 320) is not first
     assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256, 16) is not first
-    for i in range(_grid.SAMPLED_LAWS_KEPT):
-        SampledLaw.of(laws.SCCA(0.1 + 0.001 * i, 0.0, 0.5), 128)
-    assert len(_grid._SAMPLED) == _grid.SAMPLED_LAWS_KEPT
+    assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256) is first  # the most recently used now
+    filled = [SampledLaw.of(laws.SCCA(0.1 + 0.001 * i, 0.0, 0.5), 128) for i in range(SAMPLED_LAWS_KEPT)]
+    # all of the last SAMPLED_LAWS_KEPT are kept (asked in the order they came: none dropped) ...
+    assert all(SampledLaw.of(laws.SCCA(0.1 + 0.001 * i, 0.0, 0.5), 128) is kept
+               for i, kept in enumerate(filled))
+    # ... and no more: the one used just before them was dropped.
     again = SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256)
     assert again is not first
     np.testing.assert_array_equal(again.grid.forcing, first.grid.forcing)

@@ -31,6 +31,7 @@ from ._grid import GAUSS_POINTS as GAUSS_POINTS
 from ._grid import INTERPOLATION_DEGREE as INTERPOLATION_DEGREE
 from ._grid import MAX_GRID_INTERVALS as MAX_GRID_INTERVALS
 from ._grid import MAX_PHASE_STEP as MAX_PHASE_STEP
+from ._grid import SAMPLED_LAWS_KEPT as SAMPLED_LAWS_KEPT
 from ._grid import SUBSTEPS_PER_INTERVAL as SUBSTEPS_PER_INTERVAL
 from ._grid import TARGET_PHASE_STEP as TARGET_PHASE_STEP
 from ._grid import MotionGrid as MotionGrid
