@@ -81,10 +81,10 @@ def _sweep_stack(laws, template: AbstractModel, period_ratios, options):
     # multiplies the working set and ran 1.4x slower).  A GPU takes several laws at once.
     with checks.checked_outside():
         return map_in_chunks(lambda law: template.sweep(law, period_ratios, options), laws,
-                             _laws_at_once(template, options, period_ratios.shape[0]))
+                             laws_at_once(template, options, period_ratios.shape[0]))
 
 
-def _laws_at_once(template: AbstractModel, options, ratios: int) -> int:
+def laws_at_once(template: AbstractModel, options, ratios: int) -> int:
     """Laws of a stack swept at once (``camjax.sdof.stack_laws``): bounded by the exact
     path's grid nodes; one at a time for a model that solves its ratios in turn (lockstep
     would run every law for the longest)."""

@@ -146,8 +146,9 @@ def test_diffrax_codes_become_the_camjax_codes_of_the_same_name():
 
     from camjax.errors import promote
 
-    names = list(diffrax.RESULTS._name_to_item)
-    assert set(names) <= set(camjax.RESULTS._name_to_item) - {"solver_failed"}
+    names = list(diffrax.RESULTS._name_to_item)  # diffrax's own table of its codes
+    assert "solver_failed" not in names  # camjax's fallback for a code it does not know
+    assert all(hasattr(camjax.RESULTS, name) for name in names), names
     theirs = jax.tree.map(lambda *x: jnp.stack(x), *(getattr(diffrax.RESULTS, n) for n in names))
     ours = jax.jit(promote)(theirs)
     for i, name in enumerate(names):
