@@ -69,7 +69,10 @@ class CtCurve(eqx.Module):
 
 
 @sweep_jit
-def _sweep(law, template: AbstractModel, period_ratios, options):
+def sweep_program(law, template: AbstractModel, period_ratios, options):
+    """``template.sweep`` of one law over period ratios, jitted (``sharding.sweep_jit``):
+    the program ``sweep_metrics`` runs, split over devices by ``shard_batch``.  Checks
+    nothing: its arguments come from :func:`prepare_sweep`."""
     with checks.checked_outside():
         return template.sweep(law, period_ratios, options)
 
@@ -120,7 +123,7 @@ def sweep_metrics(law, period_ratios, template: AbstractModel, options, *, devic
     from :func:`prepare_sweep`; ``like`` are laws that should share its compiled program
     (``AbstractModel.sweep_law``).
     """
-    return shard_batch(_sweep, template.sweep_law(law, options, like=like), template,
+    return shard_batch(sweep_program, template.sweep_law(law, options, like=like), template,
                        jnp.asarray(period_ratios), options, batched_argnums=2, devices=devices)
 
 
