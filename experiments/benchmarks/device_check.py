@@ -28,8 +28,7 @@ import jax
 import numpy as np
 
 import camjax
-from camjax import distributed, sweep
-from camjax import sdof
+from camjax import distributed, sdof, sweep
 
 LAWS = ("cycloidal", "modified-sine", "4-5-6-7")
 BIG = "cycloidal"
