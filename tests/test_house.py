@@ -41,6 +41,7 @@ def private_uses(source: str) -> list[tuple[int, str]]:
 
     Caught: ``import camjax._x``, ``from camjax._x import y``, ``from camjax.x import _y``,
     ``module._y`` where ``module`` was bound to a camjax module by an import, and the
+    ``setattr(module, "_y", ...)`` and ``getattr`` (``monkeypatch.setattr`` too), and the
     string forms ``"camjax.x._y"`` (``monkeypatch.setattr``, ``importlib.import_module``).
     """
     tree = ast.parse(source)
@@ -68,7 +69,14 @@ def private_uses(source: str) -> list[tuple[int, str]]:
             chain = _dotted(node)
             if chain and chain[0] in modules:
                 found.append((node.lineno, ".".join(chain)))
-        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+        elif isinstance(node, ast.Call) and len(node.args) >= 2:
+            # setattr(module, "_x", ...), monkeypatch.setattr(module, "_x", ...), getattr
+            target, name = node.args[0], node.args[1]
+            chain = _dotted(target)
+            if (chain and chain[0] in modules and isinstance(name, ast.Constant)
+                    and isinstance(name.value, str) and _private(name.value)):
+                found.append((node.lineno, f"{'.'.join(chain)}.{name.value}"))
+        if isinstance(node, ast.Constant) and isinstance(node.value, str):
             text = node.value
             if (
                 text.startswith("camjax.")
@@ -100,9 +108,11 @@ def test_the_scanner_finds_each_form():
             "import camjax, numpy",
             "camjax.__version__, numpy._core, obj._private",
             "from camjax import ModifiedSine",
+            "monkeypatch.setattr(sdof, '_peak_search', {})",
+            "setattr(numpy, '_x', 1); getattr(sdof, 'chunk_nodes')",
         ]
     )
-    assert [line for line, _ in private_uses(source)] == [1, 2, 3, 5, 7, 8]
+    assert [line for line, _ in private_uses(source)] == [1, 2, 3, 5, 7, 8, 12]
 
 
 @pytest.mark.parametrize("path", list(_sources()), ids=lambda p: str(p.relative_to(ROOT)))
