@@ -437,7 +437,8 @@ class SteadyState:
                              "(without damping the start-up never settles)")
         self.program = program
         self.train = Train.of(program)
-        self.rpm_min = float(rpm_min) if isinstance(rpm_min, CheckedSpeed) else float(check_rpm(rpm_min, name="rpm_min")[0])
+        checked = isinstance(rpm_min, CheckedSpeed)  # by the entry point that builds it
+        self.rpm_min = float(rpm_min if checked else check_rpm(rpm_min, name="rpm_min")[0])
         self.devices = resolve_devices(devices)
         self.grid = cycle_grid(program, resolution(program, self.rpm_min))
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
