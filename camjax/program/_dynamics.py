@@ -605,19 +605,19 @@ def node_contact_force(program: Program, rpm, laws: dict | None = None, *, rpm_m
     be concrete).  Concrete speeds are checked as ``check_rpm`` checks them; traced ones
     make the computation raise the same message when it runs with a bad one.
     """
+    if rpm_min is not None:
+        rpm_min = float(check_rpm(rpm_min, name="rpm_min")[0])
     if checks.is_concrete(rpm):
-        rpm = jnp.asarray(check_rpm(rpm))
+        checked = check_rpm(rpm)
+        rpm_min = float(checked.min()) if rpm_min is None else rpm_min
+        rpm = jnp.asarray(checked)
     else:
+        if rpm_min is None:
+            raise ValueError("rpm_min is needed where rpm is traced (it fixes the grid)")
         rpm = jnp.atleast_1d(jnp.asarray(rpm, dtype=float))
         if rpm.ndim != 1 or rpm.size == 0:
             raise ValueError("rpm must be one speed or a 1-D list of speeds")
         rpm = checks.ensure(rpm, lambda v: (v > 0) & (v < np.inf), "rpm must be positive and finite")
-    if rpm_min is None:
-        if not checks.is_concrete(rpm):
-            raise ValueError("rpm_min is needed where rpm is traced (it fixes the grid)")
-        rpm_min = float(np.min(np.asarray(rpm)))
-    else:
-        rpm_min = float(check_rpm(rpm_min, name="rpm_min")[0])
     with jax.ensure_compile_time_eval():
         grid = cycle_grid(program, resolution(program, rpm_min))
     for segment, law in (laws or {}).items():
