@@ -168,6 +168,30 @@ def period_ratios(values, *, what: str = "period ratio") -> np.ndarray:
     return n
 
 
+def speeds(values, name: str = "rpm") -> np.ndarray:
+    """Concrete machine speeds (rpm) as a non-empty 1-D float array, each positive and
+    finite, or a one-line ``ValueError`` naming ``name`` (the caller's option).  A string,
+    a bool or anything else that is not a number is refused, not converted."""
+    if not is_concrete(values):
+        raise ValueError(f"{name} must be concrete speeds here (not traced inside jit, vmap or grad)")
+    try:
+        raw = np.asarray(values)
+        ok = raw.dtype.kind in "iuf"
+    except (TypeError, ValueError):  # a ragged list
+        ok = False
+    if not ok:
+        shown = repr(values).replace("\n", " ")
+        shown = shown if len(shown) <= 60 else shown[:57] + "..."
+        raise ValueError(f"{name} must be a speed in rpm or a 1-D list of speeds, got {shown}")
+    rpm = np.atleast_1d(raw.astype(float))
+    if rpm.size == 0 or rpm.ndim != 1:
+        raise ValueError(f"{name} must be one speed or a 1-D list of speeds")
+    bad = ~(np.isfinite(rpm) & (rpm > 0))
+    if np.any(bad):
+        raise ValueError(f"{name} must be positive and finite, got {rpm[bad][0]:g}")
+    return rpm
+
+
 def read_text(path, what: str, form: str) -> str:
     """The UTF-8 text of the file ``path``, or a one-line ``ValueError`` naming it: missing,
     unreadable, or not text (``what``: "program file"; ``form``: "TOML")."""

@@ -58,8 +58,9 @@ from .laws import SCCA, AbstractMotionLaw, rest_to_rest
 from .sdof import MAX_GRID_INTERVALS, MAX_PHASE_STEP, default_resolution
 
 METRICS = ("ct", "residual", "peak_in_motion")
-_KEYS = {"output", "method", "damping", "laws_per_chunk", "dwell", "period_ratio", "laws",
-         "phase_step"}
+SPEC_KEYS = {"output", "method", "damping", "laws_per_chunk", "dwell", "period_ratio", "laws",
+             "phase_step"}
+"""The top-level keys a sweep spec may hold (docs/sweep.md); any other is refused."""
 
 
 MAX_SCCA_LAWS = 1_000_000
@@ -149,9 +150,9 @@ def _numbers(value, key: str) -> list[float]:
 
 def spec_from_dict(raw: dict, base=".") -> SweepSpec:
     """:func:`load_spec` for an already parsed dict; ``base`` anchors a relative output."""
-    unknown = set(raw) - _KEYS
+    unknown = set(raw) - SPEC_KEYS
     if unknown:
-        raise ValueError(f"unknown spec keys {sorted(unknown)}; expected some of {sorted(_KEYS)}")
+        raise ValueError(f"unknown spec keys {sorted(unknown)}; expected some of {sorted(SPEC_KEYS)}")
     if "output" not in raw:
         raise ValueError("spec needs an output directory: output = \"DIR\"")
     if not isinstance(raw["output"], str):

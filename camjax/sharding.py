@@ -101,12 +101,19 @@ curve's kernel 1.05-1.08x, compiled as fast; a CPU without them keeps its widest
 _sweep_options = {"cpu": CPU_COMPILER_OPTIONS}
 
 
-def sweeps_run_once() -> None:
+def sweeps_run_once(once: bool = True) -> None:
     """Compile the sweeps with XLA's own CPU options (not ``CPU_COMPILER_OPTIONS``), for a
     process whose sweeps each run once: under XLA's classic emitters, which a short
     ``camjax`` command uses, the wider vectors took 0.05 s longer to compile (``camjax
-    ct``, 0.55 against 0.50 s), more than its 7000 ratios gain from them."""
-    _sweep_options["cpu"] = ()
+    ct``, 0.55 against 0.50 s), more than its 7000 ratios gain from them.  ``once=False``
+    restores ``CPU_COMPILER_OPTIONS``."""
+    _sweep_options["cpu"] = () if once else CPU_COMPILER_OPTIONS
+
+
+def sweep_compiler_options() -> tuple[tuple[str, object], ...]:
+    """The XLA options the sweeps compile with on CPU now: ``CPU_COMPILER_OPTIONS``, or
+    none after ``sweeps_run_once``."""
+    return _sweep_options["cpu"]
 
 
 @functools.cache
@@ -126,39 +133,45 @@ def outside_traces() -> bool | None:
     return None if _trace_state_clean is None else bool(_trace_state_clean())
 
 
-class _OptionsJit:
+class OptionsJit:
     """``equinox.filter_jit(fun)``, compiled with ``options()`` when called outside any
     trace, and with XLA's defaults inside one: XLA takes options only for a top-level
     program (a caller's ``jit`` inlines this one; JAX refuses options there), and XLA's
     defaults where JAX cannot say.  Decided at each call, as the default backend may
-    change."""
+    change.  ``fun`` itself is ``__wrapped__``."""
 
     def __init__(self, fun, options):
         functools.update_wrapper(self, fun)
         self._fun, self._options = fun, options
 
-    def _program(self) -> eqx.Module:
-        return _filter_jit(self._fun, self._options() if outside_traces() else ())
+    def compiler_options(self) -> tuple[tuple[str, object], ...]:
+        """The XLA options a call made here and now compiles with (none inside a trace)."""
+        return self._options() if outside_traces() else ()
+
+    def program(self) -> eqx.Module:
+        """The jitted program a call made here and now runs: one per function and options,
+        shared by every ``OptionsJit`` of ``fun`` that picks the same options."""
+        return _filter_jit(self._fun, self.compiler_options())
 
     def __call__(self, *args, **kwargs):
-        return self._program()(*args, **kwargs)
+        return self.program()(*args, **kwargs)
 
     def lower(self, *args, **kwargs):
         """The program's ``lower`` (trace and lower without compiling)."""
-        return self._program().lower(*args, **kwargs)
+        return self.program().lower(*args, **kwargs)
 
 
-def sweep_jit(fun) -> _OptionsJit:
+def sweep_jit(fun) -> OptionsJit:
     """``equinox.filter_jit`` for the sweeps' programs (and ``shard_batch``'s split of
     them), which run the engine over whole batches: on CPU they compile with
     ``CPU_COMPILER_OPTIONS`` (unless ``sweeps_run_once``)."""
-    return _OptionsJit(fun, lambda: _sweep_options["cpu"] if on_cpu() else ())
+    return OptionsJit(fun, lambda: _sweep_options["cpu"] if on_cpu() else ())
 
 
-def cpu_options_jit(fun, cpu_options: tuple[tuple[str, object], ...]) -> _OptionsJit:
+def cpu_options_jit(fun, cpu_options: tuple[tuple[str, object], ...]) -> OptionsJit:
     """``equinox.filter_jit`` that compiles with ``cpu_options`` on CPU (a model's
     ``cpu_compiler_options``, for its ``solve``)."""
-    return _OptionsJit(fun, lambda: cpu_options if on_cpu() else ())
+    return OptionsJit(fun, lambda: cpu_options if on_cpu() else ())
 
 
 def _started() -> bool:
@@ -244,10 +257,16 @@ def _no_options() -> tuple:
 
 
 @functools.cache
-def _sharded_program(options) -> _OptionsJit:
-    """``_sharded_call`` jitted with ``options()``: those of ``fn`` when it is an
-    ``_OptionsJit`` (a sweep), so that the split batch compiles as the whole one would."""
-    return _OptionsJit(_sharded_call, options)
+def _sharded_program(options) -> OptionsJit:
+    return OptionsJit(_sharded_call, options)
+
+
+def split_program(fn) -> OptionsJit:
+    """The jitted program ``shard_batch`` runs to split ``fn``'s batch over devices: with
+    ``fn``'s options where ``fn`` is an ``OptionsJit`` (a sweep), so that the split batch
+    compiles as the whole one would; with XLA's defaults otherwise (a function that runs
+    on one device, as a program's speed batch)."""
+    return _sharded_program(fn._options if isinstance(fn, OptionsJit) else _no_options)
 
 
 def shard_batch(fn, *args, batched_argnums=(0,), devices=None):
@@ -279,6 +298,5 @@ def shard_batch(fn, *args, batched_argnums=(0,), devices=None):
         for i, arg in enumerate(args)
     )
     mesh = Mesh(np.asarray(chosen), (AXIS,))
-    options = fn._options if isinstance(fn, _OptionsJit) else _no_options
-    out = _sharded_program(options)(fn, mesh, padded, batched_argnums)
+    out = split_program(fn)(fn, mesh, padded, batched_argnums)
     return jax.tree.map(lambda x: x[:size], out)

@@ -69,7 +69,10 @@ class CtCurve(eqx.Module):
 
 
 @sweep_jit
-def _sweep(law, template: AbstractModel, period_ratios, options):
+def sweep_program(law, template: AbstractModel, period_ratios, options):
+    """``template.sweep`` of one law over period ratios, jitted (``sharding.sweep_jit``):
+    the program ``sweep_metrics`` runs, split over devices by ``shard_batch``.  Checks
+    nothing: its arguments come from :func:`prepare_sweep`."""
     with checks.checked_outside():
         return template.sweep(law, period_ratios, options)
 
@@ -81,10 +84,10 @@ def _sweep_stack(laws, template: AbstractModel, period_ratios, options):
     # multiplies the working set and ran 1.4x slower).  A GPU takes several laws at once.
     with checks.checked_outside():
         return map_in_chunks(lambda law: template.sweep(law, period_ratios, options), laws,
-                             _laws_at_once(template, options, period_ratios.shape[0]))
+                             laws_at_once(template, options, period_ratios.shape[0]))
 
 
-def _laws_at_once(template: AbstractModel, options, ratios: int) -> int:
+def laws_at_once(template: AbstractModel, options, ratios: int) -> int:
     """Laws of a stack swept at once (``camjax.sdof.stack_laws``): bounded by the exact
     path's grid nodes; one at a time for a model that solves its ratios in turn (lockstep
     would run every law for the longest)."""
@@ -120,7 +123,7 @@ def sweep_metrics(law, period_ratios, template: AbstractModel, options, *, devic
     from :func:`prepare_sweep`; ``like`` are laws that should share its compiled program
     (``AbstractModel.sweep_law``).
     """
-    return shard_batch(_sweep, template.sweep_law(law, options, like=like), template,
+    return shard_batch(sweep_program, template.sweep_law(law, options, like=like), template,
                        jnp.asarray(period_ratios), options, batched_argnums=2, devices=devices)
 
 

@@ -62,7 +62,7 @@ def all_models(*, swept: bool | None = None):
 @contextlib.contextmanager
 def compiled_programs():
     """The names of the programs XLA compiles inside the block, from ``jax.monitoring``'s
-    backend-compile events (``jit(_sweep)``, ``jit(_response)``, ...): a test that a call
+    backend-compile events (``jit(sweep_program)``, ``jit(_response)``, ...): a test that a call
     reuses a compiled program asserts that its name is not among them."""
     names = []
 

@@ -11,9 +11,11 @@ from camjax.sdof import (
     ACCELERATOR_CHUNK_NODES,
     ACCELERATOR_STACK_EVALUATIONS,
     CHUNK_NODES,
+    accelerator_sizes,
     chunk_nodes,
     chunked_map,
     map_in_chunks,
+    set_accelerator_sizes,
     stack_laws,
 )
 
@@ -58,14 +60,14 @@ def test_sizes_by_backend(monkeypatch):
 def test_a_model_that_sweeps_in_turn_takes_its_laws_in_turn(monkeypatch):
     """Off the CPU a stack of the exact path's laws is vmapped, but a model that solves its
     ratios one after another (friction's events) keeps its laws in turn too."""
-    from camjax.sweep import _laws_at_once, prepare_sweep
+    from camjax.sweep import laws_at_once, prepare_sweep
 
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
     _, exact, options = prepare_sweep(np.linspace(1.0, 30.0, 1000))
-    assert _laws_at_once(exact, options, 1000) == 65
+    assert laws_at_once(exact, options, 1000) == 65
     friction = camjax.CoulombFriction(1.0, 0.05)
     _, template, options = prepare_sweep([1.0, 2.0], model=friction)
-    assert template.sweeps_in_turn(options) and _laws_at_once(template, options, 2) == 1
+    assert template.sweeps_in_turn(options) and laws_at_once(template, options, 2) == 1
 
 
 def test_map_in_chunks_refuses_a_ragged_batch():
@@ -88,15 +90,15 @@ def test_accelerator_sizes_give_the_cpu_curves(monkeypatch):
     stack = camjax.ct_curves(laws, n)
     jax.clear_caches()
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
-    from camjax.sdof import _batch  # the size is read where it is used: no public setter
-
-    monkeypatch.setattr(_batch, "ACCELERATOR_STACK_EVALUATIONS", 5 * n.size)  # 3 chunks of 5, padded
+    before = set_accelerator_sizes(stack_evaluations=5 * n.size)  # 3 chunks of 5, padded
     try:
-        assert stack_laws(n.size) == 5
+        assert accelerator_sizes() == (before[0], 5 * n.size) and stack_laws(n.size) == 5
         single_gpu = camjax.ct_curve("modified-sine", n, damping=0.05)
         stack_gpu = camjax.ct_curves(laws, n)
     finally:
+        set_accelerator_sizes(*before)
         jax.clear_caches()  # no program sized for another backend outlives the test
+    assert accelerator_sizes() == (ACCELERATOR_CHUNK_NODES, ACCELERATOR_STACK_EVALUATIONS)
     for a, b in [(single, single_gpu), *((stack[k], stack_gpu[k]) for k in laws)]:
         for metric in ("ct", "residual", "peak_in_motion"):
             np.testing.assert_allclose(getattr(b, metric), getattr(a, metric), rtol=1e-11, atol=1e-11)
@@ -125,3 +127,11 @@ def test_a_stack_of_host_laws_stays_on_the_host():
     for s in (stacked, mixed):
         np.testing.assert_array_equal(s.sine, [0.5, 1.0])
         np.testing.assert_array_equal(s.cosine, [0.5, 0.0])
+
+
+def test_accelerator_sizes_are_positive_integers():
+    before = accelerator_sizes()
+    for bad in (0, -4, 2.5, True):
+        with pytest.raises(ValueError, match="chunk_nodes must be a positive integer"):
+            set_accelerator_sizes(chunk_nodes=bad)
+    assert set_accelerator_sizes() == before == accelerator_sizes()  # nothing changed

@@ -1,5 +1,6 @@
 """The core commands: output shapes, files written, and exit status 2 on bad input."""
 
+import contextlib
 import json
 import os
 
@@ -9,6 +10,7 @@ import pytest
 import camjax
 from camjax import laws
 from camjax.cli import main
+from camjax.sdof import peak_search_kind, set_peak_search
 
 
 @pytest.fixture(autouse=True)
@@ -242,6 +244,22 @@ def test_the_executable_ends_early_without_losing_output_or_exit_status(capsys, 
         assert done.returncode == status, (argv, done.stderr)
 
 
+@contextlib.contextmanager
+def _default_tuning():
+    """The library's defaults (bounded peak search, the sweeps' CPU options) for the block,
+    and whatever was set before restored after it."""
+    from camjax import sharding
+
+    kind, options = peak_search_kind(), sharding.sweep_compiler_options()
+    set_peak_search("bounded")
+    sharding.sweeps_run_once(False)
+    try:
+        yield
+    finally:
+        set_peak_search(kind)
+        sharding.sweeps_run_once(options == ())
+
+
 @pytest.mark.parametrize("argv, expected", [
     (["ct", "--out", "d"], True),
     (["program", "feed"], True),
@@ -254,29 +272,24 @@ def test_short_commands_compile_with_the_classic_cpu_emitters(monkeypatch, argv,
     """... and the dense peak search (cheaper to compile) and XLA's own vector width;
     long ones keep the bounded search and the sweeps' CPU options."""
     from camjax import sharding
-    from camjax.cli import _compile_for_one_run, build_parser
-    from camjax.sdof import _peaks
+    from camjax.cli import build_parser, compile_for_one_run
 
-    monkeypatch.setitem(_peaks._peak_search, "kind", "bounded")
-    monkeypatch.setitem(sharding._sweep_options, "cpu", sharding.CPU_COMPILER_OPTIONS)
     monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=1")
-    _compile_for_one_run(build_parser().parse_args(argv))
-    flags = os.environ["XLA_FLAGS"]
-    assert ("--xla_cpu_use_fusion_emitters=false" in flags) == expected
-    assert flags.startswith("--xla_force_host_platform_device_count=1")
-    assert _peaks._peak_search["kind"] == ("dense" if expected else "bounded")
-    assert sharding._sweep_options["cpu"] == (() if expected else sharding.CPU_COMPILER_OPTIONS)
+    with _default_tuning():
+        compile_for_one_run(build_parser().parse_args(argv))
+        flags = os.environ["XLA_FLAGS"]
+        assert ("--xla_cpu_use_fusion_emitters=false" in flags) == expected
+        assert flags.startswith("--xla_force_host_platform_device_count=1")
+        assert peak_search_kind() == ("dense" if expected else "bounded")
+        assert sharding.sweep_compiler_options() == (() if expected else sharding.CPU_COMPILER_OPTIONS)
 
 
 def test_a_users_emitter_flag_wins(monkeypatch):
-    from camjax import sharding
-    from camjax.cli import _compile_for_one_run, build_parser
-    from camjax.sdof import _peaks
+    from camjax.cli import build_parser, compile_for_one_run
 
-    monkeypatch.setitem(_peaks._peak_search, "kind", "bounded")
-    monkeypatch.setitem(sharding._sweep_options, "cpu", sharding.CPU_COMPILER_OPTIONS)
     monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_use_fusion_emitters=true")
-    _compile_for_one_run(build_parser().parse_args(["ct"]))
+    with _default_tuning():
+        compile_for_one_run(build_parser().parse_args(["ct"]))
     assert os.environ["XLA_FLAGS"] == "--xla_cpu_use_fusion_emitters=true"
 
 

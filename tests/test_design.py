@@ -135,14 +135,14 @@ def test_broken_caps_are_repaired_or_refused():
     broken = BSplineLaw.fit(get("poly4567"), 10)
     caps = D.Caps(max_ca=6.5, max_jerk=60.0)
     assert not caps.met(broken)
-    repaired = D._caps._restore(broken, caps)
+    repaired = caps.repair(broken)
     v_min, ca, cj = _fine_grid_peaks(repaired)
     assert v_min >= -1e-12 and ca <= 6.5 and cj <= 60.0
     assert ca > 6.49  # the nearest feasible point on the segment, not the anchor itself
     # Ca <= 4.5 with Cj <= 90 is feasible (least Cj 81), but no standard law meets it to
     # start a repair from: the result is refused.
     with pytest.raises(D.CapError, match="caps"):
-        D._caps._restore(broken, D.Caps(max_ca=4.5, max_jerk=90.0))
+        D.Caps(max_ca=4.5, max_jerk=90.0).repair(broken)
     # Cj <= 30 is below what any rise can have: refused before any work.
     with pytest.raises(ValueError, match="infeasible"):
         D.Caps(max_ca=4.5, max_jerk=30.0)

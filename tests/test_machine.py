@@ -390,7 +390,7 @@ def test_one_sided_curvature_at_joins_of_any_angles():
     at ``y' = 0``, translating roller ``R^2 / (R - y'') - r_r`` and flat face
     ``r_b + y + y''``; the Hertz factor at a join node a rounding off the join's angle
     (as the dynamics grid places it) takes the side of the larger stress."""
-    from camjax.program._machine import node_contact
+    from camjax.program import node_contact
 
     law = laws.get("harmonic")
     rng = np.random.default_rng(7)

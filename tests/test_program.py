@@ -594,10 +594,9 @@ def test_a_groove_turns_motion_law_reads_each_join_once():
     join and between: at a join of two moving segments in motion (the feed cam's constant
     velocity stroke) the velocity was counted from both segments (twice the stroke's)."""
     from camjax.program import TurnLaw
-    from camjax.program._groove import stroke_mm
 
     program = Program.load(example_path("feed"))
-    h = stroke_mm(program)
+    h = float(np.max(program.lift(np.linspace(0.0, 360.0, 721))[0]))  # the law's length unit
     theta = np.concatenate([program.start_deg, np.linspace(0.0, 360.0, 97)[:-1] + 0.37])
     s, v, a, _ = (np.asarray(x) for x in TurnLaw.of(program, h, 1).evaluate(theta / 360.0))
     y, dy, ddy = program.lift(theta)  # after each join: the solver steps forward from it

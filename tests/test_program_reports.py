@@ -10,9 +10,16 @@ import pytest
 
 from camjax import law_design, laws
 from camjax.program import Program, analyse, design_segment, example_path
-from camjax.program._motion import law_state
 
 RPM = (500.0, 650.0)
+
+
+def _end_state(seg) -> tuple[float, float, float]:
+    """``(v, a, j)`` at a moving segment's end (mm/deg, mm/deg^2, mm/deg^3), from its law's
+    normalised derivatives at ``tau = 1``."""
+    _, v, a, j = (float(x) for x in seg.law.evaluate(1.0))
+    beta, h = seg.angle_deg, seg.lift_mm
+    return h * v / beta, h * a / beta**2, h * j / beta**3
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +44,7 @@ def test_designed_stroke_needs_no_more_preload_than_the_original(feed, designed_
     new, result = designed_stroke
     # The neighbour that matches the stroke's jerk (segment 4, degree 7) keeps its law:
     # the design keeps the stroke's end jerk (it changed it, and segment 4 with it).
-    assert law_state(new.segments[2], True) == pytest.approx(law_state(feed.segments[2], True), abs=1e-12)
+    assert _end_state(new.segments[2]) == pytest.approx(_end_state(feed.segments[2]), abs=1e-12)
     assert new.segments[3].law == feed.segments[3].law
     assert not result.kept_initial  # improved by the design, not kept by the fallback
     # Independently, by the program's own analysis on speeds across the band.
@@ -86,22 +93,27 @@ def test_an_absurd_end_velocity_is_refused_on_its_own_segment():
 
 
 def test_the_join_check_is_relative_to_the_velocities_involved():
-    """Segment 5 starts at -1e6 mm/deg and ends at rest to its round-off (7e-9 mm/deg):
-    no velocity jump between segments 5 and 6, which the user did not touch."""
-    from camjax.program._motion import joins, resolve_segments
-    from camjax.program._spec import _segment
-
+    """The feed cam scaled by 1e6 (lifts and end velocities): segment 4 ends at -4e5
+    mm/deg to its coefficients' round-off (5e-8 mm/deg off the -4e5 that segment 5
+    starts at) and segment 5 at rest to 3e-10 mm/deg: no velocity jump, which an absolute
+    tolerance (1e-9 mm/deg) would have reported."""
     data = _feed_data()
-    data["segment"][3]["end"]["velocity_mm_per_deg"] = -1e6
-    segments = resolve_segments(tuple(_segment(i, s, None) for i, s in enumerate(data["segment"], 1)))
-    start = np.concatenate([[0.0], np.cumsum([s.angle_deg for s in segments])[:-1]])
-    out = joins(segments, start)
+    for seg in data["segment"]:
+        seg["lift_mm"] = 1e6 * seg.get("lift_mm", 0.0)
+        if isinstance(seg.get("end"), dict):
+            seg["end"] = {key: 1e6 * value for key, value in seg["end"].items()}
+    big = Program.from_dict(data)
+    out = big.joins()
+    assert out[3].velocity_mm_per_deg == pytest.approx(-4e5, rel=1e-12)
     assert out[4].velocity_mm_per_deg == pytest.approx(0.0, abs=1e-6)
-    assert abs(law_state(segments[4], True)[0]) < 1e-6
+    assert abs(_end_state(big.segments[4])[0]) < 1e-6
     # A real jump is still one: segment 4 made to start at -0.4 mm/deg against 0.3.
-    jumped = dataclasses.replace(segments[3], law=laws.BoundaryPolynomial(v0=-0.4 * 55 / -3, v1=-0.4 * 55 / -3))
+    feed = Program.load(example_path("feed"))
+    segments = feed.segments
+    jumped = dataclasses.replace(segments[3], law=laws.BoundaryPolynomial(v0=-0.4 * 55 / -3, v1=-0.4 * 55 / -3),
+                                 start=None, end=None)  # a law of its own, no end states to solve
     with pytest.raises(ValueError, match="segments 3 and 4 meet at 140 deg"):
-        joins((*segments[:3], jumped, *segments[4:]), start)
+        Program("jumped", (*segments[:3], jumped, *segments[4:]), feed.follower)
 
 
 def test_a_swinging_flat_face_without_pivot_says_what_it_needs():
@@ -123,6 +135,15 @@ def _sliced_indexer(dwell_pieces: int) -> dict:
     return data
 
 
+def _write_toml(data: dict, path) -> None:
+    """A program's ``[[segment]]`` and ``[follower]`` tables as a TOML file (flat values only)."""
+    lines = ["[program]", 'name = "slivers"']
+    for seg in data["segment"]:
+        lines += ["[[segment]]"] + [f"{k} = {v!r}".replace("'", '"') for k, v in seg.items()]
+    lines += ["[follower]"] + [f"{k} = {v!r}".replace("'", '"') for k, v in data["follower"].items()]
+    path.write_text("\n".join(lines) + "\n")
+
+
 def test_a_program_past_the_segment_limit_is_refused_before_any_work(tmp_path, capsys):
     from camjax.cli import main
     from camjax.program import MAX_SEGMENTS
@@ -133,29 +154,31 @@ def test_a_program_past_the_segment_limit_is_refused_before_any_work(tmp_path, c
     segments = [Program.from_dict(_sliced_indexer(2)).segments[0]] * (MAX_SEGMENTS + 1)
     with pytest.raises(ValueError, match=f"{MAX_SEGMENTS + 1} segments; the limit"):
         Program("many", segments, Program.load(example_path("indexer")).follower)
-    lines = ["[program]", 'name = "slivers"']
-    for seg in data["segment"]:
-        lines += ["[[segment]]"] + [f"{k} = {v!r}".replace("'", '"') for k, v in seg.items()]
-    lines += ["[follower]"] + [f"{k} = {v!r}".replace("'", '"') for k, v in data["follower"].items()]
-    (tmp_path / "p.toml").write_text("\n".join(lines) + "\n")
+    _write_toml(data, tmp_path / "p.toml")
     assert main(["program", str(tmp_path / "p.toml"), "--rpm", "300"]) == 2
     err = capsys.readouterr().err
     assert f"the program has {MAX_SEGMENTS + 2} segments; the limit is {MAX_SEGMENTS}" in err
     assert len(err.strip().splitlines()) == 1
 
 
-def test_a_long_program_is_summarised_in_text_and_whole_in_json_and_csv():
-    from camjax.cli.program import SHOWN, _table
+def test_a_long_program_is_summarised_in_text_and_whole_in_json_and_csv(tmp_path, capsys):
+    import json
 
-    program = Program.from_dict(_sliced_indexer(20))  # 42 segments, 40 of them dwells
-    report = analyse(program, [300.0], with_flight=False)
-    text = _table(report)
-    assert len(report.joins) == 42 and len(report.segments) == 42
-    assert len(report.speeds[0].residual_vibration_mm) == 40
+    from camjax.cli import main
+    from camjax.cli.program import SHOWN
+
+    _write_toml(_sliced_indexer(20), tmp_path / "p.toml")  # 42 segments, 40 of them dwells
+    printed = {}
+    for fmt in ("json", "csv", "table"):
+        assert main(["program", str(tmp_path / "p.toml"), "--rpm", "300", "--no-flight", "--format", fmt]) == 0
+        printed[fmt] = capsys.readouterr().out
+    report, text = json.loads(printed["json"]), printed["table"]
+    assert len(report["joins"]) == 42 and len(report["segments"]) == 42
+    assert len(report["speeds"][0]["residual_vibration_mm"]) == 40
     assert len(text.splitlines()) < 30 and max(map(len, text.splitlines())) < 250
     assert "42 segments (1 rise, 40 dwell, 1 return)" in text
     assert "42 joins:" in text and "40 from " in text
-    header, row = report.to_csv().splitlines()
+    header, row = printed["csv"].splitlines()
     assert header.count("residual_vibration_mm_") == 40 and len(row.split(",")) == len(header.split(","))
     assert SHOWN < 40
 

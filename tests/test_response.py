@@ -13,6 +13,7 @@ import camjax
 from camjax import laws
 from camjax.metrics import PEAK_TOLERANCE
 from camjax.models import TRACED_RESOLUTION, response_metrics
+from camjax.sweep import sweep_program
 
 
 def cycloidal_residual(n):
@@ -192,7 +193,7 @@ def test_laws_of_every_type_share_one_compiled_sweep():
     camjax.ct_curves(standard[:1], n)
     with compiled_programs() as compiled:
         curves = camjax.ct_curves(standard, n)
-    assert "jit(_sweep)" not in compiled  # each law's sampling compiles; the sweep does not
+    assert f"jit({sweep_program.__name__})" not in compiled  # each law's sampling compiles; the sweep does not
     for law in (standard[0], standard[-1]):  # an SCCA law (8 pieces) and a polynomial (1)
         for k, x in enumerate(n):
             own = camjax.solve(law, camjax.SpringMass(x), resolution=512).metrics
@@ -211,7 +212,7 @@ def test_ct_curves_like_pads_for_a_law_swept_later():
     assert set(apart) == set(standard)  # like is not swept
     with compiled_programs() as compiled:
         later = camjax.ct_curve(spline, n)
-    assert "jit(_sweep)" not in compiled
+    assert f"jit({sweep_program.__name__})" not in compiled
     together = camjax.ct_curves({**standard, "spline": spline}, n)
     for name, curve in {**apart, "spline": later}.items():
         np.testing.assert_array_equal(curve.ct, together[name].ct)
@@ -384,8 +385,8 @@ def test_raw_options_with_a_traced_ratio_past_the_grid_raise_when_run():
 def test_sampled_laws_are_kept_by_value_and_the_oldest_dropped():
     """``SampledLaw.of`` returns the kept sampling for a law of equal values (a law named
     again is a new object), samples anew for other values, resolution or padding, and
-    keeps no more than ``SAMPLED_LAWS_KEPT``."""
-    from camjax.sdof import SampledLaw, _grid
+    keeps exactly ``SAMPLED_LAWS_KEPT``, the least recently used dropped first."""
+    from camjax.sdof import SAMPLED_LAWS_KEPT, SampledLaw
 
     first = SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256)
     assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256) is first
@@ -393,9 +394,12 @@ def test_sampled_laws_are_kept_by_value_and_the_oldest_dropped():
     assert other is not first and not np.allclose(other.grid.forcing, first.grid.forcing)
     assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 320) is not first
     assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256, 16) is not first
-    for i in range(_grid.SAMPLED_LAWS_KEPT):
-        SampledLaw.of(laws.SCCA(0.1 + 0.001 * i, 0.0, 0.5), 128)
-    assert len(_grid._SAMPLED) == _grid.SAMPLED_LAWS_KEPT
+    assert SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256) is first  # the most recently used now
+    filled = [SampledLaw.of(laws.SCCA(0.1 + 0.001 * i, 0.0, 0.5), 128) for i in range(SAMPLED_LAWS_KEPT)]
+    # all of the last SAMPLED_LAWS_KEPT are kept (asked in the order they came: none dropped) ...
+    assert all(SampledLaw.of(laws.SCCA(0.1 + 0.001 * i, 0.0, 0.5), 128) is kept
+               for i, kept in enumerate(filled))
+    # ... and no more: the one used just before them was dropped.
     again = SampledLaw.of(laws.SCCA(0.3, 0.1, 0.6), 256)
     assert again is not first
     np.testing.assert_array_equal(again.grid.forcing, first.grid.forcing)

@@ -8,6 +8,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import equinox as eqx
 import jax
 import numpy as np
 import pytest
@@ -159,37 +160,36 @@ def test_shard_batch_one_device_and_batch_checks():
         batch_size({"a": np.zeros(4), "b": np.ones(3)})
 
 
-def test_sweeps_compile_with_the_cpu_options_only_at_the_top_level(monkeypatch):
+def test_sweeps_compile_with_the_cpu_options_only_at_the_top_level():
     """``sweep_jit``: on CPU a sweep's program compiles with ``CPU_COMPILER_OPTIONS`` (XLA
     refuses options on a nested jit, so a call inside a caller's trace takes none); the options change no
     number beyond the peak search's tolerance (``PEAK_TOLERANCE``, 1e-11 relative: rounding
     may settle a crest in another interval; 7e-13 measured at n = 30)."""
     from camjax import sharding
-    from camjax.sweep import _sweep, prepare_sweep
+    from camjax.sweep import prepare_sweep, sweep_program
 
-    monkeypatch.setitem(sharding._sweep_options, "cpu", sharding.CPU_COMPILER_OPTIONS)
+    sharding.sweeps_run_once(False)  # whatever an earlier test left
     n, template, options = prepare_sweep(np.linspace(1.0, 30.0, 200), damping=0.05)
     law = template.sweep_law(camjax.laws.get("modified-sine"), options)
     args = (law, template, jax.numpy.asarray(n), options)
     on_cpu = jax.default_backend() == "cpu"
     chosen = sharding.CPU_COMPILER_OPTIONS if on_cpu else ()
-    assert _sweep._program() is sharding._filter_jit(_sweep.__wrapped__, chosen)
-    plain = sharding._filter_jit(_sweep.__wrapped__, ())
+    assert sharding.sweep_compiler_options() == sharding.CPU_COMPILER_OPTIONS
+    assert sweep_program.compiler_options() == chosen
+    plain = eqx.filter_jit(sweep_program.__wrapped__)  # XLA's defaults
     # Split over devices, a sweep compiles with the same options; any other function
     # (a program's speed batch) with XLA's defaults, as it runs on one device.
-    split = sharding._sharded_program(_sweep._options)._program()
-    assert split is sharding._filter_jit(sharding._sharded_call, chosen)
-    assert sharding._sharded_program(sharding._no_options)._program() is \
-        sharding._filter_jit(sharding._sharded_call, ())
+    assert sharding.split_program(sweep_program).compiler_options() == chosen
+    assert sharding.split_program(plain).compiler_options() == ()
     picked = []
-    jax.jit(lambda r: picked.append(_sweep._program()) or r)(n)
-    assert picked == [plain]
+    jax.jit(lambda r: picked.append(sweep_program.compiler_options()) or r)(n)
+    assert picked == [()]
     if on_cpu:
         assert sharding.CPU_COMPILER_OPTIONS == (("xla_cpu_prefer_vector_width", 512),)
-    with_options, without = _sweep(*args)[0], plain(*args)[0]
+    with_options, without = sweep_program(*args)[0], plain(*args)[0]
     for field in ("ct", "residual", "peak_in_motion"):
         np.testing.assert_allclose(getattr(with_options, field), getattr(without, field),
                                    rtol=1e-11, atol=0)
     # Inside a caller's jit the program is inlined, options or not.
-    inside = jax.jit(lambda r: _sweep(law, template, r, options)[0].ct)(jax.numpy.asarray(n))
+    inside = jax.jit(lambda r: sweep_program(law, template, r, options)[0].ct)(jax.numpy.asarray(n))
     np.testing.assert_allclose(inside, with_options.ct, rtol=1e-11)

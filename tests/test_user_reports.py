@@ -213,7 +213,7 @@ ROOT = Path(__file__).parents[1]
 
 def test_the_sweep_page_documents_every_key_and_its_example_loads(tmp_path):
     page = (ROOT / "docs" / "sweep.md").read_text()
-    for key in distributed._KEYS | {"start", "stop", "count", "values", "names", "scca_step", "scca_face"}:
+    for key in distributed.SPEC_KEYS | {"start", "stop", "count", "values", "names", "scca_step", "scca_face"}:
         assert f"`{key}`" in page or f"`[{key}]`" in page, key
     spec = tmp_path / "spec.toml"
     spec.write_text(re.search(r"```toml\n(.*?)```", page, re.S).group(1))

@@ -43,13 +43,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None, *, one_run: bool = False) -> int:
     """Run one ``camjax`` command; ``one_run``: this process runs nothing else (the
-    executable), so XLA may be set up for it (:func:`_compile_for_one_run`)."""
+    executable), so XLA may be set up for it (:func:`compile_for_one_run`)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     enable_compilation_cache()
     try:
         if one_run:
-            _compile_for_one_run(args)
+            compile_for_one_run(args)
         return args.func(args) or 0
     except (CliError, ValueError) as error:
         print(f"camjax {args.command}: error: {error}", file=sys.stderr)
@@ -103,7 +103,7 @@ LONG_CT_SWEEP = 100_000
 """Period ratios from which ``camjax ct`` is a long sweep and keeps XLA's default emitters."""
 
 
-def _compile_for_one_run(args: argparse.Namespace) -> None:
+def compile_for_one_run(args: argparse.Namespace) -> None:
     """XLA's classic CPU fusion emitters, its own vector width and the dense peak search,
     for a short command (``args``, parsed).
 

@@ -103,6 +103,33 @@ class Caps:
     def met(self, law) -> bool:
         return all(x <= 0 for x in self.violations(law).values())
 
+    def repair(self, law: BSplineLaw) -> BSplineLaw:
+        """``law`` itself if it meets the caps, else the nearest spline meeting them along
+        the segment towards the standard law (fitted with ``law``'s knots) that breaks them
+        least; a ``CapError`` where no standard law meets them.  A design's last step."""
+        caps = self
+        if caps.met(law):
+            return law
+        anchors = [BSplineLaw.fit(get_law(name), len(law.coefficients), law.degree, law.zero_jerk)
+                   for name in _ANCHORS]
+        feasible = [x for x in anchors if caps.met(x)]
+        if not feasible:
+            raise CapError(
+                f"the design breaks its caps ({_describe(caps.violations(law))}) and no feasible "
+                "starting spline is known to repair it; relax the caps or add knots"
+            )
+        anchor = min(feasible, key=lambda x: max(caps.violations(x).values()))
+
+        def blend(t):
+            return BSplineLaw((1 - t) * law.coefficients + t * anchor.coefficients, law.degree,
+                              law.zero_jerk)
+
+        lo, hi = 0.0, 1.0
+        for _ in range(30):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (lo, mid) if caps.met(blend(mid)) else (mid, hi)
+        return blend(hi)
+
 
 @eqx.filter_jit
 def _fine_checks(law: AbstractMotionLaw):
@@ -111,31 +138,6 @@ def _fine_checks(law: AbstractMotionLaw):
 
 
 _ANCHORS = ("cycloidal", "modified-sine", "modified-trapezoid", "poly345", "poly4567")
-
-
-def _restore(law: BSplineLaw, caps: Caps) -> BSplineLaw:
-    """The nearest point, along a segment towards a strictly feasible spline, meeting the caps."""
-    if caps.met(law):
-        return law
-    anchors = [BSplineLaw.fit(get_law(name), len(law.coefficients), law.degree, law.zero_jerk)
-               for name in _ANCHORS]
-    feasible = [x for x in anchors if caps.met(x)]
-    if not feasible:
-        raise CapError(
-            f"the design breaks its caps ({_describe(caps.violations(law))}) and no feasible "
-            "starting spline is known to repair it; relax the caps or add knots"
-        )
-    anchor = min(feasible, key=lambda x: max(caps.violations(x).values()))
-
-    def blend(t):
-        return BSplineLaw((1 - t) * law.coefficients + t * anchor.coefficients, law.degree,
-                          law.zero_jerk)
-
-    lo, hi = 0.0, 1.0
-    for _ in range(30):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if caps.met(blend(mid)) else (mid, hi)
-    return blend(hi)
 
 
 def _describe(violations: dict[str, float]) -> str:

@@ -15,7 +15,7 @@ from tqdm.auto import tqdm
 
 from .. import checks
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, BSplineLaw, CorrectedPolynomial, as_law
-from ._caps import CapError, Caps, _describe, _fine_checks, _restore
+from ._caps import CapError, Caps, _describe, _fine_checks
 from ._objectives import AbstractObjective
 from ._residual import dense_tau
 
@@ -279,9 +279,9 @@ def design(
         # repair, the reported values): the bar stays up and says which.
         bar.set_postfix_str("checking the caps on a fine grid")
         law = law_of(theta)
-        final = _restore_corrected(law, caps) if isinstance(law, CorrectedPolynomial) else _restore(law, caps)
+        final = _restore_corrected(law, caps) if isinstance(law, CorrectedPolynomial) else caps.repair(law)
         violations = caps.violations(final)
-        if any(v > 0 for v in violations.values()):  # pragma: no cover - _restore guarantees it
+        if any(v > 0 for v in violations.values()):  # pragma: no cover - Caps.repair guarantees it
             raise CapError(f"the design breaks its caps: {_describe(violations)}")
         bar.set_postfix_str("reporting the objectives")
         values = {o.label: o.report(final) for o in objectives}

@@ -21,6 +21,7 @@ from ._base import Metrics as Metrics
 from ._base import Options as Options
 from ._base import Response as Response
 from ._solve import solve as solve
+from ._solve import solve_program as solve_program
 from ._solve import trace_solve as trace_solve
 from ._spring_mass import TRACED_RESOLUTION as TRACED_RESOLUTION
 from ._spring_mass import SpringMass as SpringMass

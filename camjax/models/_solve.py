@@ -26,8 +26,11 @@ def _compiled(cpu_options: tuple):
     return cpu_options_jit(_response, cpu_options)
 
 
-def _program(model: AbstractModel):
-    """The jitted solve for ``model``: its ``cpu_compiler_options`` apply on CPU only."""
+def solve_program(model: AbstractModel):
+    """The jitted program ``solve`` and ``trace_solve`` run for ``model``
+    (``camjax.sharding.OptionsJit``): one per set of XLA options, compiled on CPU with the
+    model class's ``cpu_compiler_options`` (XLA's defaults elsewhere, and inside a
+    caller's trace), so every model that asks for none shares one program."""
     return _compiled(type(model).cpu_compiler_options)
 
 
@@ -66,7 +69,7 @@ def solve(
     """
     opts, arguments = _arguments(law, model, dwell, method, options)
     with checks.as_value_errors():
-        response = _program(model)(*arguments)
+        response = solve_program(model)(*arguments)
     if throw and not checks.is_concrete(response.result, response.payload_acceleration):
         # Traced (the caller's jit, vmap or grad): the check runs with the computation.
         result = promote(response.result)
@@ -109,4 +112,4 @@ def trace_solve(law, model: AbstractModel, *, dwell: float = 1.0, method: str | 
     to XLA's compile, which releases the GIL: a caller can trace first and then run the
     solve beside other Python work on a second thread (``camjax follower`` does).
     """
-    _program(model).lower(*_arguments(law, model, dwell, method, options)[1])
+    solve_program(model).lower(*_arguments(law, model, dwell, method, options)[1])

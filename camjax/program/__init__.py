@@ -65,9 +65,11 @@ from ._machine import MODULUS_RANGE_GPA as MODULUS_RANGE_GPA
 from ._machine import ContactGeometry as ContactGeometry
 from ._machine import Geometry as Geometry
 from ._machine import JoinCurvature as JoinCurvature
+from ._machine import NodeContact as NodeContact
 from ._machine import cam_geometry as cam_geometry
 from ._machine import contact_geometry as contact_geometry
 from ._machine import design_warnings as design_warnings
+from ._machine import node_contact as node_contact
 from ._motion import EndState as EndState
 from ._motion import Join as Join
 from ._motion import segment_kinematics as segment_kinematics

@@ -26,6 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import checks
 from .._shapes import bucket
 from ..errors import RESULTS, raise_if_failed
 from ..metrics import refined_peak
@@ -438,7 +439,8 @@ class SteadyState:
                              "(without damping the start-up never settles)")
         self.program = program
         self.train = Train.of(program)
-        self.rpm_min = float(check_rpm(rpm_min)[0])
+        checked = isinstance(rpm_min, CheckedSpeed)  # by the entry point that builds it
+        self.rpm_min = float(rpm_min if checked else check_rpm(rpm_min, name="rpm_min")[0])
         self.devices = resolve_devices(devices)
         self.grid = cycle_grid(program, self.rpm_min)
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
@@ -469,7 +471,10 @@ class SteadyState:
     def cycles_at(self, rpm) -> Cycle:
         """``cycles`` at the speeds ``rpm``: read from the last batch where every one of them
         was computed (``summary`` keeps it), else computed."""
-        rpm = check_rpm(rpm)
+        return self.cycles_at_checked(check_rpm(rpm))
+
+    def cycles_at_checked(self, rpm: np.ndarray) -> Cycle:
+        """``cycles_at`` of speeds already checked (``check_rpm``)."""
         kept, cycles = getattr(self, "_kept", ({}, None))
         if all(float(r) in kept for r in rpm):
             rows = np.array([kept[float(r)] for r in rpm], dtype=int)
@@ -479,7 +484,10 @@ class SteadyState:
     def min_contact_force_n(self, rpm) -> np.ndarray:
         """``summary(rpm).min_contact_force_n`` alone (the jump's scan and bisection): the
         same compiled program, so a program's first look compiles one."""
-        rpm = check_rpm(rpm)
+        return self.min_contact_force_checked(check_rpm(rpm))
+
+    def min_contact_force_checked(self, rpm: np.ndarray) -> np.ndarray:
+        """``min_contact_force_n`` of speeds already checked (``check_rpm``)."""
         self._check_slowest(rpm)
         force = self._blocks(_cycles, rpm, keep=lambda c: c.min_contact_force_n)
         raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm", force)
@@ -506,7 +514,10 @@ class SteadyState:
     def cycle(self, rpm: float, q_start=None) -> Cycle:
         """Node series and extrema of the periodic steady state at one speed (or of the
         turn from the mode ``q_start`` at its start, if given)."""
-        rpm = float(check_rpm(rpm)[0])
+        return self.cycle_checked(float(check_rpm(rpm)[0]), q_start)
+
+    def cycle_checked(self, rpm: float, q_start=None) -> Cycle:
+        """``cycle`` at a speed already checked (``check_rpm``)."""
         if q_start is None:
             kept, cycles = getattr(self, "_kept", ({}, None))
             if rpm not in kept:
@@ -534,26 +545,37 @@ IMPLAUSIBLE_RPM, IMPLAUSIBLE_PERIOD_RATIO = 100_000.0, 0.05
 period ratio below 0.05 (the follower cannot follow its motion at all): often a unit slip."""
 
 
-def check_rpm(rpm, program: Program | None = None) -> np.ndarray:
-    """Speeds as a 1-D float array, checked: positive and finite (``ValueError`` if not);
+class CheckedSpeed(float):
+    """A speed (rpm) that ``check_rpm`` has passed, for an entry point to hand to
+    ``SteadyState`` (which then does not check it again).  Arithmetic on it gives a
+    plain ``float``, so no computed value passes for a checked one."""
+
+
+def check_rpm(rpm, program: Program | None = None, *, name: str = "rpm") -> np.ndarray:
+    """Speeds as a 1-D float array, checked: numbers, positive and finite (a one-line
+    ``ValueError`` naming ``name``, the caller's option, if not: ``camjax.checks.speeds``);
     with ``program``, a ``UserWarning`` for a speed past ``IMPLAUSIBLE_RPM`` or one that
-    gives a segment a period ratio below ``IMPLAUSIBLE_PERIOD_RATIO``."""
-    rpm = np.atleast_1d(np.asarray(rpm, dtype=float))
-    if rpm.size == 0 or rpm.ndim != 1:
-        raise ValueError("rpm must be one speed or a 1-D list of speeds")
-    if not np.all(np.isfinite(rpm)) or np.any(rpm <= 0):
-        raise ValueError(f"rpm must be positive and finite, got {rpm[~(np.isfinite(rpm) & (rpm > 0))][0]:g}")
+    gives a segment a period ratio below ``IMPLAUSIBLE_PERIOD_RATIO``.
+
+    The public entry points call it once, on their own arguments; the functions they call
+    take the checked array (``SteadyState.summary_checked`` and its kin)."""
+    rpm = checks.speeds(rpm, name)
     if program is not None:
-        shortest = min((s.angle_deg / 360.0 for s in program.segments if s.moving), default=1.0)
-        ratio = program.follower.vibrations_per_turn(rpm.max()) * shortest
-        why = [text for bad, text in (
-            (rpm.max() > IMPLAUSIBLE_RPM, f"faster than any cam runs (above {IMPLAUSIBLE_RPM:,.0f} rpm)"),
-            (ratio < IMPLAUSIBLE_PERIOD_RATIO, f"the shortest moving segment's period ratio is {ratio:.2g}, "
-             f"below {IMPLAUSIBLE_PERIOD_RATIO:g}: the follower cannot follow the motion at all")) if bad]
-        if why:
-            warnings.warn(f"{program.name} at {rpm.max():g} rpm: {'; '.join(why)} (check the speed's "
-                          "units)", stacklevel=3)
+        warn_implausible(program, rpm, stacklevel=4)
     return rpm
+
+
+def warn_implausible(program: Program, rpm: np.ndarray, *, stacklevel: int = 3) -> None:
+    """The ``UserWarning`` of ``check_rpm(rpm, program)`` for checked speeds."""
+    shortest = min((s.angle_deg / 360.0 for s in program.segments if s.moving), default=1.0)
+    ratio = program.follower.vibrations_per_turn(rpm.max()) * shortest
+    why = [text for bad, text in (
+        (rpm.max() > IMPLAUSIBLE_RPM, f"faster than any cam runs (above {IMPLAUSIBLE_RPM:,.0f} rpm)"),
+        (ratio < IMPLAUSIBLE_PERIOD_RATIO, f"the shortest moving segment's period ratio is {ratio:.2g}, "
+         f"below {IMPLAUSIBLE_PERIOD_RATIO:g}: the follower cannot follow the motion at all")) if bad]
+    if why:
+        warnings.warn(f"{program.name} at {rpm.max():g} rpm: {'; '.join(why)} (check the speed's "
+                      "units)", stacklevel=stacklevel)
 
 
 def startup(program: Program, rpm: float, cycles: int, *, steady: SteadyState | None = None):
@@ -563,11 +585,11 @@ def startup(program: Program, rpm: float, cycles: int, *, steady: SteadyState | 
     turn); the engine's exact step carries the state from turn to turn.
     """
     rpm = float(check_rpm(rpm)[0])
-    steady = steady or SteadyState(program, rpm)
+    steady = steady or SteadyState(program, CheckedSpeed(rpm))
     s, accel, force = [], [], []
     q_start = 0j
     for c in range(int(cycles)):
-        run = steady.cycle(rpm, q_start=q_start)
+        run = steady.cycle_checked(rpm, q_start=q_start)
         s.append(c + steady.grid.nodes[:-1])
         accel.append(run.payload_acceleration_m_s2[:-1])
         force.append(run.contact_force_n[:-1])
@@ -582,11 +604,22 @@ def node_contact_force(program: Program, rpm, laws: dict | None = None, *, rpm_m
 
     A replacement keeps the breakpoints of the law it replaces (``with_segment_law``).
     The grid is the one for ``rpm_min`` (default: the slowest of ``rpm``, which must then
-    be concrete).
+    be concrete).  Concrete speeds are checked as ``check_rpm`` checks them; traced ones
+    make the computation raise the same message when it runs with a bad one.
     """
-    rpm = jnp.atleast_1d(jnp.asarray(rpm, dtype=float))
-    if rpm_min is None:
-        rpm_min = float(np.min(np.asarray(rpm)))
+    if rpm_min is not None:
+        rpm_min = float(check_rpm(rpm_min, name="rpm_min")[0])
+    if checks.is_concrete(rpm):
+        checked = check_rpm(rpm)
+        rpm_min = float(checked.min()) if rpm_min is None else rpm_min
+        rpm = jnp.asarray(checked)
+    else:
+        if rpm_min is None:
+            raise ValueError("rpm_min is needed where rpm is traced (it fixes the grid)")
+        rpm = jnp.atleast_1d(jnp.asarray(rpm, dtype=float))
+        if rpm.ndim != 1 or rpm.size == 0:
+            raise ValueError("rpm must be one speed or a 1-D list of speeds")
+        rpm = checks.ensure(rpm, lambda v: (v > 0) & (v < np.inf), "rpm must be positive and finite")
     with jax.ensure_compile_time_eval():
         grid = cycle_grid(program, rpm_min)
     for segment, law in (laws or {}).items():

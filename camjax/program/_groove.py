@@ -225,6 +225,12 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None,
     its ``change_deg`` (a roller that chatters in a wide groove, ``groove_clearance_mm``);
     the command line warns about it.
     """
+    return groove_turns_checked(program, check_rpm(rpm), turns=turns, progress=progress)
+
+
+def groove_turns_checked(program: Program, rpm: np.ndarray, *, turns: int | None = None,
+                         progress: bool | None = None) -> list[GrooveTurn]:
+    """``groove_turns`` at speeds already checked (``check_rpm``)."""
     from ..models import Backlash, solve
 
     f = program.follower
@@ -232,7 +238,6 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None,
         raise ValueError("groove impacts need a form-closed follower with groove_clearance_mm > 0")
     if not f.damping_ratio > 0:
         raise ValueError("groove impacts need follower.damping_ratio > 0 (the start-up must settle)")
-    rpm = check_rpm(rpm)
     h = stroke_mm(program)
     samples = _samples_per_turn(program, float(rpm.min()))
     first = settling_turns(program, float(rpm.max())) if turns is None else max(2, int(turns))

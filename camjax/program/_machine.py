@@ -166,7 +166,10 @@ def _effective_radius(program: Program, cam_radius: np.ndarray, where: str, thet
 
 
 def node_contact(program: Program, theta_deg) -> NodeContact:
-    """The Hertz factors at ``theta_deg`` (zeros without ``follower.contact_width_mm``)."""
+    """The Hertz factors at cam angles ``theta_deg``: ``p_max^2 = F_c * factor``, what the
+    steady state multiplies by its contact force at every grid node (zeros without
+    ``follower.contact_width_mm``).  At a join, where the cam's radius of curvature
+    jumps, an angle within a rounding of it takes the side of the larger stress."""
     f = program.follower
     n = np.asarray(theta_deg).size
     if f.contact_width_mm is None:

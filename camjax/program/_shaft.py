@@ -22,8 +22,8 @@ import numpy as np
 from .._plain import json_ready
 from ..checks import read_toml
 from ..metrics import septic_coefficients
-from ._analysis import Report, analyse
-from ._dynamics import SteadyState, check_rpm
+from ._analysis import Report, analyse_checked
+from ._dynamics import CheckedSpeed, SteadyState, check_rpm, warn_implausible
 from ._machine import (
     DEFAULT_SPEED_FLUCTUATION,
     check_speed_fluctuation,
@@ -185,13 +185,15 @@ def analyse_machine(machine, rpm, *, with_flight: bool = True,
         machine = Machine("machine", tuple(machine))
     rpm = check_rpm(rpm)
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
-    steadies = [SteadyState(p, rpm.min()) for p, _ in machine.cams]
+    for p, _ in machine.cams:
+        warn_implausible(p, rpm)
+    steadies = [SteadyState(p, CheckedSpeed(rpm.min())) for p, _ in machine.cams]
     phases = [phase for _, phase in machine.cams]
-    reports = tuple(analyse(p, rpm, with_flight=with_flight, steady=s, speed_fluctuation=speed_fluctuation)
+    reports = tuple(analyse_checked(p, rpm, with_flight=with_flight, steady=s, speed_fluctuation=speed_fluctuation)
                     for (p, _), s in zip(machine.cams, steadies))
     shaft = []
     for r in rpm:
-        nodes, values, left, right = shaft_torque([s.cycle(float(r)) for s in steadies],
+        nodes, values, left, right = shaft_torque([s.cycle_checked(float(r)) for s in steadies],
                                                   [s.grid.nodes for s in steadies], phases)
         figures = [float(x) for x in torque_figures(values, np.diff(nodes), left, right)]
         shaft.append(ShaftSpeedReport(float(r), *figures,

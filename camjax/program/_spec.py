@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import laws
-from ..checks import is_concrete, read_toml
+from ..checks import is_concrete, read_toml, speeds
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity, TableLaw
 from ._follower import FOLLOWER_KINDS as FOLLOWER_KINDS
 from ._follower import Follower, Materials, _check_follower, _finite, _positive
@@ -468,8 +468,10 @@ def with_law(program: Program, segment: int, law) -> Program:
 
 
 def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -> tuple[float, float]:
-    """Period-ratio band ``(n1, n2)`` of segment ``segment`` (1-based) over the speed range."""
-    if not 0 < rpm_lo < rpm_hi:
+    """Period-ratio band ``(n1, n2)`` of segment ``segment`` (1-based) over the speed range
+    (the design's check of its speeds, ``camjax.checks.speeds``)."""
+    rpm_lo, rpm_hi = float(speeds(rpm_lo, "rpm_lo")[0]), float(speeds(rpm_hi, "rpm_hi")[0])
+    if not rpm_lo < rpm_hi:
         raise ValueError(f"need 0 < rpm_lo < rpm_hi, got {rpm_lo:g}, {rpm_hi:g}")
     if not 1 <= segment <= len(program.segments):
         raise ValueError(f"segment must be 1..{len(program.segments)}, got {segment}")

@@ -12,25 +12,29 @@ studies, and a cam program's turn at machine speed (``camjax.program``):
   steady state (``periodic_propagate``) and the exact state between nodes
   (``mode_between``);
 - outputs ``Re(G q)`` and their refined peaks (``peak_in_motion``, bounded or dense:
-  ``set_peak_search``, with ``plateau_bound`` on constant-acceleration intervals;
+  ``set_peak_search``, ``peak_search_kind``, with ``plateau_bound`` on constant-acceleration intervals;
   ``refined_extremes``), the dwell's peak and the residual vibration;
 - the same equation through diffrax (``integrate``, ``sdof_term``);
 - one chunked vmap for batches (``chunked_map``), its chunks sized by backend
   (``chunk_nodes``, ``stack_laws``; their sizes ``CHUNK_NODES`` on a CPU,
-  ``ACCELERATOR_CHUNK_NODES`` and ``ACCELERATOR_STACK_EVALUATIONS`` elsewhere, read-only here).
+  ``ACCELERATOR_CHUNK_NODES`` and ``ACCELERATOR_STACK_EVALUATIONS`` elsewhere by default,
+  ``set_accelerator_sizes`` to tune a device).
 """
 
 from ._batch import ACCELERATOR_CHUNK_NODES as ACCELERATOR_CHUNK_NODES
 from ._batch import ACCELERATOR_STACK_EVALUATIONS as ACCELERATOR_STACK_EVALUATIONS
 from ._batch import CHUNK_NODES as CHUNK_NODES
+from ._batch import accelerator_sizes as accelerator_sizes
 from ._batch import chunk_nodes as chunk_nodes
 from ._batch import chunked_map as chunked_map
 from ._batch import map_in_chunks as map_in_chunks
+from ._batch import set_accelerator_sizes as set_accelerator_sizes
 from ._batch import stack_laws as stack_laws
 from ._grid import GAUSS_POINTS as GAUSS_POINTS
 from ._grid import INTERPOLATION_DEGREE as INTERPOLATION_DEGREE
 from ._grid import MAX_GRID_INTERVALS as MAX_GRID_INTERVALS
 from ._grid import MAX_PHASE_STEP as MAX_PHASE_STEP
+from ._grid import SAMPLED_LAWS_KEPT as SAMPLED_LAWS_KEPT
 from ._grid import SUBSTEPS_PER_INTERVAL as SUBSTEPS_PER_INTERVAL
 from ._grid import TARGET_PHASE_STEP as TARGET_PHASE_STEP
 from ._grid import MotionGrid as MotionGrid
@@ -48,6 +52,7 @@ from ._peaks import gain_derivatives as gain_derivatives
 from ._peaks import mode_gain as mode_gain
 from ._peaks import output_jets as output_jets
 from ._peaks import peak_in_motion as peak_in_motion
+from ._peaks import peak_search_kind as peak_search_kind
 from ._peaks import plateau_bound as plateau_bound
 from ._peaks import refined_extremes as refined_extremes
 from ._peaks import refined_max as refined_max

@@ -23,23 +23,50 @@ an H200, 256 SCCA laws' kernel took 125 ms one law at a time, 20 ms 64 at a time
 0.8 GiB)."""
 
 
+_accelerator = {"chunk_nodes": ACCELERATOR_CHUNK_NODES, "stack_evaluations": ACCELERATOR_STACK_EVALUATIONS}
+
+
+def accelerator_sizes() -> tuple[int, int]:
+    """The batch sizes off the CPU now: ``(chunk nodes, stack evaluations)``, by default
+    ``ACCELERATOR_CHUNK_NODES`` and ``ACCELERATOR_STACK_EVALUATIONS``."""
+    return _accelerator["chunk_nodes"], _accelerator["stack_evaluations"]
+
+
+def set_accelerator_sizes(chunk_nodes: int | None = None, stack_evaluations: int | None = None
+                          ) -> tuple[int, int]:
+    """Size the batches off the CPU (a device's own tuning, as
+    experiments/benchmarks/device_check.py measures it); ``None`` keeps a size.  Returns
+    the sizes before, to restore them.  The sizes are read when a sweep is traced, so
+    JAX's caches are cleared on a change.  The CPU's ``CHUNK_NODES`` stays."""
+    before = accelerator_sizes()
+    for key, value in (("chunk_nodes", chunk_nodes), ("stack_evaluations", stack_evaluations)):
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{key} must be a positive integer, got {value!r}")
+        _accelerator[key] = value
+    if accelerator_sizes() != before:
+        jax.clear_caches()
+    return before
+
+
 def chunk_nodes() -> int:
-    """Grid nodes per chunk of ``chunked_map``: ``CHUNK_NODES`` (131,072) on a CPU,
-    ``camjax.sdof._batch.ACCELERATOR_CHUNK_NODES`` (2**24) on JAX's default backend
-    otherwise (``camjax.sharding.on_cpu``)."""
-    return CHUNK_NODES if on_cpu() else ACCELERATOR_CHUNK_NODES
+    """Grid nodes per chunk of ``chunked_map``: ``CHUNK_NODES`` (131,072) on a CPU, the
+    accelerator's chunk (``accelerator_sizes``, default ``ACCELERATOR_CHUNK_NODES``, 2**24)
+    on JAX's default backend otherwise (``camjax.sharding.on_cpu``)."""
+    return CHUNK_NODES if on_cpu() else _accelerator["chunk_nodes"]
 
 
 def stack_laws(ratios: int, nodes_per_ratio: int = 1) -> int:
     """Laws of a stack swept at once, each against ``ratios`` period ratios on a grid of
     ``nodes_per_ratio`` nodes: one on a CPU (a vmap over laws outgrows its cache);
-    otherwise up to ``ACCELERATOR_STACK_EVALUATIONS`` (law, ratio) pairs and
-    ``ACCELERATOR_CHUNK_NODES`` grid nodes at once (in ``camjax.sdof._batch``)."""
+    otherwise up to the accelerator's stack evaluations ((law, ratio) pairs) and chunk
+    nodes at once (``accelerator_sizes``)."""
     if on_cpu():
         return 1
     ratios, nodes = max(1, int(ratios)), max(1, int(nodes_per_ratio))
-    return max(1, min(ACCELERATOR_STACK_EVALUATIONS // ratios,
-                      ACCELERATOR_CHUNK_NODES // (ratios * nodes)))
+    chunk, evaluations = accelerator_sizes()
+    return max(1, min(evaluations // ratios, chunk // (ratios * nodes)))
 
 
 def map_in_chunks(one, batch, members: int):

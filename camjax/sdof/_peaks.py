@@ -80,6 +80,11 @@ PEAK_SEARCHES = ("bounded", "dense")
 _peak_search = {"kind": "bounded"}
 
 
+def peak_search_kind() -> str:
+    """The peak search now in use (``set_peak_search``): ``"bounded"`` or ``"dense"``."""
+    return _peak_search["kind"]
+
+
 def set_peak_search(kind: str) -> None:
     """How ``peak_in_motion`` (every Ct and residual sweep's peak) refines between nodes:
     ``"bounded"`` (default: ``camjax.metrics.peak_search``, only the intervals that can

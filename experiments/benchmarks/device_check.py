@@ -9,7 +9,7 @@ result is compared with a reference written on another machine (``--write-refere
 on the CPU) by its largest difference in Ct and residual.
 
 On a backend other than the CPU, ``--configs`` times each pair ``K:E`` of
-``camjax.sdof._batch.ACCELERATOR_CHUNK_NODES = 2**K`` and ``ACCELERATOR_STACK_EVALUATIONS = E``
+``camjax.sdof.set_accelerator_sizes(2**K, E)``
 (``17:1``: the CPU's chunks, a stack's laws one at a time) in one process (compiled anew for each), with the device's peak memory where it reports one.
 
     python experiments/benchmarks/device_check.py --write-reference ref.npz            # on the CPU
@@ -28,8 +28,7 @@ import jax
 import numpy as np
 
 import camjax
-from camjax import distributed, sweep
-from camjax.sdof import _batch
+from camjax import distributed, sdof, sweep
 
 LAWS = ("cycloidal", "modified-sine", "4-5-6-7")
 BIG = "cycloidal"
@@ -105,9 +104,9 @@ def main() -> None:
     rows = []
     for config in configs or [None]:
         if config is not None:
-            _batch.ACCELERATOR_CHUNK_NODES, _batch.ACCELERATOR_STACK_EVALUATIONS = 2 ** config[0], config[1]
+            sdof.set_accelerator_sizes(2 ** config[0], config[1])
         jax.clear_caches()
-        setting = {"chunk_nodes": _batch.chunk_nodes(), "stack_laws": _batch.stack_laws(1000)}
+        setting = {"chunk_nodes": sdof.chunk_nodes(), "stack_laws": sdof.stack_laws(1000)}
         timings, arrays = results(args.repeats)
         stats = device.memory_stats() or {}
         for key, row in timings.items():

@@ -1,0 +1,122 @@
+"""House rules of the library, checked on its own sources.
+
+Tests, experiments and notebooks use camjax as a user does: through its public names.
+A private module (``camjax.sdof._batch``) or a private name (``camjax.sweep._sweep``) may
+change or vanish at any commit; code outside the library that reaches for one breaks
+then, or, worse, keeps testing a helper the library no longer uses.
+"""
+
+import ast
+import pathlib
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+SCANNED = ("tests", "experiments", "notebooks")
+
+
+def _private(part: str) -> bool:
+    """A leading underscore that is not a dunder (``__version__``, ``__main__`` are public)."""
+    return part.startswith("_") and not (part.startswith("__") and part.endswith("__"))
+
+
+def _private_path(dotted: str) -> bool:
+    return any(_private(part) for part in dotted.split("."))
+
+
+def _dotted(node: ast.AST) -> list[str] | None:
+    """``a.b.c`` as ``["a", "b", "c"]``; None when the chain does not start at a name."""
+    parts = []
+    while isinstance(node, ast.Attribute):
+        parts.append(node.attr)
+        node = node.value
+    if not isinstance(node, ast.Name):
+        return None
+    parts.append(node.id)
+    return parts[::-1]
+
+
+def private_uses(source: str) -> list[tuple[int, str]]:
+    """Every use of a private camjax module or name in ``source``: (line, what).
+
+    Caught: ``import camjax._x``, ``from camjax._x import y``, ``from camjax.x import _y``,
+    ``module._y`` where ``module`` was bound to a camjax module by an import, and the
+    ``setattr(module, "_y", ...)`` and ``getattr`` (``monkeypatch.setattr`` too), and the
+    string forms ``"camjax.x._y"`` (``monkeypatch.setattr``, ``importlib.import_module``).
+    """
+    tree = ast.parse(source)
+    found: list[tuple[int, str]] = []
+    modules: set[str] = set()  # local names bound to camjax modules
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] != "camjax":
+                    continue
+                if _private_path(alias.name):
+                    found.append((node.lineno, f"import {alias.name}"))
+                modules.add(alias.asname or "camjax")
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module.split(".")[0] != "camjax":
+                continue
+            if _private_path(node.module):
+                found.append((node.lineno, f"from {node.module} import ..."))
+            for alias in node.names:
+                if _private(alias.name):
+                    found.append((node.lineno, f"from {node.module} import {alias.name}"))
+                modules.add(alias.asname or alias.name)
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and _private(node.attr):
+            chain = _dotted(node)
+            if chain and chain[0] in modules:
+                found.append((node.lineno, ".".join(chain)))
+        elif isinstance(node, ast.Call) and len(node.args) >= 2:
+            # setattr(module, "_x", ...), monkeypatch.setattr(module, "_x", ...), getattr
+            target, name = node.args[0], node.args[1]
+            chain = _dotted(target)
+            if (chain and chain[0] in modules and isinstance(name, ast.Constant)
+                    and isinstance(name.value, str) and _private(name.value)):
+                found.append((node.lineno, f"{'.'.join(chain)}.{name.value}"))
+        if isinstance(node, ast.Constant) and isinstance(node.value, str):
+            text = node.value
+            if (
+                text.startswith("camjax.")
+                and " " not in text
+                and "\n" not in text
+                and _private_path(text)
+            ):
+                found.append((node.lineno, repr(text)))
+    return sorted(set(found))
+
+
+def _sources():
+    for folder in SCANNED:
+        yield from sorted((ROOT / folder).rglob("*.py"))
+
+
+def test_the_scanner_finds_each_form():
+    """The checker itself: every form of private use is reported, public ones are not."""
+    source = "\n".join(
+        [
+            "import camjax._shapes",
+            "from camjax.sdof._batch import chunked",
+            "from camjax.sweep import _sweep, prepare_sweep",
+            "from camjax import sdof",
+            "x = sdof._peaks",
+            "import camjax.program as program",
+            "program._groove.stroke_mm",
+            "monkeypatch.setattr('camjax.cli._common.json_ready', f)",
+            "import camjax, numpy",
+            "camjax.__version__, numpy._core, obj._private",
+            "from camjax import ModifiedSine",
+            "monkeypatch.setattr(sdof, '_peak_search', {})",
+            "setattr(numpy, '_x', 1); getattr(sdof, 'chunk_nodes')",
+        ]
+    )
+    assert [line for line, _ in private_uses(source)] == [1, 2, 3, 5, 7, 8, 12]
+
+
+@pytest.mark.parametrize("path", list(_sources()), ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_private_camjax_outside_the_library(path):
+    uses = private_uses(path.read_text())
+    where = "; ".join(f"line {line}: {what}" for line, what in uses)
+    assert not uses, f"{path.relative_to(ROOT)} uses private camjax names: {where}"
