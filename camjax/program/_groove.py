@@ -32,8 +32,8 @@ from tqdm import tqdm
 
 from ..errors import SolverError
 from ..laws import AbstractMotionLaw
-from ._dynamics import check_rpm
 from ._spec import Program
+from ._speeds import check_rpm
 from ._turn import Turn
 
 _SETTLE = math.log(1e9)  # decay of the contact vibration over the first turns tried
