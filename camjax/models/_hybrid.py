@@ -210,6 +210,11 @@ class ExcursionGuard(diffrax.AbstractAdaptiveSolver, diffrax.AbstractWrappedSolv
     def term_compatible_contr_kwargs(self):
         return self.solver.term_compatible_contr_kwargs
 
+    @property
+    def root_finder(self):
+        """The wrapped implicit solver's (diffrax forwards ``isinstance`` to it, then asks)."""
+        return self.solver.root_finder
+
     def order(self, terms):
         return self.solver.order(terms)
 
