@@ -7,7 +7,9 @@ page closes (``POST /api/close``) or after ``idle_s`` seconds without a request.
 
 from __future__ import annotations
 
+import io
 import json
+import math
 import sys
 import tempfile
 import threading
@@ -17,7 +19,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from urllib.parse import parse_qs, urlsplit
 
-from ._workbench import DEFAULT_RPM, Workbench
+from ._workbench import DEFAULT_RPM, Busy, Workbench, _file_name
 
 STATIC = Path(__file__).parent / "static"
 IDLE_S = 1800.0
@@ -42,6 +44,7 @@ class Studio:
         self.workbenches: dict[str, Workbench] = {}
         self.reports: dict = {}  # analyses shared by the workbenches (Workbench.update)
         self._lock = threading.Lock()
+        self._laws = tempfile.TemporaryDirectory(prefix="camjax-studio-")  # designed laws' files
         self.httpd = _Server((host, port), _Handler)
         self.httpd.studio = self
         self.thread: threading.Thread | None = None
@@ -60,7 +63,8 @@ class Studio:
             bench = self.workbenches.get(session)
             if bench is None:
                 bench = self.workbenches[session] = Workbench(self.toml, self.rpm, self.base,
-                                                              with_flight=self.with_flight, cache=self.reports)
+                                                              with_flight=self.with_flight, cache=self.reports,
+                                                              law_dir=Path(self._laws.name))
             bench.touch()
             return bench
 
@@ -77,6 +81,7 @@ class Studio:
     def stop(self) -> None:
         self.httpd.shutdown()
         self.httpd.server_close()
+        self._laws.cleanup()
 
 
 class _Server(ThreadingHTTPServer):
@@ -145,6 +150,8 @@ class _Handler(BaseHTTPRequestHandler):
                 _ROUTES[route](self, bench, query)
         except ValueError as error:
             self._error(HTTPStatus.BAD_REQUEST, str(error))
+        except Busy as error:
+            self._error(HTTPStatus.CONFLICT, str(error))
         except SolverError as error:
             self._error(HTTPStatus.UNPROCESSABLE_ENTITY, str(error))
         except (BrokenPipeError, ConnectionResetError):
@@ -214,8 +221,50 @@ class _Handler(BaseHTTPRequestHandler):
                                      f'attachment; filename="{_file_name(bench.program.name)}-profile.{suffix}"'})
 
 
-def _file_name(name: str) -> str:
-    return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) or "program"
+    def bundle(self, bench: Workbench, query: dict) -> None:
+        """The program as ``camjax design --program`` writes it (``write_program``): its
+        TOML and each law that is not a registry name as a JSON file beside it, zipped."""
+        import zipfile
+
+        from ..program import write_program
+
+        bench.ensure()
+        with tempfile.TemporaryDirectory() as folder:
+            write_program(bench.program, Path(folder) / "program")
+            buffer = io.BytesIO()
+            with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+                for file in sorted((Path(folder) / "program").iterdir()):
+                    archive.write(file, file.name)
+        self._send(200, buffer.getvalue(), "application/zip",
+                   {"Content-Disposition": f'attachment; filename="{_file_name(bench.program.name)}.zip"'})
+
+    # -- designing a segment's law ----------------------------------------------------------
+
+    def start_design(self, bench: Workbench, query: dict) -> None:
+        segment = _number(query, "segment", int)
+        text = query.get("rpm", "")
+        parts = text.split(":")
+        if len(parts) != 2:
+            raise ValueError(f"rpm: expected LO:HI (rpm), got {text!r}")
+        lo, hi = (_number({"rpm": p}, "rpm", float) for p in parts)
+        options = {k: _number(query, k, int) for k in ("steps", "knots") if k in query}
+        self._json(bench.start_design(segment, query.get("objective", "preload"), lo, hi, **options),
+                   HTTPStatus.ACCEPTED)
+
+    def design(self, bench: Workbench, query: dict) -> None:
+        self._json({"state": "none"} if bench.job is None else bench.job.as_dict())
+
+
+def _number(query: dict, key: str, kind):
+    """``query[key]`` as an ``int`` or a ``float``, or a one-line ValueError naming ``key``."""
+    text = query.get(key, "")
+    try:
+        value = kind(text)
+    except ValueError:
+        raise ValueError(f"{key}: must be a {'whole ' if kind is int else ''}number, got {text!r}") from None
+    if kind is float and not math.isfinite(value):
+        raise ValueError(f"{key}: must be a finite number, got {text!r}")
+    return value
 
 
 _ROUTES = {
@@ -226,5 +275,10 @@ _ROUTES = {
     ("GET", "/api/program.toml"): _Handler.toml,
     ("GET", "/api/profile.csv"): lambda h, b, q: h.export(b, q, "csv"),
     ("GET", "/api/profile.dxf"): lambda h, b, q: h.export(b, q, "dxf"),
+    ("GET", "/api/program.zip"): _Handler.bundle,
+    ("POST", "/api/design"): _Handler.start_design,
+    ("GET", "/api/design"): _Handler.design,
+    ("POST", "/api/design/keep"): lambda h, b, q: h._json(b.keep_design()),
+    ("POST", "/api/design/discard"): lambda h, b, q: h._json(b.discard_design()),
     ("POST", "/api/close"): None,
 }
