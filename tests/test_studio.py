@@ -3,12 +3,14 @@ in a real browser (Debian's Chromium driven by Playwright; skipped where either 
 
 import contextlib
 import io
+import zipfile
 import json
 import math
 import os
 import signal
 import subprocess
 import sys
+import time
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -121,6 +123,81 @@ def test_bad_program_is_a_400_with_the_library_message(server):
     assert status == 400 and answer["error"].startswith("rpm:")
     status, answer = call(server.url + "api/curves?rpm=100")  # the default session's range
     assert status == 400 and "lowest speed of the range (400 rpm)" in answer["error"]
+
+
+DESIGN_STEPS = 12  # few steps: enough to lower the feed cam's preload, a few seconds each
+
+
+def design_done(url: str, session: str) -> dict:
+    """Poll ``GET /api/design`` until the design is no longer running; its last answer."""
+    steps = []
+    deadline = time.monotonic() + 600
+    while time.monotonic() < deadline:
+        status, job = call(url + f"api/design?session={session}")
+        assert status == 200
+        steps.append(job["step"])
+        if job["state"] != "running":
+            assert steps == sorted(steps)  # the progress only goes forward
+            return job
+        time.sleep(0.2)
+    raise AssertionError("the design did not finish")
+
+
+def test_design_from_the_api(server, tmp_path):
+    """Design the feed cam's first rise for the least preload over 400-1000 rpm: discard
+    leaves the program as it was; keep gives the report of the designed program as
+    ``camjax.program.analyse`` gives it for the saved program and its law file."""
+    url, session = server.url, "design"
+    original = call(url + f"api/report?session={session}")[1]
+    before = [s["min_preload_n"] for s in original["speeds"]]  # at 400, 600, 800, 1000 rpm
+    # bad requests: the library's one-line message, before any work
+    program = parse_program(FEED)
+    for segment, rpm in ((1, "400:1000"), (2, "1000:400"), (9, "400:1000")):
+        with pytest.raises(ValueError) as expected:
+            cp.segment_band(program, segment, *map(float, rpm.split(":")))
+        status, answer = call(url + f"api/design?session={session}&segment={segment}&rpm={rpm}", "")
+        assert status == 400 and answer == {"error": str(expected.value)}
+    for query, start in (("segment=two&rpm=400:1000", "segment: "), ("segment=2&rpm=400", "rpm: "),
+                         ("segment=2&rpm=400:1000&objective=speed", "objective: "),
+                         ("segment=2&rpm=400:1000&steps=0", "steps: ")):
+        status, answer = call(url + f"api/design?session={session}&{query}", "")
+        assert status == 400 and answer["error"].startswith(start) and "\n" not in answer["error"], answer
+    assert call(url + f"api/design/keep?session={session}", "")[0] == 400  # nothing designed yet
+    start = f"api/design?session={session}&segment=2&objective=preload&rpm=400:1000&steps={DESIGN_STEPS}"
+
+    status, job = call(url + start, "")
+    assert status == 202 and job["state"] == "running" and job["steps"] == DESIGN_STEPS
+    status, answer = call(url + start, "")  # a second while one runs
+    assert status == 409 and "\n" not in answer["error"]
+    assert call(url + f"api/design/keep?session={session}", "")[0] == 409
+    job = design_done(url, session)
+    assert job["state"] == "done", job
+    assert job["step"] == job["steps"] and not job["kept_initial"]
+    # the objective is the largest preload over the band, its ends among its speeds
+    assert math.isclose(job["before"], max(before), rel_tol=1e-6) and job["after"] < 0.9 * job["before"]
+    assert job["curves"]["before"]["min_preload_n"] == before
+    after = job["curves"]["after"]["min_preload_n"]
+    assert job["after"] >= max(after[0], after[-1]) * (1 - 1e-9)
+    assert call(url + f"api/design/discard?session={session}", "")[1]["state"] == "discarded"
+    assert call(url + f"api/report?session={session}")[1] == original
+    assert call(url + f"api/design/keep?session={session}", "")[0] == 400  # discarded
+
+    assert call(url + start, "")[0] == 202
+    job = design_done(url, session)
+    assert job["state"] == "done" and job["curves"]["after"]["min_preload_n"] == after  # deterministic
+    status, kept = call(url + f"api/design/keep?session={session}", "")
+    assert status == 200 and call(url + f"api/report?session={session}")[1] == kept
+    assert max(s["min_preload_n"] for s in kept["speeds"]) < 0.9 * max(before)
+    state = call(url + f"api/program?session={session}")[1]
+    assert state["bundle"] and state["program"]["segment"][1]["law"].endswith(".json")
+    # the saved program with its law file: the same report
+    with urllib.request.urlopen(url + f"api/program.zip?session={session}", timeout=60) as response:
+        archive = zipfile.ZipFile(io.BytesIO(response.read()))
+    assert "program.toml" in archive.namelist() and "segment2.json" in archive.namelist()
+    archive.extractall(tmp_path)
+    saved = cp.Program.load(tmp_path / "program.toml")
+    reference = json_ready(cp.analyse(saved, np.linspace(400, 1000, 4)).as_dict())
+    assert_same(kept, reference)
 
 
 def test_jerk_is_the_derivative_of_the_acceleration():
