@@ -2,6 +2,7 @@
 in a real browser (Debian's Chromium driven by Playwright; skipped where either is missing)."""
 
 import contextlib
+import dataclasses
 import io
 import zipfile
 import json
@@ -299,6 +300,66 @@ def test_page_edits_saves_and_reloads(server, tmp_path):
         page.wait_for_function(f"!document.querySelector('.err') && {idle}", timeout=REDRAW_MS)
         assert float(page.get_attribute("#jump", "data-rpm")) == shown
         assert page.input_value('input[data-seg="2"][data-key="lift_mm"]') == "7"
+        # design the first rise with few steps: the bar reaches its end, before and after shown
+        page.select_option("#d-seg", "2")
+        page.fill("#d-lo", "400")
+        page.fill("#d-hi", "1000")
+        page.fill("#d-steps", str(DESIGN_STEPS))
+        page.click("#d-start")
+        page.wait_for_function("document.querySelector('#design').dataset.state === 'done'", timeout=2 * REDRAW_MS)
+        assert page.eval_on_selector("#d-bar", "bar => bar.value === bar.max && bar.max > 0")
+        before, after = (float(page.get_attribute(f"#d-{key}", "data-value")) for key in ("before", "after"))
+        preload = {s["rpm"]: s["min_preload_n"] for s in cli_json(str(saved), "--rpm", RPM)["speeds"]}
+        assert math.isclose(before, preload[1000.0], rel_tol=1e-6) and after < 0.9 * before
+        if shots:
+            page.screenshot(path=str(Path(shots) / "studio-design.png"), full_page=True)
+        page.click("#d-keep")
+        page.wait_for_function(f"document.querySelector('#design').dataset.state === 'kept' && {idle}",
+                               timeout=REDRAW_MS)
+        assert page.input_value('select[data-seg="2"][data-key="law"]').endswith(".json")
+        assert page.inner_text("#save") == "Save TOML + laws (zip)"
         assert not errors, errors
         browser.close()
+
+
+def test_page_shows_a_table_cam_read_only():
+    """A whole cam from one lift table: its segments shown, not edited, with the note; the
+    follower stays editable and the report follows it."""
+    sync_playwright = _browser()
+    feed = parse_program(FEED)
+    angle = np.arange(0.0, 360.0, 5.0)
+    table = cp.Program.from_table("feed table", angle, feed.lift(angle)[0], feed.follower)
+    rpm = "400:1000:3"
+    running = studio(table, rpm=rpm)
+    idle = "document.body.dataset.busy === '0'"
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            page = browser.new_page(viewport={"width": 1600, "height": 1250})
+            errors = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(running.url)
+            page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
+            page.wait_for_function(idle, timeout=REDRAW_MS)
+            assert page.is_visible("#table-note") and page.inner_text("#table-note") == "a table cam: edit its file"
+            assert page.locator("#segments input, #segments select").count() == 0
+            assert page.locator("#segments tbody tr").count() == len(table.segments)
+            assert not page.is_visible("#design") and not page.is_visible("#add")
+            posted = lambda r: "/api/program" in r.url and r.request.method == "POST"  # noqa: E731
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill('#follower input[data-key="preload_n"]', "400")
+            page.wait_for_function(f"document.querySelector('#status').textContent === 'ready' && {idle}",
+                                   timeout=REDRAW_MS)
+            session = page.evaluate("SESSION")
+            state = call(running.url + f"api/program?session={session}")[1]
+            edited = cp.Program.from_dict(state["program"])
+            assert edited.follower.preload_n == 400 and "points" in state["program"]["program"]
+            expected = dataclasses.replace(table, follower=dataclasses.replace(table.follower, preload_n=400))
+            assert edited.to_toml() == expected.to_toml()
+            report = call(running.url + f"api/report?session={session}")[1]
+            assert_same(report, json_ready(cp.analyse(expected, np.linspace(400, 1000, 3)).as_dict()))
+            assert not errors, errors
+            browser.close()
+    finally:
+        running.stop()
 
