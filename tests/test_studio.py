@@ -4,7 +4,6 @@ in a real browser (Debian's Chromium driven by Playwright; skipped where either 
 import contextlib
 import dataclasses
 import io
-import zipfile
 import json
 import math
 import os
@@ -14,6 +13,7 @@ import sys
 import time
 import urllib.error
 import urllib.request
+import zipfile
 from pathlib import Path
 
 import numpy as np

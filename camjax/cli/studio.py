@@ -56,6 +56,7 @@ def run(args) -> int:
     except OSError as error:
         raise CliError(f"--host/--port: cannot serve on {args.host}:{args.port} "
                        f"({error.strerror or error})") from None
+    studio.warm()  # the first analysis starts while the browser opens the page
     print(f"camjax studio: {path.name} at {studio.url} (Ctrl-C stops)", flush=True)
     if not args.no_browser:
         import webbrowser

@@ -19,6 +19,8 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from urllib.parse import parse_qs, urlsplit
 
+import numpy as np
+
 from ._workbench import DEFAULT_RPM, Busy, Workbench, _file_name
 
 STATIC = Path(__file__).parent / "static"
@@ -44,6 +46,8 @@ class Studio:
         self.workbenches: dict[str, Workbench] = {}
         self.reports: dict = {}  # analyses shared by the workbenches (Workbench.update)
         self._lock = threading.Lock()
+        self.ready = threading.Event()  # cleared while warm() computes the first look
+        self.ready.set()
         self._laws = tempfile.TemporaryDirectory(prefix="camjax-studio-")  # designed laws' files
         self.httpd = _Server((host, port), _Handler)
         self.httpd.studio = self
@@ -72,8 +76,50 @@ class Studio:
         with self._lock:
             self.workbenches.pop(session, None)
 
-    def start(self) -> Studio:
-        """Serve on a background thread."""
+    def warm(self) -> Studio:
+        """Analyse the starting program and compute what the page draws first, on two
+        background threads, before the page asks: the report, then the curves at the
+        default speed (most of a cold start is compiling them), beside the profile and the
+        kinematics (compiled on the other core).  Requests wait until it is done, so none
+        compiles the same program twice."""
+        from ..program import profile
+
+        def first_look():
+            try:
+                bench = Workbench(self.toml, self.rpm, self.base, with_flight=self.with_flight, cache=self.reports)
+                bench.ensure()
+                bench.curves()
+            except Exception:  # the page's own request reports it
+                pass
+
+        def geometry():
+            try:
+                from ._workbench import PROFILE_POINTS, TURN_POINTS, kinematics, parse_program
+
+                program = parse_program(self.toml, self.base)
+                profile(program, PROFILE_POINTS)
+                kinematics(program, np.linspace(0.0, 360.0, TURN_POINTS))
+            except Exception:
+                pass
+
+        threads = [threading.Thread(target=t, name=f"camjax-studio-warm-{i}", daemon=True)
+                   for i, t in enumerate((first_look, geometry))]
+
+        def wait():
+            for thread in threads:
+                thread.join()
+            self.ready.set()
+
+        self.ready.clear()
+        for thread in threads:
+            thread.start()
+        threading.Thread(target=wait, name="camjax-studio-warm", daemon=True).start()
+        return self
+
+    def start(self, warm: bool = True) -> Studio:
+        """Serve on a background thread (``warm``: starting the first analysis at once)."""
+        if warm:
+            self.warm()
         self.thread = threading.Thread(target=self.httpd.serve_forever, name="camjax-studio", daemon=True)
         self.thread.start()
         return self
@@ -145,6 +191,7 @@ class _Handler(BaseHTTPRequestHandler):
             if route == ("POST", "/api/close"):
                 studio.close(session)
                 return self._json({"closed": session})
+            studio.ready.wait()
             bench = studio.workbench(session)
             with bench.lock:
                 _ROUTES[route](self, bench, query)

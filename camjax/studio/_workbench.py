@@ -37,6 +37,8 @@ DESIGN_KNOTS = 12
 DESIGN_OBJECTIVES = ("preload", "residual")
 """The page's objectives, as ``camjax.program.design_segment`` names them."""
 _CACHE_LOCK = threading.Lock()
+_PENDING: dict = {}
+"""Analyses under way (their cache keys): a second request for one waits for it."""
 
 
 class Busy(Exception):
@@ -150,8 +152,18 @@ class Workbench:
         program = Program.from_dict(data, base=self.base)
         key = (json.dumps(_canonical(data), sort_keys=True, default=str), tuple(rpm.tolist()), self.with_flight,
                self.speed_fluctuation, str(self.base))
-        hit = self.cache.get(key)
-        if hit is None:
+        while True:
+            with _CACHE_LOCK:
+                hit = self.cache.get(key)
+                pending = None if hit is not None else _PENDING.get(key)
+                if hit is None and pending is None:
+                    _PENDING[key] = threading.Event()
+            if hit is not None:
+                return hit
+            if pending is None:
+                break
+            pending.wait()  # another request analyses it: its answer is this one's
+        try:
             steady = SteadyState(program, float(min(rpm)))
             report = json_ready(program_report(program, rpm, with_flight=self.with_flight, steady=steady,
                                                speed_fluctuation=self.speed_fluctuation))
@@ -160,6 +172,9 @@ class Workbench:
                 self.cache[key] = hit
                 while len(self.cache) > CACHED_REPORTS:
                     self.cache.pop(next(iter(self.cache)))
+        finally:
+            with _CACHE_LOCK:
+                _PENDING.pop(key).set()
         return hit
 
     def curves(self, rpm: float | None = None) -> dict:
