@@ -28,8 +28,8 @@ PROFILE_POINTS = 720
 """Profile points the page draws."""
 CACHED_REPORTS = 16
 """Analyses a studio keeps (oldest dropped first), shared by its workbenches."""
-DESIGN_STEPS = 100
-"""Optimiser steps of a design started from the page: about 20 s for a segment of the feed
+DESIGN_STEPS = 60
+"""Optimiser steps of a design started from the page: about 15 s of optimising for a segment of the feed
 cam on a 2-core machine (``camjax design`` takes 6000 for its best law; a designer waits
 here, and may ask for more)."""
 DESIGN_KNOTS = 12

@@ -66,6 +66,23 @@ def _launch(args, cache: str | None = None):
     return server, f"http://127.0.0.1:{port}/", start
 
 
+def _cpu_s(server) -> float | None:
+    """CPU seconds (user and system) the server process has used so far (Linux), a figure
+    that other work on a busy machine does not inflate as it does the wall time."""
+    try:
+        fields = Path(f"/proc/{server.pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _load() -> str:
+    try:
+        return f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores"
+    except OSError:
+        return "load unknown"
+
+
 def _stop(server) -> None:
     server.terminate()
     server.wait(timeout=30)
@@ -82,12 +99,14 @@ def _first_report(url: str):
             time.sleep(0.02)
 
 
-def cold_report(args) -> float:
+def cold_report(args) -> tuple[float, float | None]:
+    """Seconds from launching the studio (empty cache) until the report answers, and the
+    CPU seconds the server used by then."""
     with tempfile.TemporaryDirectory() as cache:
         server, url, start = _launch(args, cache)
         try:
             _first_report(url)
-            return time.perf_counter() - start
+            return time.perf_counter() - start, _cpu_s(server)
         finally:
             _stop(server)
 
@@ -128,9 +147,11 @@ def main() -> None:
     parser.add_argument("--no-design", action="store_true", help="skip the design")
     args = parser.parse_args()
 
-    report_s = cold_report(args)
+    print(_load())
+    report_s, cpu_s = cold_report(args)
     page_s = cold_page(args)
-    print(f"cold start (empty compilation cache): report after {report_s:.1f} s, page drawn after "
+    print(f"cold start (empty compilation cache): report after {report_s:.1f} s ("
+          + ("" if cpu_s is None else f"{cpu_s:.1f} CPU s; ") + f"{_load()}), page drawn after "
           + ("(no Chromium/Playwright)" if page_s is None else f"{page_s:.1f} s"))
 
     server, url, start = _launch(args)

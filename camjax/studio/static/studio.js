@@ -14,7 +14,7 @@ const NUMBER = /^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/;
 
 let model = null;        // {program: {name}, segment: [...], follower: {...}, materials?: {...}}
 let bundle = false;      // the program holds a designed law: saved as a zip with its law files
-let designDefaults = {steps: 100};
+let designDefaults = {steps: 60};   // the server's (GET /api/program)
 let polling = null;      // the design's progress timer
 let laws = [];
 let rpmText = "";
