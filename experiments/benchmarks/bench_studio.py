@@ -191,7 +191,7 @@ def main() -> None:
             _post(url + f"api/program?rpm={args.rpm}", text)
             segment = 1 + program["segment"].index(rises[0])
             speeds = [s["rpm"] for s in report["speeds"]]
-            t = time.perf_counter()
+            t, cpu = time.perf_counter(), _cpu_s(server)
             job = _post(url + f"api/design?segment={segment}&objective=preload&rpm={min(speeds)}:{max(speeds)}", "")
             optimised = None
             while job["state"] == "running":
@@ -201,7 +201,9 @@ def main() -> None:
                     optimised = time.perf_counter() - t
             print(f"design of segment {segment} ({job['steps']} steps, {job['knots']} knots, the page's "
                   f"defaults): {job['state']} after {time.perf_counter() - t:.1f} s (law after "
-                  f"{optimised or float('nan'):.1f} s); {job['label']}: {job['before']:.5g} -> {job['after']:.5g}")
+                  f"{optimised or float('nan'):.1f} s; "
+                  + ("" if cpu is None else f"{_cpu_s(server) - cpu:.1f} CPU s; ")
+                  + f"{_load()}); {job['label']}: {job['before']:.5g} -> {job['after']:.5g}")
     finally:
         _stop(server)
 
