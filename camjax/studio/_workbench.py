@@ -286,10 +286,11 @@ class Workbench:
         return self.job.as_dict()
 
     def _finished(self) -> DesignJob:
-        if self.job is None or self.job.state not in ("done",):
+        if self.job is None or self.job.state != "done":
             state = "none" if self.job is None else self.job.state
-            raise (Busy if state == "running" else ValueError)(
-                f"no finished design to keep or discard (the design is {state})")
+            why = {"none": "none was started", "running": "the design is running", "kept": "it was kept",
+                   "discarded": "it was discarded", "error": "the design failed"}[state]
+            raise (Busy if state == "running" else ValueError)(f"no finished design to keep or discard: {why}")
         return self.job
 
 
