@@ -363,3 +363,16 @@ def test_page_shows_a_table_cam_read_only():
     finally:
         running.stop()
 
+
+
+def test_design_progress_is_the_loss_history():
+    """``camjax.design(progress=f)`` calls ``f(step, total, loss)`` after each compiled chunk:
+    the steps grow to the total, and each loss is the training history's at that step."""
+    from camjax import law_design as D
+
+    calls = []
+    result = D.design(D.Residual(7.3), knots=8, steps=400, optimizer="adam",  # two chunks of 200
+                      progress=lambda *a: calls.append(a))
+    steps = [c[0] for c in calls]
+    assert steps == [200, 400] and calls[-1][1] == result.loss_history.size == 400
+    np.testing.assert_array_equal([c[2] for c in calls], result.loss_history[np.array(steps) - 1])
