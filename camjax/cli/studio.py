@@ -18,7 +18,8 @@ def register(subparsers) -> None:
             "Serve the cam workbench: the program's segments and follower as editable tables, "
             "the lift and its derivatives, the profile, the response at one speed and the "
             "report over a speed range (minimum preload, jump speed, residual vibration, drive "
-            "torque, Hertz stress), redrawn after every edit; open and save the program as "
+            "torque, Hertz stress), redrawn after every edit; design a segment's law for a "
+            "speed band and keep or discard it; open and save the program as "
             "TOML, export the profile (CSV, DXF).  FILE is a program TOML file or a built-in "
             "example's name ('indexer', 'feed'; default feed).  Ctrl-C stops the server."
         ),
