@@ -267,7 +267,6 @@ class _Handler(BaseHTTPRequestHandler):
         self._send(200, body, kind, {"Content-Disposition":
                                      f'attachment; filename="{_file_name(bench.program.name)}-profile.{suffix}"'})
 
-
     def bundle(self, bench: Workbench, query: dict) -> None:
         """The program as ``camjax design --program`` writes it (``write_program``): its
         TOML and each law that is not a registry name as a JSON file beside it, zipped."""

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import tempfile
 import threading
 import time
 import tomllib
@@ -259,6 +260,8 @@ class Workbench:
             job.before_value, job.kept_initial = result.initial_values[job.label], result.kept_initial
             job.step = job.steps
             if not result.kept_initial:
+                if self.law_dir is None:  # a workbench outside a studio: a folder of its own
+                    self.law_dir = Path(tempfile.mkdtemp(prefix="camjax-studio-"))
                 self.law_dir.mkdir(parents=True, exist_ok=True)
                 path = self.law_dir / f"{_file_name(program.name)}-segment{job.segment}-{uuid.uuid4().hex[:8]}.json"
                 laws.save(new.segments[job.segment - 1].law, path)
