@@ -2,6 +2,7 @@
 in a real browser (Debian's Chromium driven by Playwright; skipped where either is missing)."""
 
 import contextlib
+import dataclasses
 import io
 import json
 import math
@@ -9,8 +10,10 @@ import os
 import signal
 import subprocess
 import sys
+import time
 import urllib.error
 import urllib.request
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -122,6 +125,81 @@ def test_bad_program_is_a_400_with_the_library_message(server):
     assert status == 400 and "lowest speed of the range (400 rpm)" in answer["error"]
 
 
+DESIGN_STEPS = 12  # few steps: enough to lower the feed cam's preload, a few seconds each
+
+
+def design_done(url: str, session: str) -> dict:
+    """Poll ``GET /api/design`` until the design is no longer running; its last answer."""
+    steps = []
+    deadline = time.monotonic() + 600
+    while time.monotonic() < deadline:
+        status, job = call(url + f"api/design?session={session}")
+        assert status == 200
+        steps.append(job["step"])
+        if job["state"] != "running":
+            assert steps == sorted(steps)  # the progress only goes forward
+            return job
+        time.sleep(0.2)
+    raise AssertionError("the design did not finish")
+
+
+def test_design_from_the_api(server, tmp_path):
+    """Design the feed cam's first rise for the least preload over 400-1000 rpm: discard
+    leaves the program as it was; keep gives the report of the designed program as
+    ``camjax.program.analyse`` gives it for the saved program and its law file."""
+    url, session = server.url, "design"
+    original = call(url + f"api/report?session={session}")[1]
+    before = [s["min_preload_n"] for s in original["speeds"]]  # at 400, 600, 800, 1000 rpm
+    # bad requests: the library's one-line message, before any work
+    program = parse_program(FEED)
+    for segment, rpm in ((1, "400:1000"), (2, "1000:400"), (9, "400:1000")):
+        with pytest.raises(ValueError) as expected:
+            cp.segment_band(program, segment, *map(float, rpm.split(":")))
+        status, answer = call(url + f"api/design?session={session}&segment={segment}&rpm={rpm}", "")
+        assert status == 400 and answer == {"error": str(expected.value)}
+    for query, start in (("segment=two&rpm=400:1000", "segment: "), ("segment=2&rpm=400", "rpm: "),
+                         ("segment=2&rpm=400:1000&objective=speed", "objective: "),
+                         ("segment=2&rpm=400:1000&steps=0", "steps: ")):
+        status, answer = call(url + f"api/design?session={session}&{query}", "")
+        assert status == 400 and answer["error"].startswith(start) and "\n" not in answer["error"], answer
+    assert call(url + f"api/design/keep?session={session}", "")[0] == 400  # nothing designed yet
+    start = f"api/design?session={session}&segment=2&objective=preload&rpm=400:1000&steps={DESIGN_STEPS}"
+
+    status, job = call(url + start, "")
+    assert status == 202 and job["state"] == "running" and job["steps"] == DESIGN_STEPS
+    status, answer = call(url + start, "")  # a second while one runs
+    assert status == 409 and "\n" not in answer["error"]
+    assert call(url + f"api/design/keep?session={session}", "")[0] == 409
+    job = design_done(url, session)
+    assert job["state"] == "done", job
+    assert job["step"] == job["steps"] and not job["kept_initial"]
+    # the objective is the largest preload over the band, its ends among its speeds
+    assert math.isclose(job["before"], max(before), rel_tol=1e-6) and job["after"] < 0.9 * job["before"]
+    assert job["curves"]["before"]["min_preload_n"] == before
+    after = job["curves"]["after"]["min_preload_n"]
+    assert job["after"] >= max(after[0], after[-1]) * (1 - 1e-9)
+    assert call(url + f"api/design/discard?session={session}", "")[1]["state"] == "discarded"
+    assert call(url + f"api/report?session={session}")[1] == original
+    assert call(url + f"api/design/keep?session={session}", "")[0] == 400  # discarded
+
+    assert call(url + start, "")[0] == 202
+    job = design_done(url, session)
+    assert job["state"] == "done" and job["curves"]["after"]["min_preload_n"] == after  # deterministic
+    status, kept = call(url + f"api/design/keep?session={session}", "")
+    assert status == 200 and call(url + f"api/report?session={session}")[1] == kept
+    assert max(s["min_preload_n"] for s in kept["speeds"]) < 0.9 * max(before)
+    state = call(url + f"api/program?session={session}")[1]
+    assert state["bundle"] and state["program"]["segment"][1]["law"].endswith(".json")
+    # the saved program with its law file: the same report
+    with urllib.request.urlopen(url + f"api/program.zip?session={session}", timeout=60) as response:
+        archive = zipfile.ZipFile(io.BytesIO(response.read()))
+    assert "program.toml" in archive.namelist() and "segment2.json" in archive.namelist()
+    archive.extractall(tmp_path)
+    saved = cp.Program.load(tmp_path / "program.toml")
+    reference = json.loads(cp.analyse(saved, np.linspace(400, 1000, 4)).to_json())
+    assert_same(kept, reference)
+
+
 def test_jerk_is_the_derivative_of_the_acceleration():
     """The page's jerk against central differences of ``Program.lift``'s acceleration."""
     program = parse_program(FEED)
@@ -221,6 +299,79 @@ def test_page_edits_saves_and_reloads(server, tmp_path):
         page.wait_for_function(f"!document.querySelector('.err') && {idle}", timeout=REDRAW_MS)
         assert float(page.get_attribute("#jump", "data-rpm")) == shown
         assert page.input_value('input[data-seg="2"][data-key="lift_mm"]') == "7"
+        # design the first rise with few steps: the bar reaches its end, before and after shown
+        page.select_option("#d-seg", "2")
+        page.fill("#d-lo", "400")
+        page.fill("#d-hi", "1000")
+        page.fill("#d-steps", str(DESIGN_STEPS))
+        page.click("#d-start")
+        page.wait_for_function("document.querySelector('#design').dataset.state === 'done'", timeout=2 * REDRAW_MS)
+        assert page.eval_on_selector("#d-bar", "bar => bar.value === bar.max && bar.max > 0")
+        before, after = (float(page.get_attribute(f"#d-{key}", "data-value")) for key in ("before", "after"))
+        preload = {s["rpm"]: s["min_preload_n"] for s in cli_json(str(saved), "--rpm", RPM)["speeds"]}
+        assert math.isclose(before, preload[1000.0], rel_tol=1e-6) and after < 0.9 * before
+        if shots:
+            page.screenshot(path=str(Path(shots) / "studio-design.png"), full_page=True)
+        page.click("#d-keep")
+        page.wait_for_function(f"document.querySelector('#design').dataset.state === 'kept' && {idle}",
+                               timeout=REDRAW_MS)
+        assert page.input_value('select[data-seg="2"][data-key="law"]').endswith(".json")
+        assert page.inner_text("#save") == "Save TOML + laws (zip)"
         assert not errors, errors
         browser.close()
 
+
+def test_page_shows_a_table_cam_read_only():
+    """A whole cam from one lift table: its segments shown, not edited, with the note; the
+    follower stays editable and the report follows it."""
+    sync_playwright = _browser()
+    feed = parse_program(FEED)
+    angle = np.arange(0.0, 360.0, 5.0)
+    table = cp.Program.from_table("feed table", angle, feed.lift(angle)[0], feed.follower)
+    rpm = "400:1000:3"
+    running = studio(table, rpm=rpm)
+    idle = "document.body.dataset.busy === '0'"
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            page = browser.new_page(viewport={"width": 1600, "height": 1250})
+            errors = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(running.url)
+            page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
+            page.wait_for_function(idle, timeout=REDRAW_MS)
+            assert page.is_visible("#table-note") and page.inner_text("#table-note") == "a table cam: edit its file"
+            assert page.locator("#segments input, #segments select").count() == 0
+            assert page.locator("#segments tbody tr").count() == len(table.segments)
+            assert not page.is_visible("#design") and not page.is_visible("#add")
+            posted = lambda r: "/api/program" in r.url and r.request.method == "POST"  # noqa: E731
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill('#follower input[data-key="preload_n"]', "400")
+            page.wait_for_function(f"document.querySelector('#status').textContent === 'ready' && {idle}",
+                                   timeout=REDRAW_MS)
+            session = page.evaluate("SESSION")
+            state = call(running.url + f"api/program?session={session}")[1]
+            edited = cp.Program.from_dict(state["program"])
+            assert edited.follower.preload_n == 400 and "points" in state["program"]["program"]
+            expected = dataclasses.replace(table, follower=dataclasses.replace(table.follower, preload_n=400))
+            assert edited.to_toml() == expected.to_toml()
+            report = call(running.url + f"api/report?session={session}")[1]
+            assert_same(report, json.loads(cp.analyse(expected, np.linspace(400, 1000, 3)).to_json()))
+            assert not errors, errors
+            browser.close()
+    finally:
+        running.stop()
+
+
+
+def test_design_progress_is_the_loss_history():
+    """``camjax.design(progress=f)`` calls ``f(step, total, loss)`` after each compiled chunk:
+    the steps grow to the total, and each loss is the training history's at that step."""
+    from camjax import law_design as D
+
+    calls = []
+    result = D.design(D.Residual(7.3), knots=8, steps=400, optimizer="adam",  # two chunks of 200
+                      progress=lambda *a: calls.append(a))
+    steps = [c[0] for c in calls]
+    assert steps == [200, 400] and calls[-1][1] == result.loss_history.size == 400
+    np.testing.assert_array_equal([c[2] for c in calls], result.loss_history[np.array(steps) - 1])

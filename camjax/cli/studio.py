@@ -18,7 +18,8 @@ def register(subparsers) -> None:
             "Serve the cam workbench: the program's segments and follower as editable tables, "
             "the lift and its derivatives, the profile, the response at one speed and the "
             "report over a speed range (minimum preload, jump speed, residual vibration, drive "
-            "torque, Hertz stress), redrawn after every edit; open and save the program as "
+            "torque, Hertz stress), redrawn after every edit; design a segment's law for a "
+            "speed band and keep or discard it; open and save the program as "
             "TOML, export the profile (CSV, DXF).  FILE is a program TOML file or a built-in "
             "example's name ('indexer', 'feed'; default feed).  Ctrl-C stops the server."
         ),
@@ -56,6 +57,7 @@ def run(args) -> int:
     except OSError as error:
         raise CliError(f"--host/--port: cannot serve on {args.host}:{args.port} "
                        f"({error.strerror or error})") from None
+    studio.warm()  # the first analysis starts while the browser opens the page
     print(f"camjax studio: {path.name} at {studio.url} (Ctrl-C stops)", flush=True)
     if not args.no_browser:
         import webbrowser

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from collections.abc import Callable
 
 import equinox as eqx
 import jax
@@ -138,7 +139,7 @@ def design(
     margin: float = 1e-3,
     seed: int = 0,
     noise: float = 0.0,
-    progress: bool = True,
+    progress: bool | Callable[[int, int, float], None] = True,
 ) -> DesignResult:
     """Design a B-spline rise minimising ``sum(weight * objective)`` under ``caps``.
 
@@ -167,6 +168,10 @@ def design(
             of the starting point, so multi-start is a loop over seeds.
         noise: size of a Gaussian perturbation of the starting point (in acceleration
             coordinates); 0 starts from ``initial`` itself.
+        progress: a progress bar on the terminal, none (``False``), or a function called
+            after each compiled chunk of steps as ``progress(step, total, loss)`` (steps
+            done and in all, counting a converged stage's rest as done; the training loss)
+            in place of the bar, for a caller that shows progress its own way.
     Raises:
         CapError: the result breaks a cap and cannot be repaired.
     """
@@ -257,9 +262,10 @@ def design(
         (theta, state), values = jax.lax.scan(step, (theta, state), ps)
         return theta, state, values
 
-    theta, history = theta0, []
+    theta, history, done = theta0, [], 0
     total = sum(chunk * math.ceil(len(ps) / chunk) for ps in stages)
-    with tqdm(total=total, disable=not progress, desc="design", unit="step") as bar:
+    report = progress if callable(progress) else None
+    with tqdm(total=total, disable=report is not None or not progress, desc="design", unit="step") as bar:
         for ps in stages:
             # Strongly typed, as run_chunk returns it, so that one compilation serves all.
             state = jax.tree.map(lambda x: jnp.asarray(x, dtype=x.dtype), opt.init(theta))
@@ -270,7 +276,11 @@ def design(
                 history.append(values)
                 bar.set_postfix(loss=f"{values[-1]:.4g}", p=f"{chunk_ps[0]:.4g}")
                 converged = optimizer == "lbfgs" and values[0] - values[-1] <= 1e-13 * abs(values[-1])
-                bar.update(chunk * (len(ps) - i if converged else 1))
+                advance = chunk * (len(ps) - i if converged else 1)
+                bar.update(advance)
+                done += advance
+                if report is not None:
+                    report(done, total, float(values[-1]))
                 if converged:
                     break
         if not np.all(np.isfinite(np.asarray(theta))):

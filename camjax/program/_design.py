@@ -28,7 +28,7 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     ``objective`` is ``"residual"`` (largest residual vibration over the band), ``"ca-ct"``
     (largest Ca*Ct), both for the segment alone at the oscillator's damping, or
     ``"preload"`` (largest preload the whole program needs over the speed range,
-    ``MaxPreload``); ``design_options`` go to ``camjax.design`` (``knots``, ``steps``, ...).
+    ``MaxPreload``); ``design_options`` go to ``camjax.design`` (``knots``, ``steps``, ``progress``, ...).
 
     A segment that starts or ends in motion (a polynomial, constant velocity, any law whose
     end velocity is not zero) is designed as a ``CorrectedPolynomial``

@@ -4,7 +4,9 @@ A small server (Python's standard library) serves one page and a JSON API over t
 public program API: ``GET /api/report`` is the report of ``camjax program --format json``,
 ``POST /api/program`` (the program's TOML as the body, ``?rpm=START:STOP:COUNT``) replaces
 the program and answers its report, or a 400 status with ``{"error": "..."}`` holding the
-library's one-line message; ``GET /api/curves?rpm=R`` gives the histories the page draws.
+library's one-line message; ``GET /api/curves?rpm=R`` gives the histories the page draws;
+``POST /api/design`` designs a segment's law on a background thread (``GET /api/design``
+its progress, ``POST /api/design/keep`` or ``/discard`` its outcome).
 docs/studio.md describes the page and the API.
 """
 

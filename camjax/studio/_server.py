@@ -7,7 +7,9 @@ page closes (``POST /api/close``) or after ``idle_s`` seconds without a request.
 
 from __future__ import annotations
 
+import io
 import json
+import math
 import sys
 import tempfile
 import threading
@@ -17,7 +19,9 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from urllib.parse import parse_qs, urlsplit
 
-from ._workbench import DEFAULT_RPM, Workbench
+import numpy as np
+
+from ._workbench import DEFAULT_RPM, Busy, Workbench, _file_name
 
 STATIC = Path(__file__).parent / "static"
 IDLE_S = 1800.0
@@ -42,6 +46,9 @@ class Studio:
         self.workbenches: dict[str, Workbench] = {}
         self.reports: dict = {}  # analyses shared by the workbenches (Workbench.update)
         self._lock = threading.Lock()
+        self.ready = threading.Event()  # cleared while warm() computes the first look
+        self.ready.set()
+        self._laws = tempfile.TemporaryDirectory(prefix="camjax-studio-")  # designed laws' files
         self.httpd = _Server((host, port), _Handler)
         self.httpd.studio = self
         self.thread: threading.Thread | None = None
@@ -60,7 +67,8 @@ class Studio:
             bench = self.workbenches.get(session)
             if bench is None:
                 bench = self.workbenches[session] = Workbench(self.toml, self.rpm, self.base,
-                                                              with_flight=self.with_flight, cache=self.reports)
+                                                              with_flight=self.with_flight, cache=self.reports,
+                                                              law_dir=Path(self._laws.name))
             bench.touch()
             return bench
 
@@ -68,8 +76,50 @@ class Studio:
         with self._lock:
             self.workbenches.pop(session, None)
 
-    def start(self) -> Studio:
-        """Serve on a background thread."""
+    def warm(self) -> Studio:
+        """Analyse the starting program and compute what the page draws first, on two
+        background threads, before the page asks: the report, then the curves at the
+        default speed (most of a cold start is compiling them), beside the profile and the
+        kinematics (compiled on the other core).  Requests wait until it is done, so none
+        compiles the same program twice."""
+        from ..program import profile
+
+        def first_look():
+            try:
+                bench = Workbench(self.toml, self.rpm, self.base, with_flight=self.with_flight, cache=self.reports)
+                bench.ensure()
+                bench.curves()
+            except Exception:  # the page's own request reports it
+                pass
+
+        def geometry():
+            try:
+                from ._workbench import PROFILE_POINTS, TURN_POINTS, kinematics, parse_program
+
+                program = parse_program(self.toml, self.base)
+                profile(program, PROFILE_POINTS)
+                kinematics(program, np.linspace(0.0, 360.0, TURN_POINTS))
+            except Exception:
+                pass
+
+        threads = [threading.Thread(target=t, name=f"camjax-studio-warm-{i}", daemon=True)
+                   for i, t in enumerate((first_look, geometry))]
+
+        def wait():
+            for thread in threads:
+                thread.join()
+            self.ready.set()
+
+        self.ready.clear()
+        for thread in threads:
+            thread.start()
+        threading.Thread(target=wait, name="camjax-studio-warm", daemon=True).start()
+        return self
+
+    def start(self, warm: bool = True) -> Studio:
+        """Serve on a background thread (``warm``: starting the first analysis at once)."""
+        if warm:
+            self.warm()
         self.thread = threading.Thread(target=self.httpd.serve_forever, name="camjax-studio", daemon=True)
         self.thread.start()
         return self
@@ -77,6 +127,7 @@ class Studio:
     def stop(self) -> None:
         self.httpd.shutdown()
         self.httpd.server_close()
+        self._laws.cleanup()
 
 
 class _Server(ThreadingHTTPServer):
@@ -140,11 +191,14 @@ class _Handler(BaseHTTPRequestHandler):
             if route == ("POST", "/api/close"):
                 studio.close(session)
                 return self._json({"closed": session})
+            studio.ready.wait()
             bench = studio.workbench(session)
             with bench.lock:
                 _ROUTES[route](self, bench, query)
         except ValueError as error:
             self._error(HTTPStatus.BAD_REQUEST, str(error))
+        except Busy as error:
+            self._error(HTTPStatus.CONFLICT, str(error))
         except SolverError as error:
             self._error(HTTPStatus.UNPROCESSABLE_ENTITY, str(error))
         except (BrokenPipeError, ConnectionResetError):
@@ -213,9 +267,50 @@ class _Handler(BaseHTTPRequestHandler):
         self._send(200, body, kind, {"Content-Disposition":
                                      f'attachment; filename="{_file_name(bench.program.name)}-profile.{suffix}"'})
 
+    def bundle(self, bench: Workbench, query: dict) -> None:
+        """The program as ``camjax design --program`` writes it (``write_program``): its
+        TOML and each law that is not a registry name as a JSON file beside it, zipped."""
+        import zipfile
 
-def _file_name(name: str) -> str:
-    return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) or "program"
+        from ..program import write_program
+
+        bench.ensure()
+        with tempfile.TemporaryDirectory() as folder:
+            write_program(bench.program, Path(folder) / "program")
+            buffer = io.BytesIO()
+            with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+                for file in sorted((Path(folder) / "program").iterdir()):
+                    archive.write(file, file.name)
+        self._send(200, buffer.getvalue(), "application/zip",
+                   {"Content-Disposition": f'attachment; filename="{_file_name(bench.program.name)}.zip"'})
+
+    # -- designing a segment's law ----------------------------------------------------------
+
+    def start_design(self, bench: Workbench, query: dict) -> None:
+        segment = _number(query, "segment", int)
+        text = query.get("rpm", "")
+        parts = text.split(":")
+        if len(parts) != 2:
+            raise ValueError(f"rpm: expected LO:HI (rpm), got {text!r}")
+        lo, hi = (_number({"rpm": p}, "rpm", float) for p in parts)
+        options = {k: _number(query, k, int) for k in ("steps", "knots") if k in query}
+        self._json(bench.start_design(segment, query.get("objective", "preload"), lo, hi, **options),
+                   HTTPStatus.ACCEPTED)
+
+    def design(self, bench: Workbench, query: dict) -> None:
+        self._json({"state": "none"} if bench.job is None else bench.job.as_dict())
+
+
+def _number(query: dict, key: str, kind):
+    """``query[key]`` as an ``int`` or a ``float``, or a one-line ValueError naming ``key``."""
+    text = query.get(key, "")
+    try:
+        value = kind(text)
+    except ValueError:
+        raise ValueError(f"{key}: must be a {'whole ' if kind is int else ''}number, got {text!r}") from None
+    if kind is float and not math.isfinite(value):
+        raise ValueError(f"{key}: must be a finite number, got {text!r}")
+    return value
 
 
 _ROUTES = {
@@ -226,5 +321,10 @@ _ROUTES = {
     ("GET", "/api/program.toml"): _Handler.toml,
     ("GET", "/api/profile.csv"): lambda h, b, q: h.export(b, q, "csv"),
     ("GET", "/api/profile.dxf"): lambda h, b, q: h.export(b, q, "dxf"),
+    ("GET", "/api/program.zip"): _Handler.bundle,
+    ("POST", "/api/design"): _Handler.start_design,
+    ("GET", "/api/design"): _Handler.design,
+    ("POST", "/api/design/keep"): lambda h, b, q: h._json(b.keep_design()),
+    ("POST", "/api/design/discard"): lambda h, b, q: h._json(b.discard_design()),
     ("POST", "/api/close"): None,
 }

@@ -9,9 +9,11 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import tempfile
 import threading
 import time
 import tomllib
+import uuid
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +28,21 @@ PROFILE_POINTS = 720
 """Profile points the page draws."""
 CACHED_REPORTS = 16
 """Analyses a studio keeps (oldest dropped first), shared by its workbenches."""
+DESIGN_STEPS = 60
+"""Optimiser steps of a design started from the page: about 15 s of optimising for a segment of the feed
+cam on a 2-core machine (``camjax design`` takes 6000 for its best law; a designer waits
+here, and may ask for more)."""
+DESIGN_KNOTS = 12
+"""Free B-spline coefficients of a design from the page (``camjax design``: 24)."""
+DESIGN_OBJECTIVES = ("preload", "residual")
+"""The page's objectives, as ``camjax.program.design_segment`` names them."""
 _CACHE_LOCK = threading.Lock()
+_PENDING: dict = {}
+"""Analyses under way (their cache keys): a second request for one waits for it."""
+
+
+class Busy(Exception):
+    """A request that conflicts with work under way (a design running): HTTP 409."""
 
 
 def parse_toml(text: str) -> dict:
@@ -98,6 +114,8 @@ class Workbench:
     used: float = dataclasses.field(default_factory=time.monotonic)
     lock: threading.Lock = dataclasses.field(default_factory=threading.Lock, repr=False)
     cache: dict = dataclasses.field(default_factory=dict, repr=False)
+    law_dir: Path | None = None
+    job: DesignJob | None = None
 
     def touch(self) -> None:
         self.used = time.monotonic()
@@ -110,18 +128,35 @@ class Workbench:
 
     def update(self, toml: str, rpm_text: str | None = None) -> dict:
         """Replace the program (and the speeds): the new report, or a ValueError that
-        leaves the last good state as it was.  The same program (the same TOML structure,
-        whatever its layout and comments) at the same speeds is analysed once per ``cache``."""
+        leaves the last good state as it was."""
+        rpm_text = self.rpm_text if rpm_text is None else str(rpm_text)
+        rpm = parse_speeds(rpm_text)
+        self.program, self.steady, self.report, self.warnings = self.analysed(toml, rpm)
+        self.toml, self.rpm_text, self.rpm = toml, rpm_text, rpm
+        return self.report
+
+    def analysed(self, toml: str, rpm: np.ndarray) -> tuple:
+        """``(program, steady state, report, warnings)`` of ``toml`` at ``rpm``, changing
+        nothing.  The same program (the same TOML structure, whatever its layout and
+        comments) at the same speeds is analysed once per ``cache``."""
         from ..program import Program, SteadyState, analyse
 
-        rpm_text = self.rpm_text if rpm_text is None else str(rpm_text)
         data = parse_toml(toml)
         program = Program.from_dict(data, base=self.base)
-        rpm = parse_speeds(rpm_text)
         key = (json.dumps(_canonical(data), sort_keys=True, default=str), tuple(rpm.tolist()), self.with_flight,
                self.speed_fluctuation, str(self.base))
-        hit = self.cache.get(key)
-        if hit is None:
+        while True:
+            with _CACHE_LOCK:
+                hit = self.cache.get(key)
+                pending = None if hit is not None else _PENDING.get(key)
+                if hit is None and pending is None:
+                    _PENDING[key] = threading.Event()
+            if hit is not None:
+                return hit
+            if pending is None:
+                break
+            pending.wait()  # another request analyses it: its answer is this one's
+        try:
             steady = SteadyState(program, float(min(rpm)))
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
                                         speed_fluctuation=self.speed_fluctuation))
@@ -130,9 +165,10 @@ class Workbench:
                 self.cache[key] = hit
                 while len(self.cache) > CACHED_REPORTS:
                     self.cache.pop(next(iter(self.cache)))
-        self.program, self.steady, self.report, self.warnings = hit
-        self.toml, self.rpm_text, self.rpm = toml, rpm_text, rpm
-        return self.report
+        finally:
+            with _CACHE_LOCK:
+                _PENDING.pop(key).set()
+        return hit
 
     def curves(self, rpm: float | None = None) -> dict:
         """Everything the page draws beside the report: the kinematics over the turn, the
@@ -164,8 +200,161 @@ class Workbench:
         })
 
     def state(self) -> dict:
-        """The program as its TOML structure (for the page's tables), its text and the speeds."""
+        """The program as its TOML structure (for the page's tables), its text and the speeds;
+        ``bundle``: whether it holds a designed law (saved as a zip with its law files)."""
         from .. import laws
 
         return {"toml": self.toml, "program": tomllib.loads(self.toml), "rpm": self.rpm_text,
-                "laws": [*laws.names(), "constant-velocity", "polynomial"]}
+                "laws": [*laws.names(), "constant-velocity", "polynomial"],
+                "bundle": self.law_dir is not None and self.law_dir.as_posix() in self.toml,
+                "design": {"steps": DESIGN_STEPS, "knots": DESIGN_KNOTS, "objectives": list(DESIGN_OBJECTIVES)}}
+
+    # -- designing a segment's law -------------------------------------------------------
+
+    def start_design(self, segment: int, objective: str, rpm_lo: float, rpm_hi: float, *,
+                     steps: int = DESIGN_STEPS, knots: int = DESIGN_KNOTS) -> dict:
+        """Start designing segment ``segment``'s law (``camjax.program.design_segment``) on a
+        background thread; its progress is ``self.job``.  A bad request is a one-line
+        ValueError before any work; a design already running is ``Busy``."""
+        from .. import law_design
+        from ..program import segment_band
+
+        if self.job is not None and self.job.state == "running":
+            raise Busy("a design is running: wait for it (GET /api/design) before starting another")
+        self.ensure()
+        if objective not in DESIGN_OBJECTIVES:
+            raise ValueError(f"objective: must be one of {', '.join(DESIGN_OBJECTIVES)}, got {objective!r}")
+        for name, value, most in (("steps", steps, law_design.MAX_STEPS), ("knots", knots, law_design.MAX_KNOTS)):
+            if not 1 <= value <= most:
+                raise ValueError(f"{name}: must be from 1 to {most:,}, got {value}")
+        segment_band(self.program, segment, rpm_lo, rpm_hi)  # its one-line error names what is wrong
+        job = self.job = DesignJob(segment, objective, float(rpm_lo), float(rpm_hi), steps, knots,
+                                   toml=self.toml, rpm=self.rpm, before=self.report)
+        threading.Thread(target=self._design, args=(job, self.program), name="camjax-studio-design",
+                         daemon=True).start()
+        return job.as_dict()
+
+    def _design(self, job: DesignJob, program) -> None:
+        """The design thread: the law, then the designed program's report at the workbench's
+        speeds (kept in the cache, so keeping the law answers at once)."""
+        from .. import laws
+        from ..errors import SolverError
+        from ..program import design_segment
+
+        def progress(step, total, loss):
+            job.step, job.steps, job.loss = step, total, loss
+            job.phase = "optimising" if step < total else "checking the law"
+
+        try:
+            new, result = design_segment(program, job.segment, job.rpm_lo, job.rpm_hi, objective=job.objective,
+                                         steps=job.steps, knots=job.knots, progress=progress)
+            (job.label, job.after_value), = result.values.items()
+            job.before_value, job.kept_initial = result.initial_values[job.label], result.kept_initial
+            job.step = job.steps
+            if not result.kept_initial:
+                if self.law_dir is None:  # a workbench outside a studio: a folder of its own
+                    self.law_dir = Path(tempfile.mkdtemp(prefix="camjax-studio-"))
+                self.law_dir.mkdir(parents=True, exist_ok=True)
+                path = self.law_dir / f"{_file_name(program.name)}-segment{job.segment}-{uuid.uuid4().hex[:8]}.json"
+                laws.save(new.segments[job.segment - 1].law, path)
+                job.designed_toml = designed_toml(job.toml, new, job.segment, path, self.base)
+                job.phase = "analysing the designed program"
+                job.after = self.analysed(job.designed_toml, job.rpm)[2]
+            job.state, job.phase = "done", "done"
+        except (ValueError, SolverError) as error:
+            job.state, job.message = "error", str(error)
+        except Exception as error:  # a fault of the studio itself: one line, the page lives on
+            job.state, job.message = "error", f"{type(error).__name__}: {error}"
+        job.seconds = time.monotonic() - job.started
+
+    def keep_design(self) -> dict:
+        """Replace the segment's law by the finished design's: the new report."""
+        job = self._finished()
+        if self.toml != job.toml:
+            raise Busy("the program changed since the design started: design it again")
+        job.state = "kept"
+        return self.report if job.designed_toml is None else self.update(job.designed_toml)
+
+    def discard_design(self) -> dict:
+        """Forget the finished design; the program stays as it is."""
+        self._finished().state = "discarded"
+        return self.job.as_dict()
+
+    def _finished(self) -> DesignJob:
+        if self.job is None or self.job.state != "done":
+            state = "none" if self.job is None else self.job.state
+            why = {"none": "none was started", "running": "the design is running", "kept": "it was kept",
+                   "discarded": "it was discarded", "error": "the design failed"}[state]
+            raise (Busy if state == "running" else ValueError)(f"no finished design to keep or discard: {why}")
+        return self.job
+
+
+def designed_toml(toml: str, program, segment: int, law_path: Path, base: Path | None) -> str:
+    """The TOML of ``program`` (a design of segment ``segment`` of the program ``toml``):
+    the designed law by its file ``law_path``, any other law file by its full path (the text
+    must stand where ``base`` is not its folder)."""
+    files = {segment: law_path.as_posix()}
+    for i, seg in enumerate(parse_toml(toml).get("segment") or (), 1):
+        law = seg.get("law") if isinstance(seg, dict) else None
+        if i != segment and isinstance(law, str) and law.endswith(".json"):
+            files[i] = (Path(law) if base is None else (base / law).resolve()).as_posix()
+    return program.to_toml(law_files=files)
+
+
+def _file_name(name: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) or "program"
+
+
+def _speed_curves(report: dict | None) -> dict | None:
+    """The speeds of a report, its minimum preload and its largest residual vibration at each."""
+    if report is None:
+        return None
+    speeds = report["speeds"]
+    return {"rpm": [s["rpm"] for s in speeds], "min_preload_n": [s["min_preload_n"] for s in speeds],
+            "max_residual_mm": [max(s["residual_vibration_mm"]) if s["residual_vibration_mm"] else None
+                                for s in speeds]}
+
+
+@dataclasses.dataclass
+class DesignJob:
+    """A design started from the page: what was asked, its progress and its outcome.
+
+    ``state`` is ``running`` (``phase``: compiling, optimising, checking the law, analysing
+    the designed program), ``done`` (to keep or discard), ``kept``, ``discarded`` or
+    ``error`` (``message`` says why)."""
+
+    segment: int
+    objective: str
+    rpm_lo: float
+    rpm_hi: float
+    steps: int
+    knots: int
+    toml: str = ""
+    rpm: np.ndarray | None = None
+    before: dict | None = None
+    state: str = "running"
+    phase: str = "compiling"
+    step: int = 0
+    loss: float | None = None
+    label: str | None = None
+    before_value: float | None = None
+    after_value: float | None = None
+    kept_initial: bool = False
+    designed_toml: str | None = None
+    after: dict | None = None
+    message: str | None = None
+    started: float = dataclasses.field(default_factory=time.monotonic)
+    seconds: float | None = None
+
+    def as_dict(self) -> dict:
+        done = self.state in ("done", "kept", "discarded")
+        return json_ready({
+            "state": self.state, "phase": self.phase, "step": self.step, "steps": self.steps, "loss": self.loss,
+            "segment": self.segment, "objective": self.objective, "rpm": [self.rpm_lo, self.rpm_hi],
+            "knots": self.knots, "label": self.label, "before": self.before_value, "after": self.after_value,
+            "kept_initial": self.kept_initial, "message": self.message,
+            "seconds": time.monotonic() - self.started if self.seconds is None else self.seconds,
+            "curves": {"before": _speed_curves(self.before),
+                       "after": _speed_curves(self.after if self.after is not None or not done else self.before)}
+            if done else None,
+        })

@@ -13,6 +13,9 @@ const FOLLOWER_FIELDS = ["kind", "mass_kg", "stiffness_n_per_mm", "damping_ratio
 const NUMBER = /^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/;
 
 let model = null;        // {program: {name}, segment: [...], follower: {...}, materials?: {...}}
+let bundle = false;      // the program holds a designed law: saved as a zip with its law files
+let designDefaults = {steps: 60};   // the server's (GET /api/program)
+let polling = null;      // the design's progress timer
 let laws = [];
 let rpmText = "";
 let chosen = null;       // the chosen speed (null: the server's choice)
@@ -32,6 +35,7 @@ function tomlValue(v) {
   if (typeof v === "string") return JSON.stringify(v);
   if (typeof v === "number") return String(v);
   if (typeof v === "boolean") return String(v);
+  if (Array.isArray(v)) return "[" + v.map(tomlValue).join(", ") + "]";
   return "{ " + Object.entries(v).map(([k, x]) => `${k} = ${tomlValue(x)}`).join(", ") + " }";
 }
 
@@ -42,7 +46,7 @@ function table(name, obj) {
 
 function toToml(m) {
   const lines = table("program", m.program);
-  for (const seg of m.segment) {
+  for (const seg of m.segment || []) {
     lines.push("[[segment]]");
     for (const [k, v] of Object.entries(seg)) lines.push(`${k} = ${tomlValue(v)}`);
     lines.push("");
@@ -91,7 +95,7 @@ function select(options, value, onChange, attrs = {}) {
   const all = options.includes(value) ? options : [...options, value];
   for (const o of all) {
     const opt = document.createElement("option");
-    opt.value = o; opt.textContent = o === "" ? "dwell" : o;
+    opt.value = o; opt.textContent = o === "" ? "dwell" : lawLabel(o);
     el.appendChild(opt);
   }
   el.value = value;
@@ -122,11 +126,35 @@ function button(text, title, onClick) {
   return b;
 }
 
-function renderEditor() {
-  $("name").value = (model.program || {}).name || "";
+// A whole cam from one lift table ([program] file or points): no segments to edit.
+const isTable = () => !!model && !model.segment && !!model.program &&
+  (model.program.file !== undefined || model.program.points !== undefined);
+
+// The table cam's segments (those its table was cut into), read-only, from the report.
+function renderTableRows() {
   const body = $("segments").querySelector("tbody");
   body.innerHTML = "";
-  model.segment.forEach((seg, i) => {
+  for (const g of (report ? report.segments : [])) {
+    const row = document.createElement("tr");
+    row.dataset.seg = g.segment;
+    row.className = "table-cam";
+    for (const text of [String(g.segment), g.kind, fmt(g.lift_mm, 5), fmt(g.angle_deg, 5), "", "", "", ""]) cell(row, text);
+    const notes = cell(row, g.kind !== "dwell" ? `peak y'' ${fmt(g.peak_acceleration_mm_per_deg2, 3)} mm/deg\u00b2` : "");
+    notes.className = "notes";
+    body.appendChild(row);
+  }
+}
+
+function renderEditor() {
+  $("name").value = (model.program || {}).name || "";
+  const table = isTable();
+  $("table-note").hidden = !table;
+  $("add").hidden = table;
+  $("design").hidden = table;
+  const body = $("segments").querySelector("tbody");
+  body.innerHTML = "";
+  if (table) renderTableRows();
+  (model.segment || []).forEach((seg, i) => {
     const n = i + 1, row = document.createElement("tr");
     row.dataset.seg = n;
     cell(row, String(n));
@@ -163,6 +191,7 @@ function renderEditor() {
     box.appendChild(label);
   }
   renderNotes();
+  renderDesign();
 }
 
 // ---- talking to the server -------------------------------------------------------------
@@ -246,8 +275,109 @@ function load(state) {
   model = state.program;
   laws = state.laws || laws;
   rpmText = state.rpm;
+  bundle = !!state.bundle;
+  designDefaults = state.design || designDefaults;
   $("range").value = rpmText;
+  $("save").href = api(bundle ? "program.zip" : "program.toml");
+  $("save").textContent = bundle ? "Save TOML + laws (zip)" : "Save TOML";
   renderEditor();
+}
+
+// ---- designing a segment's law ---------------------------------------------------------
+
+// The moving segments to choose from; the band defaults to the speed range.
+function renderDesign() {
+  const pick = $("d-seg"), was = pick.value;
+  pick.innerHTML = "";
+  (model.segment || []).forEach((seg, i) => {
+    if (!seg.law) return;
+    const opt = document.createElement("option");
+    opt.value = i + 1; opt.textContent = `${i + 1} (${lawLabel(seg.law)})`;
+    pick.appendChild(opt);
+  });
+  if ([...pick.options].some((o) => o.value === was)) pick.value = was;
+  if (!$("d-steps").value) $("d-steps").value = designDefaults.steps;
+  if (report && !$("d-lo").value) {
+    const rpm = report.speeds.map((x) => x.rpm);
+    $("d-lo").value = Math.min(...rpm); $("d-hi").value = Math.max(...rpm);
+  }
+}
+
+// A law file's name, not its folder (a designed law's file lives in the studio's folder).
+const lawLabel = (law) => law.endsWith(".json") ? law.split("/").pop() : law;
+
+function designState(state) {
+  $("design").dataset.state = state;
+}
+
+async function startDesign() {
+  $("d-message").textContent = "";
+  const params = {segment: $("d-seg").value, objective: $("d-obj").value,
+    rpm: `${$("d-lo").value.trim()}:${$("d-hi").value.trim()}`, steps: $("d-steps").value.trim()};
+  const response = await fetch(api("design", params), {method: "POST"});
+  const answer = await response.json();
+  if (!response.ok) { $("d-message").textContent = answer.error; return; }
+  $("d-result").hidden = true;
+  showProgress(answer);
+  clearInterval(polling);
+  polling = setInterval(pollDesign, 500);
+}
+
+function showProgress(job) {
+  designState(job.state);
+  $("d-progress").hidden = false;
+  $("d-start").disabled = job.state === "running";
+  $("d-bar").max = job.steps; $("d-bar").value = job.step;
+  $("d-phase").textContent = job.state === "running" ?
+    `${job.phase}: step ${job.step} of ${job.steps}, ${job.seconds.toFixed(0)} s` :
+    `${job.state}: ${job.steps} steps in ${job.seconds.toFixed(1)} s`;
+}
+
+async function pollDesign() {
+  const job = await (await fetch(api("design"))).json();
+  showProgress(job);
+  if (job.state === "running") return;
+  clearInterval(polling);
+  if (job.state === "error") { $("d-message").textContent = job.message; return; }
+  if (job.state === "done") showDesign(job);
+}
+
+// Before and after: the objective's values and the speed curves over the range.
+function showDesign(job) {
+  const change = 100 * (job.after - job.before) / Math.abs(job.before);
+  $("d-values").innerHTML =
+    `<div>${job.label}: <b id="d-before" data-value="${job.before}">${fmt(job.before, 5)}</b> with the segment's own law, ` +
+    `<b id="d-after" data-value="${job.after}">${fmt(job.after, 5)}</b> designed (${change.toFixed(1)} %)</div>` +
+    (job.kept_initial ? "<div>the design did not improve on the segment's own law: keeping it changes nothing</div>" : "");
+  $("d-result").hidden = false;
+  const b = job.curves.before, a = job.curves.after;
+  const marks = [{x: job.rpm[0], label: "band", color: "#777"}, {x: job.rpm[1], color: "#777"}];
+  const so = {xlabel: "speed (rpm)", points: true, marks};
+  plot("c-d-preload", "minimum preload (N): before and after", b.rpm, [
+    {label: "before", y: b.min_preload_n, dash: [4, 3], color: "#777"}, {label: "after", y: a.min_preload_n}], so);
+  plot("c-d-residual", "largest residual vibration (mm): before and after", b.rpm, [
+    {label: "before", y: b.max_residual_mm, dash: [4, 3], color: "#777"}, {label: "after", y: a.max_residual_mm}], so);
+}
+
+async function finishDesign(action) {
+  $("d-message").textContent = "";
+  document.body.dataset.busy = "1";
+  try {
+    const response = await fetch(api(`design/${action}`), {method: "POST"});
+    const answer = await response.json();
+    if (!response.ok) { $("d-message").textContent = answer.error; return; }
+    $("d-result").hidden = true;
+    $("d-progress").hidden = true;
+    designState(action === "keep" ? "kept" : "discarded");
+    if (action === "keep") {
+      report = answer;
+      load(await (await fetch(api("program"))).json());
+      clearErrors();
+      await loadCurves();
+    }
+  } finally {
+    document.body.dataset.busy = "0";
+  }
 }
 
 // ---- drawing ---------------------------------------------------------------------------
@@ -334,6 +464,7 @@ function draw() {
   drawHeadline();
   drawJoins();
   renderNotes();
+  if (!isTable()) renderDesign();
   drawProfile();
 }
 
@@ -368,6 +499,7 @@ function drawJoins() {
 // where contact is lost in it at the range speed nearest the chosen one.
 function renderNotes() {
   if (!report || !model) return;
+  if (isTable()) { renderTableRows(); return; }
   const speed = report.speeds.reduce((best, x) => curves && Math.abs(x.rpm - curves.rpm) < Math.abs(best.rpm - curves.rpm) ? x : best);
   let angle = 0;
   const starts = model.segment.map((s) => { const a = angle; angle += Number(s.angle_deg) || 0; return a; });
@@ -456,6 +588,9 @@ $("open").addEventListener("change", async (e) => {
   await loadCurves();
   document.body.dataset.busy = "0";
 });
+$("d-start").addEventListener("click", startDesign);
+$("d-keep").addEventListener("click", () => finishDesign("keep"));
+$("d-discard").addEventListener("click", () => finishDesign("discard"));
 for (const [id, path] of [["save", "program.toml"], ["csv", "profile.csv"], ["dxf", "profile.dxf"]])
   $(id).href = api(path);
 window.addEventListener("pagehide", () => navigator.sendBeacon(api("close")));
