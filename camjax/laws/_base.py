@@ -12,6 +12,7 @@ import numpy as np
 
 from .._custom_types import ArrayLike, Breakpoints, LawValues
 from .._shapes import power_of_two
+from .._traces import exported_jit
 from ..checks import is_concrete
 
 
@@ -156,9 +157,11 @@ class AbstractSearchedPeaksLaw(AbstractMotionLaw):
         return self.peak(3)
 
 
-@eqx.filter_jit
-def _compiled_evaluate(law: AbstractMotionLaw, tau: jax.Array) -> LawValues:
+def _evaluate_law(law: AbstractMotionLaw, tau: jax.Array) -> LawValues:
     return law._evaluate(tau)
+
+
+_compiled_evaluate = exported_jit(_evaluate_law, "law-evaluate")  # its trace kept for the next process
 
 
 @eqx.filter_jit

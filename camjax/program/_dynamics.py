@@ -27,6 +27,7 @@ import numpy as np
 
 from .. import checks
 from .._shapes import bucket
+from .._traces import exported_jit, register_types
 from ..errors import RESULTS, raise_if_failed
 from ..metrics import refined_peak
 from ..sdof import (
@@ -417,6 +418,17 @@ def _cycles(rpm, turn: PaddedTurn, probes: tuple[str, ...] = ()) -> Cycle:
     return jax.vmap(one)(rpm)
 
 
+register_types(PaddedTurn, CycleGrid, MotionGrid, Train, NodeContact, Cycle)
+
+
+def _cycles_without_probes(rpm, turn: PaddedTurn) -> Cycle:
+    return _cycles(rpm, turn)
+
+
+_kept_cycles = exported_jit(_cycles_without_probes, "program-cycles")
+"""``_cycles`` without probes, its trace kept on disk for the next process (``camjax._traces``)."""
+
+
 @jax.jit
 def _started_cycle(rpm, turn: PaddedTurn, q_start) -> Cycle:
     """One turn from the mode ``q_start`` at its start (a start-up's turns)."""
@@ -511,8 +523,14 @@ class SteadyState:
         devices = self.devices if SPEED_BLOCK % len(self.devices) == 0 else self.devices[:1]
         keep = keep or (lambda out: out)
         probes = tuple(PROBES)
-        outs = [keep(shard_batch(program, jnp.asarray(block), self.turn, probes, devices=devices))
-                for block in padded]
+        if program is _cycles and not probes and len(devices) == 1:  # the trace kept on disk
+            def run(block):
+                with jax.default_device(devices[0]):
+                    return _kept_cycles(block, self.turn)
+        else:
+            def run(block):
+                return shard_batch(program, block, self.turn, probes, devices=devices)
+        outs = [keep(run(jnp.asarray(block))) for block in padded]
         return jax.tree.map(lambda *x: np.concatenate([np.asarray(v) for v in x])[:size], *outs)
 
     def cycle(self, rpm: float, q_start=None) -> Cycle:

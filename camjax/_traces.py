@@ -1,0 +1,117 @@
+"""Traced programs kept on disk beside JAX's compilation cache (``jax.export``).
+
+JAX's persistent cache saves a new process the XLA compile of a program it has seen, but
+not the tracing and lowering that come first: for the cam program's steady state that is
+most of a cached command's wait.  ``exported_jit(fn, name)`` is ``jax.jit(fn)`` that, when
+the compilation cache is on, keeps each shape's traced program (``jax.export``,
+serialised StableHLO) under ``<compilation cache>/traces/`` and reads it back in the next
+process instead of tracing again (the compile itself then comes from JAX's cache).
+
+A kept program is found by a key of everything that changes it: the function's name, the
+arguments' structure, shapes and dtypes, the platform, JAX's version and the x64 flag,
+and a hash of camjax's own source files (an edit of the code is a new key).  Anything
+unreadable is traced afresh and written again.  Without the compilation cache (a library
+call that did not turn it on) it is plain ``jax.jit``.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import tempfile
+from pathlib import Path
+
+import equinox as eqx
+import jax
+from jax import export
+
+_PACKAGE = Path(__file__).resolve().parent
+
+
+@functools.cache
+def _source_hash() -> str:
+    """A hash of camjax's Python source (the files' bytes, in path order)."""
+    digest = hashlib.sha256()
+    for path in sorted(_PACKAGE.rglob("*.py")):
+        digest.update(str(path.relative_to(_PACKAGE)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def _directory() -> Path | None:
+    root = jax.config.jax_compilation_cache_dir
+    return Path(root) / "traces" if root else None
+
+
+def register_types(*types) -> None:
+    """Let ``jax.export`` write outputs holding these ``NamedTuple`` types (by their
+    qualified name)."""
+    for cls in types:
+        try:
+            export.register_namedtuple_serialization(cls, serialized_name=f"{cls.__module__}.{cls.__qualname__}")
+        except ValueError:  # registered already (a module reloaded)
+            pass
+
+
+_PLAIN = (bool, int, float, complex, str, type(None))
+
+
+class exported_jit:
+    """``jax.jit(fn)`` whose traced programs persist across processes (see the module).
+
+    The arguments' arrays are the program's inputs; their other leaves (Python numbers
+    and strings, as ``equinox.filter_jit`` takes them) are compiled in and part of the
+    key.  Arguments holding anything else (a function, an object) run through
+    ``equinox.filter_jit`` as they are, untouched by the cache.
+    """
+
+    def __init__(self, fn, name: str):
+        self.fn, self.name = fn, name
+        self.jitted = eqx.filter_jit(fn)
+        self.loaded: dict[str, object] = {}
+        functools.update_wrapper(self, fn)
+
+    def __call__(self, *args):
+        directory = _directory()
+        if directory is None:
+            return self.jitted(*args)
+        dynamic, static = eqx.partition(args, eqx.is_array)
+        leaves, tree = jax.tree.flatten(dynamic)
+        constants = jax.tree.leaves(static)
+        described = str(tree)
+        if not all(isinstance(x, _PLAIN) for x in constants) or " at 0x" in described:
+            return self.jitted(*args)  # no key that a new process would find again
+        shapes = ";".join(f"{x.dtype}{tuple(x.shape)}" for x in leaves)
+        text = "|".join([self.name, described, repr(constants), shapes, jax.default_backend(), jax.__version__,
+                         str(jax.config.jax_enable_x64), _source_hash()])
+        key = hashlib.sha256(text.encode()).hexdigest()[:32]
+        program = self.loaded.get(key)
+        if program is None:
+            program = self.loaded[key] = self._program(directory / f"{self.name}-{key}.bin", tree, static, leaves)
+        return program(leaves)
+
+    def _program(self, path: Path, tree, static, leaves):
+        def flat(arrays):
+            return self.fn(*eqx.combine(jax.tree.unflatten(tree, arrays), static))
+
+        try:
+            exported = export.deserialize(bytearray(path.read_bytes()))
+        except Exception:  # absent, truncated or from another JAX: trace afresh
+            exported = export.export(jax.jit(flat))(leaves)
+            try:
+                _write(path, exported.serialize())
+            except Exception:  # an output export cannot write: this process keeps it
+                pass
+        return jax.jit(exported.call)
+
+
+def _write(path: Path, data: bytes) -> None:
+    """Whole or not at all (a concurrent reader never sees half a file)."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=path.parent, delete=False) as handle:
+            handle.write(data)
+        os.replace(handle.name, path)
+    except OSError:
+        pass  # an unwritable cache only costs time
