@@ -4,14 +4,17 @@ JAX's persistent cache saves a new process the XLA compile of a program it has s
 not the tracing and lowering that come first: for the cam program's steady state that is
 most of a cached command's wait.  ``exported_jit(fn, name)`` is ``jax.jit(fn)`` that, when
 the compilation cache is on, keeps each shape's traced program (``jax.export``,
-serialised StableHLO) under ``<compilation cache>/traces/`` and reads it back in the next
-process instead of tracing again (the compile itself then comes from JAX's cache).
+serialised StableHLO) under ``<compilation cache>/traces/<source hash>/`` and reads it back
+in the next process instead of tracing again (the compile itself then comes from JAX's
+cache).
 
 A kept program is found by a key of everything that changes it: the function's name, the
-arguments' structure, shapes and dtypes, the platform, JAX's version and the x64 flag,
-and a hash of camjax's own source files (an edit of the code is a new key).  Anything
-unreadable is traced afresh and written again.  Without the compilation cache (a library
-call that did not turn it on) it is plain ``jax.jit``.
+arguments' structure, shapes and dtypes, their constants, the platform, JAX's version and
+the x64 flag, in a folder named by a hash of camjax's own source files (an edit of the
+code is a new folder).  Anything unreadable is traced afresh and written again; a program
+``jax.export`` cannot keep (one with a host callback) is marked and traced in each process.
+Without the compilation cache (a library call that did not turn it on) it is plain
+``jax.jit``.
 """
 
 from __future__ import annotations
@@ -40,8 +43,10 @@ def _source_hash() -> str:
 
 
 def _directory() -> Path | None:
+    """``<compilation cache>/traces/<source hash>``: one folder per version of camjax's code
+    (an old one may be deleted to reclaim its space), or None without the cache."""
     root = jax.config.jax_compilation_cache_dir
-    return Path(root) / "traces" if root else None
+    return Path(root) / "traces" / _source_hash()[:16] if root else None
 
 
 def register_types(*types) -> None:
@@ -95,14 +100,19 @@ class exported_jit:
         def flat(arrays):
             return self.fn(*eqx.combine(jax.tree.unflatten(tree, arrays), static))
 
+        plain = path.with_suffix(".plain")  # a program export cannot keep (a host callback)
+        if plain.exists():
+            return jax.jit(flat)
         try:
             exported = export.deserialize(bytearray(path.read_bytes()))
         except Exception:  # absent, truncated or from another JAX: trace afresh
-            exported = export.export(jax.jit(flat))(leaves)
             try:
-                _write(path, exported.serialize())
-            except Exception:  # an output export cannot write: this process keeps it
-                pass
+                exported = export.export(jax.jit(flat))(leaves)
+                data = exported.serialize()
+            except Exception:  # not exportable or its output not writable: this process traces it
+                _write(plain, b"")
+                return jax.jit(flat)
+            _write(path, data)
         return jax.jit(exported.call)
 
 

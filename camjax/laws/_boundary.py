@@ -98,12 +98,12 @@ class BoundaryPolynomial(AbstractSearchedPeaksLaw):
 
     def coefficients(self) -> jax.Array:
         """Ascending coefficients of ``s(tau)`` (degree + 1 of them)."""
+        xp = np if is_concrete(self) else jnp  # NumPy when concrete: no eager JAX op by op
         m = (self.degree + 1) // 2
-        low = [jnp.zeros(()), self.v0, self.a0 / 2] + ([self.j0 / 6] if m == 4 else [])
-        low = jnp.stack(low)
-        target = jnp.stack([jnp.ones(()), self.v1, self.a1] + ([self.j1] if m == 4 else []))
-        high = jnp.asarray(_end_inverse(self.degree)) @ (target - jnp.asarray(_end_low(self.degree)) @ low)
-        return jnp.concatenate([low, high])
+        low = xp.stack([xp.zeros(()), self.v0, self.a0 / 2] + ([self.j0 / 6] if m == 4 else []))
+        target = xp.stack([xp.ones(()), self.v1, self.a1] + ([self.j1] if m == 4 else []))
+        high = xp.asarray(_end_inverse(self.degree)) @ (target - xp.asarray(_end_low(self.degree)) @ low)
+        return xp.concatenate([low, high]).astype(float)
 
     def _numpy_derivative(self, order: int) -> np.ndarray:
         poly = np.polynomial.Polynomial(np.asarray(self.coefficients(), dtype=float))
