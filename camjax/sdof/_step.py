@@ -26,6 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..checks import is_concrete
 from ..sharding import on_cpu
 from ._grid import INTERPOLATION_DEGREE, MAX_PHASE_STEP, MotionGrid
 
@@ -90,7 +91,11 @@ def psi_host(z) -> np.ndarray:
 
 
 def eigenvalue(omega, zeta):
-    """``lambda = -zeta w + i w sqrt(1 - zeta^2)`` of the damped oscillator."""
+    """``lambda = -zeta w + i w sqrt(1 - zeta^2)`` of the damped oscillator (NumPy for
+    concrete values: no eager JAX op, which compiles for each new size)."""
+    if is_concrete(omega, zeta):
+        omega, zeta = np.asarray(omega, dtype=float), np.asarray(zeta, dtype=float)
+        return -zeta * omega + 1j * omega * np.sqrt(1.0 - zeta**2)
     return -zeta * omega + 1j * omega * jnp.sqrt(1.0 - zeta**2)
 
 
