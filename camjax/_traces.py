@@ -49,6 +49,11 @@ def _directory() -> Path | None:
     return Path(root) / "traces" / _source_hash()[:16] if root else None
 
 
+def kept() -> bool:
+    """Whether traced programs are kept on disk in this process (the compilation cache is on)."""
+    return bool(jax.config.jax_compilation_cache_dir)
+
+
 def register_types(*types) -> None:
     """Let ``jax.export`` write outputs holding these ``NamedTuple`` types (by their
     qualified name)."""
@@ -60,6 +65,7 @@ def register_types(*types) -> None:
 
 
 _PLAIN = (bool, int, float, complex, str, type(None))
+_UNKEPT = object()  # the marker of arguments whose program is not kept
 
 
 class exported_jit:
@@ -74,7 +80,7 @@ class exported_jit:
     def __init__(self, fn, name: str):
         self.fn, self.name = fn, name
         self.jitted = eqx.filter_jit(fn)
-        self.loaded: dict[str, object] = {}
+        self.loaded: dict[tuple, object] = {}  # by structure, shapes and constants
         functools.update_wrapper(self, fn)
 
     def __call__(self, *args):
@@ -84,17 +90,23 @@ class exported_jit:
         dynamic, static = eqx.partition(args, eqx.is_array)
         leaves, tree = jax.tree.flatten(dynamic)
         constants = jax.tree.leaves(static)
-        described = str(tree)
-        if not all(isinstance(x, _PLAIN) for x in constants) or " at 0x" in described:
-            return self.jitted(*args)  # no key that a new process would find again
-        shapes = ";".join(f"{x.dtype}{tuple(x.shape)}" for x in leaves)
-        text = "|".join([self.name, described, repr(constants), shapes, jax.default_backend(), jax.__version__,
-                         str(jax.config.jax_enable_x64), _source_hash()])
-        key = hashlib.sha256(text.encode()).hexdigest()[:32]
-        program = self.loaded.get(key)
+        shapes = tuple((x.dtype, x.shape) for x in leaves)
+        memo = (tree, shapes, repr(constants))  # repr: 1, 1.0, True and -0.0, 0.0 differ
+        try:
+            program = self.loaded.get(memo)
+        except TypeError:  # a structure holding something unhashable
+            return self.jitted(*args)
         if program is None:
-            program = self.loaded[key] = self._program(directory / f"{self.name}-{key}.bin", tree, static, leaves)
-        return program(leaves)
+            described = str(tree)
+            if not all(isinstance(x, _PLAIN) for x in constants) or " at 0x" in described:
+                program = _UNKEPT  # no key that a new process would find again
+            else:
+                text = "|".join([self.name, described, repr(constants), repr(shapes), jax.default_backend(),
+                                 jax.__version__, str(jax.config.jax_enable_x64)])
+                key = hashlib.sha256(text.encode()).hexdigest()[:32]
+                program = self._program(directory / f"{self.name}-{key}.bin", tree, static, leaves)
+            self.loaded[memo] = program
+        return self.jitted(*args) if program is _UNKEPT else program(leaves)
 
     def _program(self, path: Path, tree, static, leaves):
         def flat(arrays):

@@ -28,6 +28,7 @@ import numpy as np
 from .. import checks
 from .._shapes import bucket
 from .._traces import exported_jit, register_types
+from .._traces import kept as traces_kept
 from ..errors import RESULTS, raise_if_failed
 from ..metrics import refined_peak
 from ..sdof import (
@@ -523,7 +524,7 @@ class SteadyState:
         devices = self.devices if SPEED_BLOCK % len(self.devices) == 0 else self.devices[:1]
         keep = keep or (lambda out: out)
         probes = tuple(PROBES)
-        if program is _cycles and not probes and len(devices) == 1:  # the trace kept on disk
+        if program is _cycles and not probes and len(devices) == 1 and traces_kept():  # read back from disk
             def run(block):
                 with jax.default_device(devices[0]):
                     return _kept_cycles(block, self.turn)
