@@ -276,3 +276,22 @@ def test_a_groove_run_past_its_budget_is_refused_before_any_work():
     # Turns asked for: in the same terms, not the solver's dwell and samples.
     with pytest.raises(ValueError, match=r"^400 groove turns at 4,736 samples a turn .* ask for at most 10 turns"):
         groove_turns(program, [300.0], turns=400)
+
+
+def test_a_written_program_carries_a_file_only_for_a_law_it_cannot_name(tmp_path):
+    """``write_program``: the feed cam's polynomials (end states) and registry laws need no
+    file; a fitted B-spline on the indexer's first rise does, and loads back the same lift."""
+    from camjax.program import example_path, with_law, write_program
+
+    feed = Program.load(example_path("feed"))
+    path = write_program(feed, tmp_path / "feed")
+    assert sorted(p.name for p in path.parent.iterdir()) == ["program.toml"]
+    theta = np.linspace(0.0, 360.0, 721)
+    np.testing.assert_allclose(Program.load(path).lift(theta)[0], feed.lift(theta)[0], atol=1e-12)
+    indexer = Program.load(example_path("indexer"))
+    rise = indexer.moving_segments()[0] + 1
+    spline = laws.BSplineLaw.fit(laws.ModifiedSine(), 8)
+    designed = with_law(indexer, rise, spline)
+    path = write_program(designed, tmp_path / "indexer")
+    assert sorted(p.name for p in path.parent.iterdir()) == ["program.toml", f"segment{rise}.json"]
+    np.testing.assert_allclose(Program.load(path).lift(theta)[0], designed.lift(theta)[0], atol=1e-12)

@@ -132,16 +132,9 @@ def write_program(program: Program, directory) -> Path:
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     files = {}
-    for i, seg in enumerate(program.segments, 1):
-        if seg.law is None:
-            continue
-        try:
-            known = laws.get(seg.law.name) == seg.law
-        except ValueError:
-            known = False
-        if not known:
-            files[i] = f"segment{i}.json"
-            laws.save(seg.law, directory / files[i])
+    for i, law in program.unnamed_laws().items():
+        files[i] = f"segment{i}.json"
+        laws.save(law, directory / files[i])
     path = directory / "program.toml"
     path.write_text(program.to_toml(law_files=files))
     return path

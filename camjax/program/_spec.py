@@ -207,6 +207,24 @@ class Program:
         except ValueError as error:
             raise ValueError(f"{path}: {_dxf_table_error(error)}") from None
 
+    def unnamed_laws(self) -> dict[int, AbstractMotionLaw]:
+        """The laws ``to_toml`` can only name by a file (``law_files``), by 1-based segment:
+        none of a lift table (written as its points), a polynomial (its end states) or a law
+        the registry names (``camjax.laws.get``)."""
+        if _turn_table(self) is not None:
+            return {}
+        out = {}
+        for i, seg in enumerate(self.segments, 1):
+            if seg.law is None or is_polynomial(seg) or (isinstance(seg.law, TableLaw) and seg.law.fit_info):
+                continue
+            try:
+                named = laws.get(seg.law.name) == seg.law
+            except ValueError:
+                named = False
+            if not named:
+                out[i] = seg.law
+        return out
+
     def to_toml(self, law_files: dict[int, str] | None = None) -> str:
         """The program as TOML text: laws by registry name, or by ``law_files[i]`` (1-based)."""
         law_files = law_files or {}
