@@ -17,7 +17,7 @@ import numpy as np
 
 from .._custom_types import Breakpoints, LawValues
 from ..checks import is_concrete, require
-from ._base import AbstractMotionLaw, float_leaf, number_text
+from ._base import AbstractSearchedPeaksLaw, float_leaf, number_text
 from ._spline import max_abs_piecewise
 
 _PI = math.pi
@@ -71,7 +71,18 @@ TRIPLE_HARMONIC_PRESETS = {
 PRESETS.update({name: (a1, a2, closing_amplitude(a1, a2)) for name, (a1, a2) in TRIPLE_HARMONIC_PRESETS.items()})
 
 
-class HarmonicSeries(AbstractMotionLaw):
+class _SeriesLaw(AbstractSearchedPeaksLaw):
+    """A law written as its derivatives in closed form (``derivative(order, xp)``), smooth
+    over the whole rise: no breakpoints, the peaks searched on ``derivative``."""
+
+    def rise(self, tau) -> LawValues:
+        return tuple(self.derivative(k)(tau) for k in range(4))
+
+    def breakpoints(self) -> Breakpoints:
+        return ()
+
+
+class HarmonicSeries(_SeriesLaw):
     """Rise whose acceleration is ``sum_k A_k sin(2 pi k tau)`` (k = 1..K, ``amplitudes``).
 
     ``v = a = 0`` at both ends for any amplitudes; valid amplitudes close the rise,
@@ -124,31 +135,13 @@ class HarmonicSeries(AbstractMotionLaw):
 
         return f
 
-    def rise(self, tau) -> LawValues:
-        return tuple(self.derivative(k)(tau) for k in range(4))
-
-    def breakpoints(self) -> Breakpoints:
-        return ()
-
     def end_state(self):
         return (0.0, 0.0, 0.0, 0.0) if is_concrete(self) else None
 
-    def _peak(self, order: int):
+    def peak(self, order: int):
         if is_concrete(self.amplitudes):
             return dense_peak(lambda m: self.derivative(m, np), order)
         return max_abs_piecewise(self.derivative(order), np.array([0.0, 1.0]), 256)
-
-    @property
-    def Cv(self):
-        return self._peak(1)
-
-    @property
-    def Ca(self):
-        return self._peak(2)
-
-    @property
-    def Cj(self):
-        return self._peak(3)
 
 
 def FreudensteinOneThree() -> HarmonicSeries:
@@ -176,7 +169,7 @@ def TripleHarmonic(a1, a2) -> HarmonicSeries:
     return HarmonicSeries(jnp.stack([a1, a2, closing_amplitude(a1, a2)]))
 
 
-class DoubleHarmonic(AbstractMotionLaw):
+class DoubleHarmonic(_SeriesLaw):
     """Rest to reversal: ``s = [(1 - cos pi tau) - (1 - cos 2 pi tau)/4] / 2``.
 
     ``v(0) = a(0) = 0``, and it ends at ``s = 1`` with ``v = 0``, ``a = -pi^2``: a reversal,
@@ -203,23 +196,8 @@ class DoubleHarmonic(AbstractMotionLaw):
 
         return f
 
-    def rise(self, tau) -> LawValues:
-        return tuple(self.derivative(k)(tau) for k in range(4))
-
-    def breakpoints(self) -> Breakpoints:
-        return ()
-
     def end_state(self):
         return 0.0, 0.0, 0.0, -(_PI**2)
 
-    @property
-    def Cv(self) -> float:
-        return dense_peak(lambda m: self.derivative(m, np), 1)
-
-    @property
-    def Ca(self) -> float:
-        return dense_peak(lambda m: self.derivative(m, np), 2)
-
-    @property
-    def Cj(self) -> float:
-        return dense_peak(lambda m: self.derivative(m, np), 3)
+    def peak(self, order: int) -> float:
+        return dense_peak(lambda m: self.derivative(m, np), order)
