@@ -95,3 +95,9 @@ def test_the_groove_law_is_the_turn_normalised():
 def test_a_side_other_than_before_or_after_is_refused():
     with pytest.raises(ValueError, match="side must be 'before' or 'after', got 'left'"):
         _program().turn.jet(np.array([10.0]), side="left")
+
+
+def test_an_angle_that_is_not_a_number_is_refused():
+    for bad in (math.nan, math.inf):
+        with pytest.raises(ValueError, match="cam angles must be finite"):
+            _program().lift(np.array([10.0, bad]))

@@ -74,7 +74,10 @@ class Turn(eqx.Module):
         _check_side(side)
         traced = _traced(theta_deg, self.start_deg, self.angle_deg)
         xp = jnp if traced else np
-        theta = xp.mod(xp.asarray(theta_deg, dtype=float), 360.0)
+        theta = xp.asarray(theta_deg, dtype=float)
+        if not traced and not np.all(np.isfinite(theta)):
+            raise ValueError(f"cam angles must be finite, got {theta[~np.isfinite(theta)].ravel()[0]!r}")
+        theta = xp.mod(theta, 360.0)
         n = self.segments
         starts, widths = xp.asarray(self.start_deg), xp.asarray(self.angle_deg)
         bounds = xp.concatenate([starts, xp.full((1,), 360.0)])
