@@ -31,7 +31,7 @@ def require(condition: bool, message: str) -> None:
         raise ValueError(message)
 
 
-_CHECKED_OUTSIDE = contextvars.ContextVar("camjax_checked_outside", default=False)
+_CHECKED_OUTSIDE = contextvars.ContextVar("camjax_outside_checks", default=False)
 
 
 @contextlib.contextmanager

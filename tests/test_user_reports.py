@@ -12,7 +12,7 @@ import pytest
 import camjax
 from camjax import distributed
 from camjax.cli import main
-from camjax.program import Program, analyse, check_rpm, example_path
+from camjax.program import Program, Speeds, analyse, example_path, warn_implausible
 
 
 @pytest.fixture(autouse=True)
@@ -162,19 +162,19 @@ def test_an_implausible_speed_is_warned_of_by_the_library():
     edge = f_n * 60 * (100 / 360) / 0.05  # the speed at which that ratio is 0.05: 61,370 rpm
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        check_rpm([600.0, 0.99 * edge], program)  # plausible: no warning
-        check_rpm([1e9])  # without a program: positive and finite is all
+        warn_implausible(program, Speeds([600.0, 0.99 * edge]))  # plausible: no warning
+        Speeds([1e9])  # without a program: positive and finite is all
     ratio = f_n * 60 / (1.01 * edge) * 100 / 360
     with pytest.warns(UserWarning, match=rf"indexer at {1.01 * edge:g} rpm: the shortest moving "
                       rf"segment's period ratio is {ratio:.2g}, below 0.05: "
                       r"the follower cannot follow the motion at all \(check the speed's units\)$"):
-        check_rpm([600.0, 1.01 * edge], program)
+        warn_implausible(program, Speeds([600.0, 1.01 * edge]))
     with pytest.warns(UserWarning, match=r"at 1e\+09 rpm: faster than any cam runs \(above 100,000 rpm\); "):
-        check_rpm([1e9], program)
+        warn_implausible(program, Speeds([1e9]))
     stiff = Program.load(example_path())  # 4 times as stiff: n = 0.061 at 101,000 rpm
     stiff = dataclasses.replace(stiff, follower=dataclasses.replace(stiff.follower, stiffness_n_per_mm=8000))
     with pytest.warns(UserWarning, match=r"at 101000 rpm: faster than any cam runs \(above 100,000 rpm\) \("):
-        check_rpm([101_000.0], stiff)
+        warn_implausible(stiff, Speeds([101_000.0]))
 
 
 def test_program_command_warns_of_an_implausible_speed_on_one_line(capsys):

@@ -8,7 +8,7 @@ import warnings
 from pathlib import Path
 
 from .._plain import DEFAULT_SPEED_FLUCTUATION
-from ._common import CliError, add_format, file_named, output_dir, parse_range
+from ._common import CliError, add_format, file_named, output_dir
 
 DEFAULT_RPM = "600"
 
@@ -216,13 +216,14 @@ def program_path(text: str | None, default: str = "indexer") -> Path:
 
 
 def run(args) -> int:
-    from ..program import MAX_PROFILE_POINTS, Program, SteadyState, analyse, write_report
+    from ..program import MAX_PROFILE_POINTS, Program, Speeds, SteadyState, analyse, write_report
 
     if args.drive_table is not None:
         return _drive_table(args)
-    rpm = parse_range(args.rpm, "--rpm")
-    if not all(r > 0 for r in rpm):
-        raise CliError(f"--rpm: speeds must be positive, got {args.rpm!r}")
+    try:
+        rpm = Speeds.parse(args.rpm, "--rpm")
+    except ValueError as error:
+        raise CliError(str(error)) from None
     if not 8 <= args.points <= MAX_PROFILE_POINTS:
         raise CliError(f"--points: must be from 8 to {MAX_PROFILE_POINTS:,}, got {args.points}")
     if args.plot_rpm is not None and not any(math.isclose(args.plot_rpm, r, rel_tol=1e-9) for r in rpm):
@@ -240,7 +241,7 @@ def run(args) -> int:
         warnings.simplefilter("always")  # the library's speed warnings, shown below
         program = Program.load(path)
         out = output_dir(args.out)
-        steady = SteadyState(program, float(min(rpm)))
+        steady = SteadyState(program, rpm)
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
                          speed_fluctuation=args.speed_fluctuation)
         if out is not None:

@@ -35,7 +35,6 @@ from ._dxf_import import read_dxf_profile as read_dxf_profile
 from ._dynamics import Cycle as Cycle
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
-from ._dynamics import check_rpm as check_rpm
 from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
 from ._export import MAX_PROFILE_POINTS as MAX_PROFILE_POINTS
@@ -93,6 +92,10 @@ from ._spec import example_path as example_path
 from ._spec import program_path as program_path
 from ._spec import segment_band as segment_band
 from ._spec import with_law as with_law
+from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
+from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
+from ._speeds import Speeds as Speeds
+from ._speeds import warn_implausible as warn_implausible
 from ._turn import JOIN_TOLERANCE_DEG as JOIN_TOLERANCE_DEG
 from ._turn import Turn as Turn
 from ._writers import RESPONSE_SPEEDS as RESPONSE_SPEEDS

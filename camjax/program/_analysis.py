@@ -10,9 +10,9 @@ import json
 import numpy as np
 
 from .._plain import json_ready, plot_speed
-from ._dynamics import CheckedSpeed, SteadyState, check_rpm
-from ._groove import Impact, groove_turns_checked
-from ._jump import Flight, flights_checked, jump_speed_checked, min_preload_n
+from ._dynamics import SteadyState
+from ._groove import Impact, groove_turns
+from ._jump import Flight, flights_at, jump_speed_rpm, min_preload_n
 from ._machine import (
     DEFAULT_SPEED_FLUCTUATION,
     Geometry,
@@ -24,16 +24,17 @@ from ._machine import (
 from ._motion import Join, segment_kinematics
 from ._probes import OUTPUTS, Probe
 from ._spec import Program
+from ._speeds import Speeds, warn_implausible
 
 
 def kinematic_acceleration_m_s2(program: Program, rpm) -> np.ndarray:
     """``max |y''|`` over the turn at each speed, exactly: ``|lift| Ca / t_segment^2``."""
-    return _kinematic(program, check_rpm(rpm))
+    return _kinematic(program, Speeds.of(rpm).rpm)
 
 
 def period_ratios(program: Program, rpm) -> np.ndarray:
     """``(speeds, moving segments)``: each segment's duration times the natural frequency."""
-    return _period_ratios(program, check_rpm(rpm))
+    return _period_ratios(program, Speeds.of(rpm).rpm)
 
 
 def _kinematic(program: Program, rpm: np.ndarray) -> np.ndarray:
@@ -206,29 +207,26 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     fluctuation and flywheel (for ``speed_fluctuation`` ``Cs``) and the Hertz stress come
     from the same steady state; ``geometry`` from the profile at the grid's nodes and 3600
     angles over the turn (a flat face over a cusp is a ``ValueError`` naming the angles).
+    ``rpm``: ``Speeds`` or what one is built from; an implausible speed is warned of
+    (``warn_implausible``).
     """
-    return analyse_checked(program, check_rpm(rpm, program), with_flight=with_flight, steady=steady,
-                           devices=devices, speed_fluctuation=speed_fluctuation)  # warns of an implausible speed
-
-
-def analyse_checked(program: Program, rpm: np.ndarray, *, with_flight: bool = True,
-                    steady: SteadyState | None = None, devices=None,
-                    speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION) -> Report:
-    """``analyse`` at speeds already checked (``check_rpm``): the machine's cams."""
+    speeds = Speeds.of(rpm)
+    warn_implausible(program, speeds)
+    rpm = speeds.rpm
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
-    steady = steady or SteadyState(program, CheckedSpeed(rpm.min()), devices=devices)
-    out = steady.summary_checked(rpm)
+    steady = steady or SteadyState(program, speeds, devices=devices)
+    out = steady.summary(speeds)
     closed = program.follower.form_closed
     preload = min_preload_n(out.min_contact_force_n, program.follower.preload_n)
-    kinematic = _kinematic(program, rpm)  # rpm is checked once, above
+    kinematic = _kinematic(program, rpm)
     ratios = _period_ratios(program, rpm)
     grooved = closed and bool(program.follower.groove_clearance_mm) and with_flight
-    turns = groove_turns_checked(program, rpm) if grooved else [None] * rpm.size
+    turns = groove_turns(program, speeds) if grooved else [None] * rpm.size
     flywheel = flywheel_inertia_kg_m2(out.energy_fluctuation_j, rpm, speed_fluctuation)
     stressed = program.follower.contact_width_mm is not None
     theta_nodes = 360.0 * steady.grid.nodes
     lost = np.flatnonzero(out.min_contact_force_n < 0) if with_flight and not closed else np.zeros(0, int)
-    found = dict(zip(lost.tolist(), flights_checked(steady, rpm[lost]) if lost.size else []))
+    found = dict(zip(lost.tolist(), flights_at(steady, speeds[lost]) if lost.size else []))
     stress = out.max_contact_stress_mpa
     half_width = 2 * out.max_contact_stress_radius_mm * stress / program.materials.contact_modulus_mpa
     computed = {  # each built-in output of the registry (OUTPUTS) at every speed
@@ -265,7 +263,7 @@ def analyse_checked(program: Program, rpm: np.ndarray, *, with_flight: bool = Tr
     jump_speed = None
     below = not closed and bool(out.min_contact_force_n[np.argmin(rpm)] < 0)
     if not closed and not below and rpm.size > 1 and rpm.max() > rpm.min():
-        jump_speed = jump_speed_checked(steady, float(rpm.min()), float(rpm.max()))
+        jump_speed = jump_speed_rpm(steady, speeds.min(), speeds.max())
     geometry = cam_geometry(program, np.union1d(theta_nodes[:-1], np.arange(3600) * 0.1))
     report = Report(program.name, tuple(speeds), jump_speed, below, tuple(segment_kinematics(program)),
                     tuple(program.joins()), geometry, speed_fluctuation)
@@ -280,9 +278,9 @@ def response(program: Program, rpm: float, *, steady: SteadyState | None = None)
     ``drive_torque_n_m`` (``F_c dy/dtheta``) and ``contact_stress_mpa`` (Hertz, zero without
     ``follower.contact_width_mm`` and where contact is lost).
     """
-    rpm = float(check_rpm(rpm)[0])
-    steady = steady or SteadyState(program, CheckedSpeed(rpm))
-    cycle = steady.cycle_checked(rpm)
+    rpm = Speeds.of(rpm)[0]
+    steady = steady or SteadyState(program, rpm)
+    cycle = steady.cycle(rpm)
     g = steady.grid
     theta = 360.0 * g.nodes
     y, _, ddy = program.lift(theta)

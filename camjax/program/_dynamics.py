@@ -53,8 +53,7 @@ from ._probes import PROBES
 from ._spec import Program
 from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
 from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
-from ._speeds import CheckedSpeed as CheckedSpeed
-from ._speeds import check_rpm as check_rpm
+from ._speeds import Speeds
 from ._speeds import warn_implausible as warn_implausible
 
 _MIN_PER_SEGMENT = 64
@@ -450,31 +449,28 @@ class SteadyState:
     (``RESULTS.nonfinite``).
     """
 
-    def __init__(self, program: Program, rpm_min: float, *, devices=None):
+    def __init__(self, program: Program, rpm_min: float | Speeds, *, devices=None):
         if not program.follower.damping_ratio > 0:
             raise ValueError("the periodic steady state needs follower.damping_ratio > 0 "
                              "(without damping the start-up never settles)")
         self.program = program
         self.train = Train.of(program)
-        checked = isinstance(rpm_min, CheckedSpeed)  # by the entry point that builds it
-        self.rpm_min = float(rpm_min if checked else check_rpm(rpm_min, name="rpm_min")[0])
+        self.rpm_min = Speeds.of(rpm_min, "rpm_min").min()  # an entry point's speeds: their slowest
         self.devices = resolve_devices(devices)
         self.grid = cycle_grid(program, self.rpm_min)
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
         self.turn = PaddedTurn.of(self.grid, self.train, self.contact)
 
     def summary(self, rpm) -> SpeedSummary:
-        """Refined extrema and residual vibration at every speed in ``rpm``."""
-        return self.summary_checked(check_rpm(rpm))
-
-    def summary_checked(self, rpm: np.ndarray) -> SpeedSummary:
-        """``summary`` of speeds already checked (``check_rpm``); the cycles computed on
-        the way are kept for ``cycle`` (the flights read them)."""
+        """Refined extrema and residual vibration at every speed in ``rpm`` (``Speeds``);
+        the cycles computed on the way are kept for ``cycle`` (the flights read them)."""
+        rpm = Speeds.of(rpm)
         cycles = self.cycles(rpm)
-        return SpeedSummary(rpm, *(getattr(cycles, name) for name in SUMMARY_OUTPUTS), cycles.probes)
+        return SpeedSummary(rpm.rpm, *(getattr(cycles, name) for name in SUMMARY_OUTPUTS), cycles.probes)
 
-    def cycles(self, rpm: np.ndarray) -> Cycle:
-        """The whole ``Cycle`` at every speed of ``rpm`` (checked), stacked on axis 0."""
+    def cycles(self, rpm) -> Cycle:
+        """The whole ``Cycle`` at every speed of ``rpm`` (``Speeds``), stacked on axis 0."""
+        rpm = Speeds.of(rpm).rpm
         self._check_slowest(rpm)
         out = _node_arrays_cut(self._blocks(_cycles, rpm), self.grid.intervals)
         for name, values in out.probes.items():
@@ -488,10 +484,7 @@ class SteadyState:
     def cycles_at(self, rpm) -> Cycle:
         """``cycles`` at the speeds ``rpm``: read from the last batch where every one of them
         was computed (``summary`` keeps it), else computed."""
-        return self.cycles_at_checked(check_rpm(rpm))
-
-    def cycles_at_checked(self, rpm: np.ndarray) -> Cycle:
-        """``cycles_at`` of speeds already checked (``check_rpm``)."""
+        rpm = Speeds.of(rpm).rpm
         kept, cycles = getattr(self, "_kept", ({}, None))
         if all(float(r) in kept for r in rpm):
             rows = np.array([kept[float(r)] for r in rpm], dtype=int)
@@ -501,10 +494,7 @@ class SteadyState:
     def min_contact_force_n(self, rpm) -> np.ndarray:
         """``summary(rpm).min_contact_force_n`` alone (the jump's scan and bisection): the
         same compiled program, so a program's first look compiles one."""
-        return self.min_contact_force_checked(check_rpm(rpm))
-
-    def min_contact_force_checked(self, rpm: np.ndarray) -> np.ndarray:
-        """``min_contact_force_n`` of speeds already checked (``check_rpm``)."""
+        rpm = Speeds.of(rpm).rpm
         self._check_slowest(rpm)
         force = self._blocks(_cycles, rpm, keep=lambda c: c.min_contact_force_n)
         raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm", force)
@@ -537,10 +527,7 @@ class SteadyState:
     def cycle(self, rpm: float, q_start=None) -> Cycle:
         """Node series and extrema of the periodic steady state at one speed (or of the
         turn from the mode ``q_start`` at its start, if given)."""
-        return self.cycle_checked(float(check_rpm(rpm)[0]), q_start)
-
-    def cycle_checked(self, rpm: float, q_start=None) -> Cycle:
-        """``cycle`` at a speed already checked (``check_rpm``)."""
+        rpm = Speeds.of(rpm)[0]
         if q_start is None:
             kept, cycles = getattr(self, "_kept", ({}, None))
             if rpm not in kept:
@@ -568,12 +555,12 @@ def startup(program: Program, rpm: float, cycles: int, *, steady: SteadyState | 
     ``s`` runs over ``cycles`` turns (grid nodes of each, the last node left to the next
     turn); the engine's exact step carries the state from turn to turn.
     """
-    rpm = float(check_rpm(rpm)[0])
-    steady = steady or SteadyState(program, CheckedSpeed(rpm))
+    rpm = Speeds.of(rpm)[:1]
+    steady = steady or SteadyState(program, rpm)
     s, accel, force = [], [], []
     q_start = 0j
     for c in range(int(cycles)):
-        run = steady.cycle_checked(rpm, q_start=q_start)
+        run = steady.cycle(rpm, q_start=q_start)
         s.append(c + steady.grid.nodes[:-1])
         accel.append(run.payload_acceleration_m_s2[:-1])
         force.append(run.contact_force_n[:-1])
@@ -588,15 +575,15 @@ def node_contact_force(program: Program, rpm, laws: dict | None = None, *, rpm_m
 
     A replacement keeps the breakpoints of the law it replaces (``with_segment_law``).
     The grid is the one for ``rpm_min`` (default: the slowest of ``rpm``, which must then
-    be concrete).  Concrete speeds are checked as ``check_rpm`` checks them; traced ones
+    be concrete).  Concrete speeds are checked as ``Speeds`` checks them; traced ones
     make the computation raise the same message when it runs with a bad one.
     """
     if rpm_min is not None:
-        rpm_min = float(check_rpm(rpm_min, name="rpm_min")[0])
+        rpm_min = Speeds.of(rpm_min, "rpm_min").min()
     if checks.is_concrete(rpm):
-        checked = check_rpm(rpm)
-        rpm_min = float(checked.min()) if rpm_min is None else rpm_min
-        rpm = jnp.asarray(checked)
+        speeds = Speeds.of(rpm)
+        rpm_min = speeds.min() if rpm_min is None else rpm_min
+        rpm = jnp.asarray(speeds.rpm)
     else:
         if rpm_min is None:
             raise ValueError("rpm_min is needed where rpm is traced (it fixes the grid)")

@@ -172,14 +172,15 @@ def save_figures(out: Path, program: Program, report, history: tuple, prof: Prof
 
 def shaft_figures(out: Path, machine, report, rpm) -> None:
     """The shaft's torque over the turn at up to four speeds, and against speed (a ``MachineReport``)."""
-    from ._dynamics import CheckedSpeed, SteadyState, check_rpm
+    from ._dynamics import SteadyState
     from ._shaft import shaft_torque
+    from ._speeds import Speeds
 
-    rpm = check_rpm(rpm)
-    steadies = [SteadyState(p, CheckedSpeed(rpm.min())) for p, _ in machine.cams]
+    rpm = Speeds.of(rpm)
+    steadies = [SteadyState(p, rpm) for p, _ in machine.cams]
     histories = []
     for r in list(rpm)[:4]:
-        nodes, values, _, _ = shaft_torque([s.cycle_checked(float(r)) for s in steadies], [s.grid.nodes for s in steadies],
+        nodes, values, _, _ = shaft_torque([s.cycle(r) for s in steadies], [s.grid.nodes for s in steadies],
                                            [phase for _, phase in machine.cams])
         histories.append((float(r), {"theta_deg": 360.0 * nodes, "drive_torque_n_m": values}))
     plot.save(over_turn(f"{machine.name}: shaft torque", "drive_torque_n_m", "drive torque (N m)", histories),

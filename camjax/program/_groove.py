@@ -33,7 +33,7 @@ from tqdm import tqdm
 from ..errors import SolverError
 from ..laws import AbstractMotionLaw
 from ._spec import Program
-from ._speeds import check_rpm
+from ._speeds import Speeds
 from ._turn import Turn
 
 _SETTLE = math.log(1e9)  # decay of the contact vibration over the first turns tried
@@ -225,12 +225,7 @@ def groove_turns(program: Program, rpm, *, turns: int | None = None,
     its ``change_deg`` (a roller that chatters in a wide groove, ``groove_clearance_mm``);
     the command line warns about it.
     """
-    return groove_turns_checked(program, check_rpm(rpm), turns=turns, progress=progress)
-
-
-def groove_turns_checked(program: Program, rpm: np.ndarray, *, turns: int | None = None,
-                         progress: bool | None = None) -> list[GrooveTurn]:
-    """``groove_turns`` at speeds already checked (``check_rpm``)."""
+    rpm = Speeds.of(rpm).rpm
     from ..models import Backlash, solve
 
     f = program.follower

@@ -21,7 +21,8 @@ import math
 import numpy as np
 
 from ..sdof import eigenvalue, psi_host, step_within_host
-from ._dynamics import SteadyState, check_rpm
+from ._dynamics import SteadyState
+from ._speeds import Speeds
 
 _BISECTIONS = 3  # rounds of 64-way subdivision before the secant: a bracket shrinks by 65^3
 _SAMPLES_PER_INTERVAL = 8
@@ -54,20 +55,14 @@ def jump_speed_rpm(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_
     program moves by 1/16 between samples), then bisects the first crossing to
     ``tolerance_rpm``.
     """
-    rpm_lo = float(check_rpm(rpm_lo, name="rpm_lo")[0])
-    rpm_hi = float(check_rpm(rpm_hi, name="rpm_hi")[0])
+    rpm_lo, rpm_hi = Speeds.of(rpm_lo, "rpm_lo")[0], Speeds.of(rpm_hi, "rpm_hi")[0]
     if not rpm_lo <= rpm_hi:
         raise ValueError(f"need rpm_lo <= rpm_hi, got {rpm_lo:g}, {rpm_hi:g}")
-    return jump_speed_checked(steady, rpm_lo, rpm_hi, tolerance_rpm)
-
-
-def jump_speed_checked(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1):
-    """``jump_speed_rpm`` over speeds already checked (``check_rpm``, ``rpm_lo <= rpm_hi``)."""
     if steady.program.follower.form_closed:
         return None
     rpm = scan_speeds(steady.program, rpm_lo, rpm_hi, 16)
     rpm[0], rpm[-1] = rpm_lo, rpm_hi
-    force = steady.min_contact_force_checked(rpm)
+    force = steady.min_contact_force_n(rpm)
     if not np.any(force < 0):
         return None
     i = int(np.argmax(force < 0))
@@ -76,7 +71,7 @@ def jump_speed_checked(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolera
     lo, hi = rpm[i - 1], rpm[i]
     while hi - lo > tolerance_rpm:
         trial = np.linspace(lo, hi, 18)[1:-1]
-        f = steady.min_contact_force_checked(trial)
+        f = steady.min_contact_force_n(trial)
         below = np.flatnonzero(f < 0)
         if below.size:
             hi = trial[below[0]]
@@ -110,11 +105,11 @@ class _Turns:
     is the engine's exact step from the node before (``camjax.sdof.step_within_host``).
     """
 
-    def __init__(self, steady: SteadyState, rpm: np.ndarray):
+    def __init__(self, steady: SteadyState, rpm: Speeds):
         grid, tr = steady.grid, steady.train
         self.period = 60.0 / np.asarray(rpm, dtype=float)
         self.lam = np.asarray(eigenvalue(tr.omega_per_turn(np.asarray(rpm, dtype=float)), tr.zeta))  # per turn
-        self.q = steady.cycles_at_checked(rpm).q
+        self.q = steady.cycles_at(rpm).q
         self.nodes = np.asarray(grid.nodes)
         self.piece = np.asarray(grid.motion.piece)
         self.piece_width = np.asarray(grid.piece_width)
@@ -195,7 +190,7 @@ def _first_roots(f, lo, hi) -> np.ndarray:
 
 def flights(steady: SteadyState, rpm: float) -> list[Flight]:
     """Every flight in one turn at ``rpm`` (empty where contact holds); see ``flights_at``."""
-    return flights_checked(steady, check_rpm(rpm)[:1])[0]
+    return flights_at(steady, Speeds.of(rpm)[:1])[0]
 
 
 def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
@@ -207,15 +202,11 @@ def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
     follower takes off again; the turn ends one period after the first separation.  The
     speeds' events are searched together, flight by flight.
     """
-    return flights_checked(steady, check_rpm(rpm))
-
-
-def flights_checked(steady: SteadyState, rpm: np.ndarray) -> list[list[Flight]]:
-    """``flights_at`` at speeds already checked (``check_rpm``)."""
+    rpm = Speeds.of(rpm)
     out = [[] for _ in rpm]
     if steady.program.follower.form_closed:
         return out
-    lost = np.flatnonzero(steady.cycles_at_checked(rpm).min_contact_force_n < 0)
+    lost = np.flatnonzero(steady.cycles_at(rpm).min_contact_force_n < 0)
     if lost.size == 0:
         return out
     turns = _Turns(steady, rpm[lost])
@@ -259,7 +250,7 @@ def flights_checked(steady: SteadyState, rpm: np.ndarray) -> list[list[Flight]]:
 
 def flight(steady: SteadyState, rpm: float) -> Flight | None:
     """The first flight of the turn at ``rpm`` (``flights``), or ``None`` where contact holds."""
-    found = flights_checked(steady, check_rpm(rpm)[:1])[0]
+    found = flights_at(steady, Speeds.of(rpm)[:1])[0]
     return found[0] if found else None
 
 

@@ -17,7 +17,6 @@ import numpy as np
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
 from ..sdof import eigenvalue
 from ._dynamics import (
-    CheckedSpeed,
     SteadyState,
     Train,
     _cycle,
@@ -125,7 +124,7 @@ class MaxPreload(AbstractProgramObjective):
     def required_preload(self, law) -> np.ndarray:
         """Required preload (N) at every evaluation speed, by ``SteadyState`` on the program with ``law``."""
         program = with_law(self.program, self.segment, law)
-        force = SteadyState(program, CheckedSpeed(self.rpm_lo)).min_contact_force_checked(self.evaluation_speeds())
+        force = SteadyState(program, self.rpm_lo).min_contact_force_n(self.evaluation_speeds())
         return min_preload_n(force, program.follower.preload_n)
 
     def report(self, law) -> float:
@@ -171,9 +170,9 @@ class MaxProgramResidual(AbstractProgramObjective):
 
     def residual_mm(self, law) -> np.ndarray:
         """Largest residual vibration (mm) at every evaluation speed, by ``SteadyState``."""
-        steady = SteadyState(with_law(self.program, self.segment, law), CheckedSpeed(self.rpm_lo))
+        steady = SteadyState(with_law(self.program, self.segment, law), self.rpm_lo)
         steady.grid = _same_points(steady.grid, self.program)  # before its first (tracing) call
-        out = steady.summary_checked(self.evaluation_speeds())  # rpm_lo, rpm_hi checked at __check_init__
+        out = steady.summary(self.evaluation_speeds())
         return np.max(out.residual_vibration_mm, axis=1)
 
     def report(self, law) -> float:

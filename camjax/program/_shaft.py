@@ -22,8 +22,8 @@ import numpy as np
 from .._plain import json_ready
 from ..checks import read_toml
 from ..metrics import septic_coefficients
-from ._analysis import Report, analyse_checked
-from ._dynamics import CheckedSpeed, SteadyState, check_rpm, warn_implausible
+from ._analysis import Report, analyse
+from ._dynamics import SteadyState
 from ._machine import (
     DEFAULT_SPEED_FLUCTUATION,
     check_speed_fluctuation,
@@ -32,6 +32,7 @@ from ._machine import (
 )
 from ._probes import OUTPUTS
 from ._spec import Program, _no_unknown
+from ._speeds import Speeds
 
 
 @dataclasses.dataclass(frozen=True)
@@ -183,17 +184,15 @@ def analyse_machine(machine, rpm, *, with_flight: bool = True,
     """
     if not isinstance(machine, Machine):
         machine = Machine("machine", tuple(machine))
-    rpm = check_rpm(rpm)
+    rpm = Speeds.of(rpm)
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
-    for p, _ in machine.cams:
-        warn_implausible(p, rpm)
-    steadies = [SteadyState(p, CheckedSpeed(rpm.min())) for p, _ in machine.cams]
+    steadies = [SteadyState(p, rpm) for p, _ in machine.cams]
     phases = [phase for _, phase in machine.cams]
-    reports = tuple(analyse_checked(p, rpm, with_flight=with_flight, steady=s, speed_fluctuation=speed_fluctuation)
+    reports = tuple(analyse(p, rpm, with_flight=with_flight, steady=s, speed_fluctuation=speed_fluctuation)
                     for (p, _), s in zip(machine.cams, steadies))
     shaft = []
     for r in rpm:
-        nodes, values, left, right = shaft_torque([s.cycle_checked(float(r)) for s in steadies],
+        nodes, values, left, right = shaft_torque([s.cycle(r) for s in steadies],
                                                   [s.grid.nodes for s in steadies], phases)
         figures = [float(x) for x in torque_figures(values, np.diff(nodes), left, right)]
         shaft.append(ShaftSpeedReport(float(r), *figures,

@@ -1,4 +1,4 @@
-"""A cam program's speeds, checked once at every public entry point."""
+"""A cam program's speeds as a value: ``Speeds``, checked once when built."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import warnings
 import numpy as np
 
 from .. import checks
+from .._plain import parse_range
 from ._spec import Program
 
 IMPLAUSIBLE_RPM, IMPLAUSIBLE_PERIOD_RATIO = 100_000.0, 0.05
@@ -14,28 +15,85 @@ IMPLAUSIBLE_RPM, IMPLAUSIBLE_PERIOD_RATIO = 100_000.0, 0.05
 period ratio below 0.05 (the follower cannot follow its motion at all): often a unit slip."""
 
 
-class CheckedSpeed(float):
-    """A speed (rpm) that ``check_rpm`` has passed, for an entry point to hand to
-    ``SteadyState`` (which then does not check it again).  Arithmetic on it gives a
-    plain ``float``, so no computed value passes for a checked one."""
+class Speeds:
+    """Machine speeds (rpm): a non-empty, read-only 1-D float array, each speed positive and
+    finite, checked once when built (``checks.speeds``: a one-line ``ValueError`` naming
+    ``name``, the caller's option, if not).
+
+    Every entry point takes a ``Speeds`` or anything it is built from (a number, a list, an
+    array; ``Speeds.parse`` reads ``START:STOP:COUNT`` or ``V1,V2,...``) and builds it with
+    ``Speeds.of``, which passes a ``Speeds`` through unchecked; so the functions an entry
+    point calls take its ``Speeds`` as they are.  A subset (``speeds[mask]``) is a
+    ``Speeds``; one speed (``speeds[i]``) a ``float``."""
+
+    __slots__ = ("rpm",)
+
+    def __init__(self, values, name: str = "rpm"):
+        rpm = values.rpm if isinstance(values, Speeds) else checks.speeds(values, name).copy()
+        rpm.flags.writeable = False
+        self.rpm: np.ndarray = rpm
+
+    @classmethod
+    def of(cls, values, name: str = "rpm") -> Speeds:
+        """``values`` as they are if a ``Speeds``, else checked into one."""
+        return values if isinstance(values, Speeds) else cls(values, name)
+
+    @classmethod
+    def parse(cls, text: str, name: str = "rpm") -> Speeds:
+        """The speeds written as ``START:STOP:COUNT`` (inclusive) or ``V1,V2,...``, or a
+        one-line ``ValueError`` that starts with ``name``."""
+        values = parse_range(str(text), name)
+        if not np.all(np.isfinite(values) & (values > 0)):
+            raise ValueError(f"{name}: speeds must be positive and finite, got {text!r}")
+        return cls(values, name)
+
+    def __len__(self) -> int:
+        return self.rpm.size
+
+    @property
+    def size(self) -> int:
+        return self.rpm.size
+
+    def __iter__(self):
+        return iter(self.rpm.tolist())
+
+    def __getitem__(self, index):
+        picked = self.rpm[index]
+        return float(picked) if np.ndim(picked) == 0 else Speeds._subset(picked)
+
+    @classmethod
+    def _subset(cls, rpm: np.ndarray) -> Speeds:
+        if rpm.size == 0:
+            raise ValueError("rpm must be one speed or a 1-D list of speeds")
+        out = cls.__new__(cls)
+        out.rpm = rpm
+        return out
+
+    def __array__(self, dtype=None, copy=None):
+        return self.rpm if dtype is None else self.rpm.astype(dtype)
+
+    def __repr__(self) -> str:
+        return f"Speeds({self.rpm.tolist()!r})"
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Speeds) and np.array_equal(self.rpm, other.rpm)
+
+    def __hash__(self) -> int:
+        return hash(tuple(self.rpm.tolist()))
+
+    def min(self) -> float:
+        return float(self.rpm.min())
+
+    def max(self) -> float:
+        return float(self.rpm.max())
+
+    def tolist(self) -> list[float]:
+        return self.rpm.tolist()
 
 
-def check_rpm(rpm, program: Program | None = None, *, name: str = "rpm") -> np.ndarray:
-    """Speeds as a 1-D float array, checked: numbers, positive and finite (a one-line
-    ``ValueError`` naming ``name``, the caller's option, if not: ``camjax.checks.speeds``);
-    with ``program``, a ``UserWarning`` for a speed past ``IMPLAUSIBLE_RPM`` or one that
-    gives a segment a period ratio below ``IMPLAUSIBLE_PERIOD_RATIO``.
-
-    The public entry points call it once, on their own arguments; the functions they call
-    take the checked array (``SteadyState.summary_checked`` and its kin)."""
-    rpm = checks.speeds(rpm, name)
-    if program is not None:
-        warn_implausible(program, rpm, stacklevel=4)
-    return rpm
-
-
-def warn_implausible(program: Program, rpm: np.ndarray, *, stacklevel: int = 3) -> None:
-    """The ``UserWarning`` of ``check_rpm(rpm, program)`` for checked speeds."""
+def warn_implausible(program: Program, rpm: Speeds, *, stacklevel: int = 3) -> None:
+    """A ``UserWarning`` for a speed past ``IMPLAUSIBLE_RPM`` or one that gives a segment of
+    ``program`` a period ratio below ``IMPLAUSIBLE_PERIOD_RATIO`` (often a unit slip)."""
     shortest = min((s.angle_deg / 360.0 for s in program.segments if s.moving), default=1.0)
     ratio = program.follower.vibrations_per_turn(rpm.max()) * shortest
     why = [text for bad, text in (

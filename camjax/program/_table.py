@@ -71,7 +71,7 @@ def read_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
             row.append(value)
         rows.append(row)
         line_numbers.append(n)
-    return _checked(np.array(rows).reshape(-1, 2), str(path), [f"line {n}" for n in line_numbers])
+    return _valid_table(np.array(rows).reshape(-1, 2), str(path), [f"line {n}" for n in line_numbers])
 
 
 def read_points(points, where: str) -> tuple[np.ndarray, np.ndarray]:
@@ -88,10 +88,10 @@ def read_points(points, where: str) -> tuple[np.ndarray, np.ndarray]:
             if not math.isfinite(value):
                 raise ValueError(f"{where}: points row {k}: {name} must be finite, got {value!r}")
         rows.append([float(row[0]), float(row[1])])
-    return _checked(np.array(rows).reshape(-1, 2), where, [f"points row {k}" for k in range(1, len(rows) + 1)])
+    return _valid_table(np.array(rows).reshape(-1, 2), where, [f"points row {k}" for k in range(1, len(rows) + 1)])
 
 
-def _checked(table: np.ndarray, where: str, rows: list[str]):
+def _valid_table(table: np.ndarray, where: str, rows: list[str]):
     if len(table) < MIN_POINTS:
         raise ValueError(f"{where}: {len(table)} point(s); a lift table needs at least {MIN_POINTS} "
                          "(its spline is of degree 5)")

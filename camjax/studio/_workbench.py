@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, parse_range, plot_speed
+from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, plot_speed
 
 DEFAULT_RPM = "200:1400:7"
 """The speed range a workbench starts with (wide enough to show the examples' jump speeds)."""
@@ -60,15 +60,12 @@ def parse_program(text: str, base: Path | None = None):
     return Program.from_dict(parse_toml(text), base=base)
 
 
-def parse_speeds(text: str) -> np.ndarray:
-    """The speed range ``text`` (``START:STOP:COUNT`` or ``V1,V2,...``, rpm), or a ValueError."""
-    try:
-        rpm = parse_range(str(text), "rpm")
-    except ValueError as error:
-        raise ValueError(str(error)) from None
-    if not all(r > 0 for r in rpm):
-        raise ValueError(f"rpm: speeds must be positive, got {text!r}")
-    return rpm
+def parse_speeds(text: str):
+    """The speed range ``text`` (``START:STOP:COUNT`` or ``V1,V2,...``, rpm) as
+    ``camjax.program.Speeds``, or a one-line ValueError."""
+    from ..program import Speeds
+
+    return Speeds.parse(text, "rpm")
 
 
 def kinematics(program, theta_deg: np.ndarray) -> dict[str, np.ndarray]:
@@ -107,7 +104,7 @@ class Workbench:
     with_flight: bool = True
     speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION
     program: object = None
-    rpm: np.ndarray | None = None
+    rpm: object = None  # camjax.program.Speeds
     report: dict | None = None
     steady: object = None
     warnings: list = dataclasses.field(default_factory=list)
@@ -135,7 +132,7 @@ class Workbench:
         self.toml, self.rpm_text, self.rpm = toml, rpm_text, rpm
         return self.report
 
-    def analysed(self, toml: str, rpm: np.ndarray) -> tuple:
+    def analysed(self, toml: str, rpm) -> tuple:
         """``(program, steady state, report, warnings)`` of ``toml`` at ``rpm``, changing
         nothing.  The same program (the same TOML structure, whatever its layout and
         comments) at the same speeds is analysed once per ``cache``."""
@@ -157,7 +154,7 @@ class Workbench:
                 break
             pending.wait()  # another request analyses it: its answer is this one's
         try:
-            steady = SteadyState(program, float(min(rpm)))
+            steady = SteadyState(program, rpm)
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
                                         speed_fluctuation=self.speed_fluctuation))
             hit = (program, steady, report, list(report.get("warnings", ())))
@@ -177,7 +174,7 @@ class Workbench:
 
         report = self.ensure()
         program = self.program
-        lowest = float(min(self.rpm))
+        lowest = self.rpm.min()
         if rpm is None:
             rpm = plot_speed(report, None)
         if not (isinstance(rpm, int | float) and math.isfinite(rpm) and rpm >= lowest):
@@ -330,7 +327,7 @@ class DesignJob:
     steps: int
     knots: int
     toml: str = ""
-    rpm: np.ndarray | None = None
+    rpm: object = None  # camjax.program.Speeds
     before: dict | None = None
     state: str = "running"
     phase: str = "compiling"
