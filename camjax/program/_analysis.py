@@ -12,35 +12,28 @@ import numpy as np
 from .._plain import json_ready, plot_speed
 from ._dynamics import SteadyState
 from ._groove import Impact, groove_turns
-from ._jump import Flight, flights_at, jump_speed_rpm, min_preload_n
+from ._jump import Flight, flights_at, jump_speed_rpm
 from ._machine import (
     DEFAULT_SPEED_FLUCTUATION,
     Geometry,
     cam_geometry,
     check_speed_fluctuation,
     design_warnings,
-    flywheel_inertia_kg_m2,
 )
 from ._motion import Join, segment_kinematics
-from ._probes import OUTPUTS, Probe
+from ._probes import Outputs, Probe, ProbeContext, kinematic_peak_m_s2
 from ._spec import Program
 from ._speeds import Speeds, warn_implausible
 
 
 def kinematic_acceleration_m_s2(program: Program, rpm) -> np.ndarray:
     """``max |y''|`` over the turn at each speed, exactly: ``|lift| Ca / t_segment^2``."""
-    return _kinematic(program, Speeds.of(rpm).rpm)
+    return kinematic_peak_m_s2(program, Speeds.of(rpm).rpm)
 
 
 def period_ratios(program: Program, rpm) -> np.ndarray:
     """``(speeds, moving segments)``: each segment's duration times the natural frequency."""
     return _period_ratios(program, Speeds.of(rpm).rpm)
-
-
-def _kinematic(program: Program, rpm: np.ndarray) -> np.ndarray:
-    peak = max((abs(s.lift_mm) * float(s.law.Ca) / (s.angle_deg / 360.0) ** 2 for s in program.segments if s.moving),
-               default=0.0)
-    return 1e-3 * peak * (rpm / 60.0) ** 2
 
 
 def _period_ratios(program: Program, rpm: np.ndarray) -> np.ndarray:
@@ -54,12 +47,10 @@ class SpeedReport:
 
     Attributes:
         rpm: the cam's speed.
-        max_payload_acceleration_m_s2, max_kinematic_acceleration_m_s2: peak ``|x''|`` of
-            the payload (refined between nodes) and ``|y''|`` of the cam.
-        min_contact_force_n, max_contact_force_n: extremes of the contact force over the
-            turn (for a form-closed cam the signed flank force).
-        jump: whether the contact force goes negative (a spring-loaded cam only).
-        min_preload_n: the preload that just keeps contact (``None`` when form-closed).
+        values: every per-speed output of the set the report was computed with
+            (``Outputs``: name -> value, ``None`` where it does not apply), also read as
+            attributes (``speed.min_contact_force_n``); the built-in ones are documented in
+            ``camjax.program.BUILT_IN`` (label, unit, doc line).
         residual_vibration_mm: amplitude of the free vibration at the start of each dwell
             and constant-velocity segment (``Program.residual_segments``), in program order.
         period_ratios: each moving segment's duration times the natural frequency.
@@ -67,48 +58,22 @@ class SpeedReport:
         impacts: a grooved cam's strikes on its flanks in a settled turn (else ``None``).
         impacts_change_deg: how far the strikes still moved from the turn before (degrees;
             at most ``camjax.program.SETTLED_DEG`` once settled; ``None`` without a groove).
-        max_drive_torque_n_m, rms_drive_torque_n_m, mean_drive_torque_n_m: peak ``|T|``, RMS
-            and mean of the camshaft torque ``T = F_c dy/dtheta`` over the turn.
-        energy_fluctuation_j: ``max W - min W``, ``W = integral of (T - mean T) dtheta``.
-        flywheel_inertia_kg_m2: ``energy_fluctuation / (Cs Omega^2)`` (``Report.speed_fluctuation``).
-        max_contact_stress_mpa, max_contact_stress_deg: peak Hertz line-contact pressure over
-            the grid's nodes and where (``None`` without ``follower.contact_width_mm``).
-        contact_half_width_mm: the Hertz contact half-width there, ``2 R' p_max / E*``.
-        outputs: the registered probes' values (``camjax.program.register_probe``), also
-            read as attributes (``speed.rms_contact_force_n``) and flat in ``as_dict``.
-
-    Every scalar field above but ``rpm`` is a built-in output of ``camjax.program.OUTPUTS``
-    (its label, unit and doc line), read from there by the table and the CSV.
     """
 
     rpm: float
-    max_payload_acceleration_m_s2: float
-    max_kinematic_acceleration_m_s2: float
-    min_contact_force_n: float
-    max_contact_force_n: float
-    jump: bool
-    min_preload_n: float | None
-    residual_vibration_mm: tuple[float, ...]
-    period_ratios: tuple[float, ...]
+    values: dict
+    residual_vibration_mm: tuple[float, ...] = ()
+    period_ratios: tuple[float, ...] = ()
     flights: tuple[Flight, ...] | None = None
     impacts: tuple[Impact, ...] | None = None
     impacts_change_deg: float | None = None
-    max_drive_torque_n_m: float = 0.0
-    rms_drive_torque_n_m: float = 0.0
-    mean_drive_torque_n_m: float = 0.0
-    energy_fluctuation_j: float = 0.0
-    flywheel_inertia_kg_m2: float = 0.0
-    max_contact_stress_mpa: float | None = None
-    max_contact_stress_deg: float | None = None
-    contact_half_width_mm: float | None = None
-    outputs: dict[str, float] = dataclasses.field(default_factory=dict)
 
-    def __getattr__(self, name):  # a registered probe's value, as an attribute
-        outputs = self.__dict__.get("outputs", {})
-        if name in outputs:
-            return outputs[name]
+    def __getattr__(self, name):  # an output's value, as an attribute
+        values = self.__dict__.get("values", {})
+        if name in values:
+            return values[name]
         raise AttributeError(f"{type(self).__name__} has no attribute {name!r} (outputs: "
-                             f"{', '.join(outputs) or 'none registered'})")
+                             f"{', '.join(values) or 'none'})")
 
     @property
     def flight(self) -> Flight | None:
@@ -116,15 +81,13 @@ class SpeedReport:
         return self.flights[0] if self.flights else None
 
     def as_dict(self) -> dict:
-        """Plain types for JSON, with ``flight`` (the first flight) beside ``flights``."""
+        """Plain types for JSON: ``rpm``, every output flat, the lists, and ``flight`` (the
+        first flight) beside ``flights``."""
         flights = None if self.flights is None else [x.as_dict() for x in self.flights]
-        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "outputs"}
-        out.update(self.outputs)
-        out.update(residual_vibration_mm=list(self.residual_vibration_mm),
-                   period_ratios=list(self.period_ratios), flight=flights[0] if flights else None,
-                   flights=flights,
-                   impacts=None if self.impacts is None else [x.as_dict() for x in self.impacts])
-        return out
+        return {"rpm": self.rpm, **self.values, "residual_vibration_mm": list(self.residual_vibration_mm),
+                "period_ratios": list(self.period_ratios), "flights": flights,
+                "impacts": None if self.impacts is None else [x.as_dict() for x in self.impacts],
+                "impacts_change_deg": self.impacts_change_deg, "flight": flights[0] if flights else None}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -136,7 +99,8 @@ class Report:
     (``segment_kinematics``) and ``joins`` (``Program.joins``) describe the motion itself,
     at any speed; the cam's ``Geometry`` and the coefficient of speed fluctuation the
     flywheel is sized for.  ``to_json`` and ``to_csv`` write it as ``camjax program`` prints
-    it, its per-speed columns read from the registry ``OUTPUTS`` (``columns``)."""
+    it, its per-speed columns read from the set of outputs it was computed with
+    (``outputs``, ``columns``)."""
 
     program: str
     speeds: tuple[SpeedReport, ...]
@@ -147,6 +111,7 @@ class Report:
     geometry: Geometry | None = None
     speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION
     warnings: tuple[str, ...] = ()  # design_warnings: input or results past the design rules
+    outputs: Outputs = dataclasses.field(default_factory=Outputs)  # the per-speed outputs computed
 
     def as_dict(self) -> dict:
         return {"program": self.program, "speeds": [s.as_dict() for s in self.speeds],
@@ -156,10 +121,9 @@ class Report:
                 "speed_fluctuation": self.speed_fluctuation, "warnings": list(self.warnings)}
 
     def columns(self) -> tuple[Probe, ...]:
-        """The per-speed outputs this report holds, in the registry's order (``OUTPUTS``):
-        every built-in one and the probes registered when it was computed."""
-        held = self.speeds[0].outputs if self.speeds else {}
-        return tuple(p for p in OUTPUTS.values() if p.built_in or p.name in held)
+        """The per-speed outputs this report holds, in order: every built-in one and the
+        probes of the set it was computed with."""
+        return tuple(self.outputs.values())
 
     def to_json(self) -> str:
         """The report as JSON text (``camjax program --format json``, ``summary.json``):
@@ -193,10 +157,10 @@ def _blank(value):
 
 
 def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadyState | None = None,
-            devices=None, speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION) -> Report:
+            devices=None, speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION, outputs=None) -> Report:
     """The steady-state report at every speed in ``rpm`` (see docs/program.md).
 
-    Every field but ``flights`` and ``impacts`` is the periodic steady state with contact
+    Every output but ``flights`` and ``impacts`` is the periodic steady state with contact
     held (linear); where that says contact is lost, ``flights`` lists every flight of the
     turn from the event simulation (``None`` where contact holds).  For a form-closed cam
     ``min_contact_force_n`` is the signed flank force (negative: the outer wall pushes),
@@ -208,65 +172,42 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     from the same steady state; ``geometry`` from the profile at the grid's nodes and 3600
     angles over the turn (a flat face over a cusp is a ``ValueError`` naming the angles).
     ``rpm``: ``Speeds`` or what one is built from; an implausible speed is warned of
-    (``warn_implausible``).
+    (``warn_implausible``).  ``outputs``: the per-speed outputs (``Outputs``, or a list of
+    ``probe``s beside the built-in ones; default ``default_outputs()``).
     """
     speeds = Speeds.of(rpm)
     warn_implausible(program, speeds)
     rpm = speeds.rpm
+    outputs = Outputs.of(outputs)
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
     steady = steady or SteadyState(program, speeds, devices=devices)
-    out = steady.summary(speeds)
+    out = steady.summary(speeds, outputs)
     closed = program.follower.form_closed
-    preload = min_preload_n(out.min_contact_force_n, program.follower.preload_n)
-    kinematic = _kinematic(program, rpm)
+    theta_nodes = 360.0 * steady.grid.nodes
+    values = outputs.evaluate(out.values, ProbeContext(program, rpm, speed_fluctuation, theta_nodes, out.cycles))
     ratios = _period_ratios(program, rpm)
     grooved = closed and bool(program.follower.groove_clearance_mm) and with_flight
     turns = groove_turns(program, speeds) if grooved else [None] * rpm.size
-    flywheel = flywheel_inertia_kg_m2(out.energy_fluctuation_j, rpm, speed_fluctuation)
-    stressed = program.follower.contact_width_mm is not None
-    theta_nodes = 360.0 * steady.grid.nodes
-    lost = np.flatnonzero(out.min_contact_force_n < 0) if with_flight and not closed else np.zeros(0, int)
+    lost = np.flatnonzero(values["jump"]) if with_flight and not closed else np.zeros(0, int)
     found = dict(zip(lost.tolist(), flights_at(steady, speeds[lost]) if lost.size else []))
-    stress = out.max_contact_stress_mpa
-    half_width = 2 * out.max_contact_stress_radius_mm * stress / program.materials.contact_modulus_mpa
-    computed = {  # each built-in output of the registry (OUTPUTS) at every speed
-        "max_payload_acceleration_m_s2": out.max_payload_acceleration_m_s2,
-        "max_kinematic_acceleration_m_s2": kinematic,
-        "min_contact_force_n": out.min_contact_force_n,
-        "max_contact_force_n": out.max_contact_force_n,
-        "min_preload_n": None if closed else preload,
-        "jump": None if closed else out.min_contact_force_n < 0,
-        "max_drive_torque_n_m": out.max_drive_torque_n_m,
-        "rms_drive_torque_n_m": out.rms_drive_torque_n_m,
-        "mean_drive_torque_n_m": out.mean_drive_torque_n_m,
-        "energy_fluctuation_j": out.energy_fluctuation_j,
-        "flywheel_inertia_kg_m2": flywheel,
-        "max_contact_stress_mpa": stress if stressed else None,
-        "max_contact_stress_deg": theta_nodes[np.asarray(out.max_contact_stress_node, int)] if stressed else None,
-        "contact_half_width_mm": half_width if stressed else None,
-    }
-    built_in = {p.name: computed[p.name] for p in OUTPUTS.values() if p.built_in}
-    speeds = []
+    rows = []
     for i, r in enumerate(rpm):
-        values = {name: None if v is None else v[i].item() for name, v in built_in.items()}
-        values["jump"] = bool(values["jump"])  # false for a form-closed cam
-        speeds.append(SpeedReport(
+        rows.append(SpeedReport(
             rpm=float(r),
-            **values,
+            values={name: None if v is None else np.asarray(v)[i].item() for name, v in values.items()},
             residual_vibration_mm=tuple(float(v) for v in out.residual_vibration_mm[i]),
             period_ratios=tuple(float(v) for v in ratios[i]),
             flights=tuple(found[i]) if i in found else None,
             impacts=None if turns[i] is None else tuple(turns[i].impacts),
             impacts_change_deg=None if turns[i] is None else turns[i].change_deg,
-            outputs={name: float(values[i]) for name, values in out.probes.items()},
         ))
     jump_speed = None
-    below = not closed and bool(out.min_contact_force_n[np.argmin(rpm)] < 0)
+    below = not closed and bool(values["jump"][np.argmin(rpm)])
     if not closed and not below and rpm.size > 1 and rpm.max() > rpm.min():
         jump_speed = jump_speed_rpm(steady, speeds.min(), speeds.max())
     geometry = cam_geometry(program, np.union1d(theta_nodes[:-1], np.arange(3600) * 0.1))
-    report = Report(program.name, tuple(speeds), jump_speed, below, tuple(segment_kinematics(program)),
-                    tuple(program.joins()), geometry, speed_fluctuation)
+    report = Report(program.name, tuple(rows), jump_speed, below, tuple(segment_kinematics(program)),
+                    tuple(program.joins()), geometry, speed_fluctuation, outputs=outputs)
     return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))
 
 

@@ -49,7 +49,7 @@ from ..sdof import (
 )
 from ..sharding import resolve_devices, shard_batch
 from ._machine import NodeContact, contact_stress_squared, node_contact, torque_figures, torque_jets
-from ._probes import PROBES
+from ._probes import Outputs, Probe
 from ._spec import Program
 from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
 from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
@@ -259,7 +259,7 @@ class Cycle(NamedTuple):
     max_contact_stress_radius_mm: jax.Array
     drive_torque_left: jax.Array
     drive_torque_right: jax.Array
-    probes: dict = {}  # the registered probes' values (camjax.program.register_probe)
+    outputs: dict = {}  # the compiled outputs' values (camjax.program.Outputs), filled by the speed batch
 
 
 def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True,
@@ -325,28 +325,24 @@ def residual_modes(grid: CycleGrid, q, beta, lam):
 
 
 class SpeedSummary(NamedTuple):
-    """Refined extrema and residual vibration of the periodic steady state at every speed."""
+    """The periodic steady state at every speed: ``values``, each compiled output of the
+    set (``Outputs.compiled``, name -> array over the speeds), and the stacked ``Cycle``
+    (its node series and figures; ``residual_vibration_mm`` per residual segment).  An
+    output reads as an attribute (``summary.min_contact_force_n``)."""
 
     rpm: np.ndarray
-    max_payload_acceleration_m_s2: np.ndarray
-    min_contact_force_n: np.ndarray
-    max_contact_force_n: np.ndarray
-    residual_vibration_mm: np.ndarray
-    max_drive_torque_n_m: np.ndarray
-    rms_drive_torque_n_m: np.ndarray
-    mean_drive_torque_n_m: np.ndarray
-    energy_fluctuation_j: np.ndarray
-    max_contact_stress_mpa: np.ndarray
-    max_contact_stress_node: np.ndarray
-    max_contact_stress_radius_mm: np.ndarray
-    probes: dict = {}  # name -> values at every speed (camjax.program.register_probe)
+    values: dict
+    cycles: Cycle
 
+    @property
+    def residual_vibration_mm(self) -> np.ndarray:
+        return self.cycles.residual_vibration_mm
 
-SUMMARY_OUTPUTS = ("max_payload_acceleration_m_s2", "min_contact_force_n", "max_contact_force_n",
-                   "residual_vibration_mm", "max_drive_torque_n_m", "rms_drive_torque_n_m",
-                   "mean_drive_torque_n_m", "energy_fluctuation_j", "max_contact_stress_mpa",
-                   "max_contact_stress_node", "max_contact_stress_radius_mm")
-"""The ``Cycle`` fields a speed sweep keeps (``SpeedSummary``'s, after ``rpm``)."""
+    def __getattr__(self, name):
+        values = self[1]
+        if name in values:
+            return values[name]
+        raise AttributeError(f"SpeedSummary has no attribute {name!r} (outputs: {', '.join(values)})")
 
 
 class PaddedTurn(NamedTuple):
@@ -404,16 +400,16 @@ def _node_arrays_cut(cycle: Cycle, intervals: int) -> Cycle:
         drive_torque_right=cycle.drive_torque_right[..., :intervals, :])
 
 
-@functools.partial(jax.jit, static_argnames="probes")
-def _cycles(rpm, turn: PaddedTurn, probes: tuple[str, ...] = ()) -> Cycle:
+@functools.partial(jax.jit, static_argnames="outputs")
+def _cycles(rpm, turn: PaddedTurn, outputs: tuple[Probe, ...]) -> Cycle:
     """The periodic steady state's whole ``Cycle`` at every speed of a block, with the
-    values of the ``probes`` named: one compiled program per shape of the turn (and set of
-    probes), whatever the program's values."""
+    values of the compiled ``outputs`` (``Outputs.compiled``, a static argument): one
+    compiled program per shape of the turn and set of outputs, whatever the program's
+    values."""
 
     def one(r):
         cycle = _cycle(turn.grid, turn.train, r, contact=turn.contact)
-        return cycle._replace(probes={name: jnp.asarray(PROBES[name].fn(cycle, turn), dtype=float)
-                                      for name in probes})
+        return cycle._replace(outputs={p.name: jnp.asarray(p.fn(cycle, turn), dtype=float) for p in outputs})
 
     return jax.vmap(one)(rpm)
 
@@ -421,12 +417,15 @@ def _cycles(rpm, turn: PaddedTurn, probes: tuple[str, ...] = ()) -> Cycle:
 register_types(PaddedTurn, CycleGrid, MotionGrid, Train, NodeContact, Cycle)
 
 
-def _cycles_without_probes(rpm, turn: PaddedTurn) -> Cycle:
-    return _cycles(rpm, turn)
+_BUILT_IN_COMPILED = Outputs().compiled
 
 
-_kept_cycles = exported_jit(_cycles_without_probes, "program-cycles")
-"""``_cycles`` without probes, its trace kept on disk for the next process (``camjax._traces``)."""
+def _cycles_built_in(rpm, turn: PaddedTurn) -> Cycle:
+    return _cycles(rpm, turn, _BUILT_IN_COMPILED)
+
+
+_kept_cycles = exported_jit(_cycles_built_in, "program-cycles")
+"""``_cycles`` of the built-in outputs, its trace kept on disk for the next process (``camjax._traces``)."""
 
 
 @jax.jit
@@ -460,24 +459,30 @@ class SteadyState:
         self.grid = cycle_grid(program, self.rpm_min)
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
         self.turn = PaddedTurn.of(self.grid, self.train, self.contact)
+        self._kept: tuple[dict[float, int], Cycle | None] = ({}, None)
+        """The last batch of ``cycles``: its row of each speed, and the stacked ``Cycle``."""
 
-    def summary(self, rpm) -> SpeedSummary:
-        """Refined extrema and residual vibration at every speed in ``rpm`` (``Speeds``);
-        the cycles computed on the way are kept for ``cycle`` (the flights read them)."""
+    def summary(self, rpm, outputs: Outputs | None = None) -> SpeedSummary:
+        """Refined extrema and residual vibration at every speed in ``rpm`` (``Speeds``),
+        with the compiled values of ``outputs`` (default: ``default_outputs()``); the
+        cycles computed on the way are kept for ``cycle`` (the flights read them)."""
         rpm = Speeds.of(rpm)
-        cycles = self.cycles(rpm)
-        return SpeedSummary(rpm.rpm, *(getattr(cycles, name) for name in SUMMARY_OUTPUTS), cycles.probes)
+        cycles = self.cycles(rpm, outputs)
+        return SpeedSummary(rpm.rpm, dict(cycles.outputs), cycles)
 
-    def cycles(self, rpm) -> Cycle:
-        """The whole ``Cycle`` at every speed of ``rpm`` (``Speeds``), stacked on axis 0."""
+    def cycles(self, rpm, outputs: Outputs | None = None) -> Cycle:
+        """The whole ``Cycle`` at every speed of ``rpm`` (``Speeds``), stacked on axis 0,
+        with the compiled values of ``outputs`` (``Cycle.outputs``)."""
         rpm = Speeds.of(rpm).rpm
+        outputs = Outputs.of(outputs)
         self._check_slowest(rpm)
-        out = _node_arrays_cut(self._blocks(_cycles, rpm), self.grid.intervals)
-        for name, values in out.probes.items():
-            if not np.all(np.isfinite(values)):
-                raise ValueError(f"probe {name!r} is not finite at {rpm[~np.isfinite(values)][0]:g} rpm")
+        out = _node_arrays_cut(self._blocks(_cycles, rpm, outputs=outputs), self.grid.intervals)
+        for p in outputs.compiled:
+            values = out.outputs[p.name]
+            if not p.built_in and not np.all(np.isfinite(values)):
+                raise ValueError(f"probe {p.name!r} is not finite at {rpm[~np.isfinite(values)][0]:g} rpm")
         raise_if_failed(RESULTS.successful, lambda i: f"the steady state at {rpm[i]:g} rpm",
-                        *(getattr(out, name) for name in SUMMARY_OUTPUTS[:9] if name != "residual_vibration_mm"))
+                        *(out.outputs[p.name] for p in outputs.compiled if p.built_in))
         self._kept = {float(r): i for i, r in enumerate(rpm)}, out
         return out
 
@@ -485,7 +490,7 @@ class SteadyState:
         """``cycles`` at the speeds ``rpm``: read from the last batch where every one of them
         was computed (``summary`` keeps it), else computed."""
         rpm = Speeds.of(rpm).rpm
-        kept, cycles = getattr(self, "_kept", ({}, None))
+        kept, cycles = self._kept
         if all(float(r) in kept for r in rpm):
             rows = np.array([kept[float(r)] for r in rpm], dtype=int)
             return jax.tree.map(lambda x: x[rows], cycles)
@@ -504,23 +509,24 @@ class SteadyState:
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
 
-    def _blocks(self, program, rpm: np.ndarray, keep=None):
+    def _blocks(self, program, rpm: np.ndarray, keep=None, outputs: Outputs | None = None):
         """``program`` over the speeds in blocks of ``SPEED_BLOCK`` (the last padded), each
         split over the devices (all of them, or one where the block does not split
-        evenly: one compiled program for every call); the blocks are dispatched before any
-        is waited for, and ``keep`` picks the outputs to bring back."""
+        evenly: one compiled program for every call), with the compiled ``outputs``
+        (default: the built-in ones); the blocks are dispatched before any is waited for,
+        and ``keep`` picks the outputs to bring back."""
         size = rpm.size
         padded = np.pad(rpm, (0, -size % SPEED_BLOCK), mode="edge").reshape(-1, SPEED_BLOCK)
         devices = self.devices if SPEED_BLOCK % len(self.devices) == 0 else self.devices[:1]
         keep = keep or (lambda out: out)
-        probes = tuple(PROBES)
-        if program is _cycles and not probes and len(devices) == 1 and traces_kept():  # read back from disk
+        compiled = _BUILT_IN_COMPILED if outputs is None else outputs.compiled
+        if program is _cycles and compiled == _BUILT_IN_COMPILED and len(devices) == 1 and traces_kept():  # from disk
             def run(block):
                 with jax.default_device(devices[0]):
                     return _kept_cycles(block, self.turn)
         else:
             def run(block):
-                return shard_batch(program, block, self.turn, probes, devices=devices)
+                return shard_batch(program, block, self.turn, compiled, devices=devices)
         outs = [keep(run(jnp.asarray(block))) for block in padded]
         return jax.tree.map(lambda *x: np.concatenate([np.asarray(v) for v in x])[:size], *outs)
 
@@ -529,7 +535,7 @@ class SteadyState:
         turn from the mode ``q_start`` at its start, if given)."""
         rpm = Speeds.of(rpm)[0]
         if q_start is None:
-            kept, cycles = getattr(self, "_kept", ({}, None))
+            kept, cycles = self._kept
             if rpm not in kept:
                 self._check_slowest(np.array([rpm]))
                 cycles, kept = self._blocks(_cycles, np.array([rpm])), {rpm: 0}

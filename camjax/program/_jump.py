@@ -22,15 +22,11 @@ import numpy as np
 
 from ..sdof import eigenvalue, psi_host, step_within_host
 from ._dynamics import SteadyState
+from ._probes import min_preload_n as min_preload_n
 from ._speeds import Speeds
 
 _BISECTIONS = 3  # rounds of 64-way subdivision before the secant: a bracket shrinks by 65^3
 _SAMPLES_PER_INTERVAL = 8
-
-
-def min_preload_n(min_contact_force_n, preload_n):
-    """Preload that just keeps contact: ``max(0, max over the cycle of -(k e + c e'))``."""
-    return np.maximum(0.0, preload_n - np.asarray(min_contact_force_n))
 
 
 def even_periods(rpm_lo: float, rpm_hi: float, count: int) -> np.ndarray:

@@ -30,7 +30,7 @@ from ._machine import (
     flywheel_inertia_kg_m2,
     torque_figures,
 )
-from ._probes import OUTPUTS
+from ._probes import BUILT_IN
 from ._spec import Program, _no_unknown
 from ._speeds import Speeds
 
@@ -128,9 +128,9 @@ class MachineReport:
         return json.dumps(json_ready(self.as_dict()), indent=1)
 
     def columns(self) -> tuple:
-        """The shaft's per-speed outputs: the built-in outputs (``OUTPUTS``) it holds."""
+        """The shaft's per-speed outputs: the built-in outputs (``BUILT_IN``) it holds."""
         fields = {f.name for f in dataclasses.fields(ShaftSpeedReport)}
-        return tuple(p for p in OUTPUTS.values() if p.built_in and p.name in fields)
+        return tuple(p for p in BUILT_IN if p.name in fields)
 
     def to_csv(self) -> str:
         """The shaft's totals, one row per speed (``camjax program MACHINE --format csv``)."""

@@ -318,6 +318,7 @@ _ROUTES = {
     ("POST", "/api/program"): _Handler.post_program,
     ("GET", "/api/program"): _Handler.get_program,
     ("GET", "/api/curves"): _Handler.curves,
+    ("GET", "/api/outputs"): lambda h, b, q: h._json(b.output_columns()),
     ("GET", "/api/program.toml"): _Handler.toml,
     ("GET", "/api/profile.csv"): lambda h, b, q: h.export(b, q, "csv"),
     ("GET", "/api/profile.dxf"): lambda h, b, q: h.export(b, q, "dxf"),

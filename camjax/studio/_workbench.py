@@ -113,6 +113,18 @@ class Workbench:
     cache: dict = dataclasses.field(default_factory=dict, repr=False)
     law_dir: Path | None = None
     job: DesignJob | None = None
+    outputs: object = None  # camjax.program.Outputs; None: the default outputs when analysed
+
+    def output_set(self):
+        """The per-speed outputs its reports hold (``camjax.program.Outputs``): its own, else
+        the default outputs now (the built-ins and the registered probes)."""
+        from ..program import Outputs
+
+        return Outputs.of(self.outputs)
+
+    def output_columns(self) -> list[dict]:
+        """Name, label, unit, format and doc of every per-speed output (``GET /api/outputs``)."""
+        return [p.as_dict() for p in self.output_set().values()]
 
     def touch(self) -> None:
         self.used = time.monotonic()
@@ -135,13 +147,14 @@ class Workbench:
     def analysed(self, toml: str, rpm) -> tuple:
         """``(program, steady state, report, warnings)`` of ``toml`` at ``rpm``, changing
         nothing.  The same program (the same TOML structure, whatever its layout and
-        comments) at the same speeds is analysed once per ``cache``."""
+        comments) at the same speeds and outputs (``output_set``) is analysed once per ``cache``."""
         from ..program import Program, SteadyState, analyse
 
         data = parse_toml(toml)
         program = Program.from_dict(data, base=self.base)
+        outputs = self.output_set()
         key = (json.dumps(_canonical(data), sort_keys=True, default=str), tuple(rpm.tolist()), self.with_flight,
-               self.speed_fluctuation, str(self.base))
+               self.speed_fluctuation, str(self.base), outputs)
         while True:
             with _CACHE_LOCK:
                 hit = self.cache.get(key)
@@ -156,7 +169,7 @@ class Workbench:
         try:
             steady = SteadyState(program, rpm)
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
-                                        speed_fluctuation=self.speed_fluctuation))
+                                        speed_fluctuation=self.speed_fluctuation, outputs=outputs))
             hit = (program, steady, report, list(report.get("warnings", ())))
             with _CACHE_LOCK:
                 self.cache[key] = hit
