@@ -120,3 +120,79 @@ def test_no_private_camjax_outside_the_library(path):
     uses = private_uses(path.read_text())
     where = "; ".join(f"line {line}: {what}" for line, what in uses)
     assert not uses, f"{path.relative_to(ROOT)} uses private camjax names: {where}"
+
+
+# --- inside the library: each package keeps its private names to itself -------------------
+
+LIBRARY = ROOT / "camjax"
+
+
+def _module_name(path: pathlib.Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _owner(module: str) -> str:
+    """The package a module belongs to: ``camjax.sdof`` for ``camjax.sdof._grid``;
+    ``camjax`` for the library's top-level modules (``camjax._traces``)."""
+    parts = module.split(".")
+    return ".".join(parts[:2]) if len(parts) > 1 and (LIBRARY / parts[1]).is_dir() else "camjax"
+
+
+def cross_package_private_uses(source: str, module: str, is_package: bool = False) -> list[tuple[int, str]]:
+    """Every import in the library module ``module`` of a private name of another
+    package: ``from camjax.sdof._grid import x`` or ``from ..sdof import _x`` inside
+    ``camjax.program``, ``from .._traces import _memo`` anywhere.  The library's own
+    top-level private modules (``camjax._plain``) are shared by its packages; their
+    private names are not."""
+    here = _owner(module)
+    base = module.split(".") if is_package else module.split(".")[:-1]
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                anchor = base[: len(base) - (node.level - 1)]
+                target = ".".join(anchor + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            names = [(target, alias.name) for alias in node.names]
+        elif isinstance(node, ast.Import):
+            names = [(alias.name.rsplit(".", 1)[0], alias.name.rsplit(".", 1)[-1]) for alias in node.names]
+        else:
+            continue
+        for target, name in names:
+            if target.split(".")[0] != "camjax":
+                continue
+            full = f"{target}.{name}"
+            owner = _owner(full if (LIBRARY.parent / full.replace(".", "/")).is_dir() else target)
+            if owner == here:
+                continue
+            private_module = owner != "camjax" and _private_path(target.removeprefix(owner))
+            if private_module or _private(name):
+                found.append((node.lineno, f"from {target} import {name}"))
+    return sorted(set(found))
+
+
+def test_the_library_scanner_finds_each_form():
+    source = "\n".join(
+        [
+            "from ..sdof._grid import piecewise_grid",
+            "from ..sdof import _peaks",
+            "from .._traces import kept",
+            "from .._traces import _memo",
+            "from ._dynamics import _cycle",
+            "from camjax.metrics import _refine",
+            "import camjax.sdof._batch",
+            "from ..sdof import piecewise_grid",
+        ]
+    )
+    found = cross_package_private_uses(source, "camjax.program.cycle")
+    assert [line for line, _ in found] == [1, 2, 4, 6, 7]
+
+
+@pytest.mark.parametrize("path", sorted(LIBRARY.rglob("*.py")), ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_package_imports_a_private_name_of_another(path):
+    module = _module_name(path)
+    uses = cross_package_private_uses(path.read_text(), module, path.name == "__init__.py")
+    where = "; ".join(f"line {line}: {what}" for line, what in uses)
+    assert not uses, f"{path.relative_to(ROOT)} imports private names of another package: {where}"

@@ -260,12 +260,16 @@ def run(args) -> int:
 
 def _drive_table(args) -> int:
     """``--drive-table``: the motion as a servo drive loads it (kinematic: nothing else runs)."""
-    from ..program import Program, write_drive_table
-    from ..program._drive import FILE_NAMES, check_arguments
+    from ..program import (
+        DRIVE_TABLE_FILE_NAMES,
+        Program,
+        check_drive_table_arguments,
+        write_drive_table,
+    )
 
     names = {"format": "--drive-table", "step_deg": "--drive-step", "tolerance": "--drive-tolerance"}
     try:
-        check_arguments(args.drive_table, args.drive_step, args.drive_tolerance, names)
+        check_drive_table_arguments(args.drive_table, args.drive_step, args.drive_tolerance, names)
     except ValueError as error:
         raise CliError(str(error)) from None
     if args.out is None:
@@ -274,7 +278,7 @@ def _drive_table(args) -> int:
     with file_named(path):
         program = Program.load(path)
         out = output_dir(args.out)
-        print(write_drive_table(program, out / FILE_NAMES[args.drive_table], args.drive_table,
+        print(write_drive_table(program, out / DRIVE_TABLE_FILE_NAMES[args.drive_table], args.drive_table,
                                 step_deg=args.drive_step, tolerance=args.drive_tolerance))
     return 0
 

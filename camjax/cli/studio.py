@@ -35,17 +35,16 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..program import Program
+    from ..program import Program, Speeds
     from ..studio import Studio, parse_program
-    from ..studio._workbench import parse_speeds
     from .program import is_machine, program_path
 
     if not 0 <= args.port <= 65535:
         raise CliError(f"--port: must be from 0 to 65535, got {args.port}")
     try:
-        parse_speeds(args.rpm)
+        Speeds.parse(args.rpm, "--rpm")
     except ValueError as error:
-        raise CliError(str(error).replace("rpm:", "--rpm:", 1)) from None
+        raise CliError(str(error)) from None
     path = program_path(args.file, default="feed")
     if is_machine(path):
         raise CliError(f"{path}: a machine file ([[cam]] tables); the studio edits one program file")

@@ -35,5 +35,10 @@ from ._scca import Parabolic as Parabolic
 from ._scca import SimpleHarmonic as SimpleHarmonic
 from ._scca import constant_velocity_variant as constant_velocity_variant
 from ._spline import BSplineLaw as BSplineLaw
+from ._table import MAX_TABLE_POINTS as MAX_TABLE_POINTS
+from ._table import MIN_TABLE_POINTS as MIN_TABLE_POINTS
 from ._table import TableFit as TableFit
 from ._table import TableLaw as TableLaw
+from ._table import evaluate_pieces as evaluate_pieces
+from ._table import spline_fit as spline_fit
+from ._table import table_checks as table_checks

@@ -23,8 +23,8 @@ from ._base import AbstractSearchedPeaksLaw, float_leaf
 from ._spline import _basis, _derivative_matrix, max_abs_piecewise
 
 DEGREE = 5
-MIN_POINTS = DEGREE + 1
-MAX_POINTS = 4000
+MIN_TABLE_POINTS = DEGREE + 1
+MAX_TABLE_POINTS = 4000
 """Most points of one table: the fit solves a dense system of about that many unknowns."""
 _LOG_PENALTY = (-14.0, 12.0)  # bisection range of log10 of the relative penalty
 _BISECTIONS = 30
@@ -285,7 +285,7 @@ def noise_estimate(x, y) -> float:
     correlation near -792/924 (they share six points with alternating weights); a smooth
     curve sampled coarsely gives near +1 (that is spacing, not noise: its own check)."""
     x, y = np.asarray(x, float), np.asarray(y, float)
-    if y.size < 3 * MIN_POINTS:
+    if y.size < 3 * MIN_TABLE_POINTS:
         return 0.0
     window = np.arange(y.size - 6)[:, None] + np.arange(7)
     local = x[window] - x[window].mean(axis=1, keepdims=True)
@@ -314,7 +314,7 @@ def table_checks(x, y, smoothing_mm, deviation, taylor, *, ends=None, period=Non
         (_, smooth), _ = spline_fit(x, y, reference_tol, ends=ends, period=period)
         reference = _peak_acceleration(edges, smooth)
     spacing = 1.0
-    if noise == 0 and x.size >= 2 * MIN_POINTS + 1 and (period is None or x.size % 2 == 0):
+    if noise == 0 and x.size >= 2 * MIN_TABLE_POINTS + 1 and (period is None or x.size % 2 == 0):
         keep = np.arange(0, x.size, 2)
         if period is None and keep[-1] != x.size - 1:
             keep = np.append(keep, x.size - 1)

@@ -24,8 +24,10 @@ from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
 from ._design import design_segment as design_segment
 from ._design import write_program as write_program
+from ._drive import DRIVE_TABLE_FILE_NAMES as DRIVE_TABLE_FILE_NAMES
 from ._drive import DRIVE_TABLE_FORMATS as DRIVE_TABLE_FORMATS
 from ._drive import DriveTable as DriveTable
+from ._drive import check_drive_table_arguments as check_drive_table_arguments
 from ._drive import drive_table as drive_table
 from ._drive import read_drive_table as read_drive_table
 from ._drive import write_drive_table as write_drive_table
@@ -72,9 +74,13 @@ from ._machine import node_contact as node_contact
 from ._motion import EndState as EndState
 from ._motion import Join as Join
 from ._motion import segment_kinematics as segment_kinematics
+from ._probes import BUILT_IN as BUILT_IN
 from ._probes import OUTPUTS as OUTPUTS
-from ._probes import PROBES as PROBES
+from ._probes import Outputs as Outputs
 from ._probes import Probe as Probe
+from ._probes import ProbeContext as ProbeContext
+from ._probes import default_outputs as default_outputs
+from ._probes import probe as probe
 from ._probes import register_probe as register_probe
 from ._probes import unregister_probe as unregister_probe
 from ._shaft import Machine as Machine

@@ -36,7 +36,7 @@ from ._turn import JOIN_TOLERANCE_DEG
 
 DRIVE_TABLE_FORMATS = ("csv", "xyva", "codesys", "twincat")
 """The drive-table formats ``write_drive_table`` writes and ``read_drive_table`` reads."""
-FILE_NAMES = {"csv": "drive-table.csv", "xyva": "drive-table-xyva.csv",
+DRIVE_TABLE_FILE_NAMES = {"csv": "drive-table.csv", "xyva": "drive-table-xyva.csv",
               "codesys": "drive-table-codesys.st", "twincat": "drive-table-twincat.csv"}
 """The file each format gets in ``camjax program --drive-table FORMAT --out DIR``."""
 DEFAULT_STEP_DEG = 0.1
@@ -75,7 +75,7 @@ class DriveTable(NamedTuple):
     slave_unit: str
 
 
-def check_arguments(format: str, step_deg: float, tolerance: float, names: dict | None = None) -> None:
+def check_drive_table_arguments(format: str, step_deg: float, tolerance: float, names: dict | None = None) -> None:
     """A one-line ``ValueError`` naming the argument (or ``names[argument]``) that is bad."""
     names = names or {}
     if format not in DRIVE_TABLE_FORMATS:
@@ -205,7 +205,7 @@ def drive_table(program: Program, format: str = "csv", *, step_deg: float = DEFA
     """The rows ``write_drive_table`` writes: equidistant every ``step_deg`` degrees (``csv``,
     0 to 360 both included), or the knots of the quintic Hermite interpolation within
     ``tolerance`` (slave units: mm, or degrees of swing) of the motion (the other formats)."""
-    check_arguments(format, step_deg, tolerance)
+    check_drive_table_arguments(format, step_deg, tolerance)
     return _samples(program, step_deg) if format == "csv" else _knots(program, tolerance)
 
 

@@ -181,11 +181,11 @@ def lift_from_dxf(path, follower, *, points: int = DEFAULT_POINTS, layer: str | 
     roller cannot reach a hollow narrower than itself, a flat face meets a non-convex
     profile, the follower does not reach the profile or its pivot lies inside it.
     """
-    from ..laws._table import MAX_POINTS, MIN_POINTS
+    from ..laws import MAX_TABLE_POINTS, MIN_TABLE_POINTS
     from ._follower import _check_follower
 
-    if isinstance(points, bool) or not isinstance(points, (int, np.integer)) or not MIN_POINTS <= points <= MAX_POINTS:
-        raise ValueError(f"points must be a whole number of cam angles from {MIN_POINTS} to {MAX_POINTS:,}, "
+    if isinstance(points, bool) or not isinstance(points, (int, np.integer)) or not MIN_TABLE_POINTS <= points <= MAX_TABLE_POINTS:
+        raise ValueError(f"points must be a whole number of cam angles from {MIN_TABLE_POINTS} to {MAX_TABLE_POINTS:,}, "
                          f"got {points!r}")
     _check_follower(follower)
     cam = read_dxf_profile(path, layer)

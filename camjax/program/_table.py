@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from ..checks import finite_number
-from ..laws._table import (
-    MAX_POINTS,
-    MIN_POINTS,
+from ..laws import (
+    MAX_TABLE_POINTS,
+    MIN_TABLE_POINTS,
     TableFit,
     TableLaw,
     evaluate_pieces,
@@ -92,11 +92,11 @@ def read_points(points, where: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _valid_table(table: np.ndarray, where: str, rows: list[str]):
-    if len(table) < MIN_POINTS:
-        raise ValueError(f"{where}: {len(table)} point(s); a lift table needs at least {MIN_POINTS} "
+    if len(table) < MIN_TABLE_POINTS:
+        raise ValueError(f"{where}: {len(table)} point(s); a lift table needs at least {MIN_TABLE_POINTS} "
                          "(its spline is of degree 5)")
-    if len(table) > MAX_POINTS:
-        raise ValueError(f"{where}: {len(table):,} points; the limit is {MAX_POINTS:,} (thin the table)")
+    if len(table) > MAX_TABLE_POINTS:
+        raise ValueError(f"{where}: {len(table):,} points; the limit is {MAX_TABLE_POINTS:,} (thin the table)")
     angle = table[:, 0]
     for k in range(1, len(angle)):
         if angle[k] <= angle[k - 1]:
