@@ -196,3 +196,13 @@ def test_no_package_imports_a_private_name_of_another(path):
     uses = cross_package_private_uses(path.read_text(), module, path.name == "__init__.py")
     where = "; ".join(f"line {line}: {what}" for line, what in uses)
     assert not uses, f"{path.relative_to(ROOT)} imports private names of another package: {where}"
+
+
+@pytest.mark.parametrize("path", sorted(LIBRARY.rglob("__init__.py")), ids=lambda p: str(p.relative_to(ROOT)))
+def test_every_name_of_a_package_all_is_defined(path):
+    """``from camjax.x import *`` works: each name ``__all__`` lists is bound in the package."""
+    import importlib
+
+    module = importlib.import_module(_module_name(path))
+    missing = [name for name in getattr(module, "__all__", ()) if not hasattr(module, name)]
+    assert not missing, f"{_module_name(path)}.__all__ names what it does not define: {missing}"

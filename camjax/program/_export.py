@@ -206,9 +206,3 @@ def write_dxf(prof: Profile, path, *, outer: bool = False) -> Path:
         msp.add_lwpolyline([tuple(map(float, p)) for p in points], close=True, dxfattribs={"layer": name})
     doc.saveas(path)
     return path
-
-
-def check_profile(prof: Profile, roller_radius_mm: float) -> float:
-    """Largest deviation (mm) of a profile point's distance from its pitch point from the roller radius."""
-    distance = np.linalg.norm(prof.profile - prof.pitch, axis=1)
-    return float(np.max(np.abs(distance - roller_radius_mm))) if distance.size else math.nan

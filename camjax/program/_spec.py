@@ -299,9 +299,6 @@ class Program:
     def moving_segments(self) -> list[int]:
         return [i for i, s in enumerate(self.segments) if s.moving]
 
-    def dwell_segments(self) -> list[int]:
-        return [i for i, s in enumerate(self.segments) if not s.moving]
-
     def residual_segments(self) -> list[int]:
         """The dwells and constant-velocity segments: where the residual vibration is reported."""
         return [i for i, s in enumerate(self.segments) if not s.moving or isinstance(s.law, ConstantVelocity)]

@@ -222,8 +222,4 @@ def points_toml(points) -> str:
     return "[" + ", ".join(f"[{a!r}, {y!r}]" for a, y in points) + "]"
 
 
-def is_table(law) -> bool:
-    return isinstance(law, TableLaw)
-
-
 __all__ = ["COLUMNS", "TableFit", "TableLaw", "read_csv", "read_points", "segment_law", "turn_segments"]

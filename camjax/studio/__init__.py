@@ -48,4 +48,4 @@ def show(program=None, *, rpm: str = DEFAULT_RPM, height: int = 900):
 
 
 __all__ = ["Studio", "Workbench", "studio", "show", "kinematics", "rigid_contact_force_n", "parse_program",
-           "DEFAULT_RPM", "Path"]
+           "DEFAULT_RPM"]
