@@ -7,6 +7,7 @@ segment or the field that fails, with a ``ValueError``.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from pathlib import Path
 
@@ -260,14 +261,11 @@ class Program:
 
     # -- the lift over the turn ----------------------------------------------------------
 
-    @property
+    @functools.cached_property
     def turn(self) -> Turn:
-        """The lift over the turn (``Turn``): the one object every reader of the motion asks."""
-        turn = self.__dict__.get("_turn")
-        if turn is None:
-            turn = Turn.of(self.segments)
-            object.__setattr__(self, "_turn", turn)  # a cache: the fields are frozen
-        return turn
+        """The lift over the turn (``Turn``): the one object every reader of the motion asks
+        (built once per program; the fields are frozen)."""
+        return Turn.of(self.segments)
 
     @property
     def start_deg(self) -> np.ndarray:
