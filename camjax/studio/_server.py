@@ -21,7 +21,7 @@ from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 
-from ._workbench import DEFAULT_RPM, Busy, Workbench, _file_name
+from ._workbench import DEFAULT_RPM, Busy, ReportCache, Workbench, _file_name
 
 STATIC = Path(__file__).parent / "static"
 IDLE_S = 1800.0
@@ -44,7 +44,7 @@ class Studio:
                  idle_s: float = IDLE_S):
         self.toml, self.base, self.rpm, self.with_flight, self.idle_s = toml, base, rpm, with_flight, idle_s
         self.workbenches: dict[str, Workbench] = {}
-        self.reports: dict = {}  # analyses shared by the workbenches (Workbench.update)
+        self.reports = ReportCache()  # analyses shared by the workbenches (Workbench.update)
         self._lock = threading.Lock()
         self.ready = threading.Event()  # cleared while warm() computes the first look
         self.ready.set()

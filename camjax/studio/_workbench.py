@@ -36,9 +36,20 @@ DESIGN_KNOTS = 12
 """Free B-spline coefficients of a design from the page (``camjax design``: 24)."""
 DESIGN_OBJECTIVES = ("preload", "residual")
 """The page's objectives, as ``camjax.program.design_segment`` names them."""
-_CACHE_LOCK = threading.Lock()
-_PENDING: dict = {}
-"""Analyses under way (their cache keys): a second request for one waits for it."""
+
+
+@dataclasses.dataclass
+class ReportCache:
+    """A studio's analyses, shared by its workbenches: ``reports`` by key (the oldest dropped
+    past ``CACHED_REPORTS``) and those under way (``pending``: a second request for one
+    waits for it), behind one lock."""
+
+    reports: dict = dataclasses.field(default_factory=dict)
+    pending: dict = dataclasses.field(default_factory=dict)
+    lock: threading.Lock = dataclasses.field(default_factory=threading.Lock, repr=False)
+
+    def __len__(self) -> int:
+        return len(self.reports)
 
 
 class Busy(Exception):
@@ -110,7 +121,7 @@ class Workbench:
     warnings: list = dataclasses.field(default_factory=list)
     used: float = dataclasses.field(default_factory=time.monotonic)
     lock: threading.Lock = dataclasses.field(default_factory=threading.Lock, repr=False)
-    cache: dict = dataclasses.field(default_factory=dict, repr=False)
+    cache: ReportCache = dataclasses.field(default_factory=ReportCache, repr=False)
     law_dir: Path | None = None
     job: DesignJob | None = None
     outputs: object = None  # camjax.program.Outputs; None: the default outputs when analysed
@@ -155,12 +166,13 @@ class Workbench:
         outputs = self.output_set()
         key = (json.dumps(_canonical(data), sort_keys=True, default=str), tuple(rpm.tolist()), self.with_flight,
                self.speed_fluctuation, str(self.base), outputs)
+        cache = self.cache
         while True:
-            with _CACHE_LOCK:
-                hit = self.cache.get(key)
-                pending = None if hit is not None else _PENDING.get(key)
+            with cache.lock:
+                hit = cache.reports.get(key)
+                pending = None if hit is not None else cache.pending.get(key)
                 if hit is None and pending is None:
-                    _PENDING[key] = threading.Event()
+                    cache.pending[key] = threading.Event()
             if hit is not None:
                 return hit
             if pending is None:
@@ -171,13 +183,13 @@ class Workbench:
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
                                         speed_fluctuation=self.speed_fluctuation, outputs=outputs))
             hit = (program, steady, report, list(report.get("warnings", ())))
-            with _CACHE_LOCK:
-                self.cache[key] = hit
-                while len(self.cache) > CACHED_REPORTS:
-                    self.cache.pop(next(iter(self.cache)))
+            with cache.lock:
+                cache.reports[key] = hit
+                while len(cache.reports) > CACHED_REPORTS:
+                    cache.reports.pop(next(iter(cache.reports)))
         finally:
-            with _CACHE_LOCK:
-                _PENDING.pop(key).set()
+            with cache.lock:
+                cache.pending.pop(key).set()
         return hit
 
     def curves(self, rpm: float | None = None) -> dict:
