@@ -95,3 +95,30 @@ def test_a_traced_speed_is_checked_when_the_computation_runs(feed):
             jax.block_until_ready(force(jnp.array([1200.0, bad])))
     with pytest.raises(ValueError, match="rpm_min is needed where rpm is traced"):
         jax.jit(lambda r: cp.node_contact_force(feed, r))(jnp.array([300.0]))
+
+
+def test_speeds_are_a_value_checked_once_when_built(feed):
+    """``Speeds``: built from a range string, a list, an array or a number, checked then;
+    read-only; passed through unchecked by ``Speeds.of``; a subset is a ``Speeds``."""
+    speeds = cp.Speeds.parse("300:900:101")
+    np.testing.assert_array_equal(speeds.rpm, np.linspace(300.0, 900.0, 101))
+    assert cp.Speeds.parse("300,450").tolist() == [300.0, 450.0] == cp.Speeds([300, 450]).tolist()
+    assert cp.Speeds(np.array([600.0])) == cp.Speeds(600.0) and len(cp.Speeds(600.0)) == 1
+    assert cp.Speeds.of(speeds) is speeds
+    assert (speeds.min(), speeds.max(), speeds[0]) == (300.0, 900.0, 300.0)
+    assert isinstance(speeds[speeds.rpm > 600.0], cp.Speeds) and speeds[speeds.rpm > 600.0].min() > 600.0
+    with pytest.raises(ValueError):
+        speeds.rpm[0] = -1.0  # read-only: no bad speed after the check
+    source = np.array([300.0, 600.0])
+    kept = cp.Speeds(source)
+    source[0] = -1.0  # the value is its own copy
+    assert kept.min() == 300.0
+    for text, message in (("300,-1", "rpm: speeds must be positive and finite, got '300,-1'"),
+                          ("900:300:3", "rpm: START must be below STOP"),
+                          ("300:900:x", "rpm: COUNT must be an integer")):
+        with pytest.raises(ValueError, match=f"^{message}"):
+            cp.Speeds.parse(text)
+    # an entry point takes the value as it is: |lift| Ca / t^2, the feed's closed form
+    expected = cp.kinematic_acceleration_m_s2(feed, [300.0, 900.0])
+    np.testing.assert_array_equal(cp.kinematic_acceleration_m_s2(feed, cp.Speeds.parse("300:900:2")), expected)
+    np.testing.assert_allclose(expected[1] / expected[0], 9.0, rtol=1e-14)
