@@ -12,6 +12,7 @@ import subprocess
 import sys
 import time
 import urllib.error
+import urllib.parse
 import urllib.request
 import zipfile
 from pathlib import Path
@@ -55,8 +56,11 @@ def cli_json(*args) -> dict:
 
 
 def call(url, data: str | None = None):
-    """(status, decoded JSON) of a GET, or of a POST of ``data``."""
-    request = urllib.request.Request(url, data=None if data is None else data.encode(),
+    """(status, decoded JSON) of a GET, or of a POST of ``data`` (a TOML text) as the page sends
+    it: from the studio's own origin."""
+    parts = urllib.parse.urlsplit(url)
+    headers = {} if data is None else {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/toml"}
+    request = urllib.request.Request(url, data=None if data is None else data.encode(), headers=headers,
                                      method="GET" if data is None else "POST")
     try:
         with urllib.request.urlopen(request, timeout=600) as response:

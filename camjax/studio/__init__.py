@@ -42,10 +42,10 @@ def show(program=None, *, rpm: str = DEFAULT_RPM, height: int = 900):
     from IPython.display import IFrame
 
     running = studio(program, rpm=rpm)
-    frame = IFrame(running.url, width="100%", height=height)
+    frame = IFrame(running.page_url, width="100%", height=height)
     frame.studio = running
     return frame
 
 
 __all__ = ["Studio", "Workbench", "studio", "show", "kinematics", "rigid_contact_force_n", "parse_program",
-           "DEFAULT_RPM", "Path"]
+           "DEFAULT_RPM"]

@@ -36,9 +36,12 @@ DESIGN_KNOTS = 12
 """Free B-spline coefficients of a design from the page (``camjax design``: 24)."""
 DESIGN_OBJECTIVES = ("preload", "residual")
 """The page's objectives, as ``camjax.program.design_segment`` names them."""
-_CACHE_LOCK = threading.Lock()
-_PENDING: dict = {}
-"""Analyses under way (their cache keys): a second request for one waits for it."""
+MAX_SPEEDS = 1001
+"""Most speeds one analysis of the studio takes (each holds about 0.45 MB of histories while
+it is analysed: a range of 100,000 speeds would take the machine's memory)."""
+PROGRAM_FILE_KEYS = ("file", "dxf")
+"""Keys of ``[program]`` and of a ``[[segment]]`` that name a file to read (and ``law``
+when it ends in ``.json``)."""
 
 
 class Busy(Exception):
@@ -60,15 +63,112 @@ def parse_program(text: str, base: Path | None = None):
     return Program.from_dict(parse_toml(text), base=base)
 
 
+def _speed_count(count: int, what: str) -> None:
+    if count > MAX_SPEEDS:
+        raise ValueError(f"{what}: at most {MAX_SPEEDS:,} speeds in one analysis, got {count:,}")
+
+
 def parse_speeds(text: str) -> np.ndarray:
-    """The speed range ``text`` (``START:STOP:COUNT`` or ``V1,V2,...``, rpm), or a ValueError."""
-    try:
-        rpm = parse_range(str(text), "rpm")
-    except ValueError as error:
-        raise ValueError(str(error)) from None
-    if not all(r > 0 for r in rpm):
+    """The speed range ``text`` (``START:STOP:COUNT`` or ``V1,V2,...``, rpm), or a ValueError;
+    more than ``MAX_SPEEDS`` speeds are refused before any is built."""
+    text = str(text)
+    if ":" not in text:
+        _speed_count(text.count(",") + 1, "rpm")
+    rpm = parse_range(text, "rpm", check_count=_speed_count)
+    if not all(math.isfinite(r) and r > 0 for r in rpm):
         raise ValueError(f"rpm: speeds must be positive, got {text!r}")
     return rpm
+
+
+class OutsideRoot(ValueError):
+    """A program names a file the studio may not read (HTTP 403)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class FileAccess:
+    """Which files a program posted to the studio may name: those under ``root`` (the folder
+    the studio was started on) or under one of ``folders`` (the studio's designed laws), and
+    the exact ``files`` the starting program names.  Paths are resolved (``..`` and symbolic
+    links followed) before they are compared, and nothing is read here."""
+
+    root: Path
+    folders: tuple[Path, ...] = ()
+    files: frozenset[Path] = frozenset()
+
+    def check(self, data: dict, base: Path | None, *, relative: bool = True) -> None:
+        """A one-line ``OutsideRoot`` naming the key of the first file reference outside;
+        ``relative=False`` (a program opened in the page, whose own folder is unknown)
+        refuses every relative reference."""
+        for where, name in program_files(data):
+            path = Path(name).expanduser()
+            if not path.is_absolute():
+                if not relative:
+                    raise OutsideRoot(f"{where}: {name!r} is relative to the opened file's folder, which the "
+                                      f"page cannot know; give its full path under {self.root}, or start "
+                                      "camjax studio on the program file")
+                path = (base or self.root) / path
+            path = path.resolve()
+            inside = any(path.is_relative_to(folder) for folder in (self.root, *self.folders))
+            if not inside and path not in self.files:
+                raise OutsideRoot(f"{where}: {name!r} is outside the studio's folder {self.root}; the studio "
+                                  "reads only files under the folder it was started on")
+
+
+def program_files(data: dict) -> list[tuple[str, str]]:
+    """``(where, name)`` of every file a program's TOML structure names (``where`` as its
+    errors say it: ``[program] file``, ``segment 2: law``)."""
+    found = []
+    header = data.get("program") if isinstance(data, dict) else None
+    tables = [("[program]", header)] if isinstance(header, dict) else []
+    segments = data.get("segment") if isinstance(data, dict) else None
+    if isinstance(segments, list):
+        tables += [(f"segment {i}:", s) for i, s in enumerate(segments, 1) if isinstance(s, dict)]
+    for where, table in tables:
+        for key in PROGRAM_FILE_KEYS:
+            if isinstance(table.get(key), str):
+                found.append((f"{where} {key}", table[key]))
+        law = table.get("law")
+        if isinstance(law, str) and law.endswith(".json"):
+            found.append((f"{where} law", law))
+    return found
+
+
+class ReportCache:
+    """Analyses shared by a studio's workbenches, keyed by program and speeds (oldest dropped
+    first beyond ``size``); a second request for an analysis under way waits for it."""
+
+    def __init__(self, size: int = CACHED_REPORTS):
+        self.size = size
+        self._lock = threading.Lock()
+        self._done: dict = {}
+        self._pending: dict = {}
+
+    def __len__(self) -> int:
+        return len(self._done)
+
+    def get(self, key, compute):
+        """The analysis of ``key``, from ``compute()`` when neither kept nor under way."""
+        while True:
+            with self._lock:
+                hit = self._done.get(key)
+                pending = None if hit is not None else self._pending.get(key)
+                if hit is None and pending is None:
+                    self._pending[key] = threading.Event()
+            if hit is not None:
+                return hit
+            if pending is None:
+                break
+            pending.wait()  # another request analyses it: its answer is this one's
+        try:
+            hit = compute()
+            with self._lock:
+                self._done[key] = hit
+                while len(self._done) > self.size:
+                    self._done.pop(next(iter(self._done)))
+        finally:
+            with self._lock:
+                self._pending.pop(key).set()
+        return hit
 
 
 def kinematics(program, theta_deg: np.ndarray) -> dict[str, np.ndarray]:
@@ -113,9 +213,11 @@ class Workbench:
     warnings: list = dataclasses.field(default_factory=list)
     used: float = dataclasses.field(default_factory=time.monotonic)
     lock: threading.Lock = dataclasses.field(default_factory=threading.Lock, repr=False)
-    cache: dict = dataclasses.field(default_factory=dict, repr=False)
+    cache: ReportCache = dataclasses.field(default_factory=ReportCache, repr=False)
     law_dir: Path | None = None
     job: DesignJob | None = None
+    access: FileAccess | None = None
+    """Which files a program may name (``None``: any, as the program API reads them)."""
 
     def touch(self) -> None:
         self.used = time.monotonic()
@@ -126,49 +228,36 @@ class Workbench:
             self.update(self.toml, self.rpm_text)
         return self.report
 
-    def update(self, toml: str, rpm_text: str | None = None) -> dict:
+    def update(self, toml: str, rpm_text: str | None = None, *, opened: bool = False) -> dict:
         """Replace the program (and the speeds): the new report, or a ValueError that
-        leaves the last good state as it was."""
+        leaves the last good state as it was.  ``opened``: the text is a file opened in the
+        page, so a file it names relative to itself cannot be found (refused)."""
         rpm_text = self.rpm_text if rpm_text is None else str(rpm_text)
         rpm = parse_speeds(rpm_text)
-        self.program, self.steady, self.report, self.warnings = self.analysed(toml, rpm)
+        self.program, self.steady, self.report, self.warnings = self.analysed(toml, rpm, opened=opened)
         self.toml, self.rpm_text, self.rpm = toml, rpm_text, rpm
         return self.report
 
-    def analysed(self, toml: str, rpm: np.ndarray) -> tuple:
+    def analysed(self, toml: str, rpm: np.ndarray, *, opened: bool = False) -> tuple:
         """``(program, steady state, report, warnings)`` of ``toml`` at ``rpm``, changing
         nothing.  The same program (the same TOML structure, whatever its layout and
         comments) at the same speeds is analysed once per ``cache``."""
         from ..program import Program, SteadyState, analyse
 
         data = parse_toml(toml)
+        if self.access is not None:
+            self.access.check(data, self.base, relative=not opened)
         program = Program.from_dict(data, base=self.base)
         key = (json.dumps(_canonical(data), sort_keys=True, default=str), tuple(rpm.tolist()), self.with_flight,
                self.speed_fluctuation, str(self.base))
-        while True:
-            with _CACHE_LOCK:
-                hit = self.cache.get(key)
-                pending = None if hit is not None else _PENDING.get(key)
-                if hit is None and pending is None:
-                    _PENDING[key] = threading.Event()
-            if hit is not None:
-                return hit
-            if pending is None:
-                break
-            pending.wait()  # another request analyses it: its answer is this one's
-        try:
+
+        def compute():
             steady = SteadyState(program, float(min(rpm)))
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
                                         speed_fluctuation=self.speed_fluctuation))
-            hit = (program, steady, report, list(report.get("warnings", ())))
-            with _CACHE_LOCK:
-                self.cache[key] = hit
-                while len(self.cache) > CACHED_REPORTS:
-                    self.cache.pop(next(iter(self.cache)))
-        finally:
-            with _CACHE_LOCK:
-                _PENDING.pop(key).set()
-        return hit
+            return program, steady, report, list(report.get("warnings", ()))
+
+        return self.cache.get(key, compute)
 
     def curves(self, rpm: float | None = None) -> dict:
         """Everything the page draws beside the report: the kinematics over the turn, the
@@ -184,7 +273,10 @@ class Workbench:
             raise ValueError(f"rpm: the chosen speed must be at or above the lowest speed of the "
                              f"range ({lowest:g} rpm), got {rpm!r}")
         theta = np.linspace(0.0, 360.0, TURN_POINTS)
-        h = response(program, float(rpm), steady=self.steady)
+        try:
+            h = response(program, float(rpm), steady=self.steady)
+        except (OverflowError, FloatingPointError):
+            raise ValueError(f"rpm: {rpm:g} rpm is too fast to compute a turn at (a number overflows)") from None
         prof = profile(program, PROFILE_POINTS)
         f = program.follower
         return json_ready({

@@ -22,6 +22,7 @@ let chosen = null;       // the chosen speed (null: the server's choice)
 let report = null;       // last good report
 let curves = null;       // last good curves
 let lastField = null;    // the input edited last (where an error is shown)
+let opened = false;      // the program came from "Open TOML": files it names relative to itself cannot be read
 let timer = null, inFlight = false, dirty = false;
 const charts = {};
 
@@ -33,7 +34,8 @@ const api = (path, params = {}) =>
 
 function tomlValue(v) {
   if (typeof v === "string") return JSON.stringify(v);
-  if (typeof v === "number") return String(v);
+  // a whole number beyond 2^31 in exponent form: TOML reads it as a float, not a 64-bit integer
+  if (typeof v === "number") return Number.isInteger(v) && Math.abs(v) >= 2 ** 31 ? v.toExponential() : String(v);
   if (typeof v === "boolean") return String(v);
   if (Array.isArray(v)) return "[" + v.map(tomlValue).join(", ") + "]";
   return "{ " + Object.entries(v).map(([k, x]) => `${k} = ${tomlValue(x)}`).join(", ") + " }";
@@ -235,8 +237,8 @@ async function send() {
   document.body.dataset.busy = "1";
   setStatus("computing\u2026", "busy");
   try {
-    const response = await fetch(api("program", {rpm: rpmText}), {method: "POST", body: toToml(model),
-      headers: {"Content-Type": "application/toml"}});
+    const response = await fetch(api("program", {rpm: rpmText, ...(opened ? {opened: 1} : {})}),
+      {method: "POST", body: toToml(model), headers: {"Content-Type": "application/toml"}});
     const answer = await response.json();
     if (!response.ok) { showError(answer.error); return; }
     report = answer;
@@ -578,10 +580,12 @@ $("open").addEventListener("change", async (e) => {
   e.target.value = "";
   document.body.dataset.busy = "1";
   setStatus("computing\u2026", "busy");
-  const response = await fetch(api("program", {rpm: rpmText}), {method: "POST", body: text});
+  const response = await fetch(api("program", {rpm: rpmText, opened: 1}), {method: "POST", body: text,
+    headers: {"Content-Type": "application/toml"}});
   const answer = await response.json();
   if (!response.ok) { lastField = null; showError(`${file.name}: ${answer.error}`); document.body.dataset.busy = "0"; return; }
   report = answer;
+  opened = true;
   const state = await (await fetch(api("program"))).json();
   load(state);
   clearErrors();
