@@ -13,9 +13,7 @@ import urllib.parse
 import pytest
 
 from camjax import program as cp
-from camjax.studio import Studio
-from camjax.studio._server import MAX_BODY
-from camjax.studio._workbench import MAX_SPEEDS
+from camjax.studio import MAX_BODY, MAX_SPEEDS, Studio
 
 FEED = cp.example_path("feed").read_text()
 SECRET = "the-secret-line-7f3a"
@@ -70,6 +68,14 @@ def post(studio, path, body, **headers):
     for k in [k for k, v in headers.items() if v is None]:
         sent.pop(k.replace("_", "-"))
     return request(studio, "POST", path, body, sent)
+
+
+def read_all(sock) -> str:
+    """Everything the server sends before it closes the connection."""
+    chunks = []
+    while chunk := sock.recv(65536):
+        chunks.append(chunk)
+    return b"".join(chunks).decode()
 
 
 def error(text: str) -> str:
@@ -208,7 +214,7 @@ def test_a_body_too_large_is_a_413_unread(running):
                 f"Content-Type: application/toml\r\nContent-Length: {MAX_BODY + 1}\r\n\r\n"
             ).encode()
         )
-        answer = sock.recv(65536).decode()
+        answer = read_all(sock)
     assert answer.startswith("HTTP/1.0 413") or answer.startswith("HTTP/1.1 413"), answer
     assert f"the request body is {MAX_BODY + 1:,} bytes, more than {MAX_BODY:,}" in answer
 
@@ -223,7 +229,7 @@ def test_a_bad_content_length_is_a_400_in_one_line(running, length):
                 f"Content-Type: application/toml\r\nContent-Length: {length}\r\n\r\n"
             ).encode()
         )
-        answer = sock.recv(65536).decode()
+        answer = read_all(sock)
     assert " 400 " in answer.splitlines()[0]
     assert json.loads(answer.split("\r\n\r\n", 1)[1]) == {
         "error": f"Content-Length: must be a whole number of bytes, got {length!r}"
@@ -319,12 +325,11 @@ def test_the_starting_program_may_name_files_beside_its_folder(tmp_path):
 
     laws.save(laws.get("cycloidal"), law)
     toml = LAW.replace("{file}", "../laws/rise.json")
-    studio = Studio(toml, base=tmp_path / "cams", timeout_s=1.0)
+    studio = Studio(toml, base=tmp_path / "cams", timeout_s=1.0).start(warm=False)
     try:
         studio.access.check(tomllib.loads(toml), tmp_path / "cams")
         other = LAW.replace("{file}", "../laws/other.json")
         with pytest.raises(ValueError, match="'../laws/other.json' is outside the studio's folder"):
             studio.access.check(tomllib.loads(other), tmp_path / "cams")
     finally:
-        studio.httpd.server_close()
-        studio._laws.cleanup()
+        studio.stop()
