@@ -319,7 +319,7 @@ def test_page_edits_saves_and_reloads(server, tmp_path):
         page.click("#d-keep")
         page.wait_for_function(f"document.querySelector('#design').dataset.state === 'kept' && {idle}",
                                timeout=REDRAW_MS)
-        assert page.input_value('select[data-seg="2"][data-key="law"]').endswith(".json")
+        assert page.input_value('input[data-seg="2"][data-key="law"]').endswith(".json")
         assert page.inner_text("#save") == "Save TOML + laws (zip)"
         assert not errors, errors
         browser.close()

@@ -181,9 +181,10 @@ def kinematics(program, theta_deg: np.ndarray) -> dict[str, np.ndarray]:
 
 def rigid_contact_force_n(program, lift_mm: np.ndarray, acceleration_m_s2: np.ndarray) -> np.ndarray:
     """The contact force of a rigid follower train: ``F_0 + k_s y + m y''`` (docs/program.md,
-    the limit ``k -> inf``)."""
+    the limit ``k -> inf``); a grooved cam has no spring and no preload (``m y''``)."""
     f = program.follower
-    return f.preload_n + f.spring_rate * 1e-3 * lift_mm + f.mass_kg * acceleration_m_s2
+    preload = 0.0 if f.form_closed else f.preload_n  # a groove holds the follower: no spring, no preload
+    return preload + f.spring_rate * 1e-3 * lift_mm + f.mass_kg * acceleration_m_s2
 
 
 def _canonical(value):
@@ -288,16 +289,20 @@ class Workbench:
                         "outer": prof.outer if f.form_closed else None,
                         "flat_face": prof.flat_face},
             "follower": dataclasses.asdict(f) | {"form_closed": f.form_closed},
-            "warnings": self.warnings,
+            "warnings": self.warnings + ([f"follower.preload_n = {f.preload_n:g} N does nothing on a grooved cam "
+                                          "(no spring_rate_n_per_mm): the groove holds the follower"]
+                                         if f.form_closed and f.preload_n else []),
         })
 
     def state(self) -> dict:
         """The program as its TOML structure (for the page's tables), its text and the speeds;
         ``bundle``: whether it holds a designed law (saved as a zip with its law files)."""
         from .. import laws
+        from ..program import Follower
 
+        defaults = {f.name: f.default for f in dataclasses.fields(Follower) if f.default is not dataclasses.MISSING}
         return {"toml": self.toml, "program": tomllib.loads(self.toml), "rpm": self.rpm_text,
-                "laws": [*laws.names(), "constant-velocity", "polynomial"],
+                "laws": [*laws.names(), "constant-velocity", "polynomial"], "follower_defaults": defaults,
                 "bundle": self.law_dir is not None and self.law_dir.as_posix() in self.toml,
                 "design": {"steps": DESIGN_STEPS, "knots": DESIGN_KNOTS, "objectives": list(DESIGN_OBJECTIVES)}}
 
