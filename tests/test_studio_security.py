@@ -5,10 +5,15 @@ answered) before any compiling."""
 
 import http.client
 import json
+import signal
 import socket
+import subprocess
+import sys
 import time
 import tomllib
+import urllib.error
 import urllib.parse
+import urllib.request
 
 import pytest
 
@@ -333,3 +338,41 @@ def test_the_starting_program_may_name_files_beside_its_folder(tmp_path):
             studio.access.check(tomllib.loads(other), tmp_path / "cams")
     finally:
         studio.stop()
+
+
+def test_the_command_beyond_loopback_warns_and_prints_the_token():
+    server = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "camjax",
+            "studio",
+            "indexer",
+            "--no-browser",
+            "--port",
+            "0",
+            "--host",
+            "0.0.0.0",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        warning, line = server.stderr.readline(), server.stdout.readline()
+        assert warning.startswith(
+            "camjax studio: warning: serving on 0.0.0.0, beyond this machine: whoever has"
+        )
+        url = line[line.index("http://") :].split()[0]
+        base, token = url.split("/?token=")
+        assert len(token) >= 40
+        port = base.rsplit(":", 1)[1]
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=60)
+        assert refused.value.code == 403
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/?token={token}", timeout=60) as page:
+            assert "<title>camjax studio</title>" in page.read().decode()
+    finally:
+        server.send_signal(signal.SIGINT)
+        server.communicate(timeout=60)
+    assert server.returncode == 0

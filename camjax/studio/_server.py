@@ -277,6 +277,7 @@ class _Handler(BaseHTTPRequestHandler):
         query = {k: v[-1] for k, v in parse_qs(parts.query).items()}
         session = query.get("session", "default")[:64]
         route = (method, parts.path)
+        self._cookies = []
         try:
             self._admit(studio, method, query)
             self.body = self._body() if method == "POST" else ""  # all of it, before any lock
