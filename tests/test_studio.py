@@ -336,8 +336,8 @@ def test_page_edits_saves_and_reloads(server, tmp_path):
 
 
 def test_page_says_what_an_edit_does(server):
-    """While an error stands the views are marked stale and Save says it saves the last good
-    program; a parameterised law typed into the law cell reaches the library (its message
+    """A bad chosen speed's message goes when a good one is chosen; while an error of the
+    program stands the views are marked stale and Save says it saves the last good program; a parameterised law typed into the law cell reaches the library (its message
     shown) and keeps the lift; a flat face clears the roller's radius; an empty spring rate
     says the cam is grooved, whose rigid force has no preload (the preload warned of)."""
     sync_playwright = _browser()
@@ -351,6 +351,12 @@ def test_page_says_what_an_edit_does(server):
         page.goto(server.url)
         page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
         page.wait_for_function(idle, timeout=REDRAW_MS)
+        for speed in ("fast", "700"):  # a bad chosen speed's message goes with a good one
+            page.fill("#chosen", speed)
+            page.dispatch_event("#chosen", "change")
+            page.wait_for_function(f"{'!' if speed == '700' else ''}document.querySelector('.err') && {idle}",
+                                   timeout=REDRAW_MS)
+            assert page.evaluate("document.body.dataset.stale") == "0"  # the program is good
         mass = '#follower input[data-key="mass_kg"]'
         page.fill(mass, "heavy")
         page.wait_for_selector(".err", timeout=REDRAW_MS)

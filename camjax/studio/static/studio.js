@@ -17,7 +17,8 @@ let bundle = false;      // the program holds a designed law: saved as a zip wit
 let designDefaults = {steps: 60};   // the server's (GET /api/program)
 let followerDefaults = {};          // what an empty follower field stands for (GET /api/program)
 const dwellLift = new WeakMap();    // a segment's lift while it is a dwell, restored with a law
-let rollerCleared = false;          // the switch to a flat face has just cleared the roller's radius
+let rollerCleared = false;
+let errorFrom = null;               // what the standing error came from: "program" or "chosen" (the speed)          // the switch to a flat face has just cleared the roller's radius
 let polling = null;      // the design's progress timer
 let laws = [];
 let rpmText = "";
@@ -280,11 +281,13 @@ function clearErrors() {
   document.querySelectorAll(".err").forEach((e) => e.remove());
   document.querySelectorAll(".bad").forEach((e) => e.classList.remove("bad"));
   markStale(false);
+  errorFrom = null;
 }
 
-function showError(message) {
+function showError(message, from = "program") {
   clearErrors();
-  markStale(true);
+  errorFrom = from;
+  markStale(from === "program");
   setStatus(message, "error");
   const span = document.createElement("span");
   span.className = "err";
@@ -331,7 +334,8 @@ async function loadCurves() {
   const params = chosen === null ? {} : {rpm: chosen};
   const response = await fetch(api("curves", params));
   const answer = await response.json();
-  if (!response.ok) { showError(answer.error); return; }
+  if (!response.ok) { showError(answer.error, "chosen"); return; }
+  if (errorFrom === "chosen") clearErrors();  // a good speed clears the bad one's message
   curves = answer;
   chosen = curves.rpm;
   $("chosen").value = chosen;
