@@ -275,7 +275,8 @@ class Workbench:
                              f"range ({lowest:g} rpm), got {rpm!r}")
         theta = np.linspace(0.0, 360.0, TURN_POINTS)
         try:
-            h = response(program, float(rpm), steady=self.steady)
+            with np.errstate(over="raise"):
+                h = response(program, float(rpm), steady=self.steady)
         except (OverflowError, FloatingPointError):
             raise ValueError(f"rpm: {rpm:g} rpm is too fast to compute a turn at (a number overflows)") from None
         prof = profile(program, PROFILE_POINTS)
