@@ -376,3 +376,16 @@ def test_the_command_beyond_loopback_warns_and_prints_the_token():
         server.send_signal(signal.SIGINT)
         server.communicate(timeout=60)
     assert server.returncode == 0
+
+
+@pytest.mark.parametrize("site", ["cross-site", "same-site"])
+def test_another_sites_page_gets_no_work_done(running, site):
+    """A browser names who asked (``Sec-Fetch-Site``): another site's image or script asking
+    the API is refused before any work; a link to the page itself is followed."""
+    status, text = request(running, "GET", "/api/report", headers={"Sec-Fetch-Site": site})
+    assert (
+        status == 403
+        and error(text)
+        == f"Sec-Fetch-Site: the API answers the studio's own page, not a {site} one"
+    )
+    assert request(running, "GET", "/", headers={"Sec-Fetch-Site": site})[0] == 200

@@ -339,6 +339,11 @@ class _Handler(BaseHTTPRequestHandler):
                               "holds it as ?token=...)")
             if "token" in query:
                 self._cookies = [f"{cookie}={studio.token}; Path=/; HttpOnly; SameSite=Strict"]
+        fetched_from = self.headers.get("Sec-Fetch-Site", "same-origin")
+        if self.path.startswith("/api/") and fetched_from not in ("same-origin", "none"):
+            # a browser says another site's page asked (an image, a script): no work for it
+            raise Refused(HTTPStatus.FORBIDDEN, f"Sec-Fetch-Site: the API answers the studio's own page, "
+                          f"not a {fetched_from} one")
         if method != "POST":
             return
         origin = self.headers.get("Origin")
