@@ -12,6 +12,7 @@ import subprocess
 import sys
 import time
 import urllib.error
+import urllib.parse
 import urllib.request
 import zipfile
 from pathlib import Path
@@ -55,8 +56,11 @@ def cli_json(*args) -> dict:
 
 
 def call(url, data: str | None = None):
-    """(status, decoded JSON) of a GET, or of a POST of ``data``."""
-    request = urllib.request.Request(url, data=None if data is None else data.encode(),
+    """(status, decoded JSON) of a GET, or of a POST of ``data`` (a TOML text) as the page sends
+    it: from the studio's own origin."""
+    parts = urllib.parse.urlsplit(url)
+    headers = {} if data is None else {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/toml"}
+    request = urllib.request.Request(url, data=None if data is None else data.encode(), headers=headers,
                                      method="GET" if data is None else "POST")
     try:
         with urllib.request.urlopen(request, timeout=600) as response:
@@ -123,6 +127,16 @@ def test_bad_program_is_a_400_with_the_library_message(server):
     assert status == 400 and answer["error"].startswith("rpm:")
     status, answer = call(server.url + "api/curves?rpm=100")  # the default session's range
     assert status == 400 and "lowest speed of the range (400 rpm)" in answer["error"]
+    status, answer = call(server.url + "api/curves?rpm=1e300")
+    assert status == 400 and answer == {"error": "rpm: 1e+300 rpm is too fast to compute a turn at (a number overflows)"}
+
+
+def test_a_number_too_large_for_an_integer_is_a_400(server):
+    """A radius written as a whole number beyond 64 bits (the page writes ``1e+12``, a float)."""
+    huge = FEED.replace("base_radius_mm = 40", "base_radius_mm = 100000000000000000000")
+    status, answer = call(server.url + "api/program?session=e", huge)
+    assert status == 400 and answer["error"].startswith("a number of the program is too large to compute with (")
+    assert answer["error"].endswith("write large numbers as floats (1e12)") and "\n" not in answer["error"]
 
 
 DESIGN_STEPS = 12  # few steps: enough to lower the feed cam's preload, a few seconds each
@@ -315,8 +329,81 @@ def test_page_edits_saves_and_reloads(server, tmp_path):
         page.click("#d-keep")
         page.wait_for_function(f"document.querySelector('#design').dataset.state === 'kept' && {idle}",
                                timeout=REDRAW_MS)
-        assert page.input_value('select[data-seg="2"][data-key="law"]').endswith(".json")
+        assert page.input_value('input[data-seg="2"][data-key="law"]').endswith(".json")
         assert page.inner_text("#save") == "Save TOML + laws (zip)"
+        assert not errors, errors
+        browser.close()
+
+
+def test_page_says_what_an_edit_does(server):
+    """A bad chosen speed's message goes when a good one is chosen; while an error of the
+    program stands the views are marked stale and Save says it saves the last good program; a parameterised law typed into the law cell reaches the library (its message
+    shown) and keeps the lift; a flat face clears the roller's radius; an empty spring rate
+    says the cam is grooved, whose rigid force has no preload (the preload warned of)."""
+    sync_playwright = _browser()
+    idle = "document.body.dataset.busy === '0'"
+    no_error = f"!document.querySelector('.err') && {idle}"
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        page = browser.new_page(viewport={"width": 1600, "height": 1250})
+        errors = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(server.url)
+        page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
+        page.wait_for_function(idle, timeout=REDRAW_MS)
+        for speed in ("fast", "700"):  # a bad chosen speed's message goes with a good one
+            page.fill("#chosen", speed)
+            page.dispatch_event("#chosen", "change")
+            page.wait_for_function(f"{'!' if speed == '700' else ''}document.querySelector('.err') && {idle}",
+                                   timeout=REDRAW_MS)
+            assert page.evaluate("document.body.dataset.stale") == "0"  # the program is good
+        mass = '#follower input[data-key="mass_kg"]'
+        page.fill(mass, "heavy")
+        page.wait_for_selector(".err", timeout=REDRAW_MS)
+        assert page.evaluate("document.body.dataset.stale") == "1"
+        assert page.inner_text("#save") == "Save TOML (last good program)"
+        page.fill(mass, "1.5")  # the starting program again
+        page.wait_for_function(no_error, timeout=REDRAW_MS)
+        assert page.evaluate("document.body.dataset.stale") == "0" and page.inner_text("#save") == "Save TOML"
+        # a law with a parameter, typed: the library's own message for it, the lift kept
+        law = 'input[data-seg="2"][data-key="law"]'
+        page.fill(law, "poly:7")
+        page.press(law, "Enter")
+        page.wait_for_selector(".err", timeout=REDRAW_MS)
+        segment = ('law = "polynomial"\ndegree = 5\nlift_mm = 8\nangle_deg = 50\nstart = "match"        '
+                   "# the dwell's rest\nend = \"match\"          # the working stroke's 0.3 mm/deg")
+        typed = FEED.replace(segment, 'law = "poly:7"\nlift_mm = 8\nangle_deg = 50')
+        assert typed != FEED
+        with pytest.raises(ValueError) as message:
+            parse_program(typed)
+        assert page.inner_text(".err") == str(message.value)
+        assert page.evaluate("model.segment[1]") == {"law": "poly:7", "lift_mm": 8, "angle_deg": 50}
+        page.fill(law, "polynomial")
+        page.press(law, "Enter")
+        page.wait_for_function(no_error, timeout=REDRAW_MS)
+        assert page.evaluate("model.segment[1]") == {"law": "polynomial", "lift_mm": 8, "angle_deg": 50, "degree": 5,
+                                                     "start": "match", "end": "match"}
+        # a flat face: the roller's radius cleared, so the library judges the face (a cusp here)
+        note = lambda key: page.inner_text(f'#follower .fnote[data-note="{key}"]')  # noqa: E731
+        kind = '#follower select[data-key="kind"]'
+        page.select_option(kind, "translating-flat")
+        assert page.evaluate("model.follower.roller_radius_mm") is None
+        assert note("roller_radius_mm") == "a flat face has no roller: cleared"
+        page.wait_for_selector(".err", timeout=REDRAW_MS)
+        assert page.inner_text(".err").startswith("follower.kind = 'translating-flat': the cam's radius of curvature")
+        # back to a roller (its radius left empty) without a spring: notes, and that machine's analysis
+        page.select_option(kind, "translating-roller")
+        page.fill('#follower input[data-key="spring_rate_n_per_mm"]', "")
+        page.wait_for_function(f"document.querySelector('#status').textContent === 'ready' && {no_error}",
+                               timeout=2 * REDRAW_MS)
+        assert note("spring_rate_n_per_mm") == "empty: no return spring, a grooved (form-closed) cam"
+        assert note("preload_n") == "does nothing on a grooved cam (no spring)"
+        assert note("roller_radius_mm") == "empty: 10 (the default)"
+        assert note("contact_width_mm") == "empty: none" and note("mass_kg") == ""
+        response = page.evaluate("curves.response")
+        np.testing.assert_allclose(response["rigid_contact_force_n"],
+                                   1.5 * np.asarray(response["kinematic_acceleration_m_s2"]), rtol=1e-12, atol=1e-9)
+        assert "follower.preload_n = 300 N does nothing on a grooved cam" in page.inner_text("#warnings")
         assert not errors, errors
         browser.close()
 

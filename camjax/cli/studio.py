@@ -28,7 +28,9 @@ def register(subparsers) -> None:
                         help="program TOML file or built-in example name (default: feed)")
     parser.add_argument("--rpm", default=DEFAULT_RPM, metavar="START:STOP:COUNT|V1,V2,...",
                         help="the speed range the workbench starts with, rpm")
-    parser.add_argument("--host", default="127.0.0.1", help="address to serve on")
+    parser.add_argument("--host", default="127.0.0.1",
+                        help="address to serve on (beyond this machine, e.g. 0.0.0.0: requests need the "
+                             "token the printed URL holds)")
     parser.add_argument("--port", type=int, default=DEFAULT_PORT, help="port to serve on (0: any free port)")
     parser.add_argument("--no-browser", action="store_true", help="do not open a browser")
     parser.set_defaults(func=run)
@@ -57,11 +59,15 @@ def run(args) -> int:
         raise CliError(f"--host/--port: cannot serve on {args.host}:{args.port} "
                        f"({error.strerror or error})") from None
     studio.warm()  # the first analysis starts while the browser opens the page
-    print(f"camjax studio: {path.name} at {studio.url} (Ctrl-C stops)", flush=True)
+    if not studio.loopback:
+        print(f"camjax studio: warning: serving on {args.host}, beyond this machine: whoever has the URL "
+              f"below (it holds the token) can read program files under {studio.root} and run analyses",
+              file=sys.stderr, flush=True)
+    print(f"camjax studio: {path.name} at {studio.page_url} (files under {studio.root}; Ctrl-C stops)", flush=True)
     if not args.no_browser:
         import webbrowser
 
-        webbrowser.open(studio.url)
+        webbrowser.open(studio.page_url)
     try:
         studio.httpd.serve_forever()
     except KeyboardInterrupt:

@@ -12,8 +12,11 @@ docs/studio.md describes the page and the API.
 
 from __future__ import annotations
 
+from ._server import MAX_BODY as MAX_BODY
+from ._server import TIMEOUT_S as TIMEOUT_S
 from ._server import Studio as Studio
 from ._workbench import DEFAULT_RPM as DEFAULT_RPM
+from ._workbench import MAX_SPEEDS as MAX_SPEEDS
 from ._workbench import Workbench as Workbench
 from ._workbench import kinematics as kinematics
 from ._workbench import parse_program as parse_program
@@ -42,10 +45,10 @@ def show(program=None, *, rpm: str = DEFAULT_RPM, height: int = 900):
     from IPython.display import IFrame
 
     running = studio(program, rpm=rpm)
-    frame = IFrame(running.url, width="100%", height=height)
+    frame = IFrame(running.page_url, width="100%", height=height)
     frame.studio = running
     return frame
 
 
 __all__ = ["Studio", "Workbench", "studio", "show", "kinematics", "rigid_contact_force_n", "parse_program",
-           "DEFAULT_RPM"]
+           "DEFAULT_RPM", "MAX_SPEEDS", "MAX_BODY", "TIMEOUT_S"]

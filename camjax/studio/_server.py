@@ -3,13 +3,21 @@
 Each page (browser tab) names its own workbench with a ``session`` query parameter
 (requests without one share the workbench ``default``); a workbench is dropped when its
 page closes (``POST /api/close``) or after ``idle_s`` seconds without a request.
+
+What it lets in (docs/studio.md, "Security"): a request whose ``Host`` is the address
+served (DNS rebinding), a ``POST`` from the page's own origin with a body of the page's
+own types (cross-site forms and ``text/plain``), the token beyond loopback, a body up to
+``MAX_BODY`` read in ``timeout_s`` before any lock is taken, programs that name files under
+the studio's folder only.
 """
 
 from __future__ import annotations
 
 import io
+import ipaddress
 import json
 import math
+import secrets
 import sys
 import tempfile
 import threading
@@ -21,13 +29,30 @@ from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 
-from ._workbench import DEFAULT_RPM, Busy, ReportCache, Workbench, _file_name
+from ._workbench import (
+    DEFAULT_RPM,
+    Busy,
+    FileAccess,
+    OutsideRoot,
+    ReportCache,
+    Workbench,
+    _file_name,
+    program_files,
+)
 
 STATIC = Path(__file__).parent / "static"
 IDLE_S = 1800.0
 """Seconds a workbench lives without a request (its page may have closed unseen)."""
 MAX_BODY = 1 << 20
-"""Largest request body accepted (a program's TOML is a few kB)."""
+"""Largest request body accepted (a program's TOML is a few kB): larger is a 413."""
+TIMEOUT_S = 10.0
+"""Seconds a request may take to arrive (its headers and its whole body): a stalled one is
+dropped, and never holds a workbench meanwhile."""
+BODY_TYPES = ("application/toml",)
+"""Content types a request body may have: not a type a cross-site form or ``text/plain``
+request can send without the browser asking first (which this server never allows)."""
+TOKEN_COOKIE = "camjax-studio-token"
+LOOPBACK_NAMES = ("localhost", "127.0.0.1", "[::1]")
 _TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
           ".css": "text/css; charset=utf-8", ".png": "image/png", ".svg": "image/svg+xml"}
 
@@ -36,12 +61,17 @@ class Studio:
     """A running studio: the server, its thread and its workbenches.
 
     ``toml`` is the program every new workbench starts from; ``base`` the folder its law
-    files are read from.  ``port=0`` picks a free port (``url`` says which).
+    files are read from.  ``port=0`` picks a free port (``url`` says which).  ``root`` is
+    the folder whose files a posted program may name (default ``base``, else the current
+    folder); ``token`` the secret every request must carry (``?token=`` once, then a
+    cookie, or ``Authorization: token ...``): generated when serving beyond loopback, where
+    it is required.  ``timeout_s``: how long a request may take to arrive.
     """
 
     def __init__(self, toml: str, *, base: Path | None = None, rpm: str = DEFAULT_RPM,
                  host: str = "127.0.0.1", port: int = 0, with_flight: bool = True,
-                 idle_s: float = IDLE_S):
+                 idle_s: float = IDLE_S, root: Path | None = None, token: str | None = None,
+                 timeout_s: float = TIMEOUT_S):
         self.toml, self.base, self.rpm, self.with_flight, self.idle_s = toml, base, rpm, with_flight, idle_s
         self.workbenches: dict[str, Workbench] = {}
         self.reports = ReportCache()  # analyses shared by the workbenches (Workbench.update)
@@ -49,14 +79,41 @@ class Studio:
         self.ready = threading.Event()  # cleared while warm() computes the first look
         self.ready.set()
         self._laws = tempfile.TemporaryDirectory(prefix="camjax-studio-")  # designed laws' files
+        self.root = Path(root if root is not None else base if base is not None else Path.cwd()).resolve()
+        self.access = FileAccess(self.root, (Path(self._laws.name).resolve(),),
+                                 _named_files(toml, base or self.root))
+        self.loopback = is_loopback(host)
+        if token is None and not self.loopback:
+            token = secrets.token_urlsafe(32)
+        self.token, self.timeout_s = token, timeout_s
         self.httpd = _Server((host, port), _Handler)
         self.httpd.studio = self
+        self.hosts = self._hosts(host)
         self.thread: threading.Thread | None = None
+
+    def _hosts(self, host: str) -> frozenset[str] | None:
+        """The ``Host`` headers accepted: the loopback names and the address served, with the
+        port; ``None`` (any) when served on every address, where the token guards it."""
+        port = self.httpd.server_address[1]
+        if host in ("", "0.0.0.0", "::"):
+            return None
+        names = {host if ":" not in host else f"[{host}]", *(LOOPBACK_NAMES if self.loopback else ())}
+        return frozenset(f"{name}:{port}".lower() for name in names)
+
+    @property
+    def origin(self) -> str:
+        host, port = self.httpd.server_address[:2]
+        return f"http://{f'[{host}]' if ':' in host else host}:{port}"
 
     @property
     def url(self) -> str:
-        host, port = self.httpd.server_address[:2]
-        return f"http://{host}:{port}/"
+        """The server's address (the API's paths follow it)."""
+        return self.origin + "/"
+
+    @property
+    def page_url(self) -> str:
+        """The page's address to open: ``url`` with ``?token=`` when a token is required."""
+        return self.url + (f"?token={self.token}" if self.token else "")
 
     def workbench(self, session: str) -> Workbench:
         """The workbench of ``session``, a new one from the starting program if none."""
@@ -68,7 +125,7 @@ class Studio:
             if bench is None:
                 bench = self.workbenches[session] = Workbench(self.toml, self.rpm, self.base,
                                                               with_flight=self.with_flight, cache=self.reports,
-                                                              law_dir=Path(self._laws.name))
+                                                              law_dir=Path(self._laws.name), access=self.access)
             bench.touch()
             return bench
 
@@ -130,6 +187,36 @@ class Studio:
         self._laws.cleanup()
 
 
+def is_loopback(host: str) -> bool:
+    """Whether ``host`` (an address or ``localhost``) reaches this machine only."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        return False
+
+
+def _named_files(toml: str, base: Path) -> frozenset[Path]:
+    """The files the starting program names (it may reach outside the studio's folder: it
+    was given on the command line), resolved."""
+    from ._workbench import parse_toml
+
+    try:
+        data = parse_toml(toml)
+    except ValueError:
+        return frozenset()
+    return frozenset((base / Path(name).expanduser()).resolve() for _, name in program_files(data))
+
+
+class Refused(Exception):
+    """A request the server will not serve: its HTTP status and a one-line reason."""
+
+    def __init__(self, status: int, message: str):
+        super().__init__(message)
+        self.status = status
+
+
 class _Server(ThreadingHTTPServer):
     daemon_threads = True
 
@@ -145,6 +232,10 @@ class _Server(ThreadingHTTPServer):
 class _Handler(BaseHTTPRequestHandler):
     server_version = "camjax-studio"
 
+    def setup(self) -> None:
+        self.timeout = self.server.studio.timeout_s  # the socket's: a stalled read ends
+        super().setup()
+
     def log_message(self, format, *args):  # noqa: A002 - the base class's name
         pass  # one line per request would drown the URL; errors are reported below
 
@@ -155,8 +246,11 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header("Content-Type", content_type)
         self.send_header("Content-Length", str(len(body)))
         self.send_header("Cache-Control", "no-store")
+        self.send_header("X-Content-Type-Options", "nosniff")
         for key, value in (headers or {}).items():
             self.send_header(key, value)
+        for value in getattr(self, "_cookies", ()):
+            self.send_header("Set-Cookie", value)
         self.end_headers()
         if self.command != "HEAD":
             self.wfile.write(body)
@@ -183,7 +277,10 @@ class _Handler(BaseHTTPRequestHandler):
         query = {k: v[-1] for k, v in parse_qs(parts.query).items()}
         session = query.get("session", "default")[:64]
         route = (method, parts.path)
+        self._cookies = []
         try:
+            self._admit(studio, method, query)
+            self.body = self._body() if method == "POST" else ""  # all of it, before any lock
             if method == "GET" and (parts.path == "/" or parts.path.startswith("/static/")):
                 return self._static(parts.path)
             if route not in _ROUTES:
@@ -195,8 +292,18 @@ class _Handler(BaseHTTPRequestHandler):
             bench = studio.workbench(session)
             with bench.lock:
                 _ROUTES[route](self, bench, query)
+        except Refused as error:
+            self.close_connection = True
+            self._error(error.status, str(error))
+        except TimeoutError:
+            self.close_connection = True  # a stalled request: dropped, no answer
+        except OutsideRoot as error:
+            self._error(HTTPStatus.FORBIDDEN, str(error))
         except ValueError as error:
             self._error(HTTPStatus.BAD_REQUEST, str(error))
+        except OverflowError as error:  # a number of the program too large for the arrays' type
+            self._error(HTTPStatus.BAD_REQUEST, f"a number of the program is too large to compute with ({error}); "
+                        "write large numbers as floats (1e12)")
         except Busy as error:
             self._error(HTTPStatus.CONFLICT, str(error))
         except SolverError as error:
@@ -214,12 +321,74 @@ class _Handler(BaseHTTPRequestHandler):
             return self._error(HTTPStatus.NOT_FOUND, f"no such file: {path}")
         self._send(200, file.read_bytes(), _TYPES.get(file.suffix, "application/octet-stream"))
 
+    def _admit(self, studio: Studio, method: str, query: dict) -> None:
+        """Refuse (403) a request for another host name, one without the token where one is
+        required, and a ``POST`` from another origin; a token given as ``?token=`` is
+        kept as a cookie for the page's own requests."""
+        host = (self.headers.get("Host") or "").lower()
+        if studio.hosts is not None and host not in studio.hosts:
+            raise Refused(HTTPStatus.FORBIDDEN, f"Host: this studio serves {studio.origin}, not {host or 'no host'!r}")
+        if studio.token is not None:
+            cookie = f"{TOKEN_COOKIE}-{studio.httpd.server_address[1]}"  # cookies do not tell ports apart
+            given = query.get("token") or _cookie(self.headers.get("Cookie"), cookie)
+            auth = self.headers.get("Authorization") or ""
+            if auth.lower().startswith("token "):
+                given = auth[6:].strip()
+            if not given or not secrets.compare_digest(given.encode(), studio.token.encode()):
+                raise Refused(HTTPStatus.FORBIDDEN, "token: this studio needs its token (the URL it printed "
+                              "holds it as ?token=...)")
+            if "token" in query:
+                self._cookies = [f"{cookie}={studio.token}; Path=/; HttpOnly; SameSite=Strict"]
+        fetched_from = self.headers.get("Sec-Fetch-Site", "same-origin")
+        if self.path.startswith("/api/") and fetched_from not in ("same-origin", "none"):
+            # a browser says another site's page asked (an image, a script): no work for it
+            raise Refused(HTTPStatus.FORBIDDEN, f"Sec-Fetch-Site: the API answers the studio's own page, "
+                          f"not a {fetched_from} one")
+        if method != "POST":
+            return
+        origin = self.headers.get("Origin")
+        if origin is None and self.headers.get("Referer"):
+            referer = urlsplit(self.headers["Referer"])
+            origin = f"{referer.scheme}://{referer.netloc}"
+        if origin is None or origin.lower() != f"http://{host}":
+            raise Refused(HTTPStatus.FORBIDDEN, f"Origin: a change must come from the studio's own page "
+                          f"(http://{host}), not {origin or 'no origin'!r}")
+
     def _body(self) -> str:
-        length = int(self.headers.get("Content-Length") or 0)
-        if length > MAX_BODY:
-            raise ValueError(f"the program text is {length:,} bytes, more than {MAX_BODY:,}")
+        """The whole request body (at most ``MAX_BODY`` bytes, arriving within the studio's
+        ``timeout_s``; a stalled one raises ``TimeoutError``), as text."""
+        text = self.headers.get("Content-Length")
+        if self.headers.get("Transfer-Encoding"):
+            raise Refused(HTTPStatus.LENGTH_REQUIRED, "Content-Length: a body must say its length "
+                          "(no Transfer-Encoding)")
         try:
-            return self.rfile.read(length).decode("utf-8")
+            length = int(text or 0)
+        except ValueError:
+            length = -1
+        if length < 0 or (text is not None and not text.strip().isdigit()):
+            raise Refused(HTTPStatus.BAD_REQUEST, f"Content-Length: must be a whole number of bytes, got {text!r}")
+        if length > MAX_BODY:
+            raise Refused(HTTPStatus.REQUEST_ENTITY_TOO_LARGE,
+                          f"the request body is {length:,} bytes, more than {MAX_BODY:,}")
+        if length == 0:
+            return ""
+        kind = (self.headers.get("Content-Type") or "").split(";")[0].strip().lower()
+        if kind not in BODY_TYPES:
+            raise Refused(HTTPStatus.UNSUPPORTED_MEDIA_TYPE,
+                          f"Content-Type: a body must be {' or '.join(BODY_TYPES)}, got {kind or 'none'!r}")
+        deadline = time.monotonic() + self.server.studio.timeout_s
+        chunks, left = [], length
+        while left:
+            if time.monotonic() > deadline:
+                raise TimeoutError
+            chunk = self.rfile.read1(min(left, 65536))
+            if not chunk:
+                raise Refused(HTTPStatus.BAD_REQUEST, f"the body ended after {length - left:,} of the "
+                              f"{length:,} bytes its Content-Length says")
+            chunks.append(chunk)
+            left -= len(chunk)
+        try:
+            return b"".join(chunks).decode("utf-8")
         except UnicodeDecodeError:
             raise ValueError("the program text is not UTF-8") from None
 
@@ -229,7 +398,7 @@ class _Handler(BaseHTTPRequestHandler):
         self._json(bench.ensure())
 
     def post_program(self, bench: Workbench, query: dict) -> None:
-        self._json(bench.update(self._body(), query.get("rpm")))
+        self._json(bench.update(self.body, query.get("rpm"), opened=query.get("opened") == "1"))
 
     def get_program(self, bench: Workbench, query: dict) -> None:
         bench.ensure()
@@ -299,6 +468,14 @@ class _Handler(BaseHTTPRequestHandler):
 
     def design(self, bench: Workbench, query: dict) -> None:
         self._json({"state": "none"} if bench.job is None else bench.job.as_dict())
+
+
+def _cookie(header: str | None, name: str) -> str | None:
+    for part in (header or "").split(";"):
+        key, _, value = part.strip().partition("=")
+        if key == name:
+            return value
+    return None
 
 
 def _number(query: dict, key: str, kind):

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, plot_speed
+from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, parse_range, plot_speed
 
 DEFAULT_RPM = "200:1400:7"
 """The speed range a workbench starts with (wide enough to show the examples' jump speeds)."""
@@ -36,20 +36,12 @@ DESIGN_KNOTS = 12
 """Free B-spline coefficients of a design from the page (``camjax design``: 24)."""
 DESIGN_OBJECTIVES = ("preload", "residual")
 """The page's objectives, as ``camjax.program.design_segment`` names them."""
-
-
-@dataclasses.dataclass
-class ReportCache:
-    """A studio's analyses, shared by its workbenches: ``reports`` by key (the oldest dropped
-    past ``CACHED_REPORTS``) and those under way (``pending``: a second request for one
-    waits for it), behind one lock."""
-
-    reports: dict = dataclasses.field(default_factory=dict)
-    pending: dict = dataclasses.field(default_factory=dict)
-    lock: threading.Lock = dataclasses.field(default_factory=threading.Lock, repr=False)
-
-    def __len__(self) -> int:
-        return len(self.reports)
+MAX_SPEEDS = 1001
+"""Most speeds one analysis of the studio takes (each holds about 0.45 MB of histories while
+it is analysed: a range of 100,000 speeds would take the machine's memory)."""
+PROGRAM_FILE_KEYS = ("file", "dxf")
+"""Keys of ``[program]`` and of a ``[[segment]]`` that name a file to read (and ``law``
+when it ends in ``.json``)."""
 
 
 class Busy(Exception):
@@ -71,12 +63,115 @@ def parse_program(text: str, base: Path | None = None):
     return Program.from_dict(parse_toml(text), base=base)
 
 
+def _speed_count(count: int, what: str) -> None:
+    if count > MAX_SPEEDS:
+        raise ValueError(f"{what}: at most {MAX_SPEEDS:,} speeds in one analysis, got {count:,}")
+
+
 def parse_speeds(text: str):
     """The speed range ``text`` (``START:STOP:COUNT`` or ``V1,V2,...``, rpm) as
-    ``camjax.program.Speeds``, or a one-line ValueError."""
+    ``camjax.program.Speeds``, or a one-line ValueError; more than ``MAX_SPEEDS`` speeds are
+    refused before any is built."""
     from ..program import Speeds
 
-    return Speeds.parse(text, "rpm")
+    text = str(text)
+    if ":" not in text:
+        _speed_count(text.count(",") + 1, "rpm")
+    rpm = parse_range(text, "rpm", check_count=_speed_count)
+    if not all(math.isfinite(r) and r > 0 for r in rpm):
+        raise ValueError(f"rpm: speeds must be positive, got {text!r}")
+    return Speeds(rpm, "rpm")
+
+
+class OutsideRoot(ValueError):
+    """A program names a file the studio may not read (HTTP 403)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class FileAccess:
+    """Which files a program posted to the studio may name: those under ``root`` (the folder
+    the studio was started on) or under one of ``folders`` (the studio's designed laws), and
+    the exact ``files`` the starting program names.  Paths are resolved (``..`` and symbolic
+    links followed) before they are compared, and nothing is read here."""
+
+    root: Path
+    folders: tuple[Path, ...] = ()
+    files: frozenset[Path] = frozenset()
+
+    def check(self, data: dict, base: Path | None, *, relative: bool = True) -> None:
+        """A one-line ``OutsideRoot`` naming the key of the first file reference outside;
+        ``relative=False`` (a program opened in the page, whose own folder is unknown)
+        refuses every relative reference."""
+        for where, name in program_files(data):
+            path = Path(name).expanduser()
+            if not path.is_absolute():
+                if not relative:
+                    raise OutsideRoot(f"{where}: {name!r} is relative to the opened file's folder, which the "
+                                      f"page cannot know; give its full path under {self.root}, or start "
+                                      "camjax studio on the program file")
+                path = (base or self.root) / path
+            path = path.resolve()
+            inside = any(path.is_relative_to(folder) for folder in (self.root, *self.folders))
+            if not inside and path not in self.files:
+                raise OutsideRoot(f"{where}: {name!r} is outside the studio's folder {self.root}; the studio "
+                                  "reads only files under the folder it was started on")
+
+
+def program_files(data: dict) -> list[tuple[str, str]]:
+    """``(where, name)`` of every file a program's TOML structure names (``where`` as its
+    errors say it: ``[program] file``, ``segment 2: law``)."""
+    found = []
+    header = data.get("program") if isinstance(data, dict) else None
+    tables = [("[program]", header)] if isinstance(header, dict) else []
+    segments = data.get("segment") if isinstance(data, dict) else None
+    if isinstance(segments, list):
+        tables += [(f"segment {i}:", s) for i, s in enumerate(segments, 1) if isinstance(s, dict)]
+    for where, table in tables:
+        for key in PROGRAM_FILE_KEYS:
+            if isinstance(table.get(key), str):
+                found.append((f"{where} {key}", table[key]))
+        law = table.get("law")
+        if isinstance(law, str) and law.endswith(".json"):
+            found.append((f"{where} law", law))
+    return found
+
+
+class ReportCache:
+    """Analyses shared by a studio's workbenches, keyed by program and speeds (oldest dropped
+    first beyond ``size``); a second request for an analysis under way waits for it."""
+
+    def __init__(self, size: int = CACHED_REPORTS):
+        self.size = size
+        self._lock = threading.Lock()
+        self._done: dict = {}
+        self._pending: dict = {}
+
+    def __len__(self) -> int:
+        return len(self._done)
+
+    def get(self, key, compute):
+        """The analysis of ``key``, from ``compute()`` when neither kept nor under way."""
+        while True:
+            with self._lock:
+                hit = self._done.get(key)
+                pending = None if hit is not None else self._pending.get(key)
+                if hit is None and pending is None:
+                    self._pending[key] = threading.Event()
+            if hit is not None:
+                return hit
+            if pending is None:
+                break
+            pending.wait()  # another request analyses it: its answer is this one's
+        try:
+            hit = compute()
+            with self._lock:
+                self._done[key] = hit
+                while len(self._done) > self.size:
+                    self._done.pop(next(iter(self._done)))
+        finally:
+            with self._lock:
+                self._pending.pop(key).set()
+        return hit
 
 
 def kinematics(program, theta_deg: np.ndarray) -> dict[str, np.ndarray]:
@@ -89,9 +184,10 @@ def kinematics(program, theta_deg: np.ndarray) -> dict[str, np.ndarray]:
 
 def rigid_contact_force_n(program, lift_mm: np.ndarray, acceleration_m_s2: np.ndarray) -> np.ndarray:
     """The contact force of a rigid follower train: ``F_0 + k_s y + m y''`` (docs/program.md,
-    the limit ``k -> inf``)."""
+    the limit ``k -> inf``); a grooved cam has no spring and no preload (``m y''``)."""
     f = program.follower
-    return f.preload_n + f.spring_rate * 1e-3 * lift_mm + f.mass_kg * acceleration_m_s2
+    preload = 0.0 if f.form_closed else f.preload_n  # a groove holds the follower: no spring, no preload
+    return preload + f.spring_rate * 1e-3 * lift_mm + f.mass_kg * acceleration_m_s2
 
 
 def _canonical(value):
@@ -124,6 +220,8 @@ class Workbench:
     cache: ReportCache = dataclasses.field(default_factory=ReportCache, repr=False)
     law_dir: Path | None = None
     job: DesignJob | None = None
+    access: FileAccess | None = None
+    """Which files a program may name (``None``: any, as the program API reads them)."""
     outputs: object = None  # camjax.program.Outputs; None: the default outputs when analysed
 
     def output_set(self):
@@ -146,51 +244,37 @@ class Workbench:
             self.update(self.toml, self.rpm_text)
         return self.report
 
-    def update(self, toml: str, rpm_text: str | None = None) -> dict:
+    def update(self, toml: str, rpm_text: str | None = None, *, opened: bool = False) -> dict:
         """Replace the program (and the speeds): the new report, or a ValueError that
-        leaves the last good state as it was."""
+        leaves the last good state as it was.  ``opened``: the text is a file opened in the
+        page, so a file it names relative to itself cannot be found (refused)."""
         rpm_text = self.rpm_text if rpm_text is None else str(rpm_text)
         rpm = parse_speeds(rpm_text)
-        self.program, self.steady, self.report, self.warnings = self.analysed(toml, rpm)
+        self.program, self.steady, self.report, self.warnings = self.analysed(toml, rpm, opened=opened)
         self.toml, self.rpm_text, self.rpm = toml, rpm_text, rpm
         return self.report
 
-    def analysed(self, toml: str, rpm) -> tuple:
+    def analysed(self, toml: str, rpm, *, opened: bool = False) -> tuple:
         """``(program, steady state, report, warnings)`` of ``toml`` at ``rpm``, changing
         nothing.  The same program (the same TOML structure, whatever its layout and
         comments) at the same speeds and outputs (``output_set``) is analysed once per ``cache``."""
         from ..program import Program, SteadyState, analyse
 
         data = parse_toml(toml)
+        if self.access is not None:
+            self.access.check(data, self.base, relative=not opened)
         program = Program.from_dict(data, base=self.base)
         outputs = self.output_set()
         key = (json.dumps(_canonical(data), sort_keys=True, default=str), tuple(rpm.tolist()), self.with_flight,
                self.speed_fluctuation, str(self.base), outputs)
-        cache = self.cache
-        while True:
-            with cache.lock:
-                hit = cache.reports.get(key)
-                pending = None if hit is not None else cache.pending.get(key)
-                if hit is None and pending is None:
-                    cache.pending[key] = threading.Event()
-            if hit is not None:
-                return hit
-            if pending is None:
-                break
-            pending.wait()  # another request analyses it: its answer is this one's
-        try:
+
+        def compute():
             steady = SteadyState(program, rpm)
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
                                         speed_fluctuation=self.speed_fluctuation, outputs=outputs))
-            hit = (program, steady, report, list(report.get("warnings", ())))
-            with cache.lock:
-                cache.reports[key] = hit
-                while len(cache.reports) > CACHED_REPORTS:
-                    cache.reports.pop(next(iter(cache.reports)))
-        finally:
-            with cache.lock:
-                cache.pending.pop(key).set()
-        return hit
+            return program, steady, report, list(report.get("warnings", ()))
+
+        return self.cache.get(key, compute)
 
     def curves(self, rpm: float | None = None) -> dict:
         """Everything the page draws beside the report: the kinematics over the turn, the
@@ -206,7 +290,11 @@ class Workbench:
             raise ValueError(f"rpm: the chosen speed must be at or above the lowest speed of the "
                              f"range ({lowest:g} rpm), got {rpm!r}")
         theta = np.linspace(0.0, 360.0, TURN_POINTS)
-        h = response(program, float(rpm), steady=self.steady)
+        try:
+            with np.errstate(over="raise"):
+                h = response(program, float(rpm), steady=self.steady)
+        except (OverflowError, FloatingPointError):
+            raise ValueError(f"rpm: {rpm:g} rpm is too fast to compute a turn at (a number overflows)") from None
         prof = profile(program, PROFILE_POINTS)
         f = program.follower
         return json_ready({
@@ -218,16 +306,20 @@ class Workbench:
                         "outer": prof.outer if f.form_closed else None,
                         "flat_face": prof.flat_face},
             "follower": dataclasses.asdict(f) | {"form_closed": f.form_closed},
-            "warnings": self.warnings,
+            "warnings": self.warnings + ([f"follower.preload_n = {f.preload_n:g} N does nothing on a grooved cam "
+                                          "(no spring_rate_n_per_mm): the groove holds the follower"]
+                                         if f.form_closed and f.preload_n else []),
         })
 
     def state(self) -> dict:
         """The program as its TOML structure (for the page's tables), its text and the speeds;
         ``bundle``: whether it holds a designed law (saved as a zip with its law files)."""
         from .. import laws
+        from ..program import Follower
 
+        defaults = {f.name: f.default for f in dataclasses.fields(Follower) if f.default is not dataclasses.MISSING}
         return {"toml": self.toml, "program": tomllib.loads(self.toml), "rpm": self.rpm_text,
-                "laws": [*laws.names(), "constant-velocity", "polynomial"],
+                "laws": [*laws.names(), "constant-velocity", "polynomial"], "follower_defaults": defaults,
                 "bundle": self.law_dir is not None and self.law_dir.as_posix() in self.toml,
                 "design": {"steps": DESIGN_STEPS, "knots": DESIGN_KNOTS, "objectives": list(DESIGN_OBJECTIVES)}}
 

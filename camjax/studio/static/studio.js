@@ -15,6 +15,10 @@ const NUMBER = /^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/;
 let model = null;        // {program: {name}, segment: [...], follower: {...}, materials?: {...}}
 let bundle = false;      // the program holds a designed law: saved as a zip with its law files
 let designDefaults = {steps: 60};   // the server's (GET /api/program)
+let followerDefaults = {};          // what an empty follower field stands for (GET /api/program)
+const dwellLift = new WeakMap();    // a segment's lift while it is a dwell, restored with a law
+let rollerCleared = false;
+let errorFrom = null;               // what the standing error came from: "program" or "chosen" (the speed)          // the switch to a flat face has just cleared the roller's radius
 let polling = null;      // the design's progress timer
 let laws = [];
 let rpmText = "";
@@ -22,6 +26,7 @@ let chosen = null;       // the chosen speed (null: the server's choice)
 let report = null;       // last good report
 let curves = null;       // last good curves
 let lastField = null;    // the input edited last (where an error is shown)
+let opened = false;      // the program came from "Open TOML": files it names relative to itself cannot be read
 let timer = null, inFlight = false, dirty = false;
 const charts = {};
 
@@ -33,7 +38,8 @@ const api = (path, params = {}) =>
 
 function tomlValue(v) {
   if (typeof v === "string") return JSON.stringify(v);
-  if (typeof v === "number") return String(v);
+  // a whole number beyond 2^31 in exponent form: TOML reads it as a float, not a 64-bit integer
+  if (typeof v === "number") return Number.isInteger(v) && Math.abs(v) >= 2 ** 31 ? v.toExponential() : String(v);
   if (typeof v === "boolean") return String(v);
   if (Array.isArray(v)) return "[" + v.map(tomlValue).join(", ") + "]";
   return "{ " + Object.entries(v).map(([k, x]) => `${k} = ${tomlValue(x)}`).join(", ") + " }";
@@ -111,12 +117,59 @@ function cell(row, child) {
   return td;
 }
 
+// A segment's law changed: its lift kept (a dwell keeps it aside), a polynomial's ends set.
 function setLaw(seg, law) {
-  for (const k of ["law", "degree", "start", "end"]) delete seg[k];
-  if (law === "") { delete seg.lift_mm; return; }
+  const wasPoly = seg.law === "polynomial";
+  if (law === "") {
+    if (seg.lift_mm !== undefined) dwellLift.set(seg, seg.lift_mm);
+    for (const k of ["law", "lift_mm", "degree", "start", "end"]) delete seg[k];
+    return;
+  }
   seg.law = law;
-  if (seg.lift_mm === undefined) seg.lift_mm = 10;
-  if (law === "polynomial") Object.assign(seg, {degree: 5, start: "match", end: "match"});
+  if (seg.lift_mm === undefined) seg.lift_mm = dwellLift.has(seg) ? dwellLift.get(seg) : 10;
+  if (law === "polynomial" && !wasPoly) Object.assign(seg, {degree: 5, start: "match", end: "match"});
+  if (law !== "polynomial") for (const k of ["degree", "start", "end"]) delete seg[k];
+}
+
+// The law cell: any law `camjax laws` names, parameters included (`triple-harmonic:A1,A2`,
+// `modified-trapezoid-cv:P`), with the names as suggestions; empty is a dwell.
+function lawInput(seg, n) {
+  const el = document.createElement("input");
+  el.value = seg.law || "";
+  el.placeholder = "dwell";
+  el.size = 16;
+  el.setAttribute("list", "law-names");
+  el.dataset.seg = n; el.dataset.key = "law";
+  el.title = "a law of camjax laws (with its parameters, e.g. triple-harmonic:A1,A2), " +
+    "constant-velocity, polynomial, a law file (.json); empty: a dwell";
+  el.addEventListener("change", () => { lastField = null; setLaw(seg, el.value.trim()); renderEditor(); edited(); });
+  return el;
+}
+
+// Beside each follower field, what it makes of the machine when empty (or does not do).
+function renderFollowerNotes() {
+  const f = model.follower || {}, flat = (f.kind || "").endsWith("-flat");
+  document.querySelectorAll("#follower .fnote").forEach((note) => {
+    const key = note.dataset.note;
+    note.textContent =
+      key === "roller_radius_mm" && flat ? (rollerCleared ? "a flat face has no roller: cleared" : "a flat face has no roller") :
+      f[key] === undefined ? emptyNote(key) :
+      key === "preload_n" && f.spring_rate_n_per_mm === undefined ? "does nothing on a grooved cam (no spring)" : "";
+  });
+}
+
+function renderLawNames() {
+  let list = $("law-names");
+  if (!list) { list = document.createElement("datalist"); list.id = "law-names"; document.body.appendChild(list); }
+  list.innerHTML = "";
+  for (const name of laws) { const o = document.createElement("option"); o.value = name; list.appendChild(o); }
+}
+
+// What an empty follower field makes of the machine: said beside it.
+function emptyNote(key) {
+  if (key === "spring_rate_n_per_mm") return "empty: no return spring, a grooved (form-closed) cam";
+  const d = followerDefaults[key];
+  return d === null || d === undefined ? "empty: none" : `empty: ${d} (the default)`;
 }
 
 function button(text, title, onClick) {
@@ -158,7 +211,7 @@ function renderEditor() {
     const n = i + 1, row = document.createElement("tr");
     row.dataset.seg = n;
     cell(row, String(n));
-    cell(row, select(["", ...laws], seg.law || "", (v) => setLaw(seg, v), {seg: n, key: "law"}));
+    cell(row, lawInput(seg, n));
     const set = (key) => (text) => { const v = parseCell(text); if (v === undefined) delete seg[key]; else seg[key] = v; };
     cell(row, seg.law ? input(seg.lift_mm, set("lift_mm"), {seg: n, key: "lift_mm"}) : null);
     cell(row, input(seg.angle_deg, set("angle_deg"), {seg: n, key: "angle_deg"}));
@@ -183,13 +236,25 @@ function renderEditor() {
     const label = document.createElement("label");
     label.textContent = key + " ";
     if (key === "kind") {
-      label.appendChild(select(FOLLOWER_KINDS, f.kind || "translating-roller", (v) => { f.kind = v; }, {key}));
+      // a flat face has no roller: its radius goes with the switch (said beside the field)
+      label.appendChild(select(FOLLOWER_KINDS, f.kind || "translating-roller", (v) => {
+        f.kind = v;
+        if (v.endsWith("-flat") && f.roller_radius_mm !== undefined) { delete f.roller_radius_mm; rollerCleared = true; }
+      }, {key}));
     } else {
-      label.appendChild(input(f[key], (t) => { const v = parseCell(t); if (v === undefined) delete f[key]; else f[key] = v; },
-        {key}));
+      label.appendChild(input(f[key], (t) => {
+        const v = parseCell(t); if (v === undefined) delete f[key]; else f[key] = v;
+        renderFollowerNotes();
+      }, {key}));
+      const note = document.createElement("span");
+      note.className = "fnote";
+      note.dataset.note = key;
+      label.appendChild(note);
     }
     box.appendChild(label);
   }
+  renderFollowerNotes();
+  rollerCleared = false;
   renderNotes();
   renderDesign();
 }
@@ -202,13 +267,27 @@ function setStatus(text, kind) {
   s.className = kind || "";
 }
 
+// While an error stands the views show the last good program: they are marked stale, and
+// "Save" says that it saves that program, not the one in the tables.
+function markStale(stale) {
+  document.body.dataset.stale = stale ? "1" : "0";
+  $("views").title = stale ? "the last good program: the tables hold an error" : "";
+  const save = $("save");
+  save.textContent = (bundle ? "Save TOML + laws (zip)" : "Save TOML") + (stale ? " (last good program)" : "");
+  save.title = stale ? "saves the last good program, not the tables' (they hold an error)" : "";
+}
+
 function clearErrors() {
   document.querySelectorAll(".err").forEach((e) => e.remove());
   document.querySelectorAll(".bad").forEach((e) => e.classList.remove("bad"));
+  markStale(false);
+  errorFrom = null;
 }
 
-function showError(message) {
+function showError(message, from = "program") {
   clearErrors();
+  errorFrom = from;
+  markStale(from === "program");
   setStatus(message, "error");
   const span = document.createElement("span");
   span.className = "err";
@@ -235,8 +314,8 @@ async function send() {
   document.body.dataset.busy = "1";
   setStatus("computing\u2026", "busy");
   try {
-    const response = await fetch(api("program", {rpm: rpmText}), {method: "POST", body: toToml(model),
-      headers: {"Content-Type": "application/toml"}});
+    const response = await fetch(api("program", {rpm: rpmText, ...(opened ? {opened: 1} : {})}),
+      {method: "POST", body: toToml(model), headers: {"Content-Type": "application/toml"}});
     const answer = await response.json();
     if (!response.ok) { showError(answer.error); return; }
     report = answer;
@@ -255,7 +334,8 @@ async function loadCurves() {
   const params = chosen === null ? {} : {rpm: chosen};
   const response = await fetch(api("curves", params));
   const answer = await response.json();
-  if (!response.ok) { showError(answer.error); return; }
+  if (!response.ok) { showError(answer.error, "chosen"); return; }
+  if (errorFrom === "chosen") clearErrors();  // a good speed clears the bad one's message
   curves = answer;
   chosen = curves.rpm;
   $("chosen").value = chosen;
@@ -277,9 +357,11 @@ function load(state) {
   rpmText = state.rpm;
   bundle = !!state.bundle;
   designDefaults = state.design || designDefaults;
+  followerDefaults = state.follower_defaults || followerDefaults;
+  renderLawNames();
   $("range").value = rpmText;
   $("save").href = api(bundle ? "program.zip" : "program.toml");
-  $("save").textContent = bundle ? "Save TOML + laws (zip)" : "Save TOML";
+  markStale(false);
   renderEditor();
 }
 
@@ -578,10 +660,12 @@ $("open").addEventListener("change", async (e) => {
   e.target.value = "";
   document.body.dataset.busy = "1";
   setStatus("computing\u2026", "busy");
-  const response = await fetch(api("program", {rpm: rpmText}), {method: "POST", body: text});
+  const response = await fetch(api("program", {rpm: rpmText, opened: 1}), {method: "POST", body: text,
+    headers: {"Content-Type": "application/toml"}});
   const answer = await response.json();
   if (!response.ok) { lastField = null; showError(`${file.name}: ${answer.error}`); document.body.dataset.busy = "0"; return; }
   report = answer;
+  opened = true;
   const state = await (await fetch(api("program"))).json();
   load(state);
   clearErrors();
