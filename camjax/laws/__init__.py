@@ -1,5 +1,6 @@
 """Motion laws: normalised rises ``s(tau)`` with exact derivatives and coefficients."""
 
+from ._base import RMS_ACCELERATION_FLOOR as RMS_ACCELERATION_FLOOR
 from ._base import AbstractMotionLaw as AbstractMotionLaw
 from ._base import AbstractSearchedPeaksLaw as AbstractSearchedPeaksLaw
 from ._boundary import BoundaryPolynomial as BoundaryPolynomial
