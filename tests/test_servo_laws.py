@@ -101,3 +101,55 @@ def test_traced_breakpoints_give_the_same_coefficients():
     law = laws.SCCA(0.3, 0.4, 0.3)
     traced = jax.jit(lambda a, b, c: laws.SCCA(a, b, c).Ca_rms)(0.3, 0.4, 0.3)
     assert float(traced) == pytest.approx(law.rms_coefficients()["Ca_rms"], abs=1e-12)
+
+
+JERK_CAP = 200.0  # docs/laws.md states it: the least-RMS design is within 5% of the floor here
+
+
+def test_least_rms_design_is_within_five_percent_of_the_floor():
+    from camjax import law_design as D
+
+    result = D.design(D.RmsAcceleration(), caps=D.Caps(max_jerk=JERK_CAP), progress=False)
+    law = result.law
+    # Independently: adaptive quadrature of a^2 and the jerk on a dense grid.
+    points = list(law.breakpoints())
+    a_squared = lambda t: float(law.a(np.array([t]))[0]) ** 2  # noqa: E731
+    ca_rms = math.sqrt(quad(a_squared, 0, 1, points=points, epsabs=1e-13, limit=400)[0])
+    assert result.values[D.RmsAcceleration().label] == pytest.approx(ca_rms, rel=1e-9)
+    assert laws.RMS_ACCELERATION_FLOOR < ca_rms <= 1.05 * laws.RMS_ACCELERATION_FLOOR
+    assert np.max(np.abs(np.asarray(law.j(np.linspace(0, 1, 20001))))) <= JERK_CAP * (1 + 1e-9)
+    # Below every standard law with a finite jerk (the modified sine's 3.909 is the best).
+    assert ca_rms < min(
+        x.rms_coefficients()["Ca_rms"] for x in laws.standard_laws() if math.isfinite(x.Cj)
+    )
+
+
+def test_laws_command_lists_the_servo_coefficients(capsys, monkeypatch):
+    import json
+
+    from camjax.cli import main
+
+    monkeypatch.setenv("CAMJAX_CACHE_DIR", "off")
+    assert main(["laws", "--format", "json"]) == 0
+    table = json.loads(capsys.readouterr().out)
+    assert table["cycloidal"]["Ca_rms"] == pytest.approx(PI * math.sqrt(2), abs=1e-9)
+    assert table["poly345"]["Ca_rms"] == pytest.approx(math.sqrt(120 / 7), abs=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--n", "3"], "--n: not with --objective rms-acceleration"),
+        (["--damping", "0.1"], "--damping: not with --objective rms-acceleration"),
+    ],
+)
+def test_rms_design_refuses_a_period_ratio_in_one_line(
+    capsys, monkeypatch, tmp_path, extra, message
+):
+    from camjax.cli import main
+
+    monkeypatch.setenv("CAMJAX_CACHE_DIR", "off")
+    argv = ["design", "--objective", "rms-acceleration", "--out", str(tmp_path / "o"), *extra]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err

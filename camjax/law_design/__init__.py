@@ -42,6 +42,7 @@ from ._objectives import ExpectedResidual as ExpectedResidual
 from ._objectives import MaxCaCt as MaxCaCt
 from ._objectives import MaxResidual as MaxResidual
 from ._objectives import Residual as Residual
+from ._objectives import RmsAcceleration as RmsAcceleration
 from ._objectives import peak_loads as peak_loads
 from ._optimise import DEFAULT_STEPS as DEFAULT_STEPS
 from ._optimise import MAX_KNOTS as MAX_KNOTS
