@@ -52,7 +52,9 @@ from ._optimise import DesignResult as DesignResult
 from ._optimise import design as design
 from ._optimise import linear_maps as linear_maps
 from ._residual import dense_tau as dense_tau
+from ._residual import percentage_vibration as percentage_vibration
 from ._residual import quadrature as quadrature
 from ._residual import residual as residual
 from ._residual import residual_amplitude as residual_amplitude
 from ._residual import residual_kernel as residual_kernel
+from ._residual import vibration_band as vibration_band

@@ -35,6 +35,9 @@ from ._scca import ModifiedTrapezoid as ModifiedTrapezoid
 from ._scca import Parabolic as Parabolic
 from ._scca import SimpleHarmonic as SimpleHarmonic
 from ._scca import constant_velocity_variant as constant_velocity_variant
+from ._shaped import SHAPERS as SHAPERS
+from ._shaped import ShapedLaw as ShapedLaw
+from ._shaped import Shaper as Shaper
 from ._spline import BSplineLaw as BSplineLaw
 from ._table import TableFit as TableFit
 from ._table import TableLaw as TableLaw

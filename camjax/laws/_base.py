@@ -158,21 +158,7 @@ class AbstractMotionLaw(eqx.Module):
             _, v, a, _ = self.rise(t)
             return jnp.abs(v * a)
 
-        k = jnp.argmax(power(tau))
-        lo = tau[jnp.maximum(k - 1, 0)]
-        hi = tau[jnp.minimum(k + 1, tau.size - 1)]
-        lo, hi = jax.lax.stop_gradient(lo), jax.lax.stop_gradient(hi)
-
-        def shrink(_, bracket):
-            lo, hi = bracket
-            x1 = hi - _GOLDEN * (hi - lo)
-            x2 = lo + _GOLDEN * (hi - lo)
-            f1, f2 = power(jnp.stack([x1, x2]))
-            return jnp.where(f1 >= f2, lo, x1), jnp.where(f1 >= f2, x2, hi)
-
-        lo, hi = jax.lax.fori_loop(0, 80, shrink, (lo, hi))
-        best = jax.lax.stop_gradient(jnp.stack([lo, hi, tau[k]]))
-        return jnp.max(power(best))
+        return refined_max(power, tau)
 
     def rms_coefficients(self) -> dict[str, float]:
         """``{"Cv_rms", "Ca_rms", "Cva"}`` as Python floats: the servo's coefficients beside
@@ -245,6 +231,27 @@ def _piece_quadrature(law: AbstractMotionLaw) -> tuple[jax.Array, jax.Array]:
                                 jnp.ones(1)])
     lo, width = cuts[:-1, None], (cuts[1:] - cuts[:-1])[:, None]
     return (jnp.asarray(lo + width * (x + 1) / 2).ravel(), jnp.asarray(width / 2 * w).ravel())
+
+
+def refined_max(f, tau: jax.Array) -> jax.Array:
+    """``max f`` over ``[0, 1]`` for a non-negative ``f`` (elementwise, jittable): its largest
+    sample on the sorted points ``tau``, refined by a golden-section search between that
+    sample's neighbours, to rounding where ``f`` has one crest there.  Differentiable in
+    what ``f`` closes over through the value at the located point (the location carries no
+    gradient: at a maximum the value's derivative does not depend on it)."""
+    k = jnp.argmax(f(tau))
+    lo = jax.lax.stop_gradient(tau[jnp.maximum(k - 1, 0)])
+    hi = jax.lax.stop_gradient(tau[jnp.minimum(k + 1, tau.size - 1)])
+
+    def shrink(_, bracket):
+        lo, hi = bracket
+        x1 = hi - _GOLDEN * (hi - lo)
+        x2 = lo + _GOLDEN * (hi - lo)
+        f1, f2 = f(jnp.stack([x1, x2]))
+        return jnp.where(f1 >= f2, lo, x1), jnp.where(f1 >= f2, x2, hi)
+
+    lo, hi = jax.lax.fori_loop(0, 80, shrink, (lo, hi))
+    return jnp.max(f(jax.lax.stop_gradient(jnp.stack([lo, hi, tau[k]]))))
 
 
 @eqx.filter_jit
