@@ -23,7 +23,6 @@ from ._harmonic import (
 )
 from ._inflected import Inflected
 from ._polynomial import PolynomialLaw
-from ._shaped import SHAPERS, ShapedLaw, Shaper
 from ._scca import (
     CV_BASES,
     SCCA,
@@ -34,6 +33,7 @@ from ._scca import (
     SimpleHarmonic,
     constant_velocity_variant,
 )
+from ._shaped import SHAPERS, ShapedLaw, Shaper
 
 _STANDARD: dict[str, Callable[[], AbstractMotionLaw]] = {
     "cycloidal": Cycloidal,
