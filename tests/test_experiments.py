@@ -18,17 +18,19 @@ QUICK = {
     "friction.py": ["--quick"],
     "laws_table.py": ["--quick"],
     "motion_tasks.py": ["--quick"],
+    "robust_laws.py": ["--quick"],
     "scca_atlas.py": ["--quick", "--no-cache", "--devices", "1"],
     "stability_atlas.py": ["--quick"],
     "two_mass.py": ["--quick"],
 }
 """The arguments of each example's quick mode (``--out`` is added)."""
 
-SLOW = {"stability_atlas.py"}
+SLOW = {"stability_atlas.py", "robust_laws.py"}
 """Quick modes kept out of the default run: the stability atlas's still builds five panels
 (fixed-step maps, adaptive solvers with and without ``jump_ts``, a float32 child process,
 Tsit5 up to n = 300, four default grids), 138 s on the loaded 2-core machine against 18-36 s
-for each of the others (2026-11-27)."""
+for each of the others (2026-11-27); the robust laws' quick mode compiles and runs two
+designs, 108 s there (24 s of CPU, 2026-11-29)."""
 
 NOT_RUN = {
     "backlash.py": "no quick mode yet: its four parts (charts, dynamic impacts, solver limits, an optax design) take minutes",

@@ -27,13 +27,16 @@ DEFAULT_STEPS = 6000
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "design",
-        help="design a B-spline motion law (residual vibration or Ca*Ct)",
+        help="design a B-spline motion law (residual vibration, Ca*Ct or RMS acceleration)",
         description="Optimise a B-spline rise for a period-ratio band under caps; write the "
         "law (JSON, CSV), figures and a comparison with every standard law.",
     )
-    parser.add_argument("--objective", choices=("residual", "ca-ct", "preload"), default="residual",
+    parser.add_argument("--objective", choices=("residual", "ca-ct", "rms-acceleration", "preload"),
+                        default="residual",
                         help="what to minimise: residual vibration R (units of Ca) or the peak "
-                        "inertia load Ca*Ct (units of h/T^2), worst case over the band; with "
+                        "inertia load Ca*Ct (units of h/T^2), worst case over the band; "
+                        "'rms-acceleration': Ca_rms, a servo's heating (no band; reported against "
+                        "the floor 2 sqrt(3) no rest-to-rest law passes; give --max-jerk); with "
                         "--program also 'preload': the largest preload (N) the whole program "
                         "needs over the speed range; for a --segment that starts or ends in "
                         "motion, 'residual' is the whole program's largest residual vibration (mm)")
@@ -157,6 +160,8 @@ def run(args) -> int:
         return _run_program(args, out)
     if args.objective == "preload":
         raise CliError("--objective preload needs --program (a whole cam with its follower)")
+    if args.objective == "rms-acceleration":
+        return _run_rms(args, out)
     if args.band is None and args.n is None:
         raise CliError("one of --band, --n or --program is required")
     if args.n is not None and not args.n > 0:
@@ -230,6 +235,58 @@ def run(args) -> int:
     print(f"{objective.label}: designed {rows[0]['objective']:.5g}; best standard "
           f"{min(rows[1:], key=lambda r: r['objective'])['law']} "
           f"{min(r['objective'] for r in rows[1:]):.5g}; wrote {out}")
+    return 0
+
+
+def _run_rms(args, out) -> int:
+    """Least RMS acceleration under the caps: the law, its coefficients against the floor
+    and every standard law's."""
+    from .. import law_design as D
+    from ..laws import RMS_ACCELERATION_FLOOR, save, standard_laws
+
+    if args.band or args.n is not None:
+        raise CliError(f"{'--band' if args.band else '--n'}: not with --objective rms-acceleration "
+                       "(the RMS acceleration does not depend on the period ratio)")
+    if args.damping:
+        raise CliError("--damping: not with --objective rms-acceleration (no vibration in it)")
+    objective = D.RmsAcceleration()
+    caps = D.Caps(args.max_ca, args.max_jerk)
+    result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=args.steps,
+                      optimizer=args.optimizer, progress=not args.quiet)
+    law = result.law
+    save(law, out / "law.json")
+    tau = np.linspace(0.0, 1.0, 10001)
+    columns = np.stack([tau, *(np.asarray(x) for x in law.evaluate(tau))], axis=1)
+    np.savetxt(out / "law.csv", columns, delimiter=",", header="tau,s,v,a,j", comments="", fmt="%.17g")
+    keys = ("Cv", "Ca", "Cj", "Cv_rms", "Ca_rms", "Cva")
+    rows = [{"law": "designed", **result.coefficients, **law.rms_coefficients()}]
+    rows += [{"law": each.name, **each.peak_coefficients(), **each.rms_coefficients()}
+             for each in standard_laws()]
+    for row in rows:
+        row["Ca_rms_over_floor"] = row["Ca_rms"] / RMS_ACCELERATION_FLOOR
+    lines = [",".join(("law", *keys, "Ca_rms_over_floor"))]
+    lines += [",".join(str(r[k]) for k in ("law", *keys, "Ca_rms_over_floor")) for r in rows]
+    (out / "comparison.csv").write_text("\n".join(lines) + "\n")
+    md = [f"Objective: {objective.label}; caps Ca <= {args.max_ca}, Cj <= {args.max_jerk}", "",
+          "| law | Cv | Ca | Cj | Cv_rms | Ca_rms | Cva | Ca_rms / floor |",
+          "|---|---|---|---|---|---|---|---|"]
+    md += ["| " + " | ".join([r["law"], *(f"{r[k]:.4f}" for k in keys), f"{r['Ca_rms_over_floor']:.4f}"])
+           + " |" for r in rows]
+    (out / "comparison.md").write_text("\n".join(md) + "\n")
+    value = result.values[objective.label]
+    dump_json({"objective": objective.label, "value": value, "floor": RMS_ACCELERATION_FLOOR,
+               "value_over_floor": value / RMS_ACCELERATION_FLOOR,
+               "caps": {"max_ca": args.max_ca, "max_jerk": args.max_jerk, "monotone": True},
+               "coefficients": rows[0] | {"law": law.name}, "knots": args.knots, "seed": args.seed,
+               "steps": args.steps, "repaired": result.restored, "seconds": result.seconds},
+              out / "summary.json")
+    plot = import_aside("camjax.plot")()
+    title = plot.design_title(objective.label, caps, 0.0)
+    plot.save(plot.law_curves([law], title=title), out / "law.png")
+    best = min(rows[1:], key=lambda r: r["Ca_rms"])
+    print(f"Ca_rms: designed {value:.5g} ({value / RMS_ACCELERATION_FLOOR:.4f} of the floor "
+          f"2 sqrt(3) = {RMS_ACCELERATION_FLOOR:.5g}); best standard {best['law']} "
+          f"{best['Ca_rms']:.5g}; wrote {out}")
     return 0
 
 

@@ -42,6 +42,7 @@ from ._objectives import ExpectedResidual as ExpectedResidual
 from ._objectives import MaxCaCt as MaxCaCt
 from ._objectives import MaxResidual as MaxResidual
 from ._objectives import Residual as Residual
+from ._objectives import RmsAcceleration as RmsAcceleration
 from ._objectives import peak_loads as peak_loads
 from ._optimise import DEFAULT_STEPS as DEFAULT_STEPS
 from ._optimise import MAX_KNOTS as MAX_KNOTS
@@ -51,7 +52,9 @@ from ._optimise import DesignResult as DesignResult
 from ._optimise import design as design
 from ._optimise import linear_maps as linear_maps
 from ._residual import dense_tau as dense_tau
+from ._residual import percentage_vibration as percentage_vibration
 from ._residual import quadrature as quadrature
 from ._residual import residual as residual
 from ._residual import residual_amplitude as residual_amplitude
 from ._residual import residual_kernel as residual_kernel
+from ._residual import vibration_band as vibration_band

@@ -1,4 +1,5 @@
-"""Design objectives: residual vibration and peak inertia load, at one n or over a band."""
+"""Design objectives: residual vibration and peak inertia load, at one n or over a band, and
+the RMS acceleration (a servo's heating)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..laws import RMS_ACCELERATION_FLOOR
 from ..models import SpringMassOptions
 from ..sdof import (
     MAX_GRID_INTERVALS,
@@ -19,7 +21,7 @@ from ..sdof import (
     motion_grid,
     propagate,
 )
-from ._residual import _modulus, _residual_components, residual
+from ._residual import _modulus, _residual_components, quadrature, residual
 
 EVALUATION_SAMPLES = 2000
 """Period ratios across a band on which reported (true) maxima are taken."""
@@ -206,6 +208,40 @@ class ExpectedResidual(AbstractObjective):
     @property
     def label(self):
         return f"E[R], n ~ N({self.mean:g}, {self.std:g}^2)"
+
+
+class RmsAcceleration(AbstractObjective):
+    """The law's RMS acceleration ``Ca_rms = sqrt(int_0^1 a^2 dtau)``: a servo's RMS torque
+    (its heating) per ``h/T^2`` where inertia dominates the load.  No rest-to-rest law goes
+    below ``RMS_ACCELERATION_FLOOR`` (2 sqrt 3, the cubic); a jerk cap keeps a design above it.
+
+    Its features are ``sqrt(w) a`` at Gauss-Legendre nodes on every smooth piece (linear in
+    the law; exact for a spline's polynomial pieces), their norm the training value: the
+    problem stays convex.
+    """
+
+    weight: float = eqx.field(static=True, default=1.0)
+    damping: float = eqx.field(static=True, default=0.0)  # not used: the law alone sets it
+
+    def __check_init__(self):
+        _check_common(self.weight, self.damping, "RmsAcceleration")
+
+    def features(self, law):
+        nodes, weights = quadrature(law, 0.0)
+        return jnp.asarray(np.sqrt(weights)) * law.a(jnp.asarray(nodes))
+
+    def value(self, features, ca, sharpness):
+        return jnp.sqrt(jnp.sum(features**2))
+
+    def report(self, law) -> float:
+        return float(law.rms_coefficients()["Ca_rms"])
+
+    def evaluation_ratios(self):
+        return np.zeros(0)
+
+    @property
+    def label(self):
+        return f"Ca_rms (floor {RMS_ACCELERATION_FLOOR:.4f})"
 
 
 def _payload_acceleration(law, period_ratios, damping):

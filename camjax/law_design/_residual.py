@@ -96,3 +96,47 @@ def residual(law, period_ratios, damping: float = 0.0, *, ca=None) -> jax.Array:
     """Residual vibration R (units of Ca) at ``period_ratios``, by quadrature."""
     ca = law.Ca if ca is None else ca
     return residual_amplitude(law, period_ratios, damping) / ca
+
+
+def percentage_vibration(law, period_ratios, damping: float = 0.0) -> jax.Array:
+    """``V``: the residual vibration a move leaves, relative to an unshaped step's.
+
+    The amplitude of the payload's deviation from the law when the rise ends,
+    ``|q| / w_d`` with ``q = int_0^1 a(u) exp(lambda (1 - u)) du``, over that of a unit step
+    of position applied as the rise ends, ``1 / sqrt(1 - zeta^2)``: so ``V = |q| / w``, the
+    Singer-Seering percentage vibration of an impulse train carried over to a smooth move (a
+    shaped law's ``V`` is its base's times its shaper's, ``camjax.laws.Shaper.vibration``).
+    ``period_ratios`` must be concrete; the law may be traced.
+    """
+    n = np.atleast_1d(np.asarray(period_ratios, dtype=float))
+    return _modulus(_residual_components(law, n, damping)) * jnp.asarray(
+        np.sqrt(1.0 - damping**2) / (2 * np.pi * n) ** 2)
+
+
+def vibration_band(vibration, limit: float = 0.05, search: tuple[float, float] = (0.25, 1.75),
+                   samples: int = 6001) -> tuple[float, float]:
+    """``(lo, hi)``: the frequency ratios (actual / design) about 1 between which
+    ``vibration(r) <= limit`` throughout, the edges solved by ``brentq``; an edge that
+    reaches ``search`` is returned as that end.  ``vibration`` maps a NumPy array of ratios
+    to ``V`` (``Shaper.vibration``, or ``percentage_vibration`` of a law at ``n0 r``)."""
+    from scipy.optimize import brentq
+
+    if not 0.0 < limit < 1.0:
+        raise ValueError(f"vibration_band: limit must be in (0, 1), got {limit}")
+    r = np.unique(np.concatenate([np.linspace(*search, samples), [1.0]]))
+    inside = np.asarray(vibration(r), dtype=float) <= limit * (1 + 1e-9)  # EI touches it at 1
+    k = int(np.searchsorted(r, 1.0))
+    if not inside[k]:
+        raise ValueError(f"vibration_band: V = {float(vibration(np.array([1.0]))[0]):.4g} at the "
+                         f"design frequency is above the limit {limit:g}")
+    lo, hi = k, k
+    while lo > 0 and inside[lo - 1]:
+        lo -= 1
+    while hi < r.size - 1 and inside[hi + 1]:
+        hi += 1
+
+    def edge(a, b):
+        return brentq(lambda x: float(vibration(np.array([x]))[0]) - limit, a, b, xtol=1e-14)
+
+    return (float(r[0]) if lo == 0 else edge(r[lo - 1], r[lo]),
+            float(r[-1]) if hi == r.size - 1 else edge(r[hi], r[hi + 1]))

@@ -1,5 +1,6 @@
 """Motion laws: normalised rises ``s(tau)`` with exact derivatives and coefficients."""
 
+from ._base import RMS_ACCELERATION_FLOOR as RMS_ACCELERATION_FLOOR
 from ._base import AbstractMotionLaw as AbstractMotionLaw
 from ._base import AbstractSearchedPeaksLaw as AbstractSearchedPeaksLaw
 from ._boundary import BoundaryPolynomial as BoundaryPolynomial
@@ -34,6 +35,9 @@ from ._scca import ModifiedTrapezoid as ModifiedTrapezoid
 from ._scca import Parabolic as Parabolic
 from ._scca import SimpleHarmonic as SimpleHarmonic
 from ._scca import constant_velocity_variant as constant_velocity_variant
+from ._shaped import SHAPERS as SHAPERS
+from ._shaped import ShapedLaw as ShapedLaw
+from ._shaped import Shaper as Shaper
 from ._spline import BSplineLaw as BSplineLaw
 from ._table import MAX_TABLE_POINTS as MAX_TABLE_POINTS
 from ._table import MIN_TABLE_POINTS as MIN_TABLE_POINTS

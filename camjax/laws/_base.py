@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import abc
+import math
 from typing import ClassVar
 
 import equinox as eqx
@@ -129,6 +130,42 @@ class AbstractMotionLaw(eqx.Module):
             _, v, a, _ = jax.device_get(_compiled_rise(self, np.array([0.0, 1.0])))
         return float(v[0]), float(a[0]), float(v[1]), float(a[1])
 
+    @property
+    def Cv_rms(self) -> jax.Array:
+        """RMS normalised velocity ``sqrt(int_0^1 v^2 dtau)`` (Gauss-Legendre per smooth piece)."""
+        nodes, weights = _piece_quadrature(self)
+        return jnp.sqrt(jnp.dot(weights, self.rise(nodes)[1] ** 2))
+
+    @property
+    def Ca_rms(self) -> jax.Array:
+        """RMS normalised acceleration ``sqrt(int_0^1 a^2 dtau)``: a servo's heating (its RMS
+        torque) per ``h/T^2``; never below ``RMS_ACCELERATION_FLOOR`` for a rest-to-rest law."""
+        nodes, weights = _piece_quadrature(self)
+        return jnp.sqrt(jnp.dot(weights, self.rise(nodes)[2] ** 2))
+
+    @property
+    def Cva(self) -> jax.Array:
+        """Peak power coefficient ``max |v a|`` (a servo's peak power per ``m h^2/T^3``).
+
+        The largest sample of ``|v a|`` on the quadrature nodes and piece ends, refined by a
+        golden-section search between its neighbours (to rounding); differentiable in the
+        law through the value at the located point (the location carries no gradient).
+        """
+        nodes, _ = _piece_quadrature(self)
+        tau = jnp.sort(jnp.concatenate([jnp.array([0.0, 1.0]), nodes, _piece_edges(self)]))
+
+        def power(t):
+            _, v, a, _ = self.rise(t)
+            return jnp.abs(v * a)
+
+        return refined_max(power, tau)
+
+    def rms_coefficients(self) -> dict[str, float]:
+        """``{"Cv_rms", "Ca_rms", "Cva"}`` as Python floats: the servo's coefficients beside
+        ``peak_coefficients`` (RMS velocity and acceleration, peak ``|v a|``)."""
+        values = _compiled_rms(self) if is_concrete(self) else (self.Cv_rms, self.Ca_rms, self.Cva)
+        return dict(zip(("Cv_rms", "Ca_rms", "Cva"), map(float, jax.device_get(values))))
+
     def peak_coefficients(self) -> dict[str, float]:
         """``{"Cv", "Ca", "Cj"}`` as Python floats (``inf`` for an acceleration step)."""
         # One transfer for the three (on a GPU each float() of a device value is a wait).
@@ -155,6 +192,71 @@ class AbstractSearchedPeaksLaw(AbstractMotionLaw):
     @property
     def Cj(self):
         return self.peak(3)
+
+
+RMS_ACCELERATION_FLOOR = 2.0 * 3.0**0.5
+"""The least ``Ca_rms`` of any rest-to-rest law: ``int a^2`` with ``s(0) = 0``, ``s(1) = 1``,
+``v(0) = v(1) = 0`` is least for the cubic ``s = 3 tau^2 - 2 tau^3`` (``a = 6 - 12 tau``,
+``int a^2 = 12``), whose acceleration steps at both ends; a law with ``a = 0`` at the ends
+approaches it as its jerk grows."""
+
+_GOLDEN = (5.0**0.5 - 1.0) / 2.0
+_QUADRATURE_ORDER = 16  # Gauss-Legendre points per panel
+_PANELS_PER_UNIT = 16  # panels per unit of tau on a piece with fixed ends
+_PANELS_PER_TRACED_PIECE = 8  # panels on each piece whose ends are traced
+
+
+def _piece_edges(law: AbstractMotionLaw) -> jax.Array:
+    points = law.breakpoints()
+    if isinstance(points, tuple):
+        return jnp.asarray(np.array(points, dtype=float))
+    return jnp.clip(jnp.sort(jnp.asarray(points, dtype=float).ravel()), 0.0, 1.0)
+
+
+def _piece_quadrature(law: AbstractMotionLaw) -> tuple[jax.Array, jax.Array]:
+    """Gauss-Legendre nodes and weights over ``[0, 1]`` whose panels never straddle a
+    breakpoint: the integral of a smooth function of ``(s, v, a, j)`` to rounding (every
+    law is a polynomial or a few sines on each piece).  Traced breakpoints give traced
+    nodes, so the integral stays differentiable in them."""
+    x, w = np.polynomial.legendre.leggauss(_QUADRATURE_ORDER)
+    points = law.breakpoints()
+    if isinstance(points, tuple):
+        edges = np.array([0.0, *points, 1.0])
+        cuts = np.concatenate([np.linspace(lo, hi, max(1, math.ceil((hi - lo) * _PANELS_PER_UNIT)) + 1)[:-1]
+                               for lo, hi in zip(edges[:-1], edges[1:])] + [[1.0]])
+    else:
+        edges = jnp.concatenate([jnp.zeros(1), _piece_edges(law), jnp.ones(1)])
+        steps = jnp.linspace(0.0, 1.0, _PANELS_PER_TRACED_PIECE + 1)[:-1]
+        cuts = jnp.concatenate([(edges[:-1, None] + (edges[1:] - edges[:-1])[:, None] * steps).ravel(),
+                                jnp.ones(1)])
+    lo, width = cuts[:-1, None], (cuts[1:] - cuts[:-1])[:, None]
+    return (jnp.asarray(lo + width * (x + 1) / 2).ravel(), jnp.asarray(width / 2 * w).ravel())
+
+
+def refined_max(f, tau: jax.Array) -> jax.Array:
+    """``max f`` over ``[0, 1]`` for a non-negative ``f`` (elementwise, jittable): its largest
+    sample on the sorted points ``tau``, refined by a golden-section search between that
+    sample's neighbours, to rounding where ``f`` has one crest there.  Differentiable in
+    what ``f`` closes over through the value at the located point (the location carries no
+    gradient: at a maximum the value's derivative does not depend on it)."""
+    k = jnp.argmax(f(tau))
+    lo = jax.lax.stop_gradient(tau[jnp.maximum(k - 1, 0)])
+    hi = jax.lax.stop_gradient(tau[jnp.minimum(k + 1, tau.size - 1)])
+
+    def shrink(_, bracket):
+        lo, hi = bracket
+        x1 = hi - _GOLDEN * (hi - lo)
+        x2 = lo + _GOLDEN * (hi - lo)
+        f1, f2 = f(jnp.stack([x1, x2]))
+        return jnp.where(f1 >= f2, lo, x1), jnp.where(f1 >= f2, x2, hi)
+
+    lo, hi = jax.lax.fori_loop(0, 80, shrink, (lo, hi))
+    return jnp.max(f(jax.lax.stop_gradient(jnp.stack([lo, hi, tau[k]]))))
+
+
+@eqx.filter_jit
+def _compiled_rms(law: AbstractMotionLaw):
+    return law.Cv_rms, law.Ca_rms, law.Cva
 
 
 def _evaluate_law(law: AbstractMotionLaw, tau: jax.Array) -> LawValues:

@@ -33,6 +33,7 @@ from ._scca import (
     SimpleHarmonic,
     constant_velocity_variant,
 )
+from ._shaped import SHAPERS, ShapedLaw, Shaper
 
 _STANDARD: dict[str, Callable[[], AbstractMotionLaw]] = {
     "cycloidal": Cycloidal,
@@ -70,7 +71,8 @@ _ALIASES = {
 }
 
 FAMILIES = ("scca:A,B,C", "poly:K", "triple-harmonic:A1,A2",
-            *(f"{name}-cv:P" for name in CV_BASES), "NAME-asym:L")
+            *(f"{name}-cv:P" for name in CV_BASES), "NAME-asym:L", "zv-NAME:N,ZETA", "zvd-NAME:N,ZETA",
+            "ei-NAME:N,0,VTOL")
 """The parameterised rest-to-rest families ``get`` reads (``NAME``: a name of ``names()``)."""
 
 IN_MOTION_FAMILIES = ("polynomial5:V0,A0,V1,A1", "polynomial7:V0,A0,J0,V1,A1,J1")
@@ -153,6 +155,16 @@ def get(name: str) -> AbstractMotionLaw:
             raise ValueError(f"law {name!r}: NAME-asym:L takes a law of {', '.join(names())}")
         inflection = _parse_one(text, float, name, f"{base}-asym:L")
         return Inflected(get(base), inflection)
+    shaper, _, base = family.partition("-")
+    if shaper in SHAPERS and base and text:
+        base = _ALIASES.get(base, base)
+        if base not in _STANDARD and base not in _NAMED:
+            raise ValueError(f"law {name!r}: {shaper}-NAME:N,ZETA takes a law of {', '.join(names())}")
+        values = _parse_numbers(text, float, name)
+        if len(values) != (3 if shaper == "ei" else 2):
+            form = "ei-NAME:N,0,VTOL" if shaper == "ei" else f"{shaper}-NAME:N,ZETA"
+            raise ValueError(f"law {name!r}: takes the base's design period ratio and the damping, {form!r}")
+        return ShapedLaw(get(base), Shaper(shaper, *values[1:]), values[0])
     valid = ", ".join(names() + sorted(_ALIASES) + list(FAMILIES) + list(_IN_MOTION)
                       + list(IN_MOTION_FAMILIES))
     raise ValueError(f"unknown law {name!r}; valid names: {valid}")
