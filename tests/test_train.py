@@ -27,8 +27,8 @@ def rothbart(units_g=None):
 
 
 def two_mass_frequencies(m1, m2, k, ks):
-    """The free chain's two frequencies (Hz): roots of m1 m2 w^4 - (k m1 + (k + ks) m2) w^2 + k ks."""
-    b = k * m1 + (k + ks) * m2
+    """The free chain's two frequencies (Hz): roots of m1 m2 w^4 - ((k + ks) m1 + k m2) w^2 + k ks."""
+    b = (k + ks) * m1 + k * m2
     w2 = (b + np.array([-1.0, 1.0]) * math.sqrt(b * b - 4 * m1 * m2 * k * ks)) / (2 * m1 * m2)
     return np.sqrt(w2) / (2 * math.pi)
 
