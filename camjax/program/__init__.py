@@ -11,7 +11,9 @@ also sizes the drive (torque, energy, flywheel), the Hertz contact stress and th
 the profile, the figures); ``analyse_machine`` adds the torques of several cams on one shaft
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
 (``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
-preload over a speed range).  The equations are in docs/program.md and docs/machine.md.
+preload over a speed range).  ``Chain`` is the follower as a chain of bodies (a valve
+train, a spring that surges) and ``ChainSteadyState`` its exact periodic steady state.  The
+equations are in docs/program.md, docs/machine.md and docs/valve-trains.md.
 """
 
 from typing import TYPE_CHECKING
@@ -93,6 +95,15 @@ from ._spec import example_path as example_path
 from ._spec import program_path as program_path
 from ._spec import segment_band as segment_band
 from ._spec import with_law as with_law
+from ._train import Body as Body
+from ._train import Chain as Chain
+from ._train import ChainModes as ChainModes
+from ._train import ChainSteadyState as ChainSteadyState
+from ._train import ChainSummary as ChainSummary
+from ._train import Seat as Seat
+from ._train import Spring as Spring
+from ._train import chain_from_dict as chain_from_dict
+from ._train import load_chain as load_chain
 from ._turn import JOIN_TOLERANCE_DEG as JOIN_TOLERANCE_DEG
 from ._turn import Turn as Turn
 from ._writers import RESPONSE_SPEEDS as RESPONSE_SPEEDS

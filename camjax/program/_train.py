@@ -27,7 +27,8 @@ import jax.numpy as jnp
 import numpy as np
 import scipy.linalg
 
-from ..sdof import periodic_propagate, refined_extremes
+from ..metrics import PEAK_TOLERANCE, bernstein_bound, hermite_data, peak_search
+from ..sdof import periodic_propagate
 from ._follower import Follower
 
 SURGE_TOLERANCE = 0.005
@@ -296,6 +297,17 @@ CLASSIC_FIELDS = ("mass_kg", "stiffness_n_per_mm", "damping_ratio", "spring_rate
 """The ``[follower]`` fields of the one-body train (the classic spelling)."""
 
 
+def load_chain(path) -> Chain | None:
+    """The chain of a program file (``chain_from_dict`` of its tables); errors name the file."""
+    import tomllib
+
+    try:
+        with open(path, "rb") as file:
+            return chain_from_dict(tomllib.load(file))
+    except (ValueError, OSError) as error:
+        raise ValueError(f"{path}: {error}") from None
+
+
 def chain_from_dict(data: dict) -> Chain | None:
     """The chain of a program file's tables: ``[[train]]`` with ``[spring]`` and ``[seat]``,
     or ``None`` where the file has none (its ``[follower]`` fields are the one-body train).
@@ -352,7 +364,8 @@ class ChainModes(NamedTuple):
     in ``OUTPUTS`` order (the bodies' accelerations one row each).  A pytree of arrays: the
     compiled turn takes it as an argument, so an edit of values compiles nothing."""
 
-    lam: np.ndarray  # (S,) complex, 1/s
+    lam: np.ndarray  # (S,) complex, 1/s: one of each conjugate pair (S = the degrees of freedom
+    # where every mode oscillates; one more per two overdamped ones)
     forcing: np.ndarray  # (S,) complex: f_j
     gain: np.ndarray  # (O, S) complex
     direct: np.ndarray  # (O, 3) real: e0, e1, e2
@@ -411,7 +424,13 @@ class ChainModes(NamedTuple):
         output(-a.K[a.seat], -a.C[a.seat], -a.M[a.seat], preload)  # the spring's force at its seat
         rate = 1e3 * chain.spring.rate_n_per_mm if chain.spring is not None else 0.0
         output(-a.K[a.seat] - rate * unit(a.body_index[-1]), -a.C[a.seat], -a.M[a.seat])  # surge
-        return cls(lam, u + lam * v, np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
+        # A real system's modes come in conjugate pairs (LAPACK returns them exactly
+        # conjugate), whose two terms sum to twice the real part of one: keep one of each
+        # pair, doubled, and every real (overdamped) mode once.
+        keep = lam.imag >= 0
+        weight = np.where(lam.imag[keep] > 0, 2.0, 1.0)
+        gain = np.array([r[0] for r in rows])[:, keep] * weight
+        return cls(lam[keep], (u + lam * v)[keep], gain, np.array([r[1] for r in rows]),
                    np.asarray(statics, dtype=float))
 
 
@@ -435,11 +454,24 @@ def lift_jets(coefficients, widths):
 
 class ChainCycle(NamedTuple):
     """One turn of the chain's periodic steady state at one speed: outputs at the nodes
-    (rows as ``output_rows``), their refined minima and maxima over the turn."""
+    (rows as ``output_rows``); the refined least and largest contact force and seat force
+    (``SIGNED_ROWS`` of ``low`` and ``high``), and the refined peak ``|f|`` of each
+    body's acceleration and of the surge (``PEAK_ROWS`` of ``peak``)."""
 
     values: jax.Array
-    minimum: jax.Array
-    maximum: jax.Array
+    low: jax.Array
+    high: jax.Array
+    peak: jax.Array
+
+
+def signed_rows(bodies: int) -> list[int]:
+    rows = output_rows(bodies)
+    return [rows["contact_force_n"], rows["seat_force_n"]]
+
+
+def peak_rows(bodies: int) -> list[int]:
+    rows = output_rows(bodies)
+    return [*range(rows["acceleration_m_s2"].start, rows["acceleration_m_s2"].stop), rows["surge_n"]]
 
 
 def chain_cycle(motion, lift, modes: ChainModes, rpm) -> ChainCycle:
@@ -459,22 +491,49 @@ def chain_cycle(motion, lift, modes: ChainModes, rpm) -> ChainCycle:
     widths = grid.widths
     y_left, y_right = lift_jets(lift, widths)
     y_nodes = jnp.concatenate([y_left[:, :3], y_right[-1:, :3]])
-    values = jnp.real(gain @ xi) + direct @ y_nodes.T + jnp.asarray(modes.static)[:, None]
+    xr, xq = jnp.real(xi), jnp.imag(xi)
 
-    def jets(xi_end, y_end):
+    def real_part(g, re, im):  # Re(g @ x) in real products (XLA's complex ones are slow on CPU)
+        return jnp.real(g) @ re - jnp.imag(g) @ im
+
+    values = real_part(gain, xr, xq) + direct @ y_nodes.T + jnp.asarray(modes.static)[:, None]
+
+    def jets(ends, y_end):
         """``(O, K, 3)``: the outputs' first three derivatives at one end of each interval."""
         out = []
         for p in (1, 2, 3):
-            d = jnp.real((gain * lam**p) @ xi_end)
+            d = real_part(gain * lam**p, xr[:, ends], xq[:, ends])
             for i in range(p):
                 d = d + jnp.real(gain @ (lam ** (p - 1 - i) * f))[:, None] * y_end[None, :, i]
             d = d + direct @ y_end[:, p:p + 3].T
             out.append(d)
         return jnp.stack(out, axis=-1)
 
-    left, right = jets(xi[:, :-1], y_left), jets(xi[:, 1:], y_right)
-    low, high = jax.vmap(refined_extremes, in_axes=(0, None, 0, 0))(values, widths, left, right)
-    return ChainCycle(values, low, high)
+    left, right = jets(slice(None, -1), y_left), jets(slice(1, None), y_right)
+    bodies = values.shape[0] - 4
+    signed, peaks = np.asarray(signed_rows(bodies)), np.asarray(peak_rows(bodies))
+    high = jax.vmap(_bounded_max, in_axes=(0, None, 0, 0))(values[signed], widths, left[signed], right[signed])
+    low = -jax.vmap(_bounded_max, in_axes=(0, None, 0, 0))(-values[signed], widths, -left[signed],
+                                                           -right[signed])
+    peak = jax.vmap(_bounded_peak, in_axes=(0, None, 0, 0))(values[peaks], widths, left[peaks], right[peaks])
+    return ChainCycle(values, low, high, peak)
+
+
+def _bounded_peak(values, widths, left, right):
+    """``max |f|`` between the nodes, refining only the intervals whose Bernstein bound can
+    beat the best found (``camjax.metrics.peak_search``)."""
+    bound = bernstein_bound(values, widths, tuple(left.T), tuple(right.T))
+    data = hermite_data(values, widths, left, right)
+    return peak_search(bound, lambda index: data[index], jnp.max(jnp.abs(values)), PEAK_TOLERANCE)
+
+
+def _bounded_max(values, widths, left, right):
+    """``max f`` (signed) between the nodes, refining only the intervals whose Bernstein
+    bound can beat the best found (``camjax.metrics.peak_search``): the dense refinement of
+    every output over every interval cost a chain ten times its propagation."""
+    low = jnp.min(values)
+    shift = low - (jnp.max(values) - low) - 1.0
+    return _bounded_peak(values - shift, widths, left, right) + shift
 
 
 @jax.jit
@@ -538,15 +597,11 @@ class ChainSteadyState:
     def summary(self, rpm) -> ChainSummary:
         """What a valve-train engineer reads per speed (``ChainSummary``)."""
         c = self.cycles(rpm)
-        r = self._rows
-        accel = r["acceleration_m_s2"]
-        lift_m = r["lift_m"]
-        error = 1e3 * c.values[:, lift_m] - self.kinematic_ratio * np.asarray(self.grid.lift_nodes)[None, :]
-        return ChainSummary(
-            np.asarray(rpm, dtype=float), c.minimum[:, 0], c.maximum[:, 0],
-            np.maximum(-c.minimum[:, accel], c.maximum[:, accel]), np.max(np.abs(error), axis=1),
-            c.minimum[:, r["seat_force_n"]], c.maximum[:, r["seat_force_n"]],
-            np.maximum(-c.minimum[:, r["surge_n"]], c.maximum[:, r["surge_n"]]))
+        bodies = len(self.chain.bodies)
+        error = (1e3 * c.values[:, self._rows["lift_m"]]
+                 - self.kinematic_ratio * np.asarray(self.grid.lift_nodes)[None, :])
+        return ChainSummary(np.asarray(rpm, dtype=float), c.low[:, 0], c.high[:, 0], c.peak[:, :bodies],
+                            np.max(np.abs(error), axis=1), c.low[:, 1], c.high[:, 1], c.peak[:, bodies])
 
     def jump_speed(self, rpm_max: float, *, tolerance_rpm: float = 1e-4, scan: int = 128) -> float | None:
         """The lowest speed in ``[rpm_min, rpm_max]`` where the cam's contact force first
