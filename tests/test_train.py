@@ -10,7 +10,16 @@ import scipy.linalg
 import scipy.optimize
 from helpers import FOLLOWER, compiled_programs, two_cycloids
 
-from camjax.program import Body, Chain, ChainModes, ChainSteadyState, Follower, Spring, SteadyState, chain_from_dict
+from camjax.program import (
+    Body,
+    Chain,
+    ChainModes,
+    ChainSteadyState,
+    Follower,
+    Spring,
+    SteadyState,
+    chain_from_dict,
+)
 
 LB = 0.45359237  # kg
 LBF_PER_IN_AS_N_PER_MM = 4.4482216152605 / 25.4
@@ -20,8 +29,13 @@ def rothbart(units_g=None):
     """Rothbart's valve gear (Cam Design Handbook ch. 11) in SI: lbm exactly, or through
     ``1 lbm = 1 / units_g lbf s^2/in`` where ``units_g`` is given."""
     to_kg = LB if units_g is None else 4.4482216152605 / 0.0254 / units_g
-    return Chain((Body("lifter", 0.0327 * to_kg), Body("valve", 0.110 * to_kg, 3.0e5 * LBF_PER_IN_AS_N_PER_MM)),
-                 Spring(660 * LBF_PER_IN_AS_N_PER_MM, 100.0))
+    return Chain(
+        (
+            Body("lifter", 0.0327 * to_kg),
+            Body("valve", 0.110 * to_kg, 3.0e5 * LBF_PER_IN_AS_N_PER_MM),
+        ),
+        Spring(660 * LBF_PER_IN_AS_N_PER_MM, 100.0),
+    )
 
 
 def two_mass_frequencies(m1, m2, k, ks):
@@ -50,8 +64,10 @@ SURGING = dict(tappet=0.03, valve=0.05, element=200.0, rate=52.0, spring_mass=0.
 
 def surging_chain(**spring):
     s = SURGING
-    return Chain((Body("tappet", s["tappet"]), Body("valve", s["valve"], s["element"], 5.0)),
-                 Spring(s["rate"], 250.0, s["spring_mass"], **spring))
+    return Chain(
+        (Body("tappet", s["tappet"]), Body("valve", s["valve"], s["element"], 5.0)),
+        Spring(s["rate"], 250.0, s["spring_mass"], **spring),
+    )
 
 
 def continuous_held_frequencies(count=3):
@@ -89,10 +105,19 @@ def test_harmonic_check_orders():
 
 
 def toml_tables(**spring):
-    return {"follower": {"kind": "translating-roller", "base_radius_mm": 30, "roller_radius_mm": 10},
-            "train": [{"name": "tappet", "mass_kg": 0.03},
-                      {"name": "valve", "mass_kg": 0.05, "stiffness_n_per_mm": 200.0, "damping_n_s_per_m": 5.0}],
-            "spring": {"rate_n_per_mm": 52.0, "preload_n": 250.0, "mass_kg": 0.049, **spring}}
+    return {
+        "follower": {"kind": "translating-roller", "base_radius_mm": 30, "roller_radius_mm": 10},
+        "train": [
+            {"name": "tappet", "mass_kg": 0.03},
+            {
+                "name": "valve",
+                "mass_kg": 0.05,
+                "stiffness_n_per_mm": 200.0,
+                "damping_n_s_per_m": 5.0,
+            },
+        ],
+        "spring": {"rate_n_per_mm": 52.0, "preload_n": 250.0, "mass_kg": 0.049, **spring},
+    }
 
 
 def test_program_file_tables_give_the_python_chain():
@@ -100,18 +125,35 @@ def test_program_file_tables_give_the_python_chain():
     assert chain_from_dict({"follower": {}}) is None
 
 
-@pytest.mark.parametrize(("edit", "message"), [
-    (lambda d: d["train"][1].update(mass_kg=-1.0), r"body 2 \(valve\) mass_kg must be positive"),
-    (lambda d: d["train"][0].pop("mass_kg"), r"body 1 \(tappet\): needs mass_kg"),
-    (lambda d: d["train"][1].pop("stiffness_n_per_mm"), r"body 2 \(valve\): stiffness_n_per_mm is needed"),
-    (lambda d: d["train"][1].update(ratio=0.0), r"body 2 \(valve\) ratio must be positive"),
-    (lambda d: d["train"][1].update(lash_mm=-0.1), r"body 2 \(valve\) lash_mm must be non-negative"),
-    (lambda d: d.update(seat={"stiffness_n_per_mm": 5e4}, spring={"rate_n_per_mm": 52.0}),
-     r"\[seat\]: a seat needs a \[spring\] with preload_n > 0"),
-    (lambda d: d["spring"].update(elements=2), r"\[spring\] elements = 2 cannot resolve"),
-    (lambda d: d["follower"].update(mass_kg=1.0), r"\[follower\] mass_kg: a file with a \[\[train\]\]"),
-    (lambda d: d["train"][1].update(rato=1.6), r"body 2: unknown field\(s\) rato"),
-])
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda d: d["train"][1].update(mass_kg=-1.0),
+            r"body 2 \(valve\) mass_kg must be positive",
+        ),
+        (lambda d: d["train"][0].pop("mass_kg"), r"body 1 \(tappet\): needs mass_kg"),
+        (
+            lambda d: d["train"][1].pop("stiffness_n_per_mm"),
+            r"body 2 \(valve\): stiffness_n_per_mm is needed",
+        ),
+        (lambda d: d["train"][1].update(ratio=0.0), r"body 2 \(valve\) ratio must be positive"),
+        (
+            lambda d: d["train"][1].update(lash_mm=-0.1),
+            r"body 2 \(valve\) lash_mm must be non-negative",
+        ),
+        (
+            lambda d: d.update(seat={"stiffness_n_per_mm": 5e4}, spring={"rate_n_per_mm": 52.0}),
+            r"\[seat\]: a seat needs a \[spring\] with preload_n > 0",
+        ),
+        (lambda d: d["spring"].update(elements=2), r"\[spring\] elements = 2 cannot resolve"),
+        (
+            lambda d: d["follower"].update(mass_kg=1.0),
+            r"\[follower\] mass_kg: a file with a \[\[train\]\]",
+        ),
+        (lambda d: d["train"][1].update(rato=1.6), r"body 2: unknown field\(s\) rato"),
+    ],
+)
 def test_bad_train_input_is_one_line(edit, message):
     data = toml_tables()
     edit(data)
@@ -129,10 +171,18 @@ def test_one_body_spellings_and_the_classic_follower():
     derivative differently: 1e-10 of the peaks)."""
     program = two_cycloids()
     f = program.follower
-    tables = {"follower": {}, "train": [{"name": "follower", "mass_kg": f.mass_kg,
-                                         "stiffness_n_per_mm": f.stiffness_n_per_mm,
-                                         "damping_n_s_per_m": f.damping}],
-              "spring": {"rate_n_per_mm": f.spring_rate_n_per_mm, "preload_n": f.preload_n}}
+    tables = {
+        "follower": {},
+        "train": [
+            {
+                "name": "follower",
+                "mass_kg": f.mass_kg,
+                "stiffness_n_per_mm": f.stiffness_n_per_mm,
+                "damping_n_s_per_m": f.damping,
+            }
+        ],
+        "spring": {"rate_n_per_mm": f.spring_rate_n_per_mm, "preload_n": f.preload_n},
+    }
     assert chain_from_dict(tables) == Chain.of_follower(f)
     rpm = np.array([400.0, 700.0, 1000.0])
     chain = ChainSteadyState(program, Chain.of_follower(f), 300.0)
@@ -155,18 +205,30 @@ def cycloid_lift(s):
     def cyc(t):
         return t - np.sin(2 * np.pi * t) / (2 * np.pi)
 
-    return np.select([deg < 100, deg < 180, deg < 280],
-                     [20.0 * cyc(deg / 100), 20.0, 20.0 - 20.0 * cyc((deg - 180) / 100)], 0.0)
+    return np.select(
+        [deg < 100, deg < 180, deg < 280],
+        [20.0 * cyc(deg / 100), 20.0, 20.0 - 20.0 * cyc((deg - 180) / 100)],
+        0.0,
+    )
 
 
-THREE = dict(m=(0.4, 0.3, 0.5), k=(2.0e6, 1.5e6, 1.0e6), c=(60.0, 40.0, 50.0), ratio=1.5, ks=2.0e4, preload=900.0)
+THREE = dict(
+    m=(0.4, 0.3, 0.5),
+    k=(2.0e6, 1.5e6, 1.0e6),
+    c=(60.0, 40.0, 50.0),
+    ratio=1.5,
+    ks=2.0e4,
+    preload=900.0,
+)
 
 
 def three_body_chain(stiffen=1.0):
     t = THREE
-    bodies = (Body("a", t["m"][0], 1e-3 * t["k"][0], t["c"][0]),
-              Body("b", t["m"][1], stiffen * 1e-3 * t["k"][1], t["c"][1], ratio=t["ratio"]),
-              Body("c", t["m"][2], stiffen * 1e-3 * t["k"][2], t["c"][2]))
+    bodies = (
+        Body("a", t["m"][0], 1e-3 * t["k"][0], t["c"][0]),
+        Body("b", t["m"][1], stiffen * 1e-3 * t["k"][1], t["c"][1], ratio=t["ratio"]),
+        Body("c", t["m"][2], stiffen * 1e-3 * t["k"][2], t["c"][2]),
+    )
     return Chain(bodies, Spring(1e-3 * t["ks"], t["preload"]))
 
 
@@ -188,6 +250,7 @@ def frequency_domain(rpm, samples=2**17):
     rhs = np.zeros((Y.size, 3), complex)
     rhs[:, 0] = e1 * Y
     X = np.linalg.solve(Z, rhs[..., None])[..., 0]
+
     def to_time(spectrum):
         return np.fft.irfft(spectrum, n=samples) * samples
 
@@ -217,18 +280,32 @@ def test_three_body_jump_speed_against_the_frequency_domain():
 
     reference = scipy.optimize.brentq(low, jump - 0.5, jump + 0.5, xtol=1e-4)
     assert abs(jump - reference) < 0.01, (jump, reference)
-    assert all(low(r) > 0 for r in np.linspace(400.0, reference - 0.5, 300))  # the lowest such speed
+    assert all(
+        low(r) > 0 for r in np.linspace(400.0, reference - 0.5, 300)
+    )  # the lowest such speed
 
 
 def test_stiff_elements_tend_to_one_body_of_the_summed_mass():
     program = two_cycloids()
     t = THREE
-    total = t["m"][0] + t["ratio"] ** 2 * (t["m"][1] + t["m"][2])  # the far bodies seen through the lever
+    total = t["m"][0] + t["ratio"] ** 2 * (
+        t["m"][1] + t["m"][2]
+    )  # the far bodies seen through the lever
     ks = t["ratio"] ** 2 * t["ks"]
-    one = Chain((Body("one", total, 1e-3 * t["k"][0], t["c"][0]),), Spring(1e-3 * ks, t["ratio"] * t["preload"]))
+    one = Chain(
+        (Body("one", total, 1e-3 * t["k"][0], t["c"][0]),),
+        Spring(1e-3 * ks, t["ratio"] * t["preload"]),
+    )
     reference = ChainSteadyState(program, one, 500.0).summary([800.0]).max_contact_force_n[0]
-    gaps = [abs(ChainSteadyState(program, three_body_chain(s), 500.0).summary([800.0]).max_contact_force_n[0]
-                - reference) for s in (10.0, 1000.0)]
+    gaps = [
+        abs(
+            ChainSteadyState(program, three_body_chain(s), 500.0)
+            .summary([800.0])
+            .max_contact_force_n[0]
+            - reference
+        )
+        for s in (10.0, 1000.0)
+    ]
     assert gaps[1] < 0.02 * gaps[0] and gaps[1] < 1e-3 * reference
 
 
@@ -263,10 +340,18 @@ def test_seat_force_of_a_surging_spring_against_the_continuous_spring():
 def test_an_edit_of_values_compiles_nothing():
     program = two_cycloids()
     ChainSteadyState(program, three_body_chain(), 500.0).summary([600.0, 900.0])
-    edited = Chain(tuple(b.__class__(**{**b.__dict__, "mass_kg": 1.1 * b.mass_kg}) for b in three_body_chain().bodies),
-                   Spring(25.0, 800.0))
+    edited = Chain(
+        tuple(
+            b.__class__(**{**b.__dict__, "mass_kg": 1.1 * b.mass_kg})
+            for b in three_body_chain().bodies
+        ),
+        Spring(25.0, 800.0),
+    )
     steady = ChainSteadyState(program, edited, 500.0)
-    assert steady._motion.nodes.shape == ChainSteadyState(program, three_body_chain(), 500.0)._motion.nodes.shape
+    assert (
+        steady._motion.nodes.shape
+        == ChainSteadyState(program, three_body_chain(), 500.0)._motion.nodes.shape
+    )
     with compiled_programs() as names:
         steady.summary([600.0, 700.0, 900.0])
     assert "_chain_cycles" not in names, names
@@ -278,5 +363,7 @@ def test_the_classic_fields_build_the_one_body_chain():
     hz = chain.natural_frequencies()[0]
     np.testing.assert_allclose(hz, follower.natural_frequency_hz, rtol=1e-12)
     modes = ChainModes.of(chain)
-    np.testing.assert_allclose(np.sort(np.abs(modes.lam)), 2 * math.pi * follower.natural_frequency_hz, rtol=1e-12)
+    np.testing.assert_allclose(
+        np.sort(np.abs(modes.lam)), 2 * math.pi * follower.natural_frequency_hz, rtol=1e-12
+    )
     assert scipy.linalg.norm(modes.static - [follower.preload_n, 0, 0, follower.preload_n, 0]) == 0

@@ -89,8 +89,11 @@ class Spring:
             return 1
         if self.elements is not None:
             return self.elements
-        return next(n for n in range(1, MAX_SPRING_ELEMENTS + 1)
-                    if np.all(np.abs(_bar_surge_ratios(n) - 1) <= SURGE_TOLERANCE))
+        return next(
+            n
+            for n in range(1, MAX_SPRING_ELEMENTS + 1)
+            if np.all(np.abs(_bar_surge_ratios(n) - 1) <= SURGE_TOLERANCE)
+        )
 
     @property
     def surge_hz(self) -> float:
@@ -144,7 +147,11 @@ class Chain:
         """The classic follower as a one-body train: its mass on its elastic element
         (damping ``c = 2 zeta sqrt(k m)``), its return spring and preload."""
         body = Body("follower", follower.mass_kg, follower.stiffness_n_per_mm, follower.damping)
-        spring = None if follower.form_closed else Spring(follower.spring_rate_n_per_mm, follower.preload_n)
+        spring = (
+            None
+            if follower.form_closed
+            else Spring(follower.spring_rate_n_per_mm, follower.preload_n)
+        )
         return cls((body,), spring)
 
     @property
@@ -178,7 +185,13 @@ class Chain:
                 continue
             before = 0 if j == 0 else body_index[j - 1]
             M[before, before] += body.lever_mass_kg
-            element(before, body_index[j], 1e3 * body.stiffness_n_per_mm, body.damping_n_s_per_m, body.ratio)
+            element(
+                before,
+                body_index[j],
+                1e3 * body.stiffness_n_per_mm,
+                body.damping_n_s_per_m,
+                body.ratio,
+            )
         if self.spring is not None:
             s = self.spring
             nodes = [body_index[-1], *inner, seat]
@@ -210,7 +223,9 @@ class Chain:
         moving = np.arange(1, a.seat) if contact else np.arange(0, a.seat)
         if not contact and not self.bodies[0].rides:
             moving = np.arange(1, a.seat)  # the cam's coordinate carries nothing in flight
-        values, vectors = scipy.linalg.eigh(a.K[np.ix_(moving, moving)], a.M[np.ix_(moving, moving)])
+        values, vectors = scipy.linalg.eigh(
+            a.K[np.ix_(moving, moving)], a.M[np.ix_(moving, moving)]
+        )
         hz = np.sqrt(np.maximum(values, 0.0)) / (2 * math.pi)
         rows = np.searchsorted(moving, a.body_index)
         shapes = np.zeros((len(self.bodies), hz.size))
@@ -222,12 +237,16 @@ class Chain:
     def highest_frequency_hz(self) -> float:
         return float(self.natural_frequencies(contact=True)[0].max())
 
-    def harmonic_check(self, rpm_min: float, rpm_max: float, *, modes: int = 3) -> list[tuple[float, list[int]]]:
+    def harmonic_check(
+        self, rpm_min: float, rpm_max: float, *, modes: int = 3
+    ) -> list[tuple[float, list[int]]]:
         """For each of the first ``modes`` held frequencies: ``(f_n, cam orders k)`` with
         ``k rpm / 60 = f_n`` at a speed inside ``[rpm_min, rpm_max]``."""
         hz = self.natural_frequencies(contact=True)[0][:modes]
-        return [(float(f), list(range(math.ceil(60 * f / rpm_max), math.floor(60 * f / rpm_min) + 1)))
-                for f in hz]
+        return [
+            (float(f), list(range(math.ceil(60 * f / rpm_max), math.floor(60 * f / rpm_min) + 1)))
+            for f in hz
+        ]
 
 
 class Assembly(NamedTuple):
@@ -251,18 +270,26 @@ def _check_chain(chain: Chain) -> None:
         names.add(body.name)
         _number(body.mass_kg, f"{where} mass_kg", positive=True)
         if body.rides and j > 1:
-            raise ValueError(f"{where}: stiffness_n_per_mm is needed after the first body (the element "
-                             "from the body before)")
+            raise ValueError(
+                f"{where}: stiffness_n_per_mm is needed after the first body (the element "
+                "from the body before)"
+            )
         if not body.rides:
             _number(body.stiffness_n_per_mm, f"{where} stiffness_n_per_mm", positive=True)
         _number(body.damping_n_s_per_m, f"{where} damping_n_s_per_m", non_negative=True)
         if _number(body.ratio, f"{where} ratio") <= 0:
-            raise ValueError(f"{where} ratio must be positive (a lever's travel ratio), got {body.ratio:g}")
+            raise ValueError(
+                f"{where} ratio must be positive (a lever's travel ratio), got {body.ratio:g}"
+            )
         _number(body.lever_mass_kg, f"{where} lever_mass_kg", non_negative=True)
         _number(body.lash_mm, f"{where} lash_mm", non_negative=True)
-        if body.rides and (body.ratio != 1.0 or body.lash_mm or body.lever_mass_kg or body.damping_n_s_per_m):
-            raise ValueError(f"{where}: ratio, lash_mm, lever_mass_kg and damping_n_s_per_m belong to an "
-                             "element, and a body that rides on the cam has none (give stiffness_n_per_mm)")
+        if body.rides and (
+            body.ratio != 1.0 or body.lash_mm or body.lever_mass_kg or body.damping_n_s_per_m
+        ):
+            raise ValueError(
+                f"{where}: ratio, lash_mm, lever_mass_kg and damping_n_s_per_m belong to an "
+                "element, and a body that rides on the cam has none (give stiffness_n_per_mm)"
+            )
     s = chain.spring
     if s is not None:
         _number(s.rate_n_per_mm, "[spring] rate_n_per_mm", positive=True)
@@ -275,25 +302,41 @@ def _check_chain(chain: Chain) -> None:
             raise ValueError("[spring] damping_ratio is its first surge mode's: it needs mass_kg")
         if s.elements is not None:
             if isinstance(s.elements, bool) or not isinstance(s.elements, int) or s.elements < 1:
-                raise ValueError(f"[spring] elements must be a positive whole number, got {s.elements!r}")
+                raise ValueError(
+                    f"[spring] elements must be a positive whole number, got {s.elements!r}"
+                )
             if not s.surges:
-                raise ValueError("[spring] elements: a spring without mass_kg has no surge to resolve")
+                raise ValueError(
+                    "[spring] elements: a spring without mass_kg has no surge to resolve"
+                )
             if s.elements < 4:
-                raise ValueError(f"[spring] elements = {s.elements} cannot resolve the first three surge "
-                                 "modes (4 at least; the default meets 0.5%)")
+                raise ValueError(
+                    f"[spring] elements = {s.elements} cannot resolve the first three surge "
+                    "modes (4 at least; the default meets 0.5%)"
+                )
         elif s.surges and s.element_count() > MAX_SPRING_ELEMENTS:
             raise ValueError("[spring]: its surge cannot be resolved")
     if chain.seat is not None:
         _number(chain.seat.stiffness_n_per_mm, "[seat] stiffness_n_per_mm", positive=True)
         if s is None or s.preload_n <= 0:
-            raise ValueError("[seat]: a seat needs a [spring] with preload_n > 0 to close the valve onto it")
+            raise ValueError(
+                "[seat]: a seat needs a [spring] with preload_n > 0 to close the valve onto it"
+            )
     if s is None and chain.bodies[-1].rides:
-        raise ValueError("[[train]]: a single body riding on the cam needs a [spring] (nothing holds it)")
+        raise ValueError(
+            "[[train]]: a single body riding on the cam needs a [spring] (nothing holds it)"
+        )
 
 
 _BODY_FIELDS = {f.name for f in dataclasses.fields(Body)}
 _SPRING_FIELDS = {f.name for f in dataclasses.fields(Spring)}
-CLASSIC_FIELDS = ("mass_kg", "stiffness_n_per_mm", "damping_ratio", "spring_rate_n_per_mm", "preload_n")
+CLASSIC_FIELDS = (
+    "mass_kg",
+    "stiffness_n_per_mm",
+    "damping_ratio",
+    "spring_rate_n_per_mm",
+    "preload_n",
+)
 """The ``[follower]`` fields of the one-body train (the classic spelling)."""
 
 
@@ -316,33 +359,47 @@ def chain_from_dict(data: dict) -> Chain | None:
     if train is None:
         for table, value in (("[spring]", spring), ("[seat]", seat)):
             if value is not None:
-                raise ValueError(f"{table} belongs to a [[train]]; a one-body follower gives its spring in "
-                                 "[follower] (spring_rate_n_per_mm, preload_n)")
+                raise ValueError(
+                    f"{table} belongs to a [[train]]; a one-body follower gives its spring in "
+                    "[follower] (spring_rate_n_per_mm, preload_n)"
+                )
         return None
     if not isinstance(train, list) or not all(isinstance(b, dict) for b in train):
         raise ValueError("[[train]] must be an array of tables, one per body")
     classic = [name for name in CLASSIC_FIELDS if name in (data.get("follower") or {})]
     if classic:
-        raise ValueError(f"[follower] {', '.join(classic)}: a file with a [[train]] gives the bodies there, "
-                         "not the classic one-body fields")
+        raise ValueError(
+            f"[follower] {', '.join(classic)}: a file with a [[train]] gives the bodies there, "
+            "not the classic one-body fields"
+        )
     bodies = []
     for j, table in enumerate(train, start=1):
         unknown = sorted(set(table) - _BODY_FIELDS)
         if unknown:
-            raise ValueError(f"[[train]] body {j}: unknown field(s) {', '.join(unknown)}; expected "
-                             f"{', '.join(sorted(_BODY_FIELDS))}")
+            raise ValueError(
+                f"[[train]] body {j}: unknown field(s) {', '.join(unknown)}; expected "
+                f"{', '.join(sorted(_BODY_FIELDS))}"
+            )
         if "mass_kg" not in table:
             raise ValueError(f"[[train]] body {j} ({table.get('name', j)}): needs mass_kg")
-        bodies.append(Body(**{"name": str(table.get("name", f"body {j}")), **{k: v for k, v in table.items()
-                                                                            if k != "name"}}))
+        bodies.append(
+            Body(
+                **{
+                    "name": str(table.get("name", f"body {j}")),
+                    **{k: v for k, v in table.items() if k != "name"},
+                }
+            )
+        )
     spring_obj = None
     if spring is not None:
         if not isinstance(spring, dict):
             raise ValueError("[spring] must be a table")
         unknown = sorted(set(spring) - _SPRING_FIELDS)
         if unknown:
-            raise ValueError(f"[spring]: unknown field(s) {', '.join(unknown)}; expected "
-                             f"{', '.join(sorted(_SPRING_FIELDS))}")
+            raise ValueError(
+                f"[spring]: unknown field(s) {', '.join(unknown)}; expected "
+                f"{', '.join(sorted(_SPRING_FIELDS))}"
+            )
         if "rate_n_per_mm" not in spring:
             raise ValueError("[spring] needs rate_n_per_mm")
         spring_obj = Spring(**spring)
@@ -375,11 +432,15 @@ class ChainModes(NamedTuple):
     def of(cls, chain: Chain) -> ChainModes:
         for j, body in enumerate(chain.bodies, start=1):
             if body.lash_mm:
-                raise ValueError(f"[[train]] body {j} ({body.name}) lash_mm: the steady state is of the "
-                                 "closed chain; lash (a clearance that opens) is not modelled yet")
+                raise ValueError(
+                    f"[[train]] body {j} ({body.name}) lash_mm: the steady state is of the "
+                    "closed chain; lash (a clearance that opens) is not modelled yet"
+                )
         if chain.seat is not None:
-            raise ValueError("[seat]: the steady state is of the closed chain; the seat's contact is not "
-                             "modelled yet")
+            raise ValueError(
+                "[seat]: the steady state is of the closed chain; the seat's contact is not "
+                "modelled yet"
+            )
         a = chain.matrices()
         free = np.arange(1, a.seat)
         n = free.size
@@ -391,11 +452,15 @@ class ChainModes(NamedTuple):
         b1 = np.concatenate([np.zeros(n), Minv @ (Cff @ G - a.C[free, 0])])
         lam, V = np.linalg.eig(A)
         if not np.all(lam.real < 0):
-            raise ValueError("the chain has a mode without damping (give the elements damping_n_s_per_m "
-                             "or the spring damping_ratio): its periodic steady state does not exist")
+            raise ValueError(
+                "the chain has a mode without damping (give the elements damping_n_s_per_m "
+                "or the spring damping_ratio): its periodic steady state does not exist"
+            )
         if np.linalg.cond(V) > 1e10:
-            raise ValueError("the chain's modes are not independent (a critically damped mode): change "
-                             "a damping a little")
+            raise ValueError(
+                "the chain's modes are not independent (a critically damped mode): change "
+                "a damping a little"
+            )
         Vinv = np.linalg.inv(V)
         u, v = Vinv @ b0, Vinv @ b1
         rows, statics = [], []
@@ -430,14 +495,24 @@ class ChainModes(NamedTuple):
         keep = lam.imag >= 0
         weight = np.where(lam.imag[keep] > 0, 2.0, 1.0)
         gain = np.array([r[0] for r in rows])[:, keep] * weight
-        return cls(lam[keep], (u + lam * v)[keep], gain, np.array([r[1] for r in rows]),
-                   np.asarray(statics, dtype=float))
+        return cls(
+            lam[keep],
+            (u + lam * v)[keep],
+            gain,
+            np.array([r[1] for r in rows]),
+            np.asarray(statics, dtype=float),
+        )
 
 
 def output_rows(bodies: int) -> dict[str, int | slice]:
     """Where each output sits in ``ChainModes``' rows for a chain of ``bodies``."""
-    return {"contact_force_n": 0, "acceleration_m_s2": slice(1, 1 + bodies), "lift_m": 1 + bodies,
-            "seat_force_n": 2 + bodies, "surge_n": 3 + bodies}
+    return {
+        "contact_force_n": 0,
+        "acceleration_m_s2": slice(1, 1 + bodies),
+        "lift_m": 1 + bodies,
+        "seat_force_n": 2 + bodies,
+        "surge_n": 3 + bodies,
+    }
 
 
 def lift_jets(coefficients, widths):
@@ -445,7 +520,9 @@ def lift_jets(coefficients, widths):
     interval, ``((K, 6), (K, 6))``, from its monomial coefficients in the local ``sigma``."""
     h = jnp.where(widths > 0, widths, 1.0)[:, None]
     powers = np.arange(6)
-    falling = np.array([[math.perm(int(m), d) for m in powers] for d in range(6)], dtype=float)  # (d, m)
+    falling = np.array(
+        [[math.perm(int(m), d) for m in powers] for d in range(6)], dtype=float
+    )  # (d, m)
     scale = h ** -powers[None, :]
     left = coefficients * falling.diagonal()[None, :] * scale
     right = (coefficients @ falling.T) * scale
@@ -471,7 +548,10 @@ def signed_rows(bodies: int) -> list[int]:
 
 def peak_rows(bodies: int) -> list[int]:
     rows = output_rows(bodies)
-    return [*range(rows["acceleration_m_s2"].start, rows["acceleration_m_s2"].stop), rows["surge_n"]]
+    return [
+        *range(rows["acceleration_m_s2"].start, rows["acceleration_m_s2"].stop),
+        rows["surge_n"],
+    ]
 
 
 def chain_cycle(motion, lift, modes: ChainModes, rpm) -> ChainCycle:
@@ -505,17 +585,22 @@ def chain_cycle(motion, lift, modes: ChainModes, rpm) -> ChainCycle:
             d = real_part(gain * lam**p, xr[:, ends], xq[:, ends])
             for i in range(p):
                 d = d + jnp.real(gain @ (lam ** (p - 1 - i) * f))[:, None] * y_end[None, :, i]
-            d = d + direct @ y_end[:, p:p + 3].T
+            d = d + direct @ y_end[:, p : p + 3].T
             out.append(d)
         return jnp.stack(out, axis=-1)
 
     left, right = jets(slice(None, -1), y_left), jets(slice(1, None), y_right)
     bodies = values.shape[0] - 4
     signed, peaks = np.asarray(signed_rows(bodies)), np.asarray(peak_rows(bodies))
-    high = jax.vmap(_bounded_max, in_axes=(0, None, 0, 0))(values[signed], widths, left[signed], right[signed])
-    low = -jax.vmap(_bounded_max, in_axes=(0, None, 0, 0))(-values[signed], widths, -left[signed],
-                                                           -right[signed])
-    peak = jax.vmap(_bounded_peak, in_axes=(0, None, 0, 0))(values[peaks], widths, left[peaks], right[peaks])
+    high = jax.vmap(_bounded_max, in_axes=(0, None, 0, 0))(
+        values[signed], widths, left[signed], right[signed]
+    )
+    low = -jax.vmap(_bounded_max, in_axes=(0, None, 0, 0))(
+        -values[signed], widths, -left[signed], -right[signed]
+    )
+    peak = jax.vmap(_bounded_peak, in_axes=(0, None, 0, 0))(
+        values[peaks], widths, left[peaks], right[peaks]
+    )
     return ChainCycle(values, low, high, peak)
 
 
@@ -585,11 +670,16 @@ class ChainSteadyState:
 
         rpm = check_rpm(rpm)
         if rpm.min() < self.rpm_min * (1 - 1e-12):
-            raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
+            raise ValueError(
+                f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}"
+            )
         padded = np.pad(rpm, (0, -rpm.size % SPEED_BLOCK), mode="edge").reshape(-1, SPEED_BLOCK)
-        outs = [_chain_cycles(jnp.asarray(block), self._motion, self._lift, self.modes) for block in padded]
-        out = jax.tree.map(lambda *x: np.concatenate([np.asarray(v) for v in x])[:rpm.size], *outs)
-        out = out._replace(values=out.values[..., :self.grid.intervals + 1])
+        outs = [
+            _chain_cycles(jnp.asarray(block), self._motion, self._lift, self.modes)
+            for block in padded
+        ]
+        out = jax.tree.map(lambda *x: np.concatenate([np.asarray(v) for v in x])[: rpm.size], *outs)
+        out = out._replace(values=out.values[..., : self.grid.intervals + 1])
         if not np.all(np.isfinite(out.values)):
             raise ValueError("the chain's steady state is not finite")
         return out
@@ -598,12 +688,24 @@ class ChainSteadyState:
         """What a valve-train engineer reads per speed (``ChainSummary``)."""
         c = self.cycles(rpm)
         bodies = len(self.chain.bodies)
-        error = (1e3 * c.values[:, self._rows["lift_m"]]
-                 - self.kinematic_ratio * np.asarray(self.grid.lift_nodes)[None, :])
-        return ChainSummary(np.asarray(rpm, dtype=float), c.low[:, 0], c.high[:, 0], c.peak[:, :bodies],
-                            np.max(np.abs(error), axis=1), c.low[:, 1], c.high[:, 1], c.peak[:, bodies])
+        error = (
+            1e3 * c.values[:, self._rows["lift_m"]]
+            - self.kinematic_ratio * np.asarray(self.grid.lift_nodes)[None, :]
+        )
+        return ChainSummary(
+            np.asarray(rpm, dtype=float),
+            c.low[:, 0],
+            c.high[:, 0],
+            c.peak[:, :bodies],
+            np.max(np.abs(error), axis=1),
+            c.low[:, 1],
+            c.high[:, 1],
+            c.peak[:, bodies],
+        )
 
-    def jump_speed(self, rpm_max: float, *, tolerance_rpm: float = 1e-4, scan: int = 128) -> float | None:
+    def jump_speed(
+        self, rpm_max: float, *, tolerance_rpm: float = 1e-4, scan: int = 128
+    ) -> float | None:
         """The lowest speed in ``[rpm_min, rpm_max]`` where the cam's contact force first
         reaches zero (the chain leaves the cam), ``None`` where the contact holds over the
         whole range: a scan of ``scan`` speeds, each local minimum of the least force
@@ -614,10 +716,16 @@ class ChainSteadyState:
         for _ in range(2):
             if np.any(low <= 0):
                 break
-            dips = [i for i in range(1, speeds.size - 1) if low[i] <= low[i - 1] and low[i] <= low[i + 1]]
+            dips = [
+                i
+                for i in range(1, speeds.size - 1)
+                if low[i] <= low[i - 1] and low[i] <= low[i + 1]
+            ]
             if not dips:
                 break
-            closer = np.concatenate([np.linspace(speeds[i - 1], speeds[i + 1], 34)[1:-1] for i in dips])
+            closer = np.concatenate(
+                [np.linspace(speeds[i - 1], speeds[i + 1], 34)[1:-1] for i in dips]
+            )
             speeds = np.concatenate([speeds, closer])
             low = np.concatenate([low, self.summary(closer).min_contact_force_n])
             order = np.argsort(speeds)
