@@ -367,3 +367,14 @@ def test_the_classic_fields_build_the_one_body_chain():
         np.sort(np.abs(modes.lam)), 2 * math.pi * follower.natural_frequency_hz, rtol=1e-12
     )
     assert scipy.linalg.norm(modes.static - [follower.preload_n, 0, 0, follower.preload_n, 0]) == 0
+
+
+def test_the_steady_state_refuses_what_it_does_not_model():
+    lash = Chain(
+        (Body("tappet", 0.03), Body("valve", 0.05, 200.0, 5.0, lash_mm=0.2)), Spring(52.0, 250.0)
+    )
+    with pytest.raises(ValueError, match=r"body 2 \(valve\) lash_mm: .* not modelled yet"):
+        ChainModes.of(lash)
+    alone = Chain((Body("tappet", 0.03),), Spring(52.0, 250.0))
+    with pytest.raises(ValueError, match="nothing to vibrate"):
+        ChainModes.of(alone)

@@ -235,7 +235,8 @@ class Chain:
         return hz, shapes / np.where(scale == 0, 1.0, scale)
 
     def highest_frequency_hz(self) -> float:
-        return float(self.natural_frequencies(contact=True)[0].max())
+        """The highest natural frequency with the cam held (Hz; 0 where nothing moves)."""
+        return float(self.natural_frequencies(contact=True)[0].max(initial=0.0))
 
     def harmonic_check(
         self, rpm_min: float, rpm_max: float, *, modes: int = 3
@@ -444,6 +445,12 @@ class ChainModes(NamedTuple):
         a = chain.matrices()
         free = np.arange(1, a.seat)
         n = free.size
+        if n == 0:
+            raise ValueError(
+                "[[train]]: one body riding on the cam on a spring without mass has nothing to "
+                "vibrate (its contact force is m y'' + k_s y + preload): give it an element "
+                "(stiffness_n_per_mm) or use the classic follower"
+            )
         Mff, Cff, Kff = (x[np.ix_(free, free)] for x in (a.M, a.C, a.K))
         G = np.linalg.solve(Mff, a.M[free, 0])
         Minv = np.linalg.inv(Mff)

@@ -20,8 +20,7 @@ import numpy as np
 
 import camjax
 from camjax import laws
-from camjax.program import Follower, Program, Segment
-from camjax.program._train import Body, Chain, ChainSteadyState, Spring
+from camjax.program import Body, Chain, ChainSteadyState, Follower, Program, Segment, Spring
 
 
 def program() -> Program:
