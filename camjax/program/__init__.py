@@ -11,7 +11,9 @@ also sizes the drive (torque, energy, flywheel), the Hertz contact stress and th
 the profile, the figures); ``analyse_machine`` adds the torques of several cams on one shaft
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
 (``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
-preload over a speed range).  The equations are in docs/program.md and docs/machine.md.
+preload over a speed range).  ``Chain`` is the follower as a chain of bodies (a valve
+train, a spring that surges) and ``ChainSteadyState`` its exact periodic steady state.  The
+equations are in docs/program.md, docs/machine.md and docs/valve-trains.md.
 """
 
 from typing import TYPE_CHECKING
@@ -102,6 +104,15 @@ from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
 from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
 from ._speeds import Speeds as Speeds
 from ._speeds import warn_implausible as warn_implausible
+from ._train import Body as Body
+from ._train import Chain as Chain
+from ._train import ChainModes as ChainModes
+from ._train import ChainSteadyState as ChainSteadyState
+from ._train import ChainSummary as ChainSummary
+from ._train import Seat as Seat
+from ._train import Spring as Spring
+from ._train import chain_from_dict as chain_from_dict
+from ._train import load_chain as load_chain
 from ._turn import JOIN_TOLERANCE_DEG as JOIN_TOLERANCE_DEG
 from ._turn import Turn as Turn
 from ._writers import RESPONSE_SPEEDS as RESPONSE_SPEEDS

@@ -95,10 +95,13 @@ class CycleGrid(NamedTuple):
         return self.motion._replace(forcing=forcing)
 
 
-def resolution(program: Program, rpm_min: float) -> int:
+def resolution(program: Program, rpm_min: float, vibration_hz: float | None = None) -> int:
     """Intervals per turn the slowest speed asks for: ``w h <= 0.5`` at ``rpm_min``, 64 per
-    moving segment at least (``cycle_grid`` adds what each law piece needs)."""
-    needed = 2 * math.pi * program.follower.vibrations_per_turn(rpm_min) / TARGET_PHASE_STEP
+    moving segment at least (``cycle_grid`` adds what each law piece needs); ``w`` is the
+    follower's, or ``2 pi vibration_hz`` where given (a chain's highest mode)."""
+    cycles = (program.follower.vibrations_per_turn(rpm_min) if vibration_hz is None
+              else vibration_hz * 60.0 / rpm_min)
+    needed = 2 * math.pi * cycles / TARGET_PHASE_STEP
     shortest = min((program.segments[i].angle_deg / 360 for i in program.moving_segments()), default=1.0)
     return 64 * math.ceil(max(needed, _MIN_PER_SEGMENT / shortest, 256) / 64)
 
@@ -121,11 +124,11 @@ def check_grid_size(program: Program, rpm_min: float, intervals: int) -> None:
                      + "; or ".join(remedies))
 
 
-def cycle_grid(program: Program, rpm_min: float) -> CycleGrid:
+def cycle_grid(program: Program, rpm_min: float, vibration_hz: float | None = None) -> CycleGrid:
     """Sample the program's lift and acceleration on the engine's grid for speeds from
     ``rpm_min`` up (``resolution``; every law piece gets at least four intervals); a grid
     past the limit is refused before it is built (``check_grid_size``)."""
-    intervals = resolution(program, rpm_min)
+    intervals = resolution(program, rpm_min, vibration_hz)
     edges, counts, first_piece = [0.0], [], []
     for seg, start_deg in zip(program.segments, program.start_deg):
         s0, f = start_deg / 360.0, seg.angle_deg / 360.0

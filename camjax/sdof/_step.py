@@ -110,21 +110,23 @@ _DENSE_PIECES = 64  # above this many pieces, gather each interval's weights
 
 
 def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = None,
-              resolved: bool = False) -> jax.Array:
+              resolved: bool = False, lam=None) -> jax.Array:
     """Complex mode ``q`` at every node of ``grid``, starting from rest (or from ``q0``
     at the first node).  ``gather`` picks how each interval finds its piece's step factor
     and weights (``None``: up to 64 pieces without a gather, the factors by a chain of
     selects and the weights by a matrix product; a gather above; the same numbers).
     ``resolved``: the caller guarantees ``w h <= MAX_PHASE_STEP`` on every interval (the
     SDOF's exact path refuses coarser grids); the kicks then come from one law-only
-    matrix (``_series_kicks``), with no per-piece ``psi``.
+    matrix (``_series_kicks``), with no per-piece ``psi``.  ``lam`` (complex, in the grid's
+    time unit) replaces ``eigenvalue(omega, zeta)``: any mode of a linear chain, overdamped
+    ones included (``omega`` and ``zeta`` are then unused).
 
     The recurrence ``q_(k+1) = E_k q_k + F_k`` runs in blocks of a few intervals: inside a
     block, ``q = G cumsum(F / G)`` with ``G`` the running product of the step factors
     (vectorised, and bounded since a block is short); a scan then carries the state
     from block to block.
     """
-    lam = eigenvalue(omega, zeta)
+    lam = eigenvalue(omega, zeta) if lam is None else lam
     z = lam * grid.piece_width
     step = jnp.exp(z)
     # Each interval's kick uses its own piece's weights.  With few pieces (a law's rise)
@@ -216,14 +218,16 @@ def _complex_product(real_matrix, vector):
     return jax.lax.complex(parts[..., 0], parts[..., 1])
 
 
-def periodic_propagate(grid: MotionGrid, omega, zeta) -> jax.Array:
+def periodic_propagate(grid: MotionGrid, omega, zeta, *, lam=None) -> jax.Array:
     """Complex mode at every node of the periodic steady state of a forcing that repeats
     with the grid's span (a cam's turn): the start is the fixed point of the span's map
-    ``q(end) = E q(start) + F``, ``q0 = F / (1 - E)``, exactly (needs ``zeta > 0``)."""
-    from_rest = propagate(grid, omega, zeta)
+    ``q(end) = E q(start) + F``, ``q0 = F / (1 - E)``, exactly (needs ``zeta > 0``, or
+    ``Re lam < 0`` where ``lam`` is given as in ``propagate``)."""
+    lam = eigenvalue(omega, zeta) if lam is None else lam
+    from_rest = propagate(grid, omega, zeta, lam=lam)
     span = grid.nodes[-1] - grid.nodes[0]
-    q0 = from_rest[-1] / (1.0 - jnp.exp(eigenvalue(omega, zeta) * span))
-    return from_rest + q0 * jnp.exp(eigenvalue(omega, zeta) * (grid.nodes - grid.nodes[0]))
+    q0 = from_rest[-1] / (1.0 - jnp.exp(lam * span))
+    return from_rest + q0 * jnp.exp(lam * (grid.nodes - grid.nodes[0]))
 
 
 def mode_between(grid: MotionGrid, q_nodes, lam, t) -> np.ndarray:

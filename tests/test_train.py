@@ -1,0 +1,380 @@
+"""The follower as a chain of bodies: natural frequencies against closed forms and the
+continuous spring, the exact periodic steady state against an independent frequency-domain
+solution written here (Fourier series of the lift times the chain's exact response)."""
+
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.optimize
+from helpers import FOLLOWER, compiled_programs, two_cycloids
+
+from camjax.program import (
+    Body,
+    Chain,
+    ChainModes,
+    ChainSteadyState,
+    Follower,
+    Spring,
+    SteadyState,
+    chain_from_dict,
+)
+
+LB = 0.45359237  # kg
+LBF_PER_IN_AS_N_PER_MM = 4.4482216152605 / 25.4
+
+
+def rothbart(units_g=None):
+    """Rothbart's valve gear (Cam Design Handbook ch. 11) in SI: lbm exactly, or through
+    ``1 lbm = 1 / units_g lbf s^2/in`` where ``units_g`` is given."""
+    to_kg = LB if units_g is None else 4.4482216152605 / 0.0254 / units_g
+    return Chain(
+        (
+            Body("lifter", 0.0327 * to_kg),
+            Body("valve", 0.110 * to_kg, 3.0e5 * LBF_PER_IN_AS_N_PER_MM),
+        ),
+        Spring(660 * LBF_PER_IN_AS_N_PER_MM, 100.0),
+    )
+
+
+def two_mass_frequencies(m1, m2, k, ks):
+    """The free chain's two frequencies (Hz): roots of m1 m2 w^4 - ((k + ks) m1 + k m2) w^2 + k ks."""
+    b = (k + ks) * m1 + k * m2
+    w2 = (b + np.array([-1.0, 1.0]) * math.sqrt(b * b - 4 * m1 * m2 * k * ks)) / (2 * m1 * m2)
+    return np.sqrt(w2) / (2 * math.pi)
+
+
+def test_rothbart_free_of_the_cam():
+    hz, shapes = rothbart(386.09).natural_frequencies(contact=False)
+    m1, m2 = 0.0327 / 386.09, 0.110 / 386.09  # lbf s^2/in
+    np.testing.assert_allclose(hz, two_mass_frequencies(m1, m2, 3.0e5, 660.0), rtol=1e-9)
+    assert abs(hz[0] / 212.666 - 1) < 1e-5 and abs(hz[1] / 10789.2 - 1) < 1e-5
+    # exact lbm: the book's figures as printed, to their digits (67 and 3400 Hz are 3.17 times low)
+    hz = rothbart().natural_frequencies(contact=False)[0]
+    assert abs(hz[0] - 212.666) < 5e-4 and abs(hz[1] - 10789.2) < 0.05
+    assert shapes.shape == (2, 2) and np.allclose(np.max(np.abs(shapes), axis=0), 1.0)
+    # held: the valve alone on the pushrod and the spring
+    held = rothbart(386.09).natural_frequencies(contact=True)[0]
+    np.testing.assert_allclose(held, math.sqrt((3.0e5 + 660.0) / m2) / (2 * math.pi), rtol=1e-12)
+
+
+SURGING = dict(tappet=0.03, valve=0.05, element=200.0, rate=52.0, spring_mass=0.049)
+
+
+def surging_chain(**spring):
+    s = SURGING
+    return Chain(
+        (Body("tappet", s["tappet"]), Body("valve", s["valve"], s["element"], 5.0)),
+        Spring(s["rate"], 250.0, s["spring_mass"], **spring),
+    )
+
+
+def continuous_held_frequencies(count=3):
+    """The valve on its element (tappet held) and on the continuous spring: roots of
+    k_e + k_s b cot b - m_v w^2 = 0, b = w sqrt(m_s / k_s), one between each pair of poles."""
+    s = SURGING
+    ke, ks, ms, mv = 1e3 * s["element"], 1e3 * s["rate"], s["spring_mass"], s["valve"]
+    to_b = math.sqrt(ms / ks)
+
+    def det(w):
+        b = w * to_b
+        return ke + ks * b / math.tan(b) - mv * w * w
+
+    roots = []
+    for n in range(count):
+        lo, hi = (n * math.pi + 1e-9) / to_b, ((n + 1) * math.pi - 1e-9) / to_b
+        roots.append(scipy.optimize.brentq(det, lo, hi, xtol=1e-12, rtol=1e-15) / (2 * math.pi))
+    return np.array(roots)
+
+
+def test_surging_spring_held_frequencies_within_half_a_percent():
+    chain = surging_chain()
+    hz = chain.natural_frequencies(contact=True)[0][:3]
+    reference = continuous_held_frequencies()
+    assert np.all(np.abs(hz / reference - 1) < 0.005), (hz, reference)
+    fewer = surging_chain(elements=4).natural_frequencies(contact=True)[0][:3]
+    assert np.max(np.abs(fewer / reference - 1)) > 0.005  # the setting trades accuracy for states
+
+
+def test_harmonic_check_orders():
+    chain = surging_chain()
+    f1 = chain.natural_frequencies()[0][0]
+    (hz, orders), *_ = chain.harmonic_check(1000.0, 3000.0)
+    assert hz == f1 and orders == [k for k in range(1, 100) if 1000 <= 60 * f1 / k <= 3000]
+
+
+def toml_tables(**spring):
+    return {
+        "follower": {"kind": "translating-roller", "base_radius_mm": 30, "roller_radius_mm": 10},
+        "train": [
+            {"name": "tappet", "mass_kg": 0.03},
+            {
+                "name": "valve",
+                "mass_kg": 0.05,
+                "stiffness_n_per_mm": 200.0,
+                "damping_n_s_per_m": 5.0,
+            },
+        ],
+        "spring": {"rate_n_per_mm": 52.0, "preload_n": 250.0, "mass_kg": 0.049, **spring},
+    }
+
+
+def test_program_file_tables_give_the_python_chain():
+    assert chain_from_dict(toml_tables()) == surging_chain()
+    assert chain_from_dict({"follower": {}}) is None
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda d: d["train"][1].update(mass_kg=-1.0),
+            r"body 2 \(valve\) mass_kg must be positive",
+        ),
+        (lambda d: d["train"][0].pop("mass_kg"), r"body 1 \(tappet\): needs mass_kg"),
+        (
+            lambda d: d["train"][1].pop("stiffness_n_per_mm"),
+            r"body 2 \(valve\): stiffness_n_per_mm is needed",
+        ),
+        (lambda d: d["train"][1].update(ratio=0.0), r"body 2 \(valve\) ratio must be positive"),
+        (
+            lambda d: d["train"][1].update(lash_mm=-0.1),
+            r"body 2 \(valve\) lash_mm must be non-negative",
+        ),
+        (
+            lambda d: d.update(seat={"stiffness_n_per_mm": 5e4}, spring={"rate_n_per_mm": 52.0}),
+            r"\[seat\]: a seat needs a \[spring\] with preload_n > 0",
+        ),
+        (lambda d: d["spring"].update(elements=2), r"\[spring\] elements = 2 cannot resolve"),
+        (
+            lambda d: d["follower"].update(mass_kg=1.0),
+            r"\[follower\] mass_kg: a file with a \[\[train\]\]",
+        ),
+        (lambda d: d["train"][1].update(rato=1.6), r"body 2: unknown field\(s\) rato"),
+    ],
+)
+def test_bad_train_input_is_one_line(edit, message):
+    data = toml_tables()
+    edit(data)
+    with pytest.raises(ValueError, match=message) as error:
+        chain_from_dict(data)
+    assert "\n" not in str(error.value)
+
+
+# -- the steady state -------------------------------------------------------------------
+
+
+def test_one_body_spellings_and_the_classic_follower():
+    """The classic fields and a one-body ``[[train]]`` are one chain (same numbers); its
+    steady state is the classic follower's (the two paths interpolate the lift's second
+    derivative differently: 1e-10 of the peaks)."""
+    program = two_cycloids()
+    f = program.follower
+    tables = {
+        "follower": {},
+        "train": [
+            {
+                "name": "follower",
+                "mass_kg": f.mass_kg,
+                "stiffness_n_per_mm": f.stiffness_n_per_mm,
+                "damping_n_s_per_m": f.damping,
+            }
+        ],
+        "spring": {"rate_n_per_mm": f.spring_rate_n_per_mm, "preload_n": f.preload_n},
+    }
+    assert chain_from_dict(tables) == Chain.of_follower(f)
+    rpm = np.array([400.0, 700.0, 1000.0])
+    chain = ChainSteadyState(program, Chain.of_follower(f), 300.0)
+    classic = SteadyState(program, 300.0)
+    cycles = chain.cycles(rpm)
+    for i, r in enumerate(rpm):
+        c = classic.cycle(r)
+        force, accel = cycles.values[i, 0], cycles.values[i, 1]
+        assert np.max(np.abs(force - c.contact_force_n)) < 1e-10 * np.max(np.abs(c.contact_force_n))
+        peak = c.max_payload_acceleration_m_s2
+        assert np.max(np.abs(accel - c.payload_acceleration_m_s2)) < 1e-10 * peak
+        assert abs(cycles.low[i, 0] - c.min_contact_force_n) < 1e-10 * c.max_contact_force_n
+        assert abs(cycles.peak[i, 0] - peak) < 1e-10 * peak
+
+
+def cycloid_lift(s):
+    """The two-cycloids program's lift (mm) at turn times ``s`` (written apart from camjax)."""
+    deg = 360.0 * np.mod(s, 1.0)
+
+    def cyc(t):
+        return t - np.sin(2 * np.pi * t) / (2 * np.pi)
+
+    return np.select(
+        [deg < 100, deg < 180, deg < 280],
+        [20.0 * cyc(deg / 100), 20.0, 20.0 - 20.0 * cyc((deg - 180) / 100)],
+        0.0,
+    )
+
+
+THREE = dict(
+    m=(0.4, 0.3, 0.5),
+    k=(2.0e6, 1.5e6, 1.0e6),
+    c=(60.0, 40.0, 50.0),
+    ratio=1.5,
+    ks=2.0e4,
+    preload=900.0,
+)
+
+
+def three_body_chain(stiffen=1.0):
+    t = THREE
+    bodies = (
+        Body("a", t["m"][0], 1e-3 * t["k"][0], t["c"][0]),
+        Body("b", t["m"][1], stiffen * 1e-3 * t["k"][1], t["c"][1], ratio=t["ratio"]),
+        Body("c", t["m"][2], stiffen * 1e-3 * t["k"][2], t["c"][2]),
+    )
+    return Chain(bodies, Spring(1e-3 * t["ks"], t["preload"]))
+
+
+def frequency_domain(rpm, samples=2**17):
+    """Contact force (N) and the last body's acceleration (m/s^2) at ``samples`` times of
+    the turn: each harmonic of the lift through the chain's exact response, by hand."""
+    t = THREE
+    s = np.arange(samples) / samples
+    Y = np.fft.rfft(1e-3 * cycloid_lift(s)) / samples
+    w = 2 * np.pi * np.arange(Y.size) * rpm / 60.0
+    (m1, m2, m3), (k1, k2, k3), (c1, c2, c3), r = t["m"], t["k"], t["c"], t["ratio"]
+    e1, e2, e3 = k1 + 1j * w * c1, k2 + 1j * w * c2, k3 + 1j * w * c3
+    Z = np.zeros((Y.size, 3, 3), complex)
+    Z[:, 0, 0] = e1 + r * r * e2 - m1 * w**2
+    Z[:, 0, 1] = Z[:, 1, 0] = -r * e2
+    Z[:, 1, 1] = e2 + e3 - m2 * w**2
+    Z[:, 1, 2] = Z[:, 2, 1] = -e3
+    Z[:, 2, 2] = e3 + t["ks"] - m3 * w**2
+    rhs = np.zeros((Y.size, 3), complex)
+    rhs[:, 0] = e1 * Y
+    X = np.linalg.solve(Z, rhs[..., None])[..., 0]
+
+    def to_time(spectrum):
+        return np.fft.irfft(spectrum, n=samples) * samples
+
+    return t["preload"] * r + to_time(e1 * (Y - X[:, 0])), to_time(-(w**2) * X[:, 2])
+
+
+def test_three_body_chain_against_the_frequency_domain():
+    steady = ChainSteadyState(two_cycloids(), three_body_chain(), 400.0)
+    rpm = np.array([600.0, 1100.0])
+    summary = steady.summary(rpm)
+    for i, r in enumerate(rpm):
+        force, accel = frequency_domain(r)
+        scale = np.max(np.abs(force))
+        assert abs(summary.min_contact_force_n[i] - force.min()) < 1e-6 * scale
+        assert abs(summary.max_contact_force_n[i] - force.max()) < 1e-6 * scale
+        peak = np.max(np.abs(accel))
+        assert abs(summary.max_acceleration_m_s2[i, 2] - peak) < 1e-6 * peak
+
+
+def test_three_body_jump_speed_against_the_frequency_domain():
+    steady = ChainSteadyState(two_cycloids(), three_body_chain(), 400.0)
+    jump = steady.jump_speed(3000.0, tolerance_rpm=1e-3)
+    assert jump is not None
+
+    def low(r):
+        return frequency_domain(r, 2**15)[0].min()
+
+    reference = scipy.optimize.brentq(low, jump - 0.5, jump + 0.5, xtol=1e-4)
+    assert abs(jump - reference) < 0.01, (jump, reference)
+    assert all(
+        low(r) > 0 for r in np.linspace(400.0, reference - 0.5, 300)
+    )  # the lowest such speed
+
+
+def test_stiff_elements_tend_to_one_body_of_the_summed_mass():
+    program = two_cycloids()
+    t = THREE
+    total = t["m"][0] + t["ratio"] ** 2 * (
+        t["m"][1] + t["m"][2]
+    )  # the far bodies seen through the lever
+    ks = t["ratio"] ** 2 * t["ks"]
+    one = Chain(
+        (Body("one", total, 1e-3 * t["k"][0], t["c"][0]),),
+        Spring(1e-3 * ks, t["ratio"] * t["preload"]),
+    )
+    reference = ChainSteadyState(program, one, 500.0).summary([800.0]).max_contact_force_n[0]
+    gaps = [
+        abs(
+            ChainSteadyState(program, three_body_chain(s), 500.0)
+            .summary([800.0])
+            .max_contact_force_n[0]
+            - reference
+        )
+        for s in (10.0, 1000.0)
+    ]
+    assert gaps[1] < 0.02 * gaps[0] and gaps[1] < 1e-3 * reference
+
+
+def test_seat_force_of_a_surging_spring_against_the_continuous_spring():
+    """The valve on its surging spring, driven at its first held mode's third order: the
+    seat force's swing against the continuous spring's exact dynamic stiffness."""
+    program = two_cycloids()
+    chain = surging_chain(damping_ratio=0.05)
+    s = SURGING
+    rpm = 60 * chain.natural_frequencies()[0][0] / 7.5
+    steady = ChainSteadyState(program, chain, rpm)
+    summary = steady.summary([rpm])
+    samples = 2**14
+    Y = np.fft.rfft(1e-3 * cycloid_lift(np.arange(samples) / samples)) / samples
+    w = 2 * np.pi * np.arange(Y.size) * rpm / 60.0
+    ks, ms = 1e3 * s["rate"], s["spring_mass"]
+    tau = 2 * 0.05 / (np.pi * math.sqrt(ks / ms))
+    k_star = ks * (1 + 1j * w * tau)
+    b = w * np.sqrt(ms / k_star)
+    b = np.where(w == 0, 1e-30, b)
+    body_side = np.where(w == 0, ks, k_star * b / np.tan(b))
+    seat_side = np.where(w == 0, ks, k_star * b / np.sin(b))
+    ke = 1e3 * s["element"] + 1j * w * 5.0
+    X = ke * Y / (ke + body_side - s["valve"] * w**2)  # the tappet rides on the cam: x_1 = y
+    seat = 250.0 + np.fft.irfft(seat_side * X, n=samples) * samples
+    swing = seat.max() - seat.min()
+    assert abs(summary.max_seat_force_n[0] - seat.max()) < 0.01 * swing
+    assert abs(summary.min_seat_force_n[0] - seat.min()) < 0.01 * swing
+    assert summary.max_surge_n[0] > 0.02 * swing  # the surge is there to measure
+
+
+def test_an_edit_of_values_compiles_nothing():
+    program = two_cycloids()
+    ChainSteadyState(program, three_body_chain(), 500.0).summary([600.0, 900.0])
+    edited = Chain(
+        tuple(
+            b.__class__(**{**b.__dict__, "mass_kg": 1.1 * b.mass_kg})
+            for b in three_body_chain().bodies
+        ),
+        Spring(25.0, 800.0),
+    )
+    steady = ChainSteadyState(program, edited, 500.0)
+    assert (
+        steady._motion.nodes.shape
+        == ChainSteadyState(program, three_body_chain(), 500.0)._motion.nodes.shape
+    )
+    with compiled_programs() as names:
+        steady.summary([600.0, 700.0, 900.0])
+    assert "_chain_cycles" not in names, names
+
+
+def test_the_classic_fields_build_the_one_body_chain():
+    follower = Follower(**FOLLOWER)
+    chain = Chain.of_follower(follower)
+    hz = chain.natural_frequencies()[0]
+    np.testing.assert_allclose(hz, follower.natural_frequency_hz, rtol=1e-12)
+    modes = ChainModes.of(chain)
+    np.testing.assert_allclose(
+        np.sort(np.abs(modes.lam)), 2 * math.pi * follower.natural_frequency_hz, rtol=1e-12
+    )
+    assert scipy.linalg.norm(modes.static - [follower.preload_n, 0, 0, follower.preload_n, 0]) == 0
+
+
+def test_the_steady_state_refuses_what_it_does_not_model():
+    lash = Chain(
+        (Body("tappet", 0.03), Body("valve", 0.05, 200.0, 5.0, lash_mm=0.2)), Spring(52.0, 250.0)
+    )
+    with pytest.raises(ValueError, match=r"body 2 \(valve\) lash_mm: .* not modelled yet"):
+        ChainModes.of(lash)
+    alone = Chain((Body("tappet", 0.03),), Spring(52.0, 250.0))
+    with pytest.raises(ValueError, match="nothing to vibrate"):
+        ChainModes.of(alone)
