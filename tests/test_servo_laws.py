@@ -141,6 +141,7 @@ def test_laws_command_lists_the_servo_coefficients(capsys, monkeypatch):
     [
         (["--n", "3"], "--n: not with --objective rms-acceleration"),
         (["--damping", "0.1"], "--damping: not with --objective rms-acceleration"),
+        (["--program", "indexer", "--segment", "1", "--rpm", "100:200"], "not with --program"),
     ],
 )
 def test_rms_design_refuses_a_period_ratio_in_one_line(
