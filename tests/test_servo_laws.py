@@ -154,3 +154,22 @@ def test_rms_design_refuses_a_period_ratio_in_one_line(
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
+
+
+@pytest.mark.slow
+def test_rms_design_command_reports_against_the_floor(capsys, monkeypatch, tmp_path):
+    import json
+
+    from camjax.cli import main
+
+    monkeypatch.setenv("CAMJAX_CACHE_DIR", "off")
+    out = tmp_path / "rms"
+    argv = ["design", "--objective", "rms-acceleration", "--max-jerk", str(JERK_CAP), "--quiet"]
+    assert main([*argv, "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    law = laws.load(out / "law.json")
+    assert summary["value"] == pytest.approx(law.rms_coefficients()["Ca_rms"], rel=1e-12)
+    assert summary["value_over_floor"] == pytest.approx(summary["value"] / math.sqrt(12), rel=1e-12)
+    assert 1 < summary["value_over_floor"] <= 1.05
+    rows = (out / "comparison.csv").read_text().splitlines()
+    assert [r.split(",")[0] for r in rows[1:]] == ["designed", *laws.names()[:7]]
