@@ -173,3 +173,11 @@ def test_rms_design_command_reports_against_the_floor(capsys, monkeypatch, tmp_p
     assert 1 < summary["value_over_floor"] <= 1.05
     rows = (out / "comparison.csv").read_text().splitlines()
     assert [r.split(",")[0] for r in rows[1:]] == ["designed", *laws.names()[:7]]
+
+
+def test_rms_objective_trains_on_the_exact_integral():
+    from camjax import law_design as D
+
+    law = laws.BSplineLaw.fit(laws.ModifiedSine(), 16, 5)
+    trained = float(D.RmsAcceleration().train(law, 1.0, 8.0))
+    assert trained == pytest.approx(law.rms_coefficients()["Ca_rms"], rel=1e-12)
