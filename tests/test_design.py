@@ -44,6 +44,7 @@ OBJECTIVES = [
     D.ExpectedResidual(8.0, 0.8, nodes=16, damping=0.02),
     D.CaCt(8.0),
     D.MaxCaCt(7.2, 8.8, samples=3),
+    D.RmsAcceleration(),
 ]
 
 

@@ -141,6 +141,7 @@ def test_laws_command_lists_the_servo_coefficients(capsys, monkeypatch):
     [
         (["--n", "3"], "--n: not with --objective rms-acceleration"),
         (["--damping", "0.1"], "--damping: not with --objective rms-acceleration"),
+        (["--program", "indexer", "--segment", "1", "--rpm", "100:200"], "not with --program"),
     ],
 )
 def test_rms_design_refuses_a_period_ratio_in_one_line(
@@ -153,3 +154,30 @@ def test_rms_design_refuses_a_period_ratio_in_one_line(
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
+
+
+@pytest.mark.slow
+def test_rms_design_command_reports_against_the_floor(capsys, monkeypatch, tmp_path):
+    import json
+
+    from camjax.cli import main
+
+    monkeypatch.setenv("CAMJAX_CACHE_DIR", "off")
+    out = tmp_path / "rms"
+    argv = ["design", "--objective", "rms-acceleration", "--max-jerk", str(JERK_CAP), "--quiet"]
+    assert main([*argv, "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    law = laws.load(out / "law.json")
+    assert summary["value"] == pytest.approx(law.rms_coefficients()["Ca_rms"], rel=1e-12)
+    assert summary["value_over_floor"] == pytest.approx(summary["value"] / math.sqrt(12), rel=1e-12)
+    assert 1 < summary["value_over_floor"] <= 1.05
+    rows = (out / "comparison.csv").read_text().splitlines()
+    assert [r.split(",")[0] for r in rows[1:]] == ["designed", *laws.names()[:7]]
+
+
+def test_rms_objective_trains_on_the_exact_integral():
+    from camjax import law_design as D
+
+    law = laws.BSplineLaw.fit(laws.ModifiedSine(), 16, 5)
+    trained = float(D.RmsAcceleration().train(law, 1.0, 8.0))
+    assert trained == pytest.approx(law.rms_coefficients()["Ca_rms"], rel=1e-12)

@@ -163,3 +163,18 @@ def test_bad_input_is_one_line(make, message):
     with pytest.raises(ValueError, match=None) as error:
         make()
     assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_shaped_law_traces_and_differentiates_through_its_base():
+    import jax
+
+    def ca_rms(b):
+        return laws.ShapedLaw(laws.SCCA(0.25, b, 0.25), laws.Shaper("zv", 0.1), 1.75).Ca_rms
+
+    concrete = laws.ShapedLaw(laws.SCCA(0.25, 0.4, 0.25), laws.Shaper("zv", 0.1), 1.75)
+    assert float(jax.jit(ca_rms)(0.4)) == pytest.approx(
+        concrete.rms_coefficients()["Ca_rms"], abs=1e-12
+    )
+    h = 1e-6
+    fd = (float(ca_rms(0.4 + h)) - float(ca_rms(0.4 - h))) / (2 * h)
+    assert float(jax.grad(ca_rms)(0.4)) == pytest.approx(fd, rel=1e-6)

@@ -155,6 +155,9 @@ def run(args) -> int:
     if args.program and (args.band or args.n is not None):
         raise CliError(f"{'--band' if args.band else '--n'}: not with --program (the segment's "
                        "band comes from --rpm)")
+    if args.program and args.objective == "rms-acceleration":
+        raise CliError("--objective rms-acceleration: not with --program (it designs a free "
+                       "rise; a segment's design takes residual, ca-ct or preload)")
     out = output_dir(args.out)
     if args.program:
         return _run_program(args, out)

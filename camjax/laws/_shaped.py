@@ -53,12 +53,18 @@ class Shaper(eqx.Module):
         if self.kind not in SHAPERS:
             raise ValueError(f"shaper must be one of {', '.join(SHAPERS)}, got {self.kind!r}")
         if not (math.isfinite(self.damping) and 0.0 <= self.damping < 1.0):
-            raise ValueError(f"shaper {self.kind}: damping ratio must be in [0, 1), got {self.damping}")
+            raise ValueError(
+                f"shaper {self.kind}: damping ratio must be in [0, 1), got {self.damping}"
+            )
         if self.kind == "ei" and self.damping != 0.0:
-            raise ValueError("shaper ei: only the undamped closed form is built (damping 0); "
-                             "use zv or zvd for a damped mode")
+            raise ValueError(
+                "shaper ei: only the undamped closed form is built (damping 0); "
+                "use zv or zvd for a damped mode"
+            )
         if self.kind == "ei" and not 0.0 < self.vtol < 1.0:
-            raise ValueError(f"shaper ei: vibration tolerance vtol must be in (0, 1), got {self.vtol}")
+            raise ValueError(
+                f"shaper ei: vibration tolerance vtol must be in (0, 1), got {self.vtol}"
+            )
 
     @property
     def amplitudes(self) -> np.ndarray:
@@ -102,7 +108,9 @@ class ShapedLaw(AbstractSearchedPeaksLaw):
 
     def __check_init__(self):
         if not isinstance(self.base, AbstractMotionLaw):
-            raise TypeError(f"ShapedLaw needs a motion law as its base, got {type(self.base).__name__}")
+            raise TypeError(
+                f"ShapedLaw needs a motion law as its base, got {type(self.base).__name__}"
+            )
         if not (math.isfinite(self.period_ratio) and self.period_ratio > 0):
             raise ValueError(f"shaped law: period ratio must be positive, got {self.period_ratio}")
 
@@ -120,8 +128,10 @@ class ShapedLaw(AbstractSearchedPeaksLaw):
     @property
     def name(self) -> str:
         extra = f",{number_text(self.shaper.vtol)}" if self.shaper.kind == "ei" else ""
-        return (f"{self.shaper.kind}-{self.base.name}:{number_text(self.period_ratio)},"
-                f"{number_text(self.shaper.damping)}{extra}")
+        return (
+            f"{self.shaper.kind}-{self.base.name}:{number_text(self.period_ratio)},"
+            f"{number_text(self.shaper.damping)}{extra}"
+        )
 
     def rise(self, tau) -> LawValues:
         D = self.stretch
@@ -135,7 +145,9 @@ class ShapedLaw(AbstractSearchedPeaksLaw):
         points = self.base.breakpoints()
         D = self.stretch
         if isinstance(points, tuple):
-            return static_breakpoints([(t + b) / D for t in self.shifts for b in (0.0, *points, 1.0)])
+            return static_breakpoints(
+                [(t + b) / D for t in self.shifts for b in (0.0, *points, 1.0)]
+            )
         inner = jnp.concatenate([jnp.zeros(1), jnp.asarray(points, float).ravel(), jnp.ones(1)])
         return jnp.sort(jnp.concatenate([(t + inner) / D for t in self.shifts]))
 
@@ -152,8 +164,13 @@ class ShapedLaw(AbstractSearchedPeaksLaw):
 
 
 def _sample_points(law: AbstractMotionLaw):
-    edges = np.array([0.0, *law.breakpoints(), 1.0]) if isinstance(law.breakpoints(), tuple) else None
+    edges = (
+        np.array([0.0, *law.breakpoints(), 1.0]) if isinstance(law.breakpoints(), tuple) else None
+    )
     if edges is None:
         return jnp.linspace(0.0, 1.0, 4097)
-    return jnp.asarray(np.unique(np.concatenate(
-        [np.linspace(lo, hi, 257) for lo, hi in zip(edges[:-1], edges[1:])])))
+    return jnp.asarray(
+        np.unique(
+            np.concatenate([np.linspace(lo, hi, 257) for lo, hi in zip(edges[:-1], edges[1:])])
+        )
+    )

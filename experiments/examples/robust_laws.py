@@ -32,7 +32,9 @@ import numpy as np  # noqa: E402
 from camjax import law_design as D  # noqa: E402
 from camjax import laws  # noqa: E402
 
-DESIGN_RATIO = 1.75  # the unshaped move's period ratio at the design frequency (the cycloidal's V is 6% there)
+DESIGN_RATIO = (
+    1.75  # the unshaped move's period ratio at the design frequency (the cycloidal's V is 6% there)
+)
 DAMPING = 0.1
 BAND = 0.2  # the designed law holds V <= LIMIT over +/- BAND of frequency error
 LIMIT = 0.05
@@ -49,61 +51,121 @@ def _band_row(label, vibration, added):
     try:
         lo, hi = D.vibration_band(vibration, LIMIT, SEARCH)
     except ValueError:  # V above the limit at the design frequency: no band
-        return {"what": label, "band_low_percent": None, "band_high_percent": None, "added_duration": added}
-    return {"what": label, "band_low_percent": 100 * (lo - 1), "band_high_percent": 100 * (hi - 1),
-            "added_duration": added}
+        return {
+            "what": label,
+            "band_low_percent": None,
+            "band_high_percent": None,
+            "added_duration": added,
+        }
+    return {
+        "what": label,
+        "band_low_percent": 100 * (lo - 1),
+        "band_high_percent": 100 * (hi - 1),
+        "added_duration": added,
+    }
 
 
 def robust(out: Path, quick: bool) -> dict:
     base = laws.Cycloidal()
     steps = 1200 if quick else D.DEFAULT_STEPS
     started = time.perf_counter()
-    result = D.design(D.MaxResidual((1 - BAND) * DESIGN_RATIO, (1 + BAND) * DESIGN_RATIO, damping=DAMPING),
-                      caps=D.Caps(*DESIGN_CAPS), steps=steps, progress=False)
+    result = D.design(
+        D.MaxResidual((1 - BAND) * DESIGN_RATIO, (1 + BAND) * DESIGN_RATIO, damping=DAMPING),
+        caps=D.Caps(*DESIGN_CAPS),
+        steps=steps,
+        progress=False,
+    )
     design_seconds = time.perf_counter() - started
     designed = result.law
     laws.save(designed, out / "designed_law.json")
 
-    def law_vibration(law, ratio):  # V of a law whose period ratio is `ratio` at the design frequency
+    def law_vibration(
+        law, ratio
+    ):  # V of a law whose period ratio is `ratio` at the design frequency
         return lambda r: np.asarray(D.percentage_vibration(law, ratio * np.asarray(r), DAMPING))
 
     rows = []
     for kind in laws.SHAPERS:  # the impulse trains, undamped: the published bands
-        row = _band_row(f"{kind} shaper, zeta = 0", laws.Shaper(kind).vibration, "0.5 T_d" if kind == "zv" else "T_d")
+        row = _band_row(
+            f"{kind} shaper, zeta = 0",
+            laws.Shaper(kind).vibration,
+            "0.5 T_d" if kind == "zv" else "T_d",
+        )
         row["published_percent"] = PUBLISHED[kind]
         rows.append(row)
     for kind in ("zv", "zvd"):
-        rows.append(_band_row(f"{kind} shaper, zeta = {DAMPING:g}", laws.Shaper(kind, DAMPING).vibration,
-                              "0.5 T_d" if kind == "zv" else "T_d"))
-    shaped = {kind: laws.ShapedLaw(base, laws.Shaper(kind, DAMPING if kind != "ei" else 0.0), DESIGN_RATIO)
-              for kind in laws.SHAPERS}
+        rows.append(
+            _band_row(
+                f"{kind} shaper, zeta = {DAMPING:g}",
+                laws.Shaper(kind, DAMPING).vibration,
+                "0.5 T_d" if kind == "zv" else "T_d",
+            )
+        )
+    shaped = {
+        kind: laws.ShapedLaw(
+            base, laws.Shaper(kind, DAMPING if kind != "ei" else 0.0), DESIGN_RATIO
+        )
+        for kind in laws.SHAPERS
+    }
     for kind, law in shaped.items():
         if kind == "ei":
             continue  # undamped only
-        rows.append(_band_row(f"{law.name} (the whole move), zeta = {DAMPING:g}",
-                              law_vibration(law, law.stretch * DESIGN_RATIO), f"{law.stretch - 1:.3f} of the move"))
-    rows.append(_band_row(f"designed over +/-{100 * BAND:g}%, zeta = {DAMPING:g} (Ca <= {DESIGN_CAPS[0]:g}, "
-                          f"Cj <= {DESIGN_CAPS[1]:g})", law_vibration(designed, DESIGN_RATIO), "0"))
-    rows.append(_band_row(f"cycloidal unshaped, zeta = {DAMPING:g}", law_vibration(base, DESIGN_RATIO), "0"))
+        rows.append(
+            _band_row(
+                f"{law.name} (the whole move), zeta = {DAMPING:g}",
+                law_vibration(law, law.stretch * DESIGN_RATIO),
+                f"{law.stretch - 1:.3f} of the move",
+            )
+        )
+    rows.append(
+        _band_row(
+            f"designed over +/-{100 * BAND:g}%, zeta = {DAMPING:g} (Ca <= {DESIGN_CAPS[0]:g}, "
+            f"Cj <= {DESIGN_CAPS[1]:g})",
+            law_vibration(designed, DESIGN_RATIO),
+            "0",
+        )
+    )
+    rows.append(
+        _band_row(f"cycloidal unshaped, zeta = {DAMPING:g}", law_vibration(base, DESIGN_RATIO), "0")
+    )
 
     r = np.linspace(0.5, 1.5, 1001)
     error = 100 * (r - 1)
     fig, ax = plt.subplots(figsize=(8, 5))
     for kind, style in zip(laws.SHAPERS, ("C0", "C1", "C2")):
-        ax.plot(error, 100 * laws.Shaper(kind).vibration(r), color=style, label=f"{kind.upper()} shaper, zeta = 0")
+        ax.plot(
+            error,
+            100 * laws.Shaper(kind).vibration(r),
+            color=style,
+            label=f"{kind.upper()} shaper, zeta = 0",
+        )
     for kind, style in zip(("zv", "zvd"), ("C0", "C1")):
-        ax.plot(error, 100 * laws.Shaper(kind, DAMPING).vibration(r), color=style, ls="--",
-                label=f"{kind.upper()} shaper, zeta = {DAMPING:g}")
+        ax.plot(
+            error,
+            100 * laws.Shaper(kind, DAMPING).vibration(r),
+            color=style,
+            ls="--",
+            label=f"{kind.upper()} shaper, zeta = {DAMPING:g}",
+        )
     v_designed = law_vibration(designed, DESIGN_RATIO)(r)
     v_cycloidal = law_vibration(base, DESIGN_RATIO)(r)
-    ax.plot(error, 100 * v_designed, color="k", lw=2,
-            label=f"designed law, no added duration, zeta = {DAMPING:g}")
+    ax.plot(
+        error,
+        100 * v_designed,
+        color="k",
+        lw=2,
+        label=f"designed law, no added duration, zeta = {DAMPING:g}",
+    )
     ax.plot(error, 100 * v_cycloidal, color="C7", label=f"cycloidal, unshaped, zeta = {DAMPING:g}")
     ax.axhline(100 * LIMIT, color="C3", lw=0.8, ls=":")
     ax.axvspan(-100 * BAND, 100 * BAND, color="C3", alpha=0.06)
-    ax.set(xlabel="frequency error, actual / design - 1 (%)", ylabel="V: residual / unshaped step's (%)",
-           ylim=(0, 40), title=f"Residual vibration against frequency error (design period ratio "
-                               f"{DESIGN_RATIO:g} for the laws)")
+    ax.set(
+        xlabel="frequency error, actual / design - 1 (%)",
+        ylabel="V: residual / unshaped step's (%)",
+        ylim=(0, 40),
+        title=f"Residual vibration against frequency error (design period ratio "
+        f"{DESIGN_RATIO:g} for the laws)",
+    )
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(out / "vibration.png", dpi=120)
@@ -114,20 +176,43 @@ def robust(out: Path, quick: bool) -> dict:
             return "none (V > 5% at 0)"
         return f"beyond {x:+.0f}" if abs(abs(x) - 100 * (SEARCH[1] - 1)) < 1e-9 else f"{x:+.2f}"
 
-    md = ["| shaper or law | band low (%) | band high (%) | published (+/- %) | added duration |",
-          "|---|---:|---:|---:|---|"]
-    md += [f"| {row['what']} | {cell(row['band_low_percent'])} | {cell(row['band_high_percent'])} | "
-           f"{row.get('published_percent', '')} | {row['added_duration']} |" for row in rows]
+    md = [
+        "| shaper or law | band low (%) | band high (%) | published (+/- %) | added duration |",
+        "|---|---:|---:|---:|---|",
+    ]
+    md += [
+        f"| {row['what']} | {cell(row['band_low_percent'])} | {cell(row['band_high_percent'])} | "
+        f"{row.get('published_percent', '')} | {row['added_duration']} |"
+        for row in rows
+    ]
     (out / "bands.md").write_text("\n".join(md) + "\n")
     keys = ("what", "band_low_percent", "band_high_percent", "published_percent", "added_duration")
-    (out / "bands.csv").write_text("\n".join([",".join(keys)] + [
-        ",".join(f'"{row.get(k, "")}"' if k in ("what", "added_duration") else str(row.get(k, "")) for k in keys)
-        for row in rows]) + "\n")
+    (out / "bands.csv").write_text(
+        "\n".join(
+            [",".join(keys)]
+            + [
+                ",".join(
+                    f'"{row.get(k, "")}"'
+                    if k in ("what", "added_duration")
+                    else str(row.get(k, ""))
+                    for k in keys
+                )
+                for row in rows
+            ]
+        )
+        + "\n"
+    )
     inside = np.abs(r - 1) <= BAND
-    return {"bands": rows, "design_ratio": DESIGN_RATIO, "damping": DAMPING, "limit": LIMIT,
-            "designed_max_V_over_band": float(v_designed[inside].max()),
-            "cycloidal_max_V_over_band": float(v_cycloidal[inside].max()),
-            "designed_coefficients": result.coefficients, "design_seconds": design_seconds}
+    return {
+        "bands": rows,
+        "design_ratio": DESIGN_RATIO,
+        "damping": DAMPING,
+        "limit": LIMIT,
+        "designed_max_V_over_band": float(v_designed[inside].max()),
+        "cycloidal_max_V_over_band": float(v_cycloidal[inside].max()),
+        "designed_coefficients": result.coefficients,
+        "design_seconds": design_seconds,
+    }
 
 
 def least_rms(out: Path, quick: bool) -> dict:
@@ -136,29 +221,66 @@ def least_rms(out: Path, quick: bool) -> dict:
     steps = 1200 if quick else D.DEFAULT_STEPS
     rows, chosen = [], None
     for cap in caps:
-        result = D.design(D.RmsAcceleration(), caps=D.Caps(max_jerk=cap), steps=steps, progress=False)
+        result = D.design(
+            D.RmsAcceleration(), caps=D.Caps(max_jerk=cap), steps=steps, progress=False
+        )
         c = result.law.rms_coefficients()
-        rows.append({"max_jerk": cap, "Ca_rms": c["Ca_rms"], "over_floor": c["Ca_rms"] / floor,
-                     "Ca": result.coefficients["Ca"], "Cv_rms": c["Cv_rms"], "Cva": c["Cva"]})
+        rows.append(
+            {
+                "max_jerk": cap,
+                "Ca_rms": c["Ca_rms"],
+                "over_floor": c["Ca_rms"] / floor,
+                "Ca": result.coefficients["Ca"],
+                "Cv_rms": c["Cv_rms"],
+                "Cva": c["Cva"],
+            }
+        )
         if cap == JERK_CAP:
             chosen = result.law
     laws.save(chosen, out / "least_rms_law.json")
-    lines = ["| jerk cap | Ca_rms | Ca_rms / floor | Ca | Cv_rms | Cva |", "|---:|---:|---:|---:|---:|---:|"]
-    lines += [f"| {r['max_jerk']:g} | {r['Ca_rms']:.4f} | {r['over_floor']:.4f} | {r['Ca']:.3f} | "
-              f"{r['Cv_rms']:.4f} | {r['Cva']:.3f} |" for r in rows]
+    lines = [
+        "| jerk cap | Ca_rms | Ca_rms / floor | Ca | Cv_rms | Cva |",
+        "|---:|---:|---:|---:|---:|---:|",
+    ]
+    lines += [
+        f"| {r['max_jerk']:g} | {r['Ca_rms']:.4f} | {r['over_floor']:.4f} | {r['Ca']:.3f} | "
+        f"{r['Cv_rms']:.4f} | {r['Cva']:.3f} |"
+        for r in rows
+    ]
     (out / "rms.md").write_text("\n".join(lines) + "\n")
     keys = list(rows[0])
-    (out / "rms.csv").write_text("\n".join([",".join(keys)] + [",".join(str(r[k]) for k in keys)
-                                                               for r in rows]) + "\n")
+    (out / "rms.csv").write_text(
+        "\n".join([",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]) + "\n"
+    )
     tau = np.linspace(0, 1, 2001)
     fig, ax = plt.subplots(figsize=(8, 4.5))
-    ax.plot(tau, np.asarray(chosen.a(tau)), "k", lw=2,
-            label=f"least Ca_rms, Cj <= {JERK_CAP:g}: {chosen.rms_coefficients()['Ca_rms']:.4f}")
-    ax.plot(tau, 6 - 12 * tau, "C3", ls="--", label=f"cubic 3t^2 - 2t^3 (the floor 2 sqrt 3 = {floor:.4f})")
+    ax.plot(
+        tau,
+        np.asarray(chosen.a(tau)),
+        "k",
+        lw=2,
+        label=f"least Ca_rms, Cj <= {JERK_CAP:g}: {chosen.rms_coefficients()['Ca_rms']:.4f}",
+    )
+    ax.plot(
+        tau,
+        6 - 12 * tau,
+        "C3",
+        ls="--",
+        label=f"cubic 3t^2 - 2t^3 (the floor 2 sqrt 3 = {floor:.4f})",
+    )
     for name in ("modified-sine", "cycloidal"):
         law = laws.get(name)
-        ax.plot(tau, np.asarray(law.a(tau)), lw=1, label=f"{name}: {law.rms_coefficients()['Ca_rms']:.4f}")
-    ax.set(xlabel="tau", ylabel="a (h/T^2)", title="Acceleration of the least-RMS design (Ca_rms in the legend)")
+        ax.plot(
+            tau,
+            np.asarray(law.a(tau)),
+            lw=1,
+            label=f"{name}: {law.rms_coefficients()['Ca_rms']:.4f}",
+        )
+    ax.set(
+        xlabel="tau",
+        ylabel="a (h/T^2)",
+        title="Acceleration of the least-RMS design (Ca_rms in the legend)",
+    )
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(out / "rms.png", dpi=120)
@@ -169,7 +291,9 @@ def least_rms(out: Path, quick: bool) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="results/robust_laws")
-    parser.add_argument("--quick", action="store_true", help="fewer optimiser steps and one jerk cap")
+    parser.add_argument(
+        "--quick", action="store_true", help="fewer optimiser steps and one jerk cap"
+    )
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -179,8 +303,10 @@ def main() -> None:
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
     print((out / "bands.md").read_text())
     print((out / "rms.md").read_text())
-    print(f"designed law: max V over +/-{100 * BAND:g}% = {summary['robust']['designed_max_V_over_band']:.4f} "
-          f"(cycloidal {summary['robust']['cycloidal_max_V_over_band']:.4f}); {summary['seconds']:.0f} s; wrote {out}")
+    print(
+        f"designed law: max V over +/-{100 * BAND:g}% = {summary['robust']['designed_max_V_over_band']:.4f} "
+        f"(cycloidal {summary['robust']['cycloidal_max_V_over_band']:.4f}); {summary['seconds']:.0f} s; wrote {out}"
+    )
 
 
 if __name__ == "__main__":
