@@ -32,9 +32,11 @@ import numpy as np
 SAMPLES_PER_DEGREE = 1
 """Points per degree of the compensated whole-cam table (360 over the turn: the periodic
 quintic fit solves a dense system, minutes for 3600 points)."""
-OVERSAMPLING = 64
+OVERSAMPLING = 16
 """Fourier samples per table point: the inverse runs on ``OVERSAMPLING`` times the table's
 points, so that the aliasing of the law's harmonics stays below the table's fit."""
+NOISE_FLOOR = 1e-15
+"""Harmonics of the law smaller than this share of its largest are round-off and dropped."""
 _SMOOTH_RTOL = 1e-6
 
 
@@ -43,12 +45,22 @@ def _chain(values, name: str, count: int, positive: bool = True) -> np.ndarray:
     if values.shape != (count,):
         raise ValueError(f"{name} must hold one value per body ({count}), got shape {values.shape}")
     if not np.all(np.isfinite(values)) or (np.any(values <= 0) if positive else np.any(values < 0)):
-        raise ValueError(f"{name} must be {'positive' if positive else 'non-negative'} and finite, got {values.tolist()}")
+        raise ValueError(
+            f"{name} must be {'positive' if positive else 'non-negative'} and finite, got {values.tolist()}"
+        )
     return values
 
 
-def compensated_lift(payload, period_s: float, masses, stiffnesses, dampings, ratios, spring_rate: float = 0.0,
-                     preload: float = 0.0) -> np.ndarray:
+def compensated_lift(
+    payload,
+    period_s: float,
+    masses,
+    stiffnesses,
+    dampings,
+    ratios,
+    spring_rate: float = 0.0,
+    preload: float = 0.0,
+) -> np.ndarray:
     """The input motion ``y`` (the cam's lift) that makes the last body of the chain follow
     ``payload`` exactly, in the steady state of one period.
 
@@ -81,6 +93,9 @@ def compensated_lift(payload, period_s: float, masses, stiffnesses, dampings, ra
         if not (math.isfinite(float(value)) and float(value) >= 0):
             raise ValueError(f"{name} must be non-negative and finite, got {value!r}")
     spectrum = np.fft.rfft(x)
+    # Harmonics at the round-off floor carry no law, only noise the inverse would amplify
+    # (by (omega / omega_n)^2 per body): they are dropped.
+    spectrum[np.abs(spectrum) < NOISE_FLOOR * np.abs(spectrum).max()] = 0.0
     omega = 2 * math.pi * np.arange(spectrum.size) / period_s
     preload_term = np.zeros_like(spectrum)
     preload_term[0] = float(preload) * x.size  # a constant force in rfft's scaling
@@ -125,12 +140,25 @@ def check_smooth(program) -> None:
     eps = 1e-9
     for k in range(n):
         before = at((k - 1) % n, 1.0 - eps)[:, 0]
-        sides.append((turn.start_deg[k], f"the join of segments {(k - 1) % n + 1} ({_law_name(turn, (k - 1) % n)}) "
-                      f"and {k + 1} ({_law_name(turn, k)})", before, at(k, eps)[:, 0]))
+        sides.append(
+            (
+                turn.start_deg[k],
+                f"the join of segments {(k - 1) % n + 1} ({_law_name(turn, (k - 1) % n)}) "
+                f"and {k + 1} ({_law_name(turn, k)})",
+                before,
+                at(k, eps)[:, 0],
+            )
+        )
         law = turn.laws[k]
-        for b in (law.breakpoints() if law is not None else ()):
-            sides.append((turn.start_deg[k] + b * turn.angle_deg[k], f"segment {k + 1} ({_law_name(turn, k)})",
-                          at(k, b - eps)[:, 0], at(k, b + eps)[:, 0]))
+        for b in law.breakpoints() if law is not None else ():
+            sides.append(
+                (
+                    turn.start_deg[k] + b * turn.angle_deg[k],
+                    f"segment {k + 1} ({_law_name(turn, k)})",
+                    at(k, b - eps)[:, 0],
+                    at(k, b + eps)[:, 0],
+                )
+            )
     # each derivative's largest size over the turn: the scale a step is measured against
     scale = np.max([np.abs(at(k, np.linspace(0.0, 1.0, 65))).max(axis=1) for k in range(n)], axis=0)
     for angle, label, before, after in sides:
@@ -143,7 +171,8 @@ def check_smooth(program) -> None:
                 "cam's velocity and acceleration take the law's third and fourth): the symmetric polynomial of "
                 "degree 9 (camjax.laws.PolynomialLaw(5)) or more, triple-harmonic-zero-jerk and a whole-cam lift "
                 "table pass; polynomials of degree 5 and 7 (3-4-5, 4-5-6-7) and the cycloidal (a jerk step at "
-                "each end) do not")
+                "each end) do not"
+            )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -171,12 +200,18 @@ class Compensation:
         return f"# compensated at {self.rpm:g} rpm\nangle_deg,lift_mm\n{rows}\n"
 
     def as_dict(self) -> dict:
-        return {"rpm": self.rpm, "max_correction_mm": self.max_correction_mm,
-                "correction_share": self.correction_share, "static_compression_mm": self.static_compression_mm,
-                "min_contact_force_n": self.min_contact_force_n}
+        return {
+            "rpm": self.rpm,
+            "max_correction_mm": self.max_correction_mm,
+            "correction_share": self.correction_share,
+            "static_compression_mm": self.static_compression_mm,
+            "min_contact_force_n": self.min_contact_force_n,
+        }
 
 
-def compensate(program, rpm: float, *, samples_per_degree: int = SAMPLES_PER_DEGREE) -> Compensation:
+def compensate(
+    program, rpm: float, *, samples_per_degree: int = SAMPLES_PER_DEGREE
+) -> Compensation:
     """The cam lift that makes ``program``'s payload follow its law exactly at ``rpm``.
 
     Refused with one line: a law not smooth enough (``check_smooth``), a train with lash (a
@@ -188,30 +223,81 @@ def compensate(program, rpm: float, *, samples_per_degree: int = SAMPLES_PER_DEG
     rpm = float(check_rpm(rpm)[0])
     follower = program.follower
     if follower.groove_clearance_mm is not None:
-        raise ValueError("compensation needs a linear train: this follower has lash (groove_clearance_mm)")
+        raise ValueError(
+            "compensation needs a linear train: this follower has lash (groove_clearance_mm)"
+        )
     check_smooth(program)
     if int(samples_per_degree) != samples_per_degree or samples_per_degree < 1:
-        raise ValueError(f"samples_per_degree must be a whole number >= 1, got {samples_per_degree!r}")
+        raise ValueError(
+            f"samples_per_degree must be a whole number >= 1, got {samples_per_degree!r}"
+        )
     fine = 360 * int(samples_per_degree) * OVERSAMPLING
     theta = np.arange(fine) * (360.0 / fine)
     x, _, ddx = program.lift(theta)
     omega_deg = 360.0 * rpm / 60.0
-    force = follower.preload_n + follower.mass_kg * 1e-3 * ddx * omega_deg**2 + follower.spring_rate * 1e-3 * x
+    force = (
+        follower.preload_n
+        + follower.mass_kg * 1e-3 * ddx * omega_deg**2
+        + follower.spring_rate * 1e-3 * x
+    )
     if not follower.form_closed and force.min() < 0:
         where = theta[np.argmin(force)]
-        raise ValueError(f"compensation needs contact held at {rpm:g} rpm: the law's contact force falls to "
-                         f"{force.min():.4g} N at {where:.4g} deg (raise preload_n or lower the speed)")
-    y = 1e3 * compensated_lift(1e-3 * x, 60.0 / rpm, [follower.mass_kg], [follower.stiffness], [follower.damping],
-                               [1.0], follower.spring_rate, 0.0)
+        raise ValueError(
+            f"compensation needs contact held at {rpm:g} rpm: the law's contact force falls to "
+            f"{force.min():.4g} N at {where:.4g} deg (raise preload_n or lower the speed)"
+        )
+    y = 1e3 * compensated_lift(
+        1e-3 * x,
+        60.0 / rpm,
+        [follower.mass_kg],
+        [follower.stiffness],
+        [follower.damping],
+        [1.0],
+        follower.spring_rate,
+        0.0,
+    )
     static = follower.preload_n / follower.stiffness * 1e3
     table = slice(None, None, OVERSAMPLING)
     angle, lift, law_lift = theta[table], y[table] - y[0], x[table]
     stroke = float(x.max() - x.min())
     correction = float(np.max(np.abs(y - x)))
     try:
-        compensated = Program.from_table(f"{program.name}-compensated-{rpm:g}rpm", angle, lift, follower,
-                                         materials=program.materials)
+        compensated = Program.from_table(
+            f"{program.name}-compensated-{rpm:g}rpm",
+            angle,
+            lift,
+            follower,
+            materials=program.materials,
+        )
     except ValueError as error:
-        raise ValueError(f"the compensated lift at {rpm:g} rpm is not a cam the program reads back: {error}") from None
-    return Compensation(rpm, angle, lift, law_lift, compensated, correction, correction / stroke, static,
-                        float(force.min()))
+        raise ValueError(
+            f"the compensated lift at {rpm:g} rpm is not a cam the program reads back: {error}"
+        ) from None
+    return Compensation(
+        rpm,
+        angle,
+        lift,
+        law_lift,
+        compensated,
+        correction,
+        correction / stroke,
+        static,
+        float(force.min()),
+    )
+
+
+def deviation_from_law(program, driven, rpm: float) -> tuple[float, float]:
+    """How far ``driven``'s payload strays from ``program``'s law in the steady state at
+    ``rpm``: ``(largest over the turn, largest over the law's dwells)`` in mm, at
+    ``driven``'s grid nodes.  With ``driven`` the compensated program it is the residual
+    of the compensation at a speed other than its design speed (zero at it); with
+    ``driven = program`` the uncompensated cam's, for comparison."""
+    from ._analysis import response
+
+    history = response(driven, rpm)
+    theta = history["theta_deg"]
+    law, _, _ = program.lift(theta)
+    deviation = np.abs(history["payload_displacement_mm"] - law)
+    index, _ = program.turn.locate(theta)
+    dwell = np.isin(index, program.dwell_segments())
+    return float(deviation.max()), float(deviation[dwell].max()) if dwell.any() else 0.0

@@ -35,15 +35,37 @@ INERTIA_RATIO_LIMIT = 10.0
 the rotor, the train's mass as ``m r^2``) at most this many times the rotor's (5 for
 precision axes)."""
 
-MOTOR_FIELDS = ("name", "rated_speed_rpm", "maximum_speed_rpm", "rated_torque_n_m", "maximum_torque_n_m",
-                "continuous_stall_torque_n_m", "torque_constant_n_m_per_a", "rotor_inertia_kg_m2", "envelope")
+MOTOR_FIELDS = (
+    "name",
+    "rated_speed_rpm",
+    "maximum_speed_rpm",
+    "rated_torque_n_m",
+    "maximum_torque_n_m",
+    "continuous_stall_torque_n_m",
+    "torque_constant_n_m_per_a",
+    "rotor_inertia_kg_m2",
+    "envelope",
+)
 """A motor record's fields: the OPC UA powertrain model's (rated and maximum speed; rated,
 maximum and continuous stall torque; torque constant), the rotor inertia and an optional
 torque-speed envelope; the columns of a catalogue CSV."""
-_NEEDED = ("maximum_speed_rpm", "maximum_torque_n_m", "continuous_stall_torque_n_m", "rotor_inertia_kg_m2")
-DRIVE_FIELDS = ("travel_mm_per_rev", "degrees_per_rev", "arm_mm", "gear_ratio", "gearbox_efficiency",
-                "transmission_efficiency", "motor_side_inertia_kg_m2", "gearbox_inertia_kg_m2",
-                "load_side_inertia_kg_m2")
+_NEEDED = (
+    "maximum_speed_rpm",
+    "maximum_torque_n_m",
+    "continuous_stall_torque_n_m",
+    "rotor_inertia_kg_m2",
+)
+DRIVE_FIELDS = (
+    "travel_mm_per_rev",
+    "degrees_per_rev",
+    "arm_mm",
+    "gear_ratio",
+    "gearbox_efficiency",
+    "transmission_efficiency",
+    "motor_side_inertia_kg_m2",
+    "gearbox_inertia_kg_m2",
+    "load_side_inertia_kg_m2",
+)
 
 
 def _positive(value, what: str) -> float:
@@ -85,10 +107,15 @@ class Drive:
 
     def __post_init__(self):
         if (self.travel_mm_per_rev is None) == (self.degrees_per_rev is None):
-            raise ValueError("[drive] needs one of travel_mm_per_rev (a screw or belt) or degrees_per_rev "
-                             "(a rotary axis)")
+            raise ValueError(
+                "[drive] needs one of travel_mm_per_rev (a screw or belt) or degrees_per_rev "
+                "(a rotary axis)"
+            )
         for name in ("travel_mm_per_rev", "degrees_per_rev", "arm_mm"):
-            if getattr(self, name) is not None and finite_number(getattr(self, name), f"[drive] {name}") == 0:
+            if (
+                getattr(self, name) is not None
+                and finite_number(getattr(self, name), f"[drive] {name}") == 0
+            ):
                 raise ValueError(f"[drive] {name} is zero: a transmission of zero moves nothing")
         for name in ("travel_mm_per_rev", "degrees_per_rev", "arm_mm"):
             if getattr(self, name) is not None:
@@ -100,7 +127,11 @@ class Drive:
             value = finite_number(getattr(self, name), f"[drive] {name}")
             if not 0 < value <= 1:
                 raise ValueError(f"[drive] {name} must be in (0, 1], got {value:g}")
-        for name in ("motor_side_inertia_kg_m2", "gearbox_inertia_kg_m2", "load_side_inertia_kg_m2"):
+        for name in (
+            "motor_side_inertia_kg_m2",
+            "gearbox_inertia_kg_m2",
+            "load_side_inertia_kg_m2",
+        ):
             _non_negative(getattr(self, name), f"[drive] {name}")
 
     @classmethod
@@ -109,7 +140,9 @@ class Drive:
             raise ValueError("[drive] must be a table")
         unknown = sorted(set(data) - set(DRIVE_FIELDS))
         if unknown:
-            raise ValueError(f"[drive]: unknown field(s) {', '.join(unknown)}; expected {', '.join(DRIVE_FIELDS)}")
+            raise ValueError(
+                f"[drive]: unknown field(s) {', '.join(unknown)}; expected {', '.join(DRIVE_FIELDS)}"
+            )
         return cls(**data)
 
     @property
@@ -123,18 +156,29 @@ class Drive:
             return self.travel_mm_per_rev / self.gear_ratio
         arm = self.arm_mm if self.arm_mm is not None else follower_arm_mm
         if arm is None:
-            raise ValueError("[drive] degrees_per_rev needs arm_mm (or a swinging follower's arm_mm) to turn "
-                             "the swing into lift")
+            raise ValueError(
+                "[drive] degrees_per_rev needs arm_mm (or a swinging follower's arm_mm) to turn "
+                "the swing into lift"
+            )
         return math.radians(self.degrees_per_rev) * arm / self.gear_ratio
 
     def rotating_inertia_kg_m2(self) -> float:
         """The drive's own inertia at the motor shaft (the rotor not included)."""
-        return (self.motor_side_inertia_kg_m2 + self.gearbox_inertia_kg_m2
-                + self.load_side_inertia_kg_m2 / self.gear_ratio**2)
+        return (
+            self.motor_side_inertia_kg_m2
+            + self.gearbox_inertia_kg_m2
+            + self.load_side_inertia_kg_m2 / self.gear_ratio**2
+        )
 
     def toml(self) -> str:
-        return "\n".join(["[drive]"] + [f"{f.name} = {getattr(self, f.name)!r}" for f in dataclasses.fields(self)
-                                        if getattr(self, f.name) is not None])
+        return "\n".join(
+            ["[drive]"]
+            + [
+                f"{f.name} = {getattr(self, f.name)!r}"
+                for f in dataclasses.fields(self)
+                if getattr(self, f.name) is not None
+            ]
+        )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -165,11 +209,18 @@ class Motor:
                 _positive(getattr(self, name), f"{where}: {name}")
         if self.envelope is not None:
             points = np.asarray(self.envelope, dtype=float)
-            if points.ndim != 2 or points.shape[1] != 2 or len(points) < 2 or not np.all(np.isfinite(points)):
+            if (
+                points.ndim != 2
+                or points.shape[1] != 2
+                or len(points) < 2
+                or not np.all(np.isfinite(points))
+            ):
                 raise ValueError(f"{where}: envelope must be two or more finite [rpm, N m] points")
             if points[0, 0] != 0 or np.any(np.diff(points[:, 0]) <= 0):
-                raise ValueError(f"{where}: envelope is not a function of speed: its speeds must start at 0 and "
-                                 f"rise strictly, got {points[:, 0].tolist()}")
+                raise ValueError(
+                    f"{where}: envelope is not a function of speed: its speeds must start at 0 and "
+                    f"rise strictly, got {points[:, 0].tolist()}"
+                )
             if np.any(points[:, 1] < 0):
                 raise ValueError(f"{where}: envelope torques must be non-negative")
             object.__setattr__(self, "envelope", tuple(map(tuple, points.tolist())))
@@ -180,11 +231,15 @@ class Motor:
             raise ValueError(f"{where} must be a table")
         unknown = sorted(set(data) - set(MOTOR_FIELDS))
         if unknown:
-            raise ValueError(f"{where}: unknown field(s) {', '.join(unknown)}; expected {', '.join(MOTOR_FIELDS)}")
+            raise ValueError(
+                f"{where}: unknown field(s) {', '.join(unknown)}; expected {', '.join(MOTOR_FIELDS)}"
+            )
         name = str(data.get("name", "motor"))
         missing = [f for f in _NEEDED if f not in data]
         if missing:
-            raise ValueError(f"{where} (motor {name!r}): missing {', '.join(missing)}, which the checks need")
+            raise ValueError(
+                f"{where} (motor {name!r}): missing {', '.join(missing)}, which the checks need"
+            )
         return cls(**{**data, "name": name})
 
     def envelope_torque(self, rpm) -> np.ndarray:
@@ -203,7 +258,9 @@ class Motor:
                 continue
             if f.name == "envelope":
                 value = [list(p) for p in value]
-            lines.append(f'{f.name} = "{value}"' if isinstance(value, str) else f"{f.name} = {value!r}")
+            lines.append(
+                f'{f.name} = "{value}"' if isinstance(value, str) else f"{f.name} = {value!r}"
+            )
         return "\n".join(lines)
 
 
@@ -219,19 +276,28 @@ def read_motors(path) -> tuple[Motor, ...]:
         if unknown or "motor" not in data:
             raise ValueError("a motor file holds [motor] (one) or [[motor]] tables (a catalogue)")
         records = data["motor"] if isinstance(data["motor"], list) else [data["motor"]]
-        return tuple(Motor.from_dict(r, f"[motor] {i}" if len(records) > 1 else "[motor]")
-                     for i, r in enumerate(records, 1))
+        return tuple(
+            Motor.from_dict(r, f"[motor] {i}" if len(records) > 1 else "[motor]")
+            for i, r in enumerate(records, 1)
+        )
     except ValueError as error:
         message = str(error)
-        raise ValueError(message if message.startswith(str(path)) else f"{path}: {message}") from None
+        raise ValueError(
+            message if message.startswith(str(path)) else f"{path}: {message}"
+        ) from None
 
 
 def _read_catalogue(path: Path) -> tuple[Motor, ...]:
-    lines = [line for line in read_text(path, "motor catalogue", "CSV").splitlines()
-             if line.strip() and not line.lstrip().startswith("#")]
+    lines = [
+        line
+        for line in read_text(path, "motor catalogue", "CSV").splitlines()
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
     rows = list(csv.DictReader(lines))
     if not rows:
-        raise ValueError("the catalogue lists no motor (a header row of field names, then one row per motor)")
+        raise ValueError(
+            "the catalogue lists no motor (a header row of field names, then one row per motor)"
+        )
     motors = []
     for i, row in enumerate(rows, 2):
         where = f"row {i}"
@@ -259,7 +325,9 @@ def _envelope_text(text: str, where: str) -> list[list[float]]:
     try:
         return [[float(x) for x in pair.split(":")] for pair in text.split()]
     except ValueError:
-        raise ValueError(f"{where}: envelope must be rpm:Nm pairs separated by spaces, got {text!r}") from None
+        raise ValueError(
+            f"{where}: envelope must be rpm:Nm pairs separated by spaces, got {text!r}"
+        ) from None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -276,7 +344,9 @@ class Check:
     @classmethod
     def of(cls, name: str, value: float, limit: float) -> Check:
         value, limit = float(value), float(limit)
-        return cls(name, value, limit, value <= limit, 1.0 - value / limit if limit > 0 else -math.inf)
+        return cls(
+            name, value, limit, value <= limit, 1.0 - value / limit if limit > 0 else -math.inf
+        )
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -316,8 +386,11 @@ class MotorLoad:
         return min(self.checks, key=lambda c: c.margin)
 
     def as_dict(self, points: bool = True) -> dict:
-        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
-               if f.name not in ("checks", "speed_rpm", "torque_n_m")}
+        out = {
+            f.name: getattr(self, f.name)
+            for f in dataclasses.fields(self)
+            if f.name not in ("checks", "speed_rpm", "torque_n_m")
+        }
         out.update(passed=self.passed, checks=[c.as_dict() for c in self.checks])
         if points:
             out.update(points=np.stack([self.speed_rpm, self.torque_n_m], axis=1).tolist())
@@ -342,10 +415,16 @@ class MotorSizing:
         return self.dynamic.passed
 
     def as_dict(self) -> dict:
-        return {"motor": self.motor.name, "rpm": self.rpm, "inertia_ratio": self.inertia_ratio,
-                "passed": self.passed, "rms_share_limit": self.rms_share_limit,
-                "inertia_ratio_limit": self.inertia_ratio_limit,
-                "dynamic": self.dynamic.as_dict(), "rigid": self.rigid.as_dict()}
+        return {
+            "motor": self.motor.name,
+            "rpm": self.rpm,
+            "inertia_ratio": self.inertia_ratio,
+            "passed": self.passed,
+            "rms_share_limit": self.rms_share_limit,
+            "inertia_ratio_limit": self.inertia_ratio_limit,
+            "dynamic": self.dynamic.as_dict(),
+            "rigid": self.rigid.as_dict(),
+        }
 
 
 @dataclasses.dataclass(frozen=True)
@@ -381,7 +460,9 @@ def duty_cycle(program, drive: Drive, rpm: float, response: dict | None = None) 
     r = 1e-3 * lift_per_rev / (2 * math.pi)  # m of lift per motor radian
     velocity = 1e-3 * dy * omega_deg  # m/s
     acceleration = 1e-3 * ddy * omega_deg**2
-    rigid_force = follower.mass_kg * acceleration + follower.spring_rate * 1e-3 * y + follower.preload_n
+    rigid_force = (
+        follower.mass_kg * acceleration + follower.spring_rate * 1e-3 * y + follower.preload_n
+    )
     dynamic_force = np.asarray(response["contact_force_n"], dtype=float)
     eta = drive.efficiency
 
@@ -389,8 +470,16 @@ def duty_cycle(program, drive: Drive, rpm: float, response: dict | None = None) 
         return np.where(force * velocity >= 0, force * r / eta, force * r * eta)
 
     drive_inertia = drive.rotating_inertia_kg_m2()
-    return DutyCycle(rpm, theta, 60.0 * velocity / (2 * math.pi * r), acceleration / r, through(dynamic_force),
-                     through(rigid_force), drive_inertia, drive_inertia + follower.mass_kg * r**2)
+    return DutyCycle(
+        rpm,
+        theta,
+        60.0 * velocity / (2 * math.pi * r),
+        acceleration / r,
+        through(dynamic_force),
+        through(rigid_force),
+        drive_inertia,
+        drive_inertia + follower.mass_kg * r**2,
+    )
 
 
 def _mean_over_turn(theta_deg: np.ndarray, values: np.ndarray) -> float:
@@ -398,8 +487,12 @@ def _mean_over_turn(theta_deg: np.ndarray, values: np.ndarray) -> float:
     return float(np.trapezoid(values, theta_deg) / (theta_deg[-1] - theta_deg[0]))
 
 
-def _load(model: str, motor: Motor, duty: DutyCycle, load_torque: np.ndarray, rms_share: float) -> MotorLoad:
-    torque = (motor.rotor_inertia_kg_m2 + duty.drive_inertia_kg_m2) * duty.motor_acceleration_rad_s2 + load_torque
+def _load(
+    model: str, motor: Motor, duty: DutyCycle, load_torque: np.ndarray, rms_share: float
+) -> MotorLoad:
+    torque = (
+        motor.rotor_inertia_kg_m2 + duty.drive_inertia_kg_m2
+    ) * duty.motor_acceleration_rad_s2 + load_torque
     speed = duty.motor_speed_rpm
     rms = math.sqrt(_mean_over_turn(duty.theta_deg, torque**2))
     power = torque * speed * (2 * math.pi / 60.0)
@@ -411,17 +504,36 @@ def _load(model: str, motor: Motor, duty: DutyCycle, load_torque: np.ndarray, rm
     peak = float(np.max(np.abs(torque)))
     max_speed = float(np.max(np.abs(speed)))
     checks = (
-        Check.of("rms torque / continuous stall torque", rms / motor.continuous_stall_torque_n_m, rms_share),
+        Check.of(
+            "rms torque / continuous stall torque",
+            rms / motor.continuous_stall_torque_n_m,
+            rms_share,
+        ),
         Check.of("peak torque / envelope (worst point)", float(np.max(use)), 1.0),
         Check.of("peak torque / maximum torque", peak / motor.maximum_torque_n_m, 1.0),
         Check.of("max speed / maximum speed", max_speed / motor.maximum_speed_rpm, 1.0),
     )
-    return MotorLoad(model, peak, rms, max_speed, float(regenerated), rms / motor.continuous_stall_torque_n_m,
-                     float(np.max(use)), checks, speed, torque)
+    return MotorLoad(
+        model,
+        peak,
+        rms,
+        max_speed,
+        float(regenerated),
+        rms / motor.continuous_stall_torque_n_m,
+        float(np.max(use)),
+        checks,
+        speed,
+        torque,
+    )
 
 
-def size_motor(motor: Motor, duty: DutyCycle, *, rms_share_limit: float = RMS_SHARE_LIMIT,
-               inertia_ratio_limit: float = INERTIA_RATIO_LIMIT) -> MotorSizing:
+def size_motor(
+    motor: Motor,
+    duty: DutyCycle,
+    *,
+    rms_share_limit: float = RMS_SHARE_LIMIT,
+    inertia_ratio_limit: float = INERTIA_RATIO_LIMIT,
+) -> MotorSizing:
     """``motor`` against ``duty``: every check (``Check``) for the dynamic and the rigid load.
 
     Defaults: RMS torque at most ``RMS_SHARE_LIMIT`` (80%) of the continuous stall torque,
@@ -433,8 +545,13 @@ def size_motor(motor: Motor, duty: DutyCycle, *, rms_share_limit: float = RMS_SH
     inertia_ratio_limit = _positive(inertia_ratio_limit, "inertia_ratio_limit")
     ratio = duty.load_inertia_kg_m2 / motor.rotor_inertia_kg_m2
     ratio_check = Check.of("inertia ratio (load reflected / rotor)", ratio, inertia_ratio_limit)
-    loads = [_load(model, motor, duty, torque, rms_share_limit)
-             for model, torque in (("dynamic", duty.dynamic_torque_n_m), ("rigid", duty.rigid_torque_n_m))]
+    loads = [
+        _load(model, motor, duty, torque, rms_share_limit)
+        for model, torque in (
+            ("dynamic", duty.dynamic_torque_n_m),
+            ("rigid", duty.rigid_torque_n_m),
+        )
+    ]
     loads = [dataclasses.replace(load, checks=load.checks + (ratio_check,)) for load in loads]
     return MotorSizing(motor, duty.rpm, ratio, *loads, rms_share_limit, inertia_ratio_limit)
 
@@ -452,17 +569,23 @@ class MotorChoice:
     closest_check: Check | None = None
 
     def as_dict(self) -> dict:
-        return {"picked": None if self.picked is None else self.picked.name,
-                "closest": None if self.closest is None else self.closest.name,
-                "closest_failed_check": None if self.closest_check is None else self.closest_check.as_dict(),
-                "motors": [[s.as_dict() for s in per_speed] for per_speed in self.sizings]}
+        return {
+            "picked": None if self.picked is None else self.picked.name,
+            "closest": None if self.closest is None else self.closest.name,
+            "closest_failed_check": None
+            if self.closest_check is None
+            else self.closest_check.as_dict(),
+            "motors": [[s.as_dict() for s in per_speed] for per_speed in self.sizings],
+        }
 
     def summary(self) -> str:
         if self.picked is not None:
             return f"picked motor: {self.picked.name} (the smallest that passes every check at every speed)"
-        return (f"no motor passes; the closest, {self.closest.name}, fails {self.closest_check.name} by "
-                f"{-100 * self.closest_check.margin:.1f}% ({self.closest_check.value:.4g} against "
-                f"{self.closest_check.limit:.4g})")
+        return (
+            f"no motor passes; the closest, {self.closest.name}, fails {self.closest_check.name} by "
+            f"{-100 * self.closest_check.margin:.1f}% ({self.closest_check.value:.4g} against "
+            f"{self.closest_check.limit:.4g})"
+        )
 
 
 def choose_motor(motors, duties, **limits) -> MotorChoice:
@@ -475,6 +598,23 @@ def choose_motor(motors, duties, **limits) -> MotorChoice:
     for i in order:
         if all(s.passed for s in sizings[i]):
             return MotorChoice(sizings, motors[i])
-    worst = [min((s.dynamic.worst for s in per_speed), key=lambda c: c.margin) for per_speed in sizings]
+    worst = [
+        min((s.dynamic.worst for s in per_speed), key=lambda c: c.margin) for per_speed in sizings
+    ]
     best = max(range(len(motors)), key=lambda i: worst[i].margin)
     return MotorChoice(sizings, None, motors[best], worst[best])
+
+
+def motors_from_program_file(data, base: Path | None) -> tuple[Motor, ...]:
+    """A program file's ``[motor]``: one record, ``[[motor]]`` records, or ``file = "..."``
+    (a motor TOML or a catalogue CSV, relative to the program file)."""
+    if isinstance(data, dict) and set(data) == {"file"}:
+        name = data["file"]
+        if not isinstance(name, str):
+            raise ValueError(f"[motor] file must be a path, got {name!r}")
+        return read_motors(Path(name) if base is None else base / name)
+    records = data if isinstance(data, list) else [data]
+    return tuple(
+        Motor.from_dict(r, f"[motor] {i}" if len(records) > 1 else "[motor]")
+        for i, r in enumerate(records, 1)
+    )
