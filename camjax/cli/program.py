@@ -311,8 +311,8 @@ def _servo(args, program, rpm, steady, report, out) -> dict:
         for r in rpm:
             turn, dwell = deviation_from_law(program, compensation.program, r)
             law_turn, law_dwell = deviation_from_law(program, program, r)
-            speeds.append({"rpm": r, "max_deviation_mm": turn, "max_dwell_deviation_mm": dwell,
-                           "law_max_deviation_mm": law_turn, "law_max_dwell_deviation_mm": law_dwell})
+            speeds.append({"rpm": r, "max_deviation_mm": turn, "dwell_vibration_mm": dwell,
+                           "law_max_deviation_mm": law_turn, "law_dwell_vibration_mm": law_dwell})
         result["compensation"] = {**compensation.as_dict(), "table": str(out / "compensated-lift.csv"),
                                   "drive_table": str(out / "compensated-drive.csv"), "speeds": speeds}
     return result
@@ -337,8 +337,8 @@ def _servo_lines(servo: dict) -> list[str]:
                      f"({100 * c['correction_share']:.3g}% of the stroke), written to {c['table']}")
         for s in c["speeds"]:
             lines.append(f"  at {s['rpm']:g} rpm the payload strays from the law by {s['max_deviation_mm']:.3g} mm "
-                         f"at most ({s['max_dwell_deviation_mm']:.3g} mm in the dwells); the uncompensated cam's "
-                         f"{s['law_max_deviation_mm']:.3g} mm ({s['law_max_dwell_deviation_mm']:.3g} mm)")
+                         f"at most and vibrates {s['dwell_vibration_mm']:.3g} mm in the dwells; the uncompensated "
+                         f"cam {s['law_max_deviation_mm']:.3g} mm and {s['law_dwell_vibration_mm']:.3g} mm")
     return lines
 
 

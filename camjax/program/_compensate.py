@@ -288,16 +288,18 @@ def compensate(
 
 def deviation_from_law(program, driven, rpm: float) -> tuple[float, float]:
     """How far ``driven``'s payload strays from ``program``'s law in the steady state at
-    ``rpm``: ``(largest over the turn, largest over the law's dwells)`` in mm, at
-    ``driven``'s grid nodes.  With ``driven`` the compensated program it is the residual
-    of the compensation at a speed other than its design speed (zero at it); with
-    ``driven = program`` the uncompensated cam's, for comparison."""
+    ``rpm``, at ``driven``'s grid nodes: ``(largest |x - law| over the turn, largest
+    vibration in the law's dwells)`` in mm, the vibration being half the spread of
+    ``x - law`` over each dwell (a static offset, as the return spring's compression of the
+    train, is not vibration).  With ``driven`` the compensated program, the residual of the
+    compensation at a speed other than its design speed (zero at it); with ``driven =
+    program``, the uncompensated cam's, for comparison."""
     from ._analysis import response
 
     history = response(driven, rpm)
     theta = history["theta_deg"]
     law, _, _ = program.lift(theta)
-    deviation = np.abs(history["payload_displacement_mm"] - law)
+    deviation = history["payload_displacement_mm"] - law
     index, _ = program.turn.locate(theta)
-    dwell = np.isin(index, program.dwell_segments())
-    return float(deviation.max()), float(deviation[dwell].max()) if dwell.any() else 0.0
+    spreads = [np.ptp(deviation[index == k]) / 2 for k in program.dwell_segments() if np.any(index == k)]
+    return float(np.abs(deviation).max()), float(max(spreads, default=0.0))

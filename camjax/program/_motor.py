@@ -240,7 +240,10 @@ class Motor:
             raise ValueError(
                 f"{where} (motor {name!r}): missing {', '.join(missing)}, which the checks need"
             )
-        return cls(**{**data, "name": name})
+        try:
+            return cls(**{**data, "name": name})
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"{where}: {error}") from None
 
     def envelope_torque(self, rpm) -> np.ndarray:
         """Peak torque the motor gives at each speed (0 past its last speed or the maximum)."""
