@@ -37,6 +37,9 @@ OVERSAMPLING = 16
 points, so that the aliasing of the law's harmonics stays below the table's fit."""
 NOISE_FLOOR = 1e-15
 """Harmonics of the law smaller than this share of its largest are round-off and dropped."""
+NOISE_MARGIN = 10.0
+"""How far above the samples' noise (the largest harmonic of the upper half) the last kept
+harmonic must stand."""
 _SMOOTH_RTOL = 1e-6
 
 
@@ -93,9 +96,13 @@ def compensated_lift(
         if not (math.isfinite(float(value)) and float(value) >= 0):
             raise ValueError(f"{name} must be non-negative and finite, got {value!r}")
     spectrum = np.fft.rfft(x)
-    # Harmonics at the round-off floor carry no law, only noise the inverse would amplify
-    # (by (omega / omega_n)^2 per body): they are dropped.
-    spectrum[np.abs(spectrum) < NOISE_FLOOR * np.abs(spectrum).max()] = 0.0
+    # Harmonics at the samples' noise floor carry no law, only noise the inverse would amplify
+    # (by (omega / omega_n)^2 per body): the series ends at the last harmonic above the floor,
+    # NOISE_FLOOR of the largest or NOISE_MARGIN times the largest of the upper half (a law
+    # sampled finely enough has nothing there but the noise of its samples), whichever is higher.
+    size = np.abs(spectrum)
+    floor = max(NOISE_FLOOR * size.max(), NOISE_MARGIN * float(size[size.size // 2 :].max()))
+    spectrum[np.flatnonzero(size >= floor)[-1] + 1 :] = 0.0
     omega = 2 * math.pi * np.arange(spectrum.size) / period_s
     preload_term = np.zeros_like(spectrum)
     preload_term[0] = float(preload) * x.size  # a constant force in rfft's scaling
@@ -301,5 +308,7 @@ def deviation_from_law(program, driven, rpm: float) -> tuple[float, float]:
     law, _, _ = program.lift(theta)
     deviation = history["payload_displacement_mm"] - law
     index, _ = program.turn.locate(theta)
-    spreads = [np.ptp(deviation[index == k]) / 2 for k in program.dwell_segments() if np.any(index == k)]
+    spreads = [
+        np.ptp(deviation[index == k]) / 2 for k in program.dwell_segments() if np.any(index == k)
+    ]
     return float(np.abs(deviation).max()), float(max(spreads, default=0.0))
