@@ -413,3 +413,11 @@ def test_compensation_refuses_lash_and_separation():
     )
     with pytest.raises(ValueError, match="compensation needs contact held at 120 rpm"):
         compensate(_c4_program(light), RPM)
+
+
+def test_motor_toml_reads_as_the_catalogue_row():
+    from camjax.program import example_path
+
+    (toml,) = read_motors(example_path("motor"))
+    catalogue = read_motors(example_path("servo").parent / "motors.csv")
+    assert toml == next(m for m in catalogue if m.name == "S2-060")
