@@ -385,7 +385,7 @@ def test_program_compensation_drives_the_payload_along_the_law():
 @pytest.mark.parametrize(
     ("law", "message"),
     [
-        ("poly345", "fourth derivative steps at 30 deg"),
+        ("poly4567", "fourth derivative steps at 30 deg"),
         ("cycloidal", "jerk steps at 30 deg"),
     ],
 )
