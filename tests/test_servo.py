@@ -421,3 +421,33 @@ def test_motor_toml_reads_as_the_catalogue_row():
     (toml,) = read_motors(example_path("motor"))
     catalogue = read_motors(example_path("servo").parent / "motors.csv")
     assert toml == next(m for m in catalogue if m.name == "S2-060")
+
+
+def _cli(capsys, *argv):
+    from camjax.cli import main
+
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_cli_refuses_a_bad_motor_file_and_a_rough_law_in_one_line(tmp_path, capsys, monkeypatch):
+    """Both fail before the analysis: a catalogue missing a field the checks need, and
+    ``--compensate`` of a program whose laws are too rough (the built-in indexer's)."""
+    monkeypatch.setenv("CAMJAX_CACHE_DIR", "off")
+    catalogue = tmp_path / "bad.csv"
+    catalogue.write_text(
+        "name,maximum_speed_rpm,maximum_torque_n_m,rotor_inertia_kg_m2\nm,6000,2,1e-4\n"
+    )
+    code, out, err = _cli(capsys, "program", "servo", "--motor", str(catalogue))
+    assert code != 0 and out == "" and len(err.strip().splitlines()) == 1
+    assert "missing continuous_stall_torque_n_m, which the checks need" in err
+    code, out, err = _cli(
+        capsys, "program", "indexer", "--compensate", "300", "--out", str(tmp_path / "o")
+    )
+    assert (
+        code != 0
+        and len(err.strip().splitlines()) == 1
+        and "jerk steps" in err
+        and "degree 9" in err
+    )

@@ -250,13 +250,14 @@ def run(args) -> int:
     with file_named(path), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # the library's speed warnings, shown below
         program = Program.load(path)
+        motors = _motors(args, program)  # before the analysis: a bad motor file fails at once
         out = output_dir(args.out)
         steady = SteadyState(program, float(min(rpm)))
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
                          speed_fluctuation=args.speed_fluctuation)
         if out is not None:
             write_report(out, program, report, steady=steady, points=args.points, plot_rpm=args.plot_rpm)
-        servo = _servo(args, program, rpm, steady, report, out)
+        servo = _servo(args, program, motors, rpm, steady, report, out)
     for line in dict.fromkeys([*_messages(caught), *report.warnings]):
         print(f"warning: {line}", file=sys.stderr)
     if args.format == "json":
@@ -278,18 +279,29 @@ def run(args) -> int:
     return 0
 
 
-def _servo(args, program, rpm, steady, report, out) -> dict:
+def _motors(args, program) -> tuple:
+    """The motors to size: ``--motor``'s file, else the program's [motor]; checked against
+    the program's [drive]."""
+    from ..program import read_motors
+
+    motors = read_motors(Path(args.motor)) if args.motor is not None else program.motors
+    if motors and program.drive is None:
+        raise ValueError("motor sizing needs the program's [drive] (travel_mm_per_rev or degrees_per_rev, "
+                         "gear_ratio, efficiencies, inertias: docs/servo.md)")
+    if args.compensate is not None:
+        from ..program import check_smooth
+
+        check_smooth(program)  # before the analysis: a law too rough fails at once
+    return motors
+
+
+def _servo(args, program, motors, rpm, steady, report, out) -> dict:
     """The motor sizing (``--motor`` or the program's [motor]) and the compensation
     (``--compensate``), as the JSON keys ``motor`` and ``compensation``."""
-    from ..program import response
-    from ..program._motor import choose_motor, duty_cycle, read_motors
+    from ..program import choose_motor, duty_cycle, response
 
     result = {}
-    motors = read_motors(Path(args.motor)) if args.motor is not None else program.motors
     if motors:
-        if program.drive is None:
-            raise ValueError("motor sizing needs the program's [drive] (travel_mm_per_rev or degrees_per_rev, "
-                             "gear_ratio, efficiencies, inertias: docs/servo.md)")
         duties = [duty_cycle(program, program.drive, r, response(program, r, steady=steady)) for r in rpm]
         choice = choose_motor(motors, duties)
         result["motor"] = choice.as_dict()
