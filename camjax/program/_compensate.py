@@ -72,9 +72,12 @@ def compensated_lift(
             (the period's end excluded), in m (or any length unit, with the forces in that
             unit times N/m).
         period_s: the period's duration in s.
-        masses, stiffnesses, dampings, ratios: per body from the cam outward (kg, N/m,
-            N s/m, dimensionless), as in MISSION's chain.
-        spring_rate, preload: the return spring on the last body (N/m) and its preload (N).
+        masses: per body from the cam outward (kg).
+        stiffnesses: each element's stiffness (N/m), element ``j`` before body ``j``.
+        dampings: each element's viscous damping (N s/m).
+        ratios: each element's lever ratio (dimensionless).
+        spring_rate: the return spring on the last body (N/m).
+        preload: the return spring's preload (N).
 
     Returns ``y`` at the same instants, including the constant static compression the
     preload sets (``F_0 / k`` for one body); the steady state of the period is exact
