@@ -56,6 +56,13 @@ def register(subparsers) -> None:
     parser.add_argument("--drive-tolerance", type=float, default=1e-4, metavar="TOL",
                         help="most deviation of the knot tables' quintic interpolation from the motion, "
                         "in mm (degrees for a swinging follower) (default 1e-4)")
+    parser.add_argument("--motor", metavar="M.toml|CATALOGUE.csv", help="size the servo motor(s) of this file "
+                        "(a [motor] TOML or a CSV catalogue) against the program's [drive] at each --rpm, from the "
+                        "dynamic steady state and the rigid load; a catalogue's smallest passing motor is picked "
+                        "(docs/servo.md); without it, the program's own [motor] tables, if any")
+    parser.add_argument("--compensate", type=float, metavar="RPM", help="write to --out the cam lift that makes "
+                        "the payload follow the law exactly at RPM (compensated-lift.csv, a whole-cam table, and "
+                        "its drive table), and report its residual vibration at the --rpm speeds (docs/servo.md)")
     parser.set_defaults(func=run)
 
 
@@ -224,6 +231,8 @@ def run(args) -> int:
         rpm = Speeds.parse(args.rpm, "--rpm")
     except ValueError as error:
         raise CliError(str(error)) from None
+    if args.compensate is not None and args.out is None:
+        raise CliError("--compensate needs --out DIR: the directory the compensated table is written to")
     if not 8 <= args.points <= MAX_PROFILE_POINTS:
         raise CliError(f"--points: must be from 8 to {MAX_PROFILE_POINTS:,}, got {args.points}")
     if args.plot_rpm is not None and not any(math.isclose(args.plot_rpm, r, rel_tol=1e-9) for r in rpm):
@@ -236,26 +245,118 @@ def run(args) -> int:
         raise CliError(f"--speed-fluctuation: must be in (0, 2), got {args.speed_fluctuation:g}")
     path = program_path(args.file)
     if is_machine(path):
+        if args.motor is not None or args.compensate is not None:
+            raise CliError("--motor and --compensate take a program file, not a machine file")
         return _run_machine(args, path, rpm)
     with file_named(path), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # the library's speed warnings, shown below
         program = Program.load(path)
+        motors = _motors(args, program)  # before the analysis: a bad motor file fails at once
         out = output_dir(args.out)
         steady = SteadyState(program, rpm)
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
                          speed_fluctuation=args.speed_fluctuation)
         if out is not None:
             write_report(out, program, report, steady=steady, points=args.points, plot_rpm=args.plot_rpm)
+        servo = _servo(args, program, motors, rpm, steady, report, out)
     for line in dict.fromkeys([*_messages(caught), *report.warnings]):
         print(f"warning: {line}", file=sys.stderr)
     if args.format == "json":
-        print(report.to_json())
+        if servo:
+            import json
+
+            from .._plain import json_ready
+
+            print(json.dumps(json_ready({**report.as_dict(), **servo}), indent=1))
+        else:
+            print(report.to_json())
     elif args.format == "csv":
         print(report.to_csv())
     else:
         print(_table(report, grooved=bool(program.follower.form_closed and program.follower.groove_clearance_mm
                                           and not args.no_flight)))
+        for line in _servo_lines(servo):
+            print(line)
     return 0
+
+
+def _motors(args, program) -> tuple:
+    """The motors to size: ``--motor``'s file, else the program's [motor]; checked against
+    the program's [drive]."""
+    from ..program import read_motors
+
+    motors = read_motors(Path(args.motor)) if args.motor is not None else program.motors
+    if motors and program.drive is None:
+        raise ValueError("motor sizing needs the program's [drive] (travel_mm_per_rev or degrees_per_rev, "
+                         "gear_ratio, efficiencies, inertias: docs/servo.md)")
+    if args.compensate is not None:
+        from ..program import check_smooth
+
+        check_smooth(program)  # before the analysis: a law too rough fails at once
+    return motors
+
+
+def _servo(args, program, motors, rpm, steady, report, out) -> dict:
+    """The motor sizing (``--motor`` or the program's [motor]) and the compensation
+    (``--compensate``), as the JSON keys ``motor`` and ``compensation``."""
+    from ..program import choose_motor, duty_cycle, response
+
+    result = {}
+    if motors:
+        duties = [duty_cycle(program, program.drive, r, response(program, r, steady=steady)) for r in rpm]
+        choice = choose_motor(motors, duties)
+        result["motor"] = choice.as_dict()
+        result["motor_summary"] = choice.summary()
+        if out is not None:
+            from ..program import motor_figure
+
+            shown = choice.picked or choice.closest
+            index = [m.name for m in motors].index(shown.name) if shown in motors else 0
+            motor_figure(choice.sizings[index], out / "motor.png")
+    if args.compensate is not None:
+        from ..program import compensate, deviation_from_law, write_drive_table
+
+        compensation = compensate(program, args.compensate)
+        (out / "compensated-lift.csv").write_text(compensation.csv())
+        write_drive_table(compensation.program, out / "compensated-drive.csv", "csv")
+        speeds = []
+        for r in rpm:
+            turn, dwell = deviation_from_law(program, compensation.program, r)
+            law_turn, law_dwell = deviation_from_law(program, program, r)
+            speeds.append({"rpm": r, "max_deviation_mm": turn, "dwell_vibration_mm": dwell,
+                           "law_max_deviation_mm": law_turn, "law_dwell_vibration_mm": law_dwell})
+        result["compensation"] = {**compensation.as_dict(), "table": str(out / "compensated-lift.csv"),
+                                  "drive_table": str(out / "compensated-drive.csv"), "speeds": speeds}
+    return result
+
+
+def _servo_lines(servo: dict) -> list[str]:
+    lines = []
+    if "motor" in servo:
+        for per_speed in servo["motor"]["motors"]:
+            for s in per_speed:
+                d, g = s["dynamic"], s["rigid"]
+                lines.append(f"motor {s['motor']} at {s['rpm']:g} rpm: peak {d['peak_torque_n_m']:.4g} N m "
+                             f"(rigid {g['peak_torque_n_m']:.4g}), RMS {d['rms_torque_n_m']:.4g} N m (rigid "
+                             f"{g['rms_torque_n_m']:.4g}), max speed {d['max_speed_rpm']:.5g} rpm, inertia ratio "
+                             f"{s['inertia_ratio']:.3g}, regenerated {d['regenerated_energy_j']:.4g} J per turn, "
+                             f"thermal use {100 * d['thermal_use']:.1f}%: " + ("passes" if s["passed"] else "fails"))
+                lines += ["    " + _check_text(c) for c in d["checks"] if not c["passed"]]
+        lines.append(servo["motor_summary"])
+    if "compensation" in servo:
+        c = servo["compensation"]
+        lines.append(f"compensated at {c['rpm']:g} rpm: correction up to {c['max_correction_mm']:.4g} mm "
+                     f"({100 * c['correction_share']:.3g}% of the stroke), written to {c['table']}")
+        for s in c["speeds"]:
+            lines.append(f"  at {s['rpm']:g} rpm the payload strays from the law by {s['max_deviation_mm']:.3g} mm "
+                         f"at most and vibrates {s['dwell_vibration_mm']:.3g} mm in the dwells; the uncompensated "
+                         f"cam {s['law_max_deviation_mm']:.3g} mm and {s['law_dwell_vibration_mm']:.3g} mm")
+    return lines
+
+
+def _check_text(c: dict) -> str:
+    return (f"{c['name']} fails: {c['value']:.4g} against {c['limit']:.4g} "
+            f"(by {-100 * c['margin']:.1f}%)")
 
 
 def _drive_table(args) -> int:

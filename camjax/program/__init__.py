@@ -12,8 +12,11 @@ the profile, the figures); ``analyse_machine`` adds the torques of several cams 
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
 (``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
 preload over a speed range).  ``Chain`` is the follower as a chain of bodies (a valve
-train, a spring that surges) and ``ChainSteadyState`` its exact periodic steady state.  The
-equations are in docs/program.md, docs/machine.md and docs/valve-trains.md.
+train, a spring that surges) and ``ChainSteadyState`` its exact periodic steady state; a
+servo's ``Drive`` and ``Motor`` give the motor's torque over the turn (``duty_cycle``,
+``size_motor``, ``choose_motor`` from a catalogue), and ``compensate`` the cam lift that
+makes the payload follow its law at one speed.  The equations are in docs/program.md,
+docs/machine.md, docs/valve-trains.md and docs/servo.md.
 """
 
 from typing import TYPE_CHECKING
@@ -24,6 +27,11 @@ from ._analysis import analyse as analyse
 from ._analysis import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s2
 from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
+from ._compensate import Compensation as Compensation
+from ._compensate import check_smooth as check_smooth
+from ._compensate import compensate as compensate
+from ._compensate import compensated_lift as compensated_lift
+from ._compensate import deviation_from_law as deviation_from_law
 from ._design import design_segment as design_segment
 from ._design import write_program as write_program
 from ._drive import DRIVE_TABLE_FILE_NAMES as DRIVE_TABLE_FILE_NAMES
@@ -76,6 +84,19 @@ from ._machine import node_contact as node_contact
 from ._motion import EndState as EndState
 from ._motion import Join as Join
 from ._motion import segment_kinematics as segment_kinematics
+from ._motor import INERTIA_RATIO_LIMIT as INERTIA_RATIO_LIMIT
+from ._motor import RMS_SHARE_LIMIT as RMS_SHARE_LIMIT
+from ._motor import Check as Check
+from ._motor import Drive as Drive
+from ._motor import DutyCycle as DutyCycle
+from ._motor import Motor as Motor
+from ._motor import MotorChoice as MotorChoice
+from ._motor import MotorLoad as MotorLoad
+from ._motor import MotorSizing as MotorSizing
+from ._motor import choose_motor as choose_motor
+from ._motor import duty_cycle as duty_cycle
+from ._motor import read_motors as read_motors
+from ._motor import size_motor as size_motor
 from ._probes import BUILT_IN as BUILT_IN
 from ._probes import OUTPUTS as OUTPUTS
 from ._probes import Outputs as Outputs
@@ -120,6 +141,7 @@ from ._writers import write_machine_report as write_machine_report
 from ._writers import write_report as write_report
 
 if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
+    from ._figures import motor_figure as motor_figure
     from ._figures import save_figures as save_figures
     from ._figures import shaft_figures as shaft_figures
     from ._preload import AbstractProgramObjective as AbstractProgramObjective
@@ -128,7 +150,8 @@ if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
 
 # Loaded on first use: MaxPreload subclasses camjax.law_design's objective (which imports
 # optax) and the figures import matplotlib.
-_LAZY = {"AbstractProgramObjective": "._preload", "MaxPreload": "._preload", "MaxProgramResidual": "._preload", "save_figures": "._figures", "shaft_figures": "._figures"}
+_LAZY = {"AbstractProgramObjective": "._preload", "MaxPreload": "._preload", "MaxProgramResidual": "._preload", "save_figures": "._figures", "shaft_figures": "._figures",
+         "motor_figure": "._figures"}
 
 
 def __getattr__(name):

@@ -188,3 +188,34 @@ def shaft_figures(out: Path, machine, report, rpm) -> None:
     if len(report.shaft) > 1:
         plot.save(torque_sweep(report.shaft, f"{machine.name}: shaft torque"),
                   out / "shaft_torque_sweep.png")
+
+
+def motor_figure(sizings, path) -> Path:
+    """The motor's (speed, torque) points over one turn, dynamic and rigid, over its
+    torque-speed envelope, one colour per master speed (``MotorSizing`` of each); saved to
+    ``path``."""
+    fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    motor = sizings[0].motor
+    if motor.envelope is not None:
+        envelope = np.asarray(motor.envelope)
+    else:
+        envelope = np.array([[0.0, motor.maximum_torque_n_m], [motor.maximum_speed_rpm, motor.maximum_torque_n_m]])
+    for sign in (1, -1):
+        ax.plot(sign * envelope[:, 0], envelope[:, 1], "k-", lw=1.5, label="envelope" if sign == 1 else None)
+        ax.plot(sign * envelope[:, 0], -envelope[:, 1], "k-", lw=1.5)
+    ax.axhline(sizings[0].rms_share_limit * motor.continuous_stall_torque_n_m, color="k", ls=":", lw=1,
+               label=f"{100 * sizings[0].rms_share_limit:g}% of continuous stall torque")
+    for s in sizings:
+        line, = ax.plot(s.dynamic.speed_rpm, s.dynamic.torque_n_m, ".", ms=3, label=f"{s.rpm:g} rpm dynamic")
+        ax.plot(s.rigid.speed_rpm, s.rigid.torque_n_m, "-", lw=0.8, color=line.get_color(), alpha=0.6,
+                label=f"{s.rpm:g} rpm rigid")
+        ax.plot([0], [s.dynamic.rms_torque_n_m], "s", color=line.get_color(), label=f"{s.rpm:g} rpm RMS")
+    ax.set_xlabel("motor speed (rpm)")
+    ax.set_ylabel("motor torque (N m)")
+    ax.set_title(f"motor {motor.name}: torque against speed over one turn")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+    path = Path(path)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

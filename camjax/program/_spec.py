@@ -29,6 +29,7 @@ from ._motion import (
     joins,
     resolve_segments,
 )
+from ._motor import Drive, Motor, motors_from_program_file
 from ._table import points_toml, read_points, table_points, turn_segments
 from ._table import segment_law as table_segment_law
 from ._turn import JOIN_TOLERANCE_DEG, Turn
@@ -93,6 +94,8 @@ class Program:
     segments: tuple[Segment, ...]
     follower: Follower
     materials: Materials = Materials()
+    drive: Drive | None = None  # a servo's transmission ([drive]), for motor sizing
+    motors: tuple[Motor, ...] = ()  # [motor] records (or a catalogue file) to size
 
     def __post_init__(self):
         object.__setattr__(self, "segments", tuple(self.segments))
@@ -143,7 +146,7 @@ class Program:
     @classmethod
     def from_dict(cls, data: dict, *, base: Path | None = None) -> Program:
         """A program from the TOML structure (``program``, ``segment`` list, ``follower``)."""
-        _no_unknown(data, {"program", "segment", "follower", "materials"}, "top level")
+        _no_unknown(data, {"program", "segment", "follower", "materials", "drive", "motor"}, "top level")
         header = data.get("program", {})
         _no_unknown(header, {"name", *TABLE_KEYS, *DXF_KEYS}, "[program]")
         segments_data = data.get("segment")
@@ -178,8 +181,10 @@ class Program:
         _no_unknown(materials, {f.name for f in dataclasses.fields(Materials)}, "[materials]")
         if dxf is not None:
             segments, follower_data = _dxf_segments(dxf, header, follower_data, base)
+        drive = Drive.from_dict(data["drive"]) if "drive" in data else None
+        motors = motors_from_program_file(data["motor"], base) if "motor" in data else ()
         return cls(str(header.get("name", "program")), tuple(segments), Follower(**follower_data),
-                   Materials(**materials))
+                   Materials(**materials), drive, motors)
 
     @classmethod
     def from_table(cls, name: str, angle_deg, lift_mm, follower: Follower, *,
@@ -257,6 +262,10 @@ class Program:
         if self.materials != Materials():
             lines += ["", "[materials]"]
             lines += [f"{f.name} = {getattr(self.materials, f.name)!r}" for f in dataclasses.fields(Materials)]
+        if self.drive is not None:
+            lines += ["", self.drive.toml()]
+        for motor in self.motors:
+            lines += ["", motor.toml().replace("[motor]", "[[motor]]")]
         return "\n".join(lines) + "\n"
 
     # -- the lift over the turn ----------------------------------------------------------
