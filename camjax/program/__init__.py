@@ -68,6 +68,7 @@ from ._machine import JoinCurvature as JoinCurvature
 from ._machine import NodeContact as NodeContact
 from ._machine import cam_geometry as cam_geometry
 from ._machine import contact_geometry as contact_geometry
+from ._machine import ABSURD_SIZES as ABSURD_SIZES
 from ._machine import design_warnings as design_warnings
 from ._machine import node_contact as node_contact
 from ._motion import EndState as EndState

@@ -207,8 +207,8 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     from the same steady state; ``geometry`` from the profile at the grid's nodes and 3600
     angles over the turn (a flat face over a cusp is a ``ValueError`` naming the angles).
     """
-    return analyse_checked(program, check_rpm(rpm, program), with_flight=with_flight, steady=steady,
-                           devices=devices, speed_fluctuation=speed_fluctuation)  # warns of an implausible speed
+    return analyse_checked(program, check_rpm(rpm), with_flight=with_flight, steady=steady,
+                           devices=devices, speed_fluctuation=speed_fluctuation)  # an implausible speed: in warnings
 
 
 def analyse_checked(program: Program, rpm: np.ndarray, *, with_flight: bool = True,

@@ -28,6 +28,7 @@ from .._plain import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
 from ..metrics import interval_peaks, septic_coefficients
 from ._export import _angle_ranges, shape
 from ._spec import Program
+from ._speeds import speed_warnings
 
 TORQUE_PER_FORCE_VELOCITY = 1e-3 / (2 * math.pi)
 """N m of drive torque per N of contact force and mm per turn of lift velocity."""
@@ -258,15 +259,39 @@ MAX_HALF_WIDTH_RATIO = 0.1
 (``b / R' = 2 p / E*``) for which the Hertz line contact holds (it needs ``b << R'``)."""
 
 
+ABSURD_SIZES = {"mm": 10_000.0, "kg": 10_000.0, "N": 1e6, "N/mm": 1e9}
+"""Sizes no cam machine has, by unit: a length past 10 m, a moving mass past 10 tonnes, a
+force past a meganewton, a stiffness past 1e9 N/mm.  A value past them is computed but
+warned of (``size_warnings``): often a unit slip, and a length past 1e12 mm also loses the
+cam's curvature to rounding."""
+_SIZED_FIELDS = (("base_radius_mm", "mm"), ("roller_radius_mm", "mm"), ("offset_mm", "mm"), ("arm_mm", "mm"),
+                 ("pivot_mm", "mm"), ("groove_clearance_mm", "mm"), ("contact_width_mm", "mm"),
+                 ("mass_kg", "kg"), ("preload_n", "N"), ("stiffness_n_per_mm", "N/mm"),
+                 ("spring_rate_n_per_mm", "N/mm"))
+
+
+def size_warnings(program: Program) -> list[str]:
+    """A line for each follower field and segment lift past ``ABSURD_SIZES``, naming the key
+    and its value."""
+    f = program.follower
+    given = [(f"follower.{name}", getattr(f, name), unit) for name, unit in _SIZED_FIELDS
+             if getattr(f, name) is not None and not (name == "roller_radius_mm" and f.flat_face)]
+    given += [(f"segment {i}: lift_mm", s.lift_mm, "mm") for i, s in enumerate(program.segments, 1)]
+    return [f"{key} = {value:g} is more than {ABSURD_SIZES[unit]:,.0f} {unit}, larger than any cam machine's: "
+            f"check its unit ({unit})" for key, value, unit in given if abs(value) > ABSURD_SIZES[unit]]
+
+
 def design_warnings(program: Program, report=None) -> list[str]:
     """Where the input or a result lies outside what the design rules and the models hold,
-    one line each (empty where all is well): the program's own numbers (a lift table's noise
-    or spacing, ``table_warnings``, among them), and with ``report``
-    (``analyse``'s ``Report`` or its ``as_dict()``) the pressure angle, the Hertz contact and a
-    grooved cam's strikes that did not settle.
+    one line each (empty where all is well): the program's own numbers (sizes past
+    ``ABSURD_SIZES``, a grooved cam's preload, a lift table's noise or spacing among them), and
+    with ``report`` (``analyse``'s ``Report`` or its ``as_dict()``) its speeds
+    (``speed_warnings``), the pressure angle, the Hertz contact and a grooved cam's strikes
+    that did not settle.
 
     Each is a warning, not an error: the numbers are computed, but they are not to be
-    trusted as they stand.  ``camjax program`` prints them.
+    trusted as they stand.  ``analyse`` puts them in its report (``Report.warnings``, in
+    ``--format json`` and the studio); ``camjax program`` prints them on stderr.
     """
     out = []
     f, materials = program.follower, program.materials
@@ -277,6 +302,11 @@ def design_warnings(program: Program, report=None) -> list[str]:
         out.append(f"the pressure angle reaches {abs(angle):.3g} deg, above the {limit:g} deg a "
                    f"{f.kind} follower tolerates: enlarge follower.base_radius_mm "
                    "or lengthen the rises")
+    out += size_warnings(program)
+    if f.form_closed and f.preload_n != 0:
+        out.append(f"follower.preload_n = {f.preload_n:g} does nothing on a grooved cam (no "
+                   "spring_rate_n_per_mm: no return spring preloads the follower, the groove holds it): "
+                   "remove it, or give the return spring's spring_rate_n_per_mm")
     stroke = max(abs(float(y)) for y in np.cumsum([s.lift_mm for s in program.segments]))
     if stroke > 2 * f.base_radius_mm:
         out.append(f"the lift ({stroke:g} mm) is more than twice the base circle's radius "
@@ -296,6 +326,7 @@ def design_warnings(program: Program, report=None) -> list[str]:
     out += table_warnings(program)
     if report is None:
         return out
+    out += speed_warnings(program, [s["rpm"] for s in report["speeds"]])
     worst = max((s for s in report["speeds"] if s.get("contact_half_width_mm")),
                 key=lambda s: s["max_contact_stress_mpa"], default=None)
     if worst is not None:

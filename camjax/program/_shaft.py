@@ -23,7 +23,7 @@ from .._plain import json_ready
 from ..checks import read_toml
 from ..metrics import septic_coefficients
 from ._analysis import Report, analyse_checked
-from ._dynamics import CheckedSpeed, SteadyState, check_rpm, warn_implausible
+from ._dynamics import CheckedSpeed, SteadyState, check_rpm
 from ._machine import (
     DEFAULT_SPEED_FLUCTUATION,
     check_speed_fluctuation,
@@ -185,8 +185,6 @@ def analyse_machine(machine, rpm, *, with_flight: bool = True,
         machine = Machine("machine", tuple(machine))
     rpm = check_rpm(rpm)
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
-    for p, _ in machine.cams:
-        warn_implausible(p, rpm)
     steadies = [SteadyState(p, CheckedSpeed(rpm.min())) for p, _ in machine.cams]
     phases = [phase for _, phase in machine.cams]
     reports = tuple(analyse_checked(p, rpm, with_flight=with_flight, steady=s, speed_fluctuation=speed_fluctuation)

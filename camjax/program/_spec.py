@@ -18,7 +18,7 @@ from .. import laws
 from ..checks import is_concrete, read_toml, speeds
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity, TableLaw
 from ._follower import FOLLOWER_KINDS as FOLLOWER_KINDS
-from ._follower import Follower, Materials, _check_follower, _finite, _positive
+from ._follower import Follower, Materials, _as_floats, _check_follower, _finite, _positive
 from ._motion import (
     END_STATE_KEYS,
     MATCH,
@@ -58,6 +58,9 @@ class Segment:
     law: AbstractMotionLaw | None = None
     start: str | EndState | None = None
     end: str | EndState | None = None
+
+    def __post_init__(self):
+        _as_floats(self)  # a TOML integer lift or angle, however large, as a float
 
     @property
     def moving(self) -> bool:

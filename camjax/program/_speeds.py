@@ -35,13 +35,22 @@ def check_rpm(rpm, program: Program | None = None, *, name: str = "rpm") -> np.n
 
 
 def warn_implausible(program: Program, rpm: np.ndarray, *, stacklevel: int = 3) -> None:
-    """The ``UserWarning`` of ``check_rpm(rpm, program)`` for checked speeds."""
+    """The ``UserWarning`` of ``check_rpm(rpm, program)`` for checked speeds
+    (``speed_warnings``' line; ``analyse`` puts it in its report instead)."""
+    for line in speed_warnings(program, rpm):
+        warnings.warn(line, stacklevel=stacklevel)
+
+
+def speed_warnings(program: Program, rpm) -> list[str]:
+    """The line (none, or one) saying that speeds ``rpm`` are past ``IMPLAUSIBLE_RPM`` or give
+    a moving segment a period ratio below ``IMPLAUSIBLE_PERIOD_RATIO``: often a unit slip."""
+    rpm = np.asarray(rpm, dtype=float)
     shortest = min((s.angle_deg / 360.0 for s in program.segments if s.moving), default=1.0)
     ratio = program.follower.vibrations_per_turn(rpm.max()) * shortest
     why = [text for bad, text in (
         (rpm.max() > IMPLAUSIBLE_RPM, f"faster than any cam runs (above {IMPLAUSIBLE_RPM:,.0f} rpm)"),
         (ratio < IMPLAUSIBLE_PERIOD_RATIO, f"the shortest moving segment's period ratio is {ratio:.2g}, "
          f"below {IMPLAUSIBLE_PERIOD_RATIO:g}: the follower cannot follow the motion at all")) if bad]
-    if why:
-        warnings.warn(f"{program.name} at {rpm.max():g} rpm: {'; '.join(why)} (check the speed's "
-                      "units)", stacklevel=stacklevel)
+    if not why:
+        return []
+    return [f"{program.name} at {rpm.max():g} rpm: {'; '.join(why)} (check the speed's units)"]
