@@ -476,6 +476,8 @@ def _law(i: int, name, base: Path | None) -> AbstractMotionLaw:
     try:
         return laws.get(name)
     except ValueError as error:
+        if not str(error).startswith("unknown law"):  # a known law's parameters: what is wrong with them
+            raise ValueError(f"segment {i}: {error}") from None
         raise ValueError(f'segment {i}: {error}, or "polynomial" (with degree, start, end), '
                          'or "table" (with file or points)') from None
 
