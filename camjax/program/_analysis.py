@@ -12,7 +12,7 @@ import numpy as np
 from .._plain import json_ready, plot_speed
 from ._dynamics import CheckedSpeed, SteadyState, check_rpm
 from ._groove import Impact, groove_turns_checked
-from ._jump import Flight, flights_checked, jump_speed_checked, min_preload_n
+from ._jump import Flight, _Turns, flights_checked, jump_speed_checked, min_preload_n
 from ._machine import (
     DEFAULT_SPEED_FLUCTUATION,
     Geometry,
@@ -20,6 +20,7 @@ from ._machine import (
     check_speed_fluctuation,
     design_warnings,
     flywheel_inertia_kg_m2,
+    refined_contact_stress,
 )
 from ._motion import Join, segment_kinematics
 from ._probes import OUTPUTS, Probe
@@ -71,7 +72,8 @@ class SpeedReport:
         energy_fluctuation_j: ``max W - min W``, ``W = integral of (T - mean T) dtheta``.
         flywheel_inertia_kg_m2: ``energy_fluctuation / (Cs Omega^2)`` (``Report.speed_fluctuation``).
         max_contact_stress_mpa, max_contact_stress_deg: peak Hertz line-contact pressure over
-            the grid's nodes and where (``None`` without ``follower.contact_width_mm``).
+            the turn, refined between the grid's nodes, and where (``None`` without
+            ``follower.contact_width_mm``; ``camjax.program.refined_contact_stress``).
         contact_half_width_mm: the Hertz contact half-width there, ``2 R' p_max / E*``.
         outputs: the registered probes' values (``camjax.program.register_probe``), also
             read as attributes (``speed.rms_contact_force_n``) and flat in ``as_dict``.
@@ -229,8 +231,12 @@ def analyse_checked(program: Program, rpm: np.ndarray, *, with_flight: bool = Tr
     theta_nodes = 360.0 * steady.grid.nodes
     lost = np.flatnonzero(out.min_contact_force_n < 0) if with_flight and not closed else np.zeros(0, int)
     found = dict(zip(lost.tolist(), flights_checked(steady, rpm[lost]) if lost.size else []))
-    stress = out.max_contact_stress_mpa
-    half_width = 2 * out.max_contact_stress_radius_mm * stress / program.materials.contact_modulus_mpa
+    if stressed:  # the largest Hertz stress refined between the nodes, as the force's peaks are
+        held = _Turns(steady, rpm)  # the contact-held steady states, exact at any time
+        refined = refined_contact_stress(program, steady.grid.nodes, steady.cycles_at_checked(rpm).contact_stress_mpa,
+                                         lambda rows, s: held.contact_force(rows, s * held.period[rows]))
+        stress, stress_deg = refined.stress_mpa, refined.angle_deg
+        half_width = 2 * refined.radius_mm * stress / program.materials.contact_modulus_mpa
     computed = {  # each built-in output of the registry (OUTPUTS) at every speed
         "max_payload_acceleration_m_s2": out.max_payload_acceleration_m_s2,
         "max_kinematic_acceleration_m_s2": kinematic,
@@ -244,7 +250,7 @@ def analyse_checked(program: Program, rpm: np.ndarray, *, with_flight: bool = Tr
         "energy_fluctuation_j": out.energy_fluctuation_j,
         "flywheel_inertia_kg_m2": flywheel,
         "max_contact_stress_mpa": stress if stressed else None,
-        "max_contact_stress_deg": theta_nodes[np.asarray(out.max_contact_stress_node, int)] if stressed else None,
+        "max_contact_stress_deg": stress_deg if stressed else None,
         "contact_half_width_mm": half_width if stressed else None,
     }
     built_in = {p.name: computed[p.name] for p in OUTPUTS.values() if p.built_in}

@@ -194,6 +194,115 @@ def contact_stress_squared(force, contact: NodeContact):
     return jnp.maximum(force, 0.0) * contact.inner + jnp.maximum(-force, 0.0) * contact.outer
 
 
+HERTZ_CANDIDATES = 4
+"""Crests of the node stress (local maxima within ``_CANDIDATE_MARGIN`` of the largest) whose
+two intervals ``refined_contact_stress`` searches at each speed: between nodes a crest rises
+by far less than that margin, so the largest stress lies in one of them."""
+_CANDIDATE_MARGIN = 1e-2
+_FACTOR_POINTS = 8  # Chebyshev points per interval at which the Hertz factors are interpolated
+_ZOOM_POINTS, _ZOOM_ROUNDS = 33, 11  # each round narrows the bracket 16-fold: 1e-13 of an interval
+
+
+class RefinedStress(NamedTuple):
+    """The largest Hertz stress over a turn at each speed, refined between the grid's nodes:
+    ``p_max`` (MPa), the cam angle where it lies (degrees) and the effective radius ``R'``
+    (mm) there (the half-width is ``2 R' p_max / E*``)."""
+
+    stress_mpa: np.ndarray
+    angle_deg: np.ndarray
+    radius_mm: np.ndarray
+
+
+def refined_contact_stress(program: Program, nodes, stress, force_at) -> RefinedStress:
+    """The largest ``p_max = sqrt(F_c * factor)`` at every speed, between the nodes as well
+    as at them, as the contact force's own peaks are refined.
+
+    ``nodes``: the grid's nodes (turns, ``(N + 1,)``); ``stress``: ``p_max`` there at every
+    speed (``(S, N + 1)``); ``force_at(rows, s)``: the contact force (N) of speed ``rows`` at
+    turn times ``s`` (arrays of one shape), exact anywhere (the steady state's own step).
+
+    At each speed the two intervals beside each of its ``HERTZ_CANDIDATES`` largest crests
+    are searched.  The Hertz factors of ``node_contact`` (geometry only, the same at every
+    speed) are read once at ``_FACTOR_POINTS`` Chebyshev points inside each interval searched
+    and interpolated there (degree 7 over an interval of the grid: within rounding); the
+    force is exact.  A zoom of ``_ZOOM_POINTS`` points, narrowed 16-fold per round, finds
+    the largest ``F_c * factor`` of each interval to within 1e-13 of its width.
+    """
+    nodes, stress = np.asarray(nodes, dtype=float), np.atleast_2d(np.asarray(stress, dtype=float))
+    speeds, count = stress.shape
+    intervals = count - 1
+    rows, starts = _candidate_intervals(stress, intervals)
+    unique, which = np.unique(starts, return_inverse=True)
+    factors = _interpolated_factors(program, nodes, unique)  # (4, U, points) Chebyshev coefficients
+    lo, hi = np.zeros(rows.size), np.ones(rows.size)
+    width = nodes[unique + 1] - nodes[unique]
+    for _ in range(_ZOOM_ROUNDS):
+        sigma = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, _ZOOM_POINTS)
+        value, _ = _stress_squared(factors, which, sigma, nodes[unique][which][:, None] + width[which][:, None] * sigma,
+                                   rows, force_at)
+        best = np.argmax(value, axis=1)
+        step = (hi - lo) / (_ZOOM_POINTS - 1)
+        centre = sigma[np.arange(rows.size), best]
+        lo, hi = np.maximum(centre - step, 0.0), np.minimum(centre + step, 1.0)
+    sigma = centre[:, None]
+    times = nodes[unique][which][:, None] + width[which][:, None] * sigma
+    value, radius = _stress_squared(factors, which, sigma, times, rows, force_at)
+    value, radius, times = value[:, 0], radius[:, 0], times[:, 0]
+    out = np.full(speeds, -np.inf)
+    chosen = np.zeros(speeds, dtype=int)
+    for i in range(rows.size):  # the best interval of each speed
+        if value[i] > out[rows[i]]:
+            out[rows[i]], chosen[rows[i]] = value[i], i
+    return RefinedStress(np.sqrt(np.maximum(out, 0.0)), np.mod(360.0 * times[chosen], 360.0), radius[chosen])
+
+
+def _candidate_intervals(stress: np.ndarray, intervals: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(speed row, first node)`` of every interval to search: the two beside each of a
+    speed's ``HERTZ_CANDIDATES`` largest crests (the turn is periodic: node 0 is node N)."""
+    turn = stress[:, :intervals]
+    before, after = np.roll(turn, 1, axis=1), np.roll(turn, -1, axis=1)
+    crest = (turn >= before) & (turn >= after) & (turn >= (1 - _CANDIDATE_MARGIN) * turn.max(axis=1, keepdims=True))
+    rows, starts = [], []
+    for r in range(turn.shape[0]):
+        nodes = np.flatnonzero(crest[r])
+        nodes = nodes[np.argsort(turn[r, nodes])[::-1][:HERTZ_CANDIDATES]]
+        for k in nodes:
+            for first in ((k - 1) % intervals, k):
+                rows.append(r)
+                starts.append(first)
+    return np.asarray(rows, dtype=int), np.asarray(starts, dtype=int)
+
+
+_FACTOR_BLOCK = 256  # angles per call of the geometry (one compiled shape)
+
+
+def _interpolated_factors(program: Program, nodes: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """Chebyshev coefficients ``(4, intervals, _FACTOR_POINTS)`` over ``sigma`` in [0, 1] of the
+    inner and outer factors and effective radii of ``node_contact`` in each interval."""
+    x = np.cos(np.pi * (np.arange(_FACTOR_POINTS) + 0.5) / _FACTOR_POINTS)  # inside (-1, 1): no join
+    sigma = 0.5 * (1.0 + x)
+    width = nodes[starts + 1] - nodes[starts]
+    angles = (360.0 * (nodes[starts][:, None] + width[:, None] * sigma)).ravel()
+    padded = np.pad(angles, (0, -angles.size % _FACTOR_BLOCK), mode="edge")
+    parts = [node_contact(program, padded[i:i + _FACTOR_BLOCK]) for i in range(0, padded.size, _FACTOR_BLOCK)]
+    values = np.stack([np.concatenate([np.asarray(getattr(p, name)) for p in parts])[:angles.size]
+                       for name in NodeContact._fields])
+    values = values.reshape(4, starts.size, _FACTOR_POINTS)
+    values[3] = np.where(np.isfinite(values[3]), values[3], 0.0)  # no other wall: R' unused
+    return np.polynomial.chebyshev.chebfit(x, values.reshape(-1, _FACTOR_POINTS).T, _FACTOR_POINTS - 1).T.reshape(
+        4, starts.size, _FACTOR_POINTS)
+
+
+def _stress_squared(factors, which, sigma, times, rows, force_at):
+    """``p_max^2`` and ``R'`` at ``sigma`` (``(P, points)``) of the intervals ``which``."""
+    x = 2.0 * sigma - 1.0
+    inner, outer, radius_inner, radius_outer = (
+        np.polynomial.chebyshev.chebval(x.T, factors[j][which].T, tensor=False).T for j in range(4))
+    force = force_at(np.broadcast_to(rows[:, None], times.shape), times)
+    value = np.maximum(force, 0.0) * inner + np.maximum(-force, 0.0) * outer
+    return value, np.where(force >= 0, radius_inner, radius_outer)
+
+
 @dataclasses.dataclass(frozen=True)
 class JoinCurvature:
     """The cam surface's radius of curvature (mm) on both sides of a segment join."""

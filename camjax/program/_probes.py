@@ -86,7 +86,7 @@ _BUILT_IN = (
           "the flywheel for the speed fluctuation Cs: energy fluctuation / (Cs Omega^2)", "kg m^2",
           table="drive"),
     Probe("max_contact_stress_mpa", None, "max p MPa",
-          "peak Hertz line-contact pressure over the grid's nodes (with follower.contact_width_mm)", "MPa",
+          "peak Hertz line-contact pressure over the turn, refined between the grid's nodes (with follower.contact_width_mm)", "MPa",
           table="drive", optional=True),
     Probe("max_contact_stress_deg", None, "at deg", "the cam angle of that peak", "deg", "{:.5g}",
           table="drive", optional=True),
