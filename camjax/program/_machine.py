@@ -374,7 +374,7 @@ force past a meganewton, a stiffness past 1e9 N/mm.  A value past them is comput
 warned of (``size_warnings``): often a unit slip, and a length past 1e12 mm also loses the
 cam's curvature to rounding."""
 _SIZED_FIELDS = (("base_radius_mm", "mm"), ("roller_radius_mm", "mm"), ("offset_mm", "mm"), ("arm_mm", "mm"),
-                 ("pivot_mm", "mm"), ("groove_clearance_mm", "mm"), ("contact_width_mm", "mm"),
+                 ("pivot_mm", "mm"), ("groove_clearance_mm", "mm"),  # contact_width_mm: against the base circle
                  ("mass_kg", "kg"), ("preload_n", "N"), ("stiffness_n_per_mm", "N/mm"),
                  ("spring_rate_n_per_mm", "N/mm"))
 
