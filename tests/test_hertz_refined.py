@@ -4,7 +4,6 @@ mission (``p = sqrt(F_n E* / (pi L R'))``, ``F_n = F_c / cos(phi)``, ``1/R' = 1/
 1/rho``) on the program's contact geometry at any angle, with the exact contact force of
 the steady state there (``SteadyState.mode_at``), maximised densely and then by scipy."""
 
-import dataclasses
 import math
 
 import numpy as np
@@ -13,7 +12,15 @@ from helpers import FOLLOWER
 from scipy.optimize import minimize_scalar
 
 from camjax import laws
-from camjax.program import Follower, Program, Segment, SteadyState, analyse, contact_geometry, response
+from camjax.program import (
+    Follower,
+    Program,
+    Segment,
+    SteadyState,
+    analyse,
+    contact_geometry,
+    response,
+)
 from camjax.sdof import deflection_gains
 
 RPM = (500.0, 900.0)

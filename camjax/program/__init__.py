@@ -20,6 +20,7 @@ from ._analysis import Report as Report
 from ._analysis import SpeedReport as SpeedReport
 from ._analysis import analyse as analyse
 from ._analysis import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s2
+from ._analysis import max_contact_stress as max_contact_stress
 from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
 from ._design import design_segment as design_segment

@@ -16,6 +16,7 @@ from ._jump import Flight, _Turns, flights_checked, jump_speed_checked, min_prel
 from ._machine import (
     DEFAULT_SPEED_FLUCTUATION,
     Geometry,
+    RefinedStress,
     cam_geometry,
     check_speed_fluctuation,
     design_warnings,
@@ -232,9 +233,7 @@ def analyse_checked(program: Program, rpm: np.ndarray, *, with_flight: bool = Tr
     lost = np.flatnonzero(out.min_contact_force_n < 0) if with_flight and not closed else np.zeros(0, int)
     found = dict(zip(lost.tolist(), flights_checked(steady, rpm[lost]) if lost.size else []))
     if stressed:  # the largest Hertz stress refined between the nodes, as the force's peaks are
-        held = _Turns(steady, rpm)  # the contact-held steady states, exact at any time
-        refined = refined_contact_stress(program, steady.grid.nodes, steady.cycles_at_checked(rpm).contact_stress_mpa,
-                                         lambda rows, s: held.contact_force(rows, s * held.period[rows]))
+        refined = max_contact_stress(steady, rpm)
         stress, stress_deg = refined.stress_mpa, refined.angle_deg
         half_width = 2 * refined.radius_mm * stress / program.materials.contact_modulus_mpa
     computed = {  # each built-in output of the registry (OUTPUTS) at every speed
@@ -276,6 +275,16 @@ def analyse_checked(program: Program, rpm: np.ndarray, *, with_flight: bool = Tr
     report = Report(program.name, tuple(speeds), jump_speed, below, tuple(segment_kinematics(program)),
                     tuple(program.joins()), geometry, speed_fluctuation)
     return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))
+
+
+def max_contact_stress(steady: SteadyState, rpm) -> RefinedStress:
+    """The largest Hertz stress of the steady state at every speed of ``rpm``, where and its
+    effective radius, refined between the grid's nodes (``refined_contact_stress``) with the
+    contact force exact anywhere (the steady state's own step between nodes)."""
+    rpm = check_rpm(rpm)
+    held = _Turns(steady, rpm)  # the contact-held steady states, exact at any time
+    return refined_contact_stress(steady.program, steady.grid.nodes, steady.cycles_at_checked(rpm).contact_stress_mpa,
+                                  lambda rows, s: held.contact_force(rows, s * held.period[rows]))
 
 
 def response(program: Program, rpm: float, *, steady: SteadyState | None = None) -> dict[str, np.ndarray]:
