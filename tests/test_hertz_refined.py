@@ -31,8 +31,12 @@ def cam(kind: str, **follower) -> Program:
     base = {**FOLLOWER, "kind": kind, "contact_width_mm": 10.0, **follower}
     if kind.endswith("-flat"):
         base.pop("roller_radius_mm")
-    segments = (Segment(120, 12.0, laws.get("cycloidal")), Segment(60),
-                Segment(110, -12.0, laws.get("modified-sine")), Segment(70))
+    segments = (
+        Segment(120, 12.0, laws.get("cycloidal")),
+        Segment(60),
+        Segment(110, -12.0, laws.get("modified-sine")),
+        Segment(70),
+    )
     return Program(kind, segments, Follower(**base))
 
 
@@ -60,7 +64,9 @@ def hertz(program: Program, steady: SteadyState, rpm: float):
         curvature = 1.0 / rho + (0.0 if f.flat_face else 1.0 / f.roller_radius_mm)
         normal = force * g.normal_per_contact[1]
         r_eff = 1.0 / curvature
-        return np.sqrt(np.maximum(normal, 0.0) * e_star / (math.pi * f.contact_width_mm * r_eff)), r_eff
+        return np.sqrt(
+            np.maximum(normal, 0.0) * e_star / (math.pi * f.contact_width_mm * r_eff)
+        ), r_eff
 
     return at
 
@@ -72,8 +78,12 @@ def reference(program: Program, steady: SteadyState, rpm: float):
     theta = np.linspace(0.0, 360.0, 72001)[:-1]
     i = int(np.argmax(at(theta)[0]))
     step = theta[1] - theta[0]
-    best = minimize_scalar(lambda t: -float(at(t)[0][0]), bounds=(theta[i] - step, theta[i] + step),
-                           method="bounded", options={"xatol": 1e-11})
+    best = minimize_scalar(
+        lambda t: -float(at(t)[0][0]),
+        bounds=(theta[i] - step, theta[i] + step),
+        method="bounded",
+        options={"xatol": 1e-11},
+    )
     p, r_eff = (float(v[0]) for v in at(best.x))
     return p, float(best.x) % 360.0, 2 * r_eff * p / program.materials.contact_modulus_mpa
 

@@ -39,10 +39,14 @@ def measure(program: Program, count: int) -> tuple[float, float]:
 
 def main() -> None:
     program = Program.load(example_path())
-    program = dataclasses.replace(program, follower=dataclasses.replace(program.follower, contact_width_mm=15.0))
+    program = dataclasses.replace(
+        program, follower=dataclasses.replace(program.follower, contact_width_mm=15.0)
+    )
     for count in (7, 101):
         whole, alone = measure(program, count)
-        print(f"{count:4d} speeds: analyse {whole:.3f} s, refinement {alone:.3f} s ({100 * alone / whole:.0f}%)")
+        print(
+            f"{count:4d} speeds: analyse {whole:.3f} s, refinement {alone:.3f} s ({100 * alone / whole:.0f}%)"
+        )
 
 
 if __name__ == "__main__":
