@@ -168,10 +168,28 @@ def period_ratios(values, *, what: str = "period ratio") -> np.ndarray:
     return n
 
 
+MAX_SPEEDS = 5_000
+"""Most speeds one cam program's analysis takes: it holds about 0.45 MB a speed (10,000
+speeds took 4.5 GB, 100,000 had the kernel kill a 16 GB machine), so a larger request is
+refused before any work."""
+
+
+def speed_count(count: int, name: str = "rpm") -> int:
+    """``count`` speeds checked against ``MAX_SPEEDS`` (a ``ValueError`` naming ``name``, the
+    caller's option, with the limit and what to change); a range's ``COUNT`` is checked so
+    before the range is built (``camjax._plain.parse_range``'s ``check_count``)."""
+    if count > MAX_SPEEDS:
+        raise ValueError(f"{name} has {count:,} speeds, more than the {MAX_SPEEDS:,} one analysis takes "
+                         "(about 0.45 MB of memory a speed); give fewer speeds (a smaller COUNT in "
+                         "START:STOP:COUNT) or split the range into several runs")
+    return count
+
+
 def speeds(values, name: str = "rpm") -> np.ndarray:
     """Concrete machine speeds (rpm) as a non-empty 1-D float array, each positive and
-    finite, or a one-line ``ValueError`` naming ``name`` (the caller's option).  A string,
-    a bool or anything else that is not a number is refused, not converted."""
+    finite, at most ``MAX_SPEEDS`` of them, or a one-line ``ValueError`` naming ``name`` (the
+    caller's option).  A string, a bool or anything else that is not a number is refused,
+    not converted."""
     if not is_concrete(values):
         raise ValueError(f"{name} must be concrete speeds here (not traced inside jit, vmap or grad)")
     try:
@@ -186,6 +204,7 @@ def speeds(values, name: str = "rpm") -> np.ndarray:
     rpm = np.atleast_1d(raw.astype(float))
     if rpm.size == 0 or rpm.ndim != 1:
         raise ValueError(f"{name} must be one speed or a 1-D list of speeds")
+    speed_count(rpm.size, name)
     bad = ~(np.isfinite(rpm) & (rpm > 0))
     if np.any(bad):
         raise ValueError(f"{name} must be positive and finite, got {rpm[bad][0]:g}")

@@ -5,6 +5,8 @@ import dataclasses
 import math
 import os
 import re
+import stat
+import warnings
 
 import numpy as np
 import pytest
@@ -294,3 +296,42 @@ def test_a_written_table_read_back_as_a_table_cam_has_the_same_dynamics(tmp_path
                     "max_contact_force_n", "min_contact_force_n"):
             assert getattr(a, key) == pytest.approx(getattr(b, key), rel=1e-2), key
     assert ours.jump_speed_rpm == pytest.approx(theirs.jump_speed_rpm, rel=5e-3)
+
+
+def test_a_step_too_coarse_for_the_motion_is_warned_of_with_its_rows(capsys, tmp_path, monkeypatch):
+    """The indexer's shortest moving segment spans 100 degrees: a step of 360 writes 2 rows
+    (0 and 360), none inside it; 10 degrees puts 10 across it and is quiet."""
+    monkeypatch.setenv("CAMJAX_CACHE_DIR", "off")
+    program = Program.load(example_path())
+    with pytest.warns(UserWarning, match=r"^a step of 360 deg gives a table of 2 rows, about 0\.278 across "
+                      r"segment 1 \(100 deg, the shortest moving one\): .* a step of at most 10 deg puts 10 rows"):
+        assert drive_table(program, "csv", step_deg=360.0).master_deg.tolist() == [0.0, 360.0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert drive_table(program, "csv", step_deg=10.0).master_deg.size == 37
+        drive_table(program, "xyva")  # knots: no step to warn of
+    assert main(["program", "--drive-table", "csv", "--drive-step", "360", "--out", str(tmp_path)]) == 0
+    out, err = capsys.readouterr()
+    assert out.strip() == str(tmp_path / "drive-table.csv")
+    assert err.startswith("warning: --drive-step 360 deg gives a table of 2 rows") and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("option", [["--rpm", "600"], ["--format", "json"], ["--plot-rpm", "600"], ["--no-flight"]])
+def test_the_analysis_options_are_refused_with_a_drive_table(option, capsys, tmp_path):
+    assert main(["program", "--drive-table", "csv", "--out", str(tmp_path), *option]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"camjax program: error: {option[0]}: not with --drive-table, which analyses nothing and writes the "
+        "table to --out in its own format; run the analysis apart")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_drive_table_gets_the_mode_every_output_gets(feed, tmp_path):
+    """0666 less the umask (a temporary file's 0600 before), as ``Path.write_text`` gives."""
+    old = os.umask(0o027)
+    try:
+        written = write_drive_table(feed, tmp_path / "t.csv", "csv", step_deg=1.0)
+        (tmp_path / "plain.txt").write_text("x")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(written.stat().st_mode) == 0o640 == stat.S_IMODE((tmp_path / "plain.txt").stat().st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plain.txt", "t.csv"]  # no temporary left

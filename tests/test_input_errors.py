@@ -443,3 +443,35 @@ def test_torsion_factor_takes_one_number_per_argument(period_ratio, damping, sho
     for metric in (camjax.torsion_factor, camjax.residual_vibration):
         with pytest.raises(ValueError, match=f"^{shown}$"):
             metric(law, period_ratio, damping)
+
+
+# --- a law's parameters: what is wrong with them, in one line ---------------------------
+
+
+@pytest.mark.parametrize("name, message", [
+    ("modified-trapezoid-cv:P", "law 'modified-trapezoid-cv:P': P must be a number (the constant-velocity "
+     "fraction, in [0, 1)), got 'P': in modified-trapezoid-cv:P, write a number in place of P"),
+    ("poly:2.5", "law 'poly:2.5': K must be a whole number (the polynomial's order, 2 to 12), got '2.5'"),
+    ("poly:", "law 'poly:': K is missing: poly:K takes a number there (the polynomial's order, 2 to 12)"),
+    ("scca:0.2,0.5", "law 'scca:0.2,0.5': scca:A,B,C takes 3 numbers after the colon (the fractions of "
+     "the rise), got 2"),
+    ("cycloidal-asym:L", "law 'cycloidal-asym:L': L must be a number (the inflection point, in (0, 1)), "
+     "got 'L': in cycloidal-asym:L, write a number in place of L"),
+    ("triple-harmonic:1", "law 'triple-harmonic:1': triple-harmonic:A1,A2 takes 2 numbers after the colon "
+     "(two amplitudes; A3 closes the rise), got 1"),
+])
+def test_a_laws_wrong_parameter_is_named_in_one_line(capsys, tmp_path, name, message):
+    """Not the list of every law name: the parameter that is wrong and what it must be, from
+    the library, the command and a program file alike."""
+    with pytest.raises(ValueError) as error:
+        laws.get(name)
+    assert str(error.value) == message
+    code, _, err = run(capsys, "ct", "--law", name, "--n", "1:2:3")
+    assert code == 2 and err.strip() == f"camjax ct: error: --law: {message}"
+    from camjax.program import Program, example_path
+
+    text = example_path().read_text().replace('law = "cycloidal"', f'law = "{name}"')
+    (tmp_path / "p.toml").write_text(text)
+    with pytest.raises(ValueError) as error:
+        Program.load(tmp_path / "p.toml")
+    assert str(error.value) == f"{tmp_path / 'p.toml'}: segment 1: {message}"

@@ -99,22 +99,30 @@ def test_hertz_stress_against_a_hand_computed_case(indexer):
     dwell = (h["theta_deg"] > 290.0) & (h["theta_deg"] < 350.0)
     hand = np.sqrt(h["contact_force_n"][dwell] * e_star / (math.pi * 10.0 * radius))
     assert np.abs(h["contact_stress_mpa"][dwell] - hand).max() < 1e-9 * hand.max()
-    report = analyse(program, [600.0], with_flight=False).speeds[0]
+    steady = SteadyState(program, 600.0)
+    report = analyse(program, [600.0], with_flight=False, steady=steady).speeds[0]
     i = int(np.argmax(h["contact_stress_mpa"]))
-    assert report.max_contact_stress_mpa == pytest.approx(h["contact_stress_mpa"][i], rel=1e-12)
-    assert report.max_contact_stress_deg == pytest.approx(h["theta_deg"][i], abs=1e-9)
+    # refined between the nodes (tests/test_hertz_refined.py): at least the nodes' largest,
+    # within a grid interval of it
+    assert report.max_contact_stress_mpa >= h["contact_stress_mpa"][i]
+    assert abs(report.max_contact_stress_deg - h["theta_deg"][i]) < 2 * np.diff(h["theta_deg"]).max()
     # At the reported angle, from the lift alone: the pitch curve r = r_b + r_r + y(theta)
     # (no offset), its radius of curvature (r^2 + r'^2)^1.5 / (r^2 + 2 r'^2 - r r''), the
     # cam's rho = that - r_r, the pressure angle atan(r' / r); F_n = F_c / cos(phi),
-    # 1/R' = 1/r_r + 1/rho, p = sqrt(F_n E* / (pi L R')) and the half-width b = 2 R' p / E*.
+    # 1/R' = 1/r_r + 1/rho, p = sqrt(F_n E* / (pi L R')) and the half-width b = 2 R' p / E*,
+    # with the exact contact force there (the steady state's mode between the nodes).
     theta = float(report.max_contact_stress_deg)
+    train = steady.train
+    ge, gr = (complex(g) for g in deflection_gains(train.omega_per_turn(600.0), train.zeta))
+    gain = 1e-3 * train.k * ge + 1e-3 * train.c / 0.1 * gr
+    force = float(train.preload + np.real(gain * steady.mode_at(steady.cycle(600.0).q, 600.0, theta / 360.0))[0])
     assert min(abs(theta - j) for j in (0.0, 100.0, 180.0, 280.0, 360.0)) > 1e-6  # not at a join
     y, dy, ddy = (float(v[0]) for v in indexer.lift(np.array([theta])))
     r, dr, ddr = 40.0 + 12.0 + y, dy * 180 / math.pi, ddy * (180 / math.pi) ** 2
     rho = (r**2 + dr**2) ** 1.5 / (r**2 + 2 * dr**2 - r * ddr) - 12.0
     phi = math.atan2(dr, r)
     r_eff = 1.0 / (1 / 12.0 + 1 / rho)
-    p = math.sqrt(h["contact_force_n"][i] / math.cos(phi) * e_star / (math.pi * 10.0 * r_eff))
+    p = math.sqrt(force / math.cos(phi) * e_star / (math.pi * 10.0 * r_eff))
     assert report.max_contact_stress_mpa == pytest.approx(p, rel=1e-9)
     assert report.contact_half_width_mm == pytest.approx(2 * r_eff * p / e_star, rel=1e-9)
 

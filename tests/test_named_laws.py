@@ -234,6 +234,30 @@ def test_residual_through_the_engine_matches_the_closed_form():
     assert curve.residual[2] < 1e-9
 
 
+@pytest.mark.parametrize("name, zeros", [("freudenstein-1-3", (2, 4, 5, 6, 7, 8)),
+                                         ("freudenstein-1-3-5", (2, 4, 6, 7, 8))])
+def test_freudenstein_residual_is_zero_at_the_integers_docs_laws_names(name, zeros):
+    """docs/laws.md: at an integer n the residual is pi n |A_n| / Ca (the series' harmonic at
+    w = 2 pi n, zero past its last harmonic K): zero at 2 and from K + 1 on, not at the odd
+    k <= K (1-3-5 at 5: 0.2 pi^2 m / Ca = 0.368).  Checked by scipy and by ct_curve."""
+    m = solve_freudenstein_m()
+    hand = freudenstein_13() if name == "freudenstein-1-3" else freudenstein_135(m)
+    acc = hand.derivative(2)
+    ca = laws.get(name).peak_coefficients()["Ca"]
+    ratios = np.arange(1.0, 9.0)
+    curve = camjax.ct_curve(name, ratios, damping=0.0)
+    for n, r in zip(ratios, curve.residual):
+        reference = residual_by_quad(lambda u: float(acc(u)), ca, n)
+        assert r == pytest.approx(reference, abs=1e-8)
+        if int(n) in zeros:
+            assert reference < 1e-9
+        else:
+            assert reference > 0.3
+    if name == "freudenstein-1-3-5":
+        assert curve.residual[4] == pytest.approx(0.2 * PI**2 * m / ca, rel=1e-8)  # 0.368 at n = 5
+        assert curve.residual[4] == pytest.approx(0.368, abs=5e-4)
+
+
 def test_gradient_in_a_triple_harmonic_amplitude_matches_finite_differences():
     n = 2.6
 

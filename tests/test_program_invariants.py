@@ -3,7 +3,8 @@ kinds, each against an independent NumPy/SciPy computation: the energy balance o
 periodic steady state, the drive torque as the moment of the normal contact force, the
 stiff-train (kinetostatic) limit, a swinging follower on a long arm against the
 translating one, a flat face's curvature and width, a shaft of phased cams, and a program
-rotated to start its turn elsewhere.
+rotated to start its turn elsewhere; and a second program of named laws, an asymmetric law and
+a B-spline (``trade_segments``) on a spring-loaded and a grooved follower.
 
 ``MIXED`` holds every segment kind: dwells, a cycloidal rise, an SCCA return (modified
 trapezoid), boundary quintics with ``"match"`` and with given end states, a rising and a
@@ -36,7 +37,7 @@ from camjax.program import (
 )
 
 RPM = 300.0
-_CHEB_DEGREE = 24
+_CHEB_DEGREE = 40  # sin(6 pi tau) of the triple harmonic needs it: degree 24 leaves 2e-8
 
 def mixed_segments():
     """Every segment kind over one turn (angles not whole degrees, the wrap in motion)."""
@@ -393,3 +394,95 @@ def test_a_shaft_of_a_cam_and_its_rotation_put_back_in_phase_is_twice_the_cam(pr
     at = np.searchsorted(nodes, steady.grid.nodes - 1e-12)
     assert np.abs(nodes[at] - steady.grid.nodes).max() < 1e-11
     assert np.abs(values[at] - 2 * torque).max() < 1e-9 * np.abs(torque).max()
+
+
+# -- laws of the trade, an asymmetric law, a B-spline, a grooved follower ---------------------------
+
+
+def trade_segments():
+    """Named laws (Freudenstein 1-3, the zero-jerk triple harmonic), an asymmetric modified
+    sine and a B-spline rise between dwells (angles not whole degrees)."""
+    spline = laws.BSplineLaw(np.array([0.15, 0.35, 0.6, 0.85]))
+    return (
+        Segment(70.3, 9.0, laws.get("freudenstein-1-3")),
+        Segment(20.0),
+        Segment(55.5, -4.0, laws.get("modified-sine-asym:0.35")),
+        Segment(15.0),
+        Segment(60.0, 3.0, spline),
+        Segment(25.0),
+        Segment(50.0, -8.0, laws.get("triple-harmonic-zero-jerk")),
+        Segment(64.2),
+    )
+
+
+TRADE_FOLLOWERS = {
+    "spring": {},
+    "grooved": {"spring_rate_n_per_mm": None, "preload_n": 0.0},
+}
+
+
+@pytest.fixture(scope="module", params=list(TRADE_FOLLOWERS))
+def trade(request):
+    """``(program, NumPy lift, steady state, response)`` of the trade laws on a spring-loaded
+    and on a grooved (form-closed) translating roller."""
+    follower = {**FOLLOWER, "offset_mm": 6.0, "stiffness_n_per_mm": 500.0, **TRADE_FOLLOWERS[request.param]}
+    program = Program("trade", trade_segments(), Follower(**follower))
+    steady = SteadyState(program, RPM)
+    return program, NumpyLift(program), steady, response(program, RPM, steady=steady)
+
+
+def test_the_numpy_lift_is_the_programs_for_the_trade_laws(trade):
+    program, lift, _, _ = trade
+    theta = np.linspace(0.0, 360.0, 721)[1:-1] + 0.123
+    mine, theirs = lift(theta), np.stack(program.lift(theta))
+    for d, tolerance in enumerate((1e-9, 1e-9, 1e-7)):
+        assert np.abs(mine[d] - theirs[d]).max() < tolerance, d
+
+
+def test_energy_balance_of_the_trade_laws(trade):
+    """As ``test_energy_balance_of_the_steady_state``: the drive's work over a turn is the
+    damper's dissipation, the deflection SciPy's periodic solve of the physical equation
+    (no return spring for the grooved follower)."""
+    program, lift, steady, history = trade
+    cycle = steady.cycle(RPM)
+    f = program.follower
+    period = 60.0 / RPM
+    x, w = np.polynomial.legendre.leggauss(24)
+    edges = lift.edges_deg / 360.0 * period
+    times = np.concatenate([0.5 * (a + b) + 0.5 * (b - a) * x for a, b in zip(edges[:-1], edges[1:])])
+    weights = np.concatenate([0.5 * (b - a) * w for a, b in zip(edges[:-1], edges[1:])])
+    nodes_t = history["theta_deg"][:-1] / 360.0 * period
+    both = np.concatenate([times, nodes_t])
+    order = np.argsort(both)
+    solved = np.empty((2, both.size))
+    solved[:, order] = scipy_periodic_deflection(f, RPM, lift.scalar, lift.edges_deg, both[order])
+    e, de = solved[:, :times.size]
+    dissipation = f.damping * np.sum(weights * de**2)
+    assert 2 * math.pi * float(cycle.mean_drive_torque_n_m) == pytest.approx(dissipation, rel=1e-6)
+    deflection = 1e-3 * (history["lift_mm"] - history["payload_displacement_mm"])[:-1]
+    assert np.abs(deflection - solved[0, times.size:]).max() < 1e-7 * np.abs(deflection).max()
+
+
+def test_drive_torque_of_the_trade_laws_is_the_moment_of_the_normal_force(trade):
+    program, lift, _, history = trade
+    y, dy, _ = lift(history["theta_deg"])
+    moment = _numpy_moment("translating-offset", history["contact_force_n"], y, dy * 180.0 / math.pi)
+    assert np.abs(moment - history["drive_torque_n_m"]).max() < 1e-9 * np.abs(moment).max()
+    assert np.abs(moment).max() > 1.0
+
+
+def test_a_very_stiff_train_gives_the_kinetostatic_force_for_the_trade_laws(trade):
+    """Train stiffness x 4e5: the rigid force ``m y_tt + k_s y + F_0`` (no spring and no
+    preload on the grooved follower).  The named laws and the B-spline are C2 at their ends;
+    the asymmetric modified sine's and the Freudenstein's end jerks ring by ``m |jerk
+    step| / w_n``, a fraction of a percent of the peak inertia force."""
+    program, lift, _, _ = trade
+    stiff = dataclasses.replace(program, follower=dataclasses.replace(program.follower, stiffness_n_per_mm=2e8))
+    rpm = 600.0
+    h = response(stiff, rpm)
+    y, _, ddy = lift(h["theta_deg"])
+    rate = 360.0 * rpm / 60.0
+    f = stiff.follower
+    inertia = f.mass_kg * 1e-3 * ddy * rate**2
+    rigid = inertia + f.spring_rate * 1e-3 * y + (0.0 if f.form_closed else f.preload_n)
+    assert np.abs(h["contact_force_n"] - rigid).max() < 1e-2 * np.abs(inertia).max()

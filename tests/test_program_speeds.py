@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from camjax import program as cp
+from camjax.checks import MAX_SPEEDS
 from camjax.program import Program, example_path
 
 BAD = [
@@ -19,6 +20,8 @@ BAD = [
     ([], "must be one speed or a 1-D list of speeds"),
     ("300", "must be a speed in rpm or a 1-D list of speeds, got '300'"),
     (True, "must be a speed in rpm or a 1-D list of speeds, got True"),
+    (np.linspace(200.0, 1400.0, MAX_SPEEDS + 1), f"has {MAX_SPEEDS + 1:,} speeds, more than the "
+     f"{MAX_SPEEDS:,} one analysis takes (about 0.45 MB of memory a speed); give fewer speeds"),
 ]
 
 
@@ -64,7 +67,7 @@ def _entry_points(feed, steady, tmp):
     ]
 
 
-@pytest.mark.parametrize("bad, message", BAD, ids=["negative", "nan", "inf", "empty", "string", "bool"])
+@pytest.mark.parametrize("bad, message", BAD, ids=["negative", "nan", "inf", "empty", "string", "bool", "too-many"])
 def test_every_entry_point_refuses_a_bad_speed_in_one_line(feed, steady, tmp_path, bad, message):
     for option, call in _entry_points(feed, steady, tmp_path):
         with pytest.raises(ValueError) as caught:
@@ -122,3 +125,14 @@ def test_speeds_are_a_value_checked_once_when_built(feed):
     expected = cp.kinematic_acceleration_m_s2(feed, [300.0, 900.0])
     np.testing.assert_array_equal(cp.kinematic_acceleration_m_s2(feed, cp.Speeds.parse("300:900:2")), expected)
     np.testing.assert_allclose(expected[1] / expected[0], 9.0, rtol=1e-14)
+
+
+def test_the_command_refuses_too_many_speeds_before_building_them(capsys):
+    """A COUNT of 1e12 would need 8 TB for the range alone: refused from the count."""
+    from camjax.cli import main
+
+    for rpm in (f"200:1400:{10**12}", ",".join(["300"] * (MAX_SPEEDS + 1))):
+        assert main(["program", "--rpm", rpm]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and err.startswith("camjax program: error: --rpm has ")
+        assert f"more than the {MAX_SPEEDS:,} one analysis takes" in err and "split the range" in err

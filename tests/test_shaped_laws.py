@@ -153,7 +153,7 @@ def test_designed_law_holds_five_percent_over_twenty_percent_with_no_added_durat
             lambda: laws.ShapedLaw(laws.Cycloidal(), laws.Shaper("zv"), 0.0),
             "period ratio must be positive",
         ),
-        (lambda: laws.get("zv-cycloidal:2"), "zv-NAME:N,ZETA"),
+        (lambda: laws.get("zv-cycloidal:2"), "zv-cycloidal:N,ZETA takes 2 numbers"),
         (lambda: laws.get("zv-nolaw:2,0"), "takes a law of"),
         (lambda: D.vibration_band(laws.Shaper("zv").vibration, 1.5), "limit must be in (0, 1)"),
         (lambda: D.vibration_band(lambda r: np.ones_like(r)), "above the limit"),

@@ -1,6 +1,7 @@
 """Defects a new user met outside the program's dynamics: each test failed before its fix."""
 
 import dataclasses
+import json
 import math
 import re
 import warnings
@@ -178,12 +179,15 @@ def test_an_implausible_speed_is_warned_of_by_the_library():
 
 
 def test_program_command_warns_of_an_implausible_speed_on_one_line(capsys):
-    code, _, err = run(capsys, "program", "--rpm", "1e5", "--no-flight", "--format", "json")
+    code, out, err = run(capsys, "program", "--rpm", "1e5", "--no-flight", "--format", "json")
     assert code == 0
     lines = [x for x in err.splitlines() if x.startswith("warning: ")]
     assert len(lines) == 1 and lines[0].startswith("warning: indexer at 100000 rpm: ")
-    with pytest.warns(UserWarning, match="the follower cannot follow"):
-        analyse(Program.load(example_path()), [1e5], with_flight=False)
+    assert json.loads(out)["warnings"] == [lines[0][len("warning: "):]]  # in the report, as JSON shows it
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # one mechanism: the report's warnings, not a UserWarning too
+        report = analyse(Program.load(example_path()), [1e5], with_flight=False)
+    assert [w for w in report.warnings if "the follower cannot follow" in w] == [lines[0][len("warning: "):]]
 
 
 # --- a traced period ratio past the default grid -----------------------------------------

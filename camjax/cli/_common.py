@@ -169,12 +169,18 @@ def parse_float_list(text: str, what: str) -> list[float]:
 
 def parse_range(text: str, what: str):
     """``camjax._plain.parse_range`` (``START:STOP:COUNT`` or ``V1,V2,...``) with its
-    ``ValueError`` as a ``CliError``; ``--n`` counts are checked as period ratios."""
+    ``ValueError`` as a ``CliError``; ``--n`` counts are checked as period ratios, ``--rpm``
+    counts as speeds (``camjax.checks.speed_count``), before the range is built."""
     check_count = None
     if what == "--n":
         from ..checks import period_ratio_count as check_count
+    elif what == "--rpm":
+        from ..checks import speed_count as check_count
     with options_named():
-        return _parse_range(text, what, check_count)
+        values = _parse_range(text, what, check_count)
+        if check_count is not None:
+            check_count(values.size, what)  # a list V1,V2,... as long
+        return values
 
 
 def add_format(parser: argparse.ArgumentParser, choices=("table", "json", "csv")) -> None:

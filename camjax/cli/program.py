@@ -8,7 +8,7 @@ import warnings
 from pathlib import Path
 
 from .._plain import DEFAULT_SPEED_FLUCTUATION
-from ._common import CliError, add_format, file_named, output_dir
+from ._common import CliError, file_named, output_dir
 
 DEFAULT_RPM = "600"
 
@@ -34,8 +34,8 @@ def register(subparsers) -> None:
     )
     parser.add_argument("file", nargs="?", metavar="FILE",
                         help="program or machine TOML file, or a built-in example name (default: indexer)")
-    parser.add_argument("--rpm", default=DEFAULT_RPM, metavar="RPM|V1,V2,...|START:STOP:COUNT",
-                        help=f"cam speed(s) in rpm (default {DEFAULT_RPM})")
+    parser.add_argument("--rpm", default=None, metavar="RPM|V1,V2,...|START:STOP:COUNT",
+                        help=f"cam speed(s) in rpm (default {DEFAULT_RPM}; not with --drive-table)")
     parser.add_argument("--no-flight", action="store_true", help="skip the flight simulation where contact is lost "
                         "(and a grooved cam's impacts)")
     parser.add_argument("--speed-fluctuation", type=float, default=DEFAULT_SPEED_FLUCTUATION, metavar="CS",
@@ -45,12 +45,15 @@ def register(subparsers) -> None:
     parser.add_argument("--plot-rpm", type=float, default=None, metavar="RPM",
                         help="the speed whose turn the figures show, one of the --rpm speeds "
                         "(default: the speed given nearest the jump speed, else the highest)")
-    add_format(parser)
+    parser.add_argument("--format", choices=("table", "json", "csv"), default=None,
+                        help="output format on standard output (default table; not with --drive-table, "
+                        "which writes its own format to --out)")
     parser.add_argument("--out", metavar="DIR", help="write profile.csv, profile.dxf, response.csv, "
                         "summary.json and figures here (response.csv at up to 10 speeds)")
     parser.add_argument("--drive-table", metavar="FORMAT", help="instead of the analysis, write the "
                         "motion as a servo drive loads it to --out (csv, xyva, codesys or twincat; "
-                        "docs/drive-tables.md)")
+                        "docs/drive-tables.md); the analysis's options (--rpm, --format, --plot-rpm, "
+                        "--no-flight) are refused with it, since nothing is analysed")
     parser.add_argument("--drive-step", type=float, default=0.1, metavar="DEG",
                         help="master step of the csv drive table in degrees (default 0.1)")
     parser.add_argument("--drive-tolerance", type=float, default=1e-4, metavar="TOL",
@@ -227,6 +230,8 @@ def run(args) -> int:
 
     if args.drive_table is not None:
         return _drive_table(args)
+    args.format = args.format or "table"
+    args.rpm = args.rpm or DEFAULT_RPM
     try:
         rpm = Speeds.parse(args.rpm, "--rpm")
     except ValueError as error:
@@ -368,6 +373,12 @@ def _drive_table(args) -> int:
         write_drive_table,
     )
 
+    ignored = [option for option, given in (("--rpm", args.rpm is not None), ("--format", args.format is not None),
+                                            ("--plot-rpm", args.plot_rpm is not None), ("--no-flight", args.no_flight))
+               if given]
+    if ignored:
+        raise CliError(f"{ignored[0]}: not with --drive-table, which analyses nothing and writes the table to "
+                       "--out in its own format; run the analysis apart")
     names = {"format": "--drive-table", "step_deg": "--drive-step", "tolerance": "--drive-tolerance"}
     try:
         check_drive_table_arguments(args.drive_table, args.drive_step, args.drive_tolerance, names)
@@ -376,11 +387,15 @@ def _drive_table(args) -> int:
     if args.out is None:
         raise CliError("--drive-table needs --out DIR: the directory the table is written to")
     path = program_path(args.file)
-    with file_named(path):
+    with file_named(path), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")  # a step too coarse for the motion, shown below
         program = Program.load(path)
         out = output_dir(args.out)
-        print(write_drive_table(program, out / DRIVE_TABLE_FILE_NAMES[args.drive_table], args.drive_table,
-                                step_deg=args.drive_step, tolerance=args.drive_tolerance))
+        written = write_drive_table(program, out / DRIVE_TABLE_FILE_NAMES[args.drive_table], args.drive_table,
+                                    step_deg=args.drive_step, tolerance=args.drive_tolerance)
+    for line in _messages(caught):
+        print(f"warning: {line.replace('a step of', '--drive-step', 1)}", file=sys.stderr)
+    print(written)
     return 0
 
 

@@ -94,18 +94,28 @@ def named_laws() -> list[AbstractMotionLaw]:
     return [make() for make in (*_STANDARD.values(), *_NAMED.values())]
 
 
-def _parse_numbers(text: str, kind, name: str) -> list:
-    try:
-        return [kind(x) for x in text.split(",")]
-    except ValueError:
-        raise ValueError(f"cannot read the parameters of law {name!r}") from None
-
-
-def _parse_one(text: str, kind, name: str, form: str):
-    values = _parse_numbers(text, kind, name)
-    if len(values) != 1:
-        raise ValueError(f"law {name!r}: takes one number, {form!r}")
-    return values[0]
+def _parameters(name: str, form: str, meaning: str, whole: bool = False) -> list:
+    """The numbers after the colon of the law name ``name`` (as typed, case kept), one for
+    each letter of ``form`` (``"scca:A,B,C"``), or a one-line ``ValueError`` saying which
+    parameter is wrong and what it must be (``meaning``: what the letters stand for)."""
+    letters = form.partition(":")[2].split(",")
+    parts = [x.strip() for x in name.strip().partition(":")[2].split(",")]
+    if len(parts) != len(letters):
+        raise ValueError(f"law {name!r}: {form} takes {len(letters)} number{'s' if len(letters) > 1 else ''} "
+                         f"after the colon ({meaning}), got {len(parts)}")
+    values = []
+    for letter, part in zip(letters, parts):
+        if not part:
+            raise ValueError(f"law {name!r}: {letter} is missing: {form} takes a number there ({meaning})")
+        try:
+            value = float(part)
+        except ValueError:
+            typed = f": in {form}, write a number in place of {letter}" if part.upper() == letter else ""
+            raise ValueError(f"law {name!r}: {letter} must be a number ({meaning}), got {part!r}{typed}") from None
+        if whole and not value.is_integer():
+            raise ValueError(f"law {name!r}: {letter} must be a whole number ({meaning}), got {part!r}")
+        values.append(int(value) if whole else value)
+    return values
 
 
 def get(name: str) -> AbstractMotionLaw:
@@ -125,45 +135,36 @@ def get(name: str) -> AbstractMotionLaw:
                          'lift_mm), or in a program law = "table" with file = "....csv" or points')
     if key.startswith(("polynomial5:", "polynomial7:")):
         degree = int(key[10])
-        values = _parse_numbers(key[12:], float, name)
         keys = ("v0", "a0", "v1", "a1") if degree == 5 else ("v0", "a0", "j0", "v1", "a1", "j1")
-        if len(values) != len(keys):
-            raise ValueError(f"law {name!r}: polynomial{degree} takes {len(keys)} boundary values, "
-                             f"'polynomial{degree}:{','.join(k.upper() for k in keys)}'")
+        form = f"polynomial{degree}:{','.join(k.upper() for k in keys)}"
+        values = _parameters(name, form, "boundary values in normalised units")
         return BoundaryPolynomial(**dict(zip(keys, values)), degree=degree)
     if family == "scca":
-        fractions = _parse_numbers(text, float, name)
-        if len(fractions) != 3:
-            raise ValueError(f"law {name!r}: scca takes three fractions, 'scca:A,B,C'")
-        return SCCA(*fractions)
+        return SCCA(*_parameters(name, "scca:A,B,C", "the fractions of the rise"))
     if family == "poly":
-        order = _parse_one(text, int, name, "poly:K")
+        (order,) = _parameters(name, "poly:K", "the polynomial's order, 2 to 12", whole=True)
         return PolynomialLaw(order)
     if family == "triple-harmonic":
-        amplitudes = _parse_numbers(text, float, name)
-        if len(amplitudes) != 2:
-            raise ValueError(f"law {name!r}: triple-harmonic takes two amplitudes, 'triple-harmonic:A1,A2' "
-                             "(A3 closes the rise)")
+        amplitudes = _parameters(name, "triple-harmonic:A1,A2", "two amplitudes; A3 closes the rise")
         return TripleHarmonic(*amplitudes)
-    if family.endswith("-cv") and text:
+    if family.endswith("-cv") and ":" in key:
         base = _ALIASES.get(family[:-3], family[:-3])
-        share = _parse_one(text, float, name, f"{base}-cv:P")
+        (share,) = _parameters(name, f"{base}-cv:P", "the constant-velocity fraction, in [0, 1)")
         return constant_velocity_variant(base, share)
-    if family.endswith("-asym") and text:
+    if family.endswith("-asym") and ":" in key:
         base = _ALIASES.get(family[:-5], family[:-5])
         if base not in _STANDARD and base not in _NAMED:
             raise ValueError(f"law {name!r}: NAME-asym:L takes a law of {', '.join(names())}")
-        inflection = _parse_one(text, float, name, f"{base}-asym:L")
+        (inflection,) = _parameters(name, f"{base}-asym:L", "the inflection point, in (0, 1)")
         return Inflected(get(base), inflection)
     shaper, _, base = family.partition("-")
     if shaper in SHAPERS and base and text:
         base = _ALIASES.get(base, base)
         if base not in _STANDARD and base not in _NAMED:
             raise ValueError(f"law {name!r}: {shaper}-NAME:N,ZETA takes a law of {', '.join(names())}")
-        values = _parse_numbers(text, float, name)
-        if len(values) != (3 if shaper == "ei" else 2):
-            form = "ei-NAME:N,0,VTOL" if shaper == "ei" else f"{shaper}-NAME:N,ZETA"
-            raise ValueError(f"law {name!r}: takes the base's design period ratio and the damping, {form!r}")
+        form = f"{shaper}-{base}:N,0,VTOL" if shaper == "ei" else f"{shaper}-{base}:N,ZETA"
+        values = _parameters(name, form, "the base's design period ratio and the damping"
+                             + (" (0), and the tolerated vibration" if shaper == "ei" else ""))
         return ShapedLaw(get(base), Shaper(shaper, *values[1:]), values[0])
     valid = ", ".join(names() + sorted(_ALIASES) + list(FAMILIES) + list(_IN_MOTION)
                       + list(IN_MOTION_FAMILIES))

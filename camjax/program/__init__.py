@@ -25,6 +25,7 @@ from ._analysis import Report as Report
 from ._analysis import SpeedReport as SpeedReport
 from ._analysis import analyse as analyse
 from ._analysis import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s2
+from ._analysis import max_contact_stress as max_contact_stress
 from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
 from ._compensate import Compensation as Compensation
@@ -69,6 +70,7 @@ from ._jump import flights as flights
 from ._jump import flights_at as flights_at
 from ._jump import jump_speed_rpm as jump_speed_rpm
 from ._jump import min_preload_n as min_preload_n
+from ._machine import ABSURD_SIZES as ABSURD_SIZES
 from ._machine import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
 from ._machine import MAX_HALF_WIDTH_RATIO as MAX_HALF_WIDTH_RATIO
 from ._machine import MAX_PRESSURE_ANGLE_DEG as MAX_PRESSURE_ANGLE_DEG
@@ -77,10 +79,12 @@ from ._machine import ContactGeometry as ContactGeometry
 from ._machine import Geometry as Geometry
 from ._machine import JoinCurvature as JoinCurvature
 from ._machine import NodeContact as NodeContact
+from ._machine import RefinedStress as RefinedStress
 from ._machine import cam_geometry as cam_geometry
 from ._machine import contact_geometry as contact_geometry
 from ._machine import design_warnings as design_warnings
 from ._machine import node_contact as node_contact
+from ._machine import refined_contact_stress as refined_contact_stress
 from ._motion import EndState as EndState
 from ._motion import Join as Join
 from ._motion import segment_kinematics as segment_kinematics

@@ -12,18 +12,20 @@ import numpy as np
 from .._plain import json_ready, plot_speed
 from ._dynamics import SteadyState
 from ._groove import Impact, groove_turns
-from ._jump import Flight, flights_at, jump_speed_rpm
+from ._jump import Flight, _Turns, flights_at, jump_speed_rpm
 from ._machine import (
     DEFAULT_SPEED_FLUCTUATION,
     Geometry,
+    RefinedStress,
     cam_geometry,
     check_speed_fluctuation,
     design_warnings,
+    refined_contact_stress,
 )
 from ._motion import Join, segment_kinematics
 from ._probes import Outputs, Probe, ProbeContext, kinematic_peak_m_s2
 from ._spec import Program
-from ._speeds import Speeds, warn_implausible
+from ._speeds import Speeds
 
 
 def kinematic_acceleration_m_s2(program: Program, rpm) -> np.ndarray:
@@ -172,11 +174,10 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     from the same steady state; ``geometry`` from the profile at the grid's nodes and 3600
     angles over the turn (a flat face over a cusp is a ``ValueError`` naming the angles).
     ``rpm``: ``Speeds`` or what one is built from; an implausible speed is warned of
-    (``warn_implausible``).  ``outputs``: the per-speed outputs (``Outputs``, or a list of
+    (in the report's warnings).  ``outputs``: the per-speed outputs (``Outputs``, or a list of
     ``probe``s beside the built-in ones; default ``default_outputs()``).
     """
-    speeds = Speeds.of(rpm)
-    warn_implausible(program, speeds)
+    speeds = Speeds.of(rpm)  # an implausible speed is said in the report's warnings
     rpm = speeds.rpm
     outputs = Outputs.of(outputs)
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
@@ -184,7 +185,10 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     out = steady.summary(speeds, outputs)
     closed = program.follower.form_closed
     theta_nodes = 360.0 * steady.grid.nodes
-    values = outputs.evaluate(out.values, ProbeContext(program, rpm, speed_fluctuation, theta_nodes, out.cycles))
+    stress = (max_contact_stress(steady, speeds)
+              if program.follower.contact_width_mm is not None else None)
+    values = outputs.evaluate(out.values, ProbeContext(program, rpm, speed_fluctuation, theta_nodes, out.cycles,
+                                                       stress))
     ratios = _period_ratios(program, rpm)
     grooved = closed and bool(program.follower.groove_clearance_mm) and with_flight
     turns = groove_turns(program, speeds) if grooved else [None] * rpm.size
@@ -209,6 +213,17 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     report = Report(program.name, tuple(rows), jump_speed, below, tuple(segment_kinematics(program)),
                     tuple(program.joins()), geometry, speed_fluctuation, outputs=outputs)
     return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))
+
+
+def max_contact_stress(steady: SteadyState, rpm) -> RefinedStress:
+    """The largest Hertz stress of the steady state at every speed of ``rpm``, where and its
+    effective radius, refined between the grid's nodes (``refined_contact_stress``) with the
+    contact force exact anywhere (the steady state's own step between nodes)."""
+    speeds = Speeds.of(rpm)
+    held = _Turns(steady, speeds)  # the contact-held steady states, exact at any time
+    stress = np.asarray(steady.cycles_at(speeds).contact_stress_mpa)
+    return refined_contact_stress(steady.program, steady.grid.nodes, stress,
+                                  lambda rows, s: held.contact_force(rows, s * held.period[rows]))
 
 
 def response(program: Program, rpm: float, *, steady: SteadyState | None = None) -> dict[str, np.ndarray]:

@@ -24,7 +24,8 @@ import csv
 import math
 import os
 import re
-import tempfile
+import secrets
+import warnings
 from pathlib import Path
 from typing import NamedTuple
 
@@ -204,9 +205,37 @@ def drive_table(program: Program, format: str = "csv", *, step_deg: float = DEFA
                 tolerance: float = DEFAULT_TOLERANCE) -> DriveTable:
     """The rows ``write_drive_table`` writes: equidistant every ``step_deg`` degrees (``csv``,
     0 to 360 both included), or the knots of the quintic Hermite interpolation within
-    ``tolerance`` (slave units: mm, or degrees of swing) of the motion (the other formats)."""
+    ``tolerance`` (slave units: mm, or degrees of swing) of the motion (the other formats).
+    A ``csv`` step too coarse for the motion (``coarse_step``) is a ``UserWarning``."""
     check_drive_table_arguments(format, step_deg, tolerance)
-    return _samples(program, step_deg) if format == "csv" else _knots(program, tolerance)
+    if format != "csv":
+        return _knots(program, tolerance)
+    coarse = coarse_step(program, step_deg)
+    if coarse is not None:
+        warnings.warn(coarse, stacklevel=2)
+    return _samples(program, step_deg)
+
+
+MIN_ROWS_PER_SEGMENT = 10
+"""Fewest rows of an equidistant table across the shortest moving segment: with fewer, the
+drive's interpolation between rows does not follow the segment's motion."""
+
+
+def coarse_step(program: Program, step_deg: float) -> str | None:
+    """The line saying that an equidistant step of ``step_deg`` degrees puts fewer than
+    ``MIN_ROWS_PER_SEGMENT`` rows across the shortest moving segment (with the table's count
+    of rows and the step that gives enough), or ``None``."""
+    moving = [(s.angle_deg, i) for i, s in enumerate(program.segments, 1) if s.moving]
+    if not moving:
+        return None
+    angle, index = min(moving)
+    if angle / step_deg >= MIN_ROWS_PER_SEGMENT:
+        return None
+    rows = round(360.0 / step_deg) + 1
+    return (f"a step of {step_deg:g} deg gives a table of {rows:,} rows, about {angle / step_deg:.3g} across "
+            f"segment {index} ({angle:g} deg, the shortest moving one): the drive's interpolation between "
+            f"rows does not follow its motion; a step of at most {angle / MIN_ROWS_PER_SEGMENT:.3g} deg puts "
+            f"{MIN_ROWS_PER_SEGMENT} rows across it (one that divides 360, such as 0.1)")
 
 
 def _real(x: float) -> str:
@@ -257,18 +286,19 @@ def _text(program: Program, table: DriveTable, format: str) -> str:
 def write_drive_table(program: Program, path, format: str = "csv", *, step_deg: float = DEFAULT_STEP_DEG,
                       tolerance: float = DEFAULT_TOLERANCE) -> Path:
     """Write ``program``'s motion as a drive table (``DRIVE_TABLE_FORMATS``) to ``path``, atomically: the
-    text goes to a temporary file beside ``path`` and is renamed over it only when whole."""
+    text goes to a temporary file beside ``path`` and is renamed over it only when whole.  The
+    file gets the mode every other output gets (0666 less the umask), not a temporary file's 0600."""
     table = drive_table(program, format, step_deg=step_deg, tolerance=tolerance)
     text = _text(program, table, format)
     path = Path(path)
-    handle = tempfile.NamedTemporaryFile("w", dir=path.parent, prefix=f".{path.name}.", suffix=".tmp",
-                                         delete=False, newline="")
+    temporary = path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
     try:
-        with handle:
+        descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies
+        with open(descriptor, "w", newline="") as handle:
             handle.write(text)
-        os.replace(handle.name, path)
+        os.replace(temporary, path)
     except BaseException:
-        Path(handle.name).unlink(missing_ok=True)
+        temporary.unlink(missing_ok=True)
         raise
     return path
 

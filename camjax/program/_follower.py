@@ -41,6 +41,9 @@ class Follower:
     groove_clearance_mm: float | None = None
     contact_width_mm: float | None = None
 
+    def __post_init__(self):
+        _as_floats(self)
+
     @property
     def flat_face(self) -> bool:
         return self.kind.endswith("-flat")
@@ -81,6 +84,16 @@ class Follower:
 
 
 _finite = finite_number  # a program file's numbers are checked as every other input
+
+
+def _as_floats(record) -> None:
+    """A frozen dataclass's Python ``int`` fields made floats: a TOML integer such as
+    ``roller_radius_mm = 1000000000000`` is a length, not an index, and JAX refuses an
+    integer past 64 bits (an ``OverflowError`` traceback) where it takes the float."""
+    for field in dataclasses.fields(record):
+        value = getattr(record, field.name)
+        if type(value) is int:
+            object.__setattr__(record, field.name, float(value))
 
 
 def _positive(value, what: str) -> float:
@@ -146,6 +159,7 @@ class Materials:
     follower_poisson_ratio: float = 0.3
 
     def __post_init__(self):
+        _as_floats(self)
         for part in ("cam", "follower"):
             _positive(getattr(self, f"{part}_youngs_modulus_gpa"), f"materials.{part}_youngs_modulus_gpa")
             nu = _finite(getattr(self, f"{part}_poisson_ratio"), f"materials.{part}_poisson_ratio")

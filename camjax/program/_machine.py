@@ -28,6 +28,7 @@ from .._plain import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
 from ..metrics import interval_peaks, septic_coefficients
 from ._export import _angle_ranges, shape
 from ._spec import Program
+from ._speeds import speed_warnings
 
 TORQUE_PER_FORCE_VELOCITY = 1e-3 / (2 * math.pi)
 """N m of drive torque per N of contact force and mm per turn of lift velocity."""
@@ -193,6 +194,126 @@ def contact_stress_squared(force, contact: NodeContact):
     return jnp.maximum(force, 0.0) * contact.inner + jnp.maximum(-force, 0.0) * contact.outer
 
 
+HERTZ_CANDIDATES = 4
+"""Crests of the node stress (local maxima within ``_CANDIDATE_MARGIN`` of the largest) whose
+two intervals ``refined_contact_stress`` searches at each speed: between nodes a crest rises
+by far less than that margin, so the largest stress lies in one of them."""
+_CANDIDATE_MARGIN = 1e-2
+_FACTOR_POINTS = 8  # Chebyshev points per interval at which the Hertz factors are interpolated
+_SCREEN_POINTS, _SCREEN_MARGIN = 9, 1e-4  # between 9 samples a crest hides far less than 1e-4
+_ZOOM_POINTS, _ZOOM_ROUNDS = 17, 14  # each round narrows the bracket 8-fold: 1e-13 of an interval
+
+
+class RefinedStress(NamedTuple):
+    """The largest Hertz stress over a turn at each speed, refined between the grid's nodes:
+    ``p_max`` (MPa), the cam angle where it lies (degrees) and the effective radius ``R'``
+    (mm) there (the half-width is ``2 R' p_max / E*``)."""
+
+    stress_mpa: np.ndarray
+    angle_deg: np.ndarray
+    radius_mm: np.ndarray
+
+
+def refined_contact_stress(program: Program, nodes, stress, force_at) -> RefinedStress:
+    """The largest ``p_max = sqrt(F_c * factor)`` at every speed, between the nodes as well
+    as at them, as the contact force's own peaks are refined.
+
+    ``nodes``: the grid's nodes (turns, ``(N + 1,)``); ``stress``: ``p_max`` there at every
+    speed (``(S, N + 1)``); ``force_at(rows, s)``: the contact force (N) of speed ``rows`` at
+    turn times ``s`` (arrays of one shape), exact anywhere (the steady state's own step).
+
+    At each speed the two intervals beside each of its ``HERTZ_CANDIDATES`` largest crests
+    are searched.  The Hertz factors of ``node_contact`` (geometry only, the same at every
+    speed) are read once at ``_FACTOR_POINTS`` Chebyshev points inside each interval searched
+    and interpolated there (degree 7 over an interval of the grid: within rounding); the
+    force is exact.  A screen of 9 samples per interval keeps those within 1e-4 of their
+    speed's best; a zoom of ``_ZOOM_POINTS`` points, narrowed 8-fold per round, finds the
+    largest ``F_c * factor`` of each to within 1e-13 of its width.
+    """
+    nodes, stress = np.asarray(nodes, dtype=float), np.atleast_2d(np.asarray(stress, dtype=float))
+    speeds, count = stress.shape
+    intervals = count - 1
+    rows, starts = _candidate_intervals(stress, intervals)
+    unique, which = np.unique(starts, return_inverse=True)
+    factors = _interpolated_factors(program, nodes, unique)  # (4, U, points) Chebyshev coefficients
+    begin, width = nodes[unique][which], (nodes[unique + 1] - nodes[unique])[which]
+
+    def at(pairs, sigma):
+        return _stress_squared(factors, which[pairs], sigma, begin[pairs][:, None] + width[pairs][:, None] * sigma,
+                               rows[pairs], force_at)
+
+    # a screen of every candidate interval; only those within _SCREEN_MARGIN of their speed's
+    # best sample are zoomed into, around their best sample
+    screen = np.linspace(0.0, 1.0, _SCREEN_POINTS)
+    value, _ = at(np.arange(rows.size), np.broadcast_to(screen, (rows.size, screen.size)))
+    top = np.full(speeds, -np.inf)
+    np.maximum.at(top, rows, value.max(axis=1))
+    pairs = np.flatnonzero(value.max(axis=1) >= (1 - _SCREEN_MARGIN) * top[rows])
+    step = np.full(pairs.size, screen[1])
+    centre = screen[np.argmax(value[pairs], axis=1)]
+    for _ in range(_ZOOM_ROUNDS):
+        lo, hi = np.maximum(centre - step, 0.0), np.minimum(centre + step, 1.0)
+        sigma = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, _ZOOM_POINTS)
+        value, _ = at(pairs, sigma)
+        centre = sigma[np.arange(pairs.size), np.argmax(value, axis=1)]
+        step = (hi - lo) / (_ZOOM_POINTS - 1)
+    value, radius = (x[:, 0] for x in at(pairs, centre[:, None]))
+    times = begin[pairs] + width[pairs] * centre
+    out = np.full(speeds, -np.inf)
+    chosen = np.zeros(speeds, dtype=int)
+    for i, r in enumerate(rows[pairs]):  # the best interval of each speed
+        if value[i] > out[r]:
+            out[r], chosen[r] = value[i], i
+    return RefinedStress(np.sqrt(np.maximum(out, 0.0)), np.mod(360.0 * times[chosen], 360.0), radius[chosen])
+
+
+def _candidate_intervals(stress: np.ndarray, intervals: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(speed row, first node)`` of every interval to search: the two beside each of a
+    speed's ``HERTZ_CANDIDATES`` largest crests (the turn is periodic: node 0 is node N)."""
+    turn = stress[:, :intervals]
+    before, after = np.roll(turn, 1, axis=1), np.roll(turn, -1, axis=1)
+    crest = (turn >= before) & (turn >= after) & (turn >= (1 - _CANDIDATE_MARGIN) * turn.max(axis=1, keepdims=True))
+    rows, starts = [], []
+    for r in range(turn.shape[0]):
+        nodes = np.flatnonzero(crest[r])
+        nodes = nodes[np.argsort(turn[r, nodes])[::-1][:HERTZ_CANDIDATES]]
+        for k in nodes:
+            for first in ((k - 1) % intervals, k):
+                rows.append(r)
+                starts.append(first)
+    return np.asarray(rows, dtype=int), np.asarray(starts, dtype=int)
+
+
+_FACTOR_BLOCK = 256  # angles per call of the geometry (one compiled shape)
+
+
+def _interpolated_factors(program: Program, nodes: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """Chebyshev coefficients ``(4, intervals, _FACTOR_POINTS)`` over ``sigma`` in [0, 1] of the
+    inner and outer factors and effective radii of ``node_contact`` in each interval."""
+    x = np.cos(np.pi * (np.arange(_FACTOR_POINTS) + 0.5) / _FACTOR_POINTS)  # inside (-1, 1): no join
+    sigma = 0.5 * (1.0 + x)
+    width = nodes[starts + 1] - nodes[starts]
+    angles = (360.0 * (nodes[starts][:, None] + width[:, None] * sigma)).ravel()
+    padded = np.pad(angles, (0, -angles.size % _FACTOR_BLOCK), mode="edge")
+    parts = [node_contact(program, padded[i:i + _FACTOR_BLOCK]) for i in range(0, padded.size, _FACTOR_BLOCK)]
+    values = np.stack([np.concatenate([np.asarray(getattr(p, name)) for p in parts])[:angles.size]
+                       for name in NodeContact._fields])
+    values = values.reshape(4, starts.size, _FACTOR_POINTS)
+    values[3] = np.where(np.isfinite(values[3]), values[3], 0.0)  # no other wall: R' unused
+    return np.polynomial.chebyshev.chebfit(x, values.reshape(-1, _FACTOR_POINTS).T, _FACTOR_POINTS - 1).T.reshape(
+        4, starts.size, _FACTOR_POINTS)
+
+
+def _stress_squared(factors, which, sigma, times, rows, force_at):
+    """``p_max^2`` and ``R'`` at ``sigma`` (``(P, points)``) of the intervals ``which``."""
+    x = 2.0 * sigma - 1.0
+    inner, outer, radius_inner, radius_outer = (
+        np.polynomial.chebyshev.chebval(x.T, factors[j][which].T, tensor=False).T for j in range(4))
+    force = force_at(np.broadcast_to(rows[:, None], times.shape), times)
+    value = np.maximum(force, 0.0) * inner + np.maximum(-force, 0.0) * outer
+    return value, np.where(force >= 0, radius_inner, radius_outer)
+
+
 @dataclasses.dataclass(frozen=True)
 class JoinCurvature:
     """The cam surface's radius of curvature (mm) on both sides of a segment join."""
@@ -258,15 +379,39 @@ MAX_HALF_WIDTH_RATIO = 0.1
 (``b / R' = 2 p / E*``) for which the Hertz line contact holds (it needs ``b << R'``)."""
 
 
+ABSURD_SIZES = {"mm": 10_000.0, "kg": 10_000.0, "N": 1e6, "N/mm": 1e9}
+"""Sizes no cam machine has, by unit: a length past 10 m, a moving mass past 10 tonnes, a
+force past a meganewton, a stiffness past 1e9 N/mm.  A value past them is computed but
+warned of (``size_warnings``): often a unit slip, and a length past 1e12 mm also loses the
+cam's curvature to rounding."""
+_SIZED_FIELDS = (("base_radius_mm", "mm"), ("roller_radius_mm", "mm"), ("offset_mm", "mm"), ("arm_mm", "mm"),
+                 ("pivot_mm", "mm"), ("groove_clearance_mm", "mm"),  # contact_width_mm: against the base circle
+                 ("mass_kg", "kg"), ("preload_n", "N"), ("stiffness_n_per_mm", "N/mm"),
+                 ("spring_rate_n_per_mm", "N/mm"))
+
+
+def size_warnings(program: Program) -> list[str]:
+    """A line for each follower field and segment lift past ``ABSURD_SIZES``, naming the key
+    and its value."""
+    f = program.follower
+    given = [(f"follower.{name}", getattr(f, name), unit) for name, unit in _SIZED_FIELDS
+             if getattr(f, name) is not None and not (name == "roller_radius_mm" and f.flat_face)]
+    given += [(f"segment {i}: lift_mm", s.lift_mm, "mm") for i, s in enumerate(program.segments, 1)]
+    return [f"{key} = {value:g} is more than {ABSURD_SIZES[unit]:,.0f} {unit}, larger than any cam machine's: "
+            f"check its unit ({unit})" for key, value, unit in given if abs(value) > ABSURD_SIZES[unit]]
+
+
 def design_warnings(program: Program, report=None) -> list[str]:
     """Where the input or a result lies outside what the design rules and the models hold,
-    one line each (empty where all is well): the program's own numbers (a lift table's noise
-    or spacing, ``table_warnings``, among them), and with ``report``
-    (``analyse``'s ``Report`` or its ``as_dict()``) the pressure angle, the Hertz contact and a
-    grooved cam's strikes that did not settle.
+    one line each (empty where all is well): the program's own numbers (sizes past
+    ``ABSURD_SIZES``, a grooved cam's preload, a lift table's noise or spacing among them), and
+    with ``report`` (``analyse``'s ``Report`` or its ``as_dict()``) its speeds
+    (``speed_warnings``), the pressure angle, the Hertz contact and a grooved cam's strikes
+    that did not settle.
 
     Each is a warning, not an error: the numbers are computed, but they are not to be
-    trusted as they stand.  ``camjax program`` prints them.
+    trusted as they stand.  ``analyse`` puts them in its report (``Report.warnings``, in
+    ``--format json`` and the studio); ``camjax program`` prints them on stderr.
     """
     out = []
     f, materials = program.follower, program.materials
@@ -277,6 +422,11 @@ def design_warnings(program: Program, report=None) -> list[str]:
         out.append(f"the pressure angle reaches {abs(angle):.3g} deg, above the {limit:g} deg a "
                    f"{f.kind} follower tolerates: enlarge follower.base_radius_mm "
                    "or lengthen the rises")
+    out += size_warnings(program)
+    if f.form_closed and f.preload_n != 0:
+        out.append(f"follower.preload_n = {f.preload_n:g} does nothing on a grooved cam (no "
+                   "spring_rate_n_per_mm: no return spring preloads the follower, the groove holds it): "
+                   "remove it, or give the return spring's spring_rate_n_per_mm")
     stroke = max(abs(float(y)) for y in np.cumsum([s.lift_mm for s in program.segments]))
     if stroke > 2 * f.base_radius_mm:
         out.append(f"the lift ({stroke:g} mm) is more than twice the base circle's radius "
@@ -296,6 +446,7 @@ def design_warnings(program: Program, report=None) -> list[str]:
     out += table_warnings(program)
     if report is None:
         return out
+    out += speed_warnings(program, [s["rpm"] for s in report["speeds"]])
     worst = max((s for s in report["speeds"] if s.get("contact_half_width_mm")),
                 key=lambda s: s["max_contact_stress_mpa"], default=None)
     if worst is not None:

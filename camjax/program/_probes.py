@@ -34,13 +34,16 @@ from ._machine import flywheel_inertia_kg_m2
 class ProbeContext(NamedTuple):
     """What a host output (``Probe.host``) reads beside the compiled values: the program,
     the speeds (rpm, a 1-D array), the coefficient of speed fluctuation, the turn's grid
-    nodes in degrees and the stacked ``Cycle`` of every speed (cut to the turn's nodes)."""
+    nodes in degrees, the stacked ``Cycle`` of every speed (cut to the turn's nodes) and the
+    largest Hertz stress refined between the nodes (``RefinedStress``; ``None`` without
+    ``follower.contact_width_mm``)."""
 
     program: object
     rpm: np.ndarray
     speed_fluctuation: float
     nodes_deg: np.ndarray
     cycles: object
+    stress: object = None  # the Hertz peak refined between nodes (RefinedStress), with a contact width
 
 
 @dataclasses.dataclass(frozen=True)
@@ -144,15 +147,15 @@ BUILT_IN = (
           "the flywheel for the speed fluctuation Cs: energy fluctuation / (Cs Omega^2)", "kg m^2",
           table="drive",
           host=lambda v, c: flywheel_inertia_kg_m2(v["energy_fluctuation_j"], c.rpm, c.speed_fluctuation)),
-    Probe("max_contact_stress_mpa", _field("max_contact_stress_mpa"), "max p MPa",
-          "peak Hertz line-contact pressure over the grid's nodes (with follower.contact_width_mm)", "MPa",
-          table="drive", optional=True, host=_stressed(lambda v, c: v["max_contact_stress_mpa"])),
+    Probe("max_contact_stress_mpa", None, "max p MPa",
+          "peak Hertz line-contact pressure over the turn, refined between the grid's nodes "
+          "(with follower.contact_width_mm)", "MPa",
+          table="drive", optional=True, host=_stressed(lambda v, c: c.stress.stress_mpa)),
     Probe("max_contact_stress_deg", None, "at deg", "the cam angle of that peak", "deg", "{:.5g}",
-          table="drive", optional=True,
-          host=_stressed(lambda v, c: c.nodes_deg[np.asarray(c.cycles.max_contact_stress_node, int)])),
+          table="drive", optional=True, host=_stressed(lambda v, c: c.stress.angle_deg)),
     Probe("contact_half_width_mm", None, "half-width mm",
           "the Hertz contact half-width there, 2 R' p / E*", "mm", "{:.4g}", table="drive", optional=True,
-          host=_stressed(lambda v, c: 2 * c.cycles.max_contact_stress_radius_mm * v["max_contact_stress_mpa"]
+          host=_stressed(lambda v, c: 2 * c.stress.radius_mm * c.stress.stress_mpa
                          / c.program.materials.contact_modulus_mpa)),
 )
 BUILT_IN = tuple(dataclasses.replace(p, built_in=True) for p in BUILT_IN)

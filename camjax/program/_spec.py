@@ -19,7 +19,7 @@ from .. import laws
 from ..checks import is_concrete, read_toml, speeds
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity, TableLaw
 from ._follower import FOLLOWER_KINDS as FOLLOWER_KINDS
-from ._follower import Follower, Materials, _check_follower, _finite, _positive
+from ._follower import Follower, Materials, _as_floats, _check_follower, _finite, _positive
 from ._motion import (
     END_STATE_KEYS,
     MATCH,
@@ -60,6 +60,9 @@ class Segment:
     law: AbstractMotionLaw | None = None
     start: str | EndState | None = None
     end: str | EndState | None = None
+
+    def __post_init__(self):
+        _as_floats(self)  # a TOML integer lift or angle, however large, as a float
 
     @property
     def moving(self) -> bool:
@@ -477,6 +480,8 @@ def _law(i: int, name, base: Path | None) -> AbstractMotionLaw:
     try:
         return laws.get(name)
     except ValueError as error:
+        if not str(error).startswith("unknown law"):  # a known law's parameters: what is wrong with them
+            raise ValueError(f"segment {i}: {error}") from None
         raise ValueError(f'segment {i}: {error}, or "polynomial" (with degree, start, end), '
                          'or "table" (with file or points)') from None
 

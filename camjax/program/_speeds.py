@@ -42,7 +42,8 @@ class Speeds:
     def parse(cls, text: str, name: str = "rpm") -> Speeds:
         """The speeds written as ``START:STOP:COUNT`` (inclusive) or ``V1,V2,...``, or a
         one-line ``ValueError`` that starts with ``name``."""
-        values = parse_range(str(text), name)
+        values = parse_range(str(text), name, check_count=checks.speed_count)  # before it is built
+        checks.speed_count(values.size, name)  # a list V1,V2,... as long
         if not np.all(np.isfinite(values) & (values > 0)):
             raise ValueError(f"{name}: speeds must be positive and finite, got {text!r}")
         return cls(values, name)
@@ -91,15 +92,23 @@ class Speeds:
         return self.rpm.tolist()
 
 
-def warn_implausible(program: Program, rpm: Speeds, *, stacklevel: int = 3) -> None:
-    """A ``UserWarning`` for a speed past ``IMPLAUSIBLE_RPM`` or one that gives a segment of
-    ``program`` a period ratio below ``IMPLAUSIBLE_PERIOD_RATIO`` (often a unit slip)."""
+def warn_implausible(program: Program, rpm, *, stacklevel: int = 3) -> None:
+    """A ``UserWarning`` with ``speed_warnings``' line, for an entry point that returns no
+    report (``analyse`` puts the line in its report instead)."""
+    for line in speed_warnings(program, rpm):
+        warnings.warn(line, stacklevel=stacklevel)
+
+
+def speed_warnings(program: Program, rpm) -> list[str]:
+    """The line (none, or one) saying that speeds ``rpm`` are past ``IMPLAUSIBLE_RPM`` or give
+    a moving segment a period ratio below ``IMPLAUSIBLE_PERIOD_RATIO``: often a unit slip."""
+    rpm = np.asarray(rpm, dtype=float)
     shortest = min((s.angle_deg / 360.0 for s in program.segments if s.moving), default=1.0)
     ratio = program.follower.vibrations_per_turn(rpm.max()) * shortest
     why = [text for bad, text in (
         (rpm.max() > IMPLAUSIBLE_RPM, f"faster than any cam runs (above {IMPLAUSIBLE_RPM:,.0f} rpm)"),
         (ratio < IMPLAUSIBLE_PERIOD_RATIO, f"the shortest moving segment's period ratio is {ratio:.2g}, "
          f"below {IMPLAUSIBLE_PERIOD_RATIO:g}: the follower cannot follow the motion at all")) if bad]
-    if why:
-        warnings.warn(f"{program.name} at {rpm.max():g} rpm: {'; '.join(why)} (check the speed's "
-                      "units)", stacklevel=stacklevel)
+    if not why:
+        return []
+    return [f"{program.name} at {rpm.max():g} rpm: {'; '.join(why)} (check the speed's units)"]

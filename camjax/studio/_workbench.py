@@ -18,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, parse_range, plot_speed
+from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, plot_speed
+from ..checks import MAX_SPEEDS as MAX_SPEEDS
 
 DEFAULT_RPM = "200:1400:7"
 """The speed range a workbench starts with (wide enough to show the examples' jump speeds)."""
@@ -36,9 +37,6 @@ DESIGN_KNOTS = 12
 """Free B-spline coefficients of a design from the page (``camjax design``: 24)."""
 DESIGN_OBJECTIVES = ("preload", "residual")
 """The page's objectives, as ``camjax.program.design_segment`` names them."""
-MAX_SPEEDS = 1001
-"""Most speeds one analysis of the studio takes (each holds about 0.45 MB of histories while
-it is analysed: a range of 100,000 speeds would take the machine's memory)."""
 PROGRAM_FILE_KEYS = ("file", "dxf")
 """Keys of ``[program]`` and of a ``[[segment]]`` that name a file to read (and ``law``
 when it ends in ``.json``)."""
@@ -63,24 +61,13 @@ def parse_program(text: str, base: Path | None = None):
     return Program.from_dict(parse_toml(text), base=base)
 
 
-def _speed_count(count: int, what: str) -> None:
-    if count > MAX_SPEEDS:
-        raise ValueError(f"{what}: at most {MAX_SPEEDS:,} speeds in one analysis, got {count:,}")
-
-
 def parse_speeds(text: str):
     """The speed range ``text`` (``START:STOP:COUNT`` or ``V1,V2,...``, rpm) as
-    ``camjax.program.Speeds``, or a one-line ValueError; more than ``MAX_SPEEDS`` speeds are
-    refused before any is built."""
+    ``camjax.program.Speeds``, or a one-line ValueError; more than ``MAX_SPEEDS`` speeds (the
+    library's limit on one analysis) are refused before any is built."""
     from ..program import Speeds
 
-    text = str(text)
-    if ":" not in text:
-        _speed_count(text.count(",") + 1, "rpm")
-    rpm = parse_range(text, "rpm", check_count=_speed_count)
-    if not all(math.isfinite(r) and r > 0 for r in rpm):
-        raise ValueError(f"rpm: speeds must be positive, got {text!r}")
-    return Speeds(rpm, "rpm")
+    return Speeds.parse(text, "rpm")
 
 
 class OutsideRoot(ValueError):
