@@ -311,7 +311,7 @@ def smoothest_within(energy, collocation, y, tolerance: float, constraint, targe
         r_p = constraint @ c - target if mu_eq.size else np.zeros(0)
         r_i = g @ c + s - h
         gap = float(s @ z) / s.size
-        if (np.max(np.abs(r_d)) <= 1e-11 * scale_d and np.max(np.abs(r_i), initial=0.0) <= 1e-12 * tolerance
+        if (np.max(np.abs(r_d)) <= 1e-11 * scale_d and np.max(np.abs(r_i), initial=0.0) <= 1e-12 * float(np.max(np.abs(h)))
                 and gap <= 1e-13 * scale_d * tolerance):
             break
         affine = direction(r_d, r_p, r_i, s * z)
