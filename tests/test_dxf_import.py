@@ -15,10 +15,12 @@ from camjax.cli import main
 from camjax.program import (
     Program,
     analyse,
+    design_warnings,
     example_path,
     lift_from_dxf,
     profile,
     read_dxf_profile,
+    segment_kinematics,
     write_dxf,
 )
 
@@ -239,3 +241,73 @@ def test_program_file_dxf_errors_exit_2_with_one_line(tmp_path, capsys, extra, d
     assert main(["program", str(path), "--no-flight"]) == 2
     err = capsys.readouterr().err.strip()
     assert re.search(message, err) and "\n" not in err and "Traceback" not in err
+
+
+def _polyline_drawing(path, points, layer="PROFILE", **new):
+    doc = ezdxf.new(**new)
+    doc.modelspace().add_lwpolyline([tuple(map(float, p)) for p in points], close=True, dxfattribs={"layer": layer})
+    doc.saveas(path)
+    return path
+
+
+def test_drawing_says_its_unit_layer_and_rotation(tmp_path):
+    angle = np.arange(0.0, 360.0, 0.5)
+    # ezdxf.new()'s default $INSUNITS is metres: a cam drawn in mm reads a thousand times too large
+    metres = _polyline_drawing(tmp_path / "m.dxf", profile(FEED).profile)
+    with pytest.raises(ValueError, match=r"m\.dxf: LWPOLYLINE on layer 'PROFILE': its base circle .* is 40000 mm, .*"
+                                         r"lengths that large suggest a drawing read in the wrong unit .*dxf_units"):
+        Program.from_dxf("m", metres, FEED.follower)
+    big = Program.from_dxf("m", metres, dataclasses.replace(FEED.follower, base_radius_mm=40000.0), points=72)
+    said = design_warnings(big)
+    assert said[0] == ("the cam's profile is the LWPOLYLINE on layer 'PROFILE' of m.dxf, lengths scaled from "
+                       "$INSUNITS = 6 (Meters) by 1000 to mm, the cam turning counter-clockwise "
+                       '(dxf_rotation = "ccw"); base radius 40000 mm')
+    assert any("base radius is 40000 mm" in w and "outside 1 to 2000 mm" in w for w in said)
+    cam = Program.from_dxf("m", metres, FEED.follower, units="mm")
+    np.testing.assert_allclose(cam.lift(angle)[0], FEED.lift(angle)[0], atol=1e-6)
+    assert "lengths in mm (dxf_units; the file's $INSUNITS = 6 (Meters))" in design_warnings(cam)[0]
+
+    # A cam turning clockwise, drawn so (the mirror image of camjax's export): read as drawn
+    # it is the reversed cam; with rotation="cw" it is the cam.
+    offset = dataclasses.replace(FEED, follower=dataclasses.replace(FEED.follower, offset_mm=10.0))
+    mirrored = _polyline_drawing(tmp_path / "cw.dxf", profile(offset).profile * [-1.0, 1.0], units=ezdxf.units.MM)
+    _, as_drawn = lift_from_dxf(mirrored, offset.follower)
+    assert np.max(np.abs(as_drawn - offset.lift(angle)[0])) > 1.0
+    _, clockwise = lift_from_dxf(mirrored, offset.follower, rotation="cw")
+    np.testing.assert_allclose(clockwise, offset.lift(angle)[0], atol=1e-6)
+    cam = Program.from_dxf("cw", mirrored, offset.follower, rotation="cw", points=72)
+    assert "the cam turning clockwise (dxf_rotation = \"cw\": read as its mirror image, x -> -x)" in design_warnings(cam)[0]
+    with pytest.raises(ValueError, match=r"rotation must be one of 'ccw', 'cw', got 'left'"):
+        lift_from_dxf(mirrored, offset.follower, rotation="left")
+
+    # Only the pitch curve left (write_dxf's PITCH layer): not read as the profile unless chosen
+    pitch = _polyline_drawing(tmp_path / "pitch.dxf", profile(FEED).pitch, layer="PITCH", units=ezdxf.units.MM)
+    with pytest.raises(ValueError, match=r"pitch\.dxf: the only closed curve, a LWPOLYLINE on layer 'PITCH', looks "
+                                         r"like a pitch curve .*give its layer"):
+        read_dxf_profile(pitch)
+    assert read_dxf_profile(pitch, layer="PITCH").base_radius_mm == pytest.approx(52.0, abs=1e-6)
+
+
+def test_drawing_read_at_too_few_angles_warns(feed_dxf):
+    exact = max(r["peak_acceleration_mm_per_deg2"] for r in segment_kinematics(FEED))
+    coarse = Program.from_dxf("coarse", feed_dxf, FEED.follower, points=10)
+    peak = max(r["peak_acceleration_mm_per_deg2"] for r in segment_kinematics(coarse))
+    assert peak < 0.8 * exact  # the 36 degree spacing misses the peak
+    said = design_warnings(coarse)
+    assert any("too sparse for its acceleration: against the drawing read at 20 angles" in w for w in said), said
+    fine = Program.from_dxf("fine", feed_dxf, FEED.follower)
+    assert max(r["peak_acceleration_mm_per_deg2"] for r in segment_kinematics(fine)) == pytest.approx(exact, rel=1e-4)
+    assert design_warnings(fine)[1:] == []  # the note on what was read, and nothing else
+
+
+@pytest.mark.parametrize(("key", "message"), [
+    ('dxf_rotation = "left"', r"\[program\] dxf_rotation must be one of 'ccw', 'cw' \(how the drawn cam turns\), got 'left'"),
+    ('dxf_units = "furlong"', r"\[program\] dxf_units must be one of 'mm', 'cm', 'm', 'in', 'ft' .*got 'furlong'"),
+])
+def test_program_file_dxf_options_are_checked(tmp_path, key, message):
+    _drawing(tmp_path / "cam.dxf", [("0", (0, 0), 40.0)])
+    follower = example_path("feed").read_text().partition("[follower]")[2]
+    path = tmp_path / "prog.toml"
+    path.write_text(f'[program]\nname = "p"\ndxf = "cam.dxf"\n{key}\n[follower]{follower}')
+    with pytest.raises(ValueError, match=message):
+        Program.load(path)

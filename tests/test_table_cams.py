@@ -75,6 +75,8 @@ def test_segment_table_file_in_a_program(tmp_path):
     for got, want in zip(program.lift(theta), indexer.lift(theta)):
         assert np.max(np.abs(got - want)) < 1e-7 * np.max(np.abs(want))
     row = segment_kinematics(program)[0]
+    # Through every point of the table (the distance measured here, not the fit's report).
+    assert np.max(np.abs(program.lift(angle)[0] - lift)) < 1e-12
     assert row["fit_deviation_mm"] < 1e-12
     assert row["peak_acceleration_mm_per_deg2"] == pytest.approx(20 * 2 * math.pi / 100**2, rel=1e-7)
     # Written back, the program reads the same (its table inline).
@@ -101,7 +103,7 @@ def test_whole_cam_table_gives_the_cams_accelerations_forces_and_jump(indexer_an
                 "min_contact_force_n", "max_contact_force_n"):
         assert _speeds(got, key) == pytest.approx(_speeds(want, key), rel=0.01), key
     assert got.jump_speed_rpm == pytest.approx(want.jump_speed_rpm, rel=0.005)
-    assert max(s["fit_deviation_mm"] for s in got.segments) < 1e-12
+    assert np.max(np.abs(table.lift(angle)[0] - (lift - lift[0]))) < 1e-12  # through every point
     assert got.warnings == ()
     # Written back, it is one periodic table again (inline), and reads the same.
     text = table.to_toml()
@@ -114,6 +116,14 @@ def test_whole_cam_table_gives_the_cams_accelerations_forces_and_jump(indexer_an
 def _peak_acceleration(program):
     """The cam's largest |y''| over the turn (mm/deg^2), from its segments' exact peaks."""
     return max(row["peak_acceleration_mm_per_deg2"] for row in segment_kinematics(program))
+
+
+def _band_distance(program, angle, lift):
+    """The largest distance of a whole-cam table's fit from its points.  The program's lift
+    is the fit less its value at 0 (unknown here): the least largest distance over that
+    constant, half the spread of the points' residuals, which the fit's own cannot be below."""
+    residual = lift - program.lift(angle)[0]
+    return 0.5 * float(np.ptp(residual))
 
 
 def test_noisy_table_needs_smoothing(indexer_and_table):
@@ -140,8 +150,106 @@ def test_noisy_table_needs_smoothing(indexer_and_table):
     for key in ("max_payload_acceleration_m_s2", "min_contact_force_n", "max_contact_force_n"):
         assert _speeds(got, key) == pytest.approx(_speeds(want, key), rel=0.10), key
     assert got.jump_speed_rpm == pytest.approx(want.jump_speed_rpm, rel=0.03)
-    assert max(s["fit_deviation_mm"] for s in got.segments) == pytest.approx(0.001, rel=1e-3)
+    distance = _band_distance(sigma, angle, noisy)
+    assert 0.001 * (1 - 1e-6) <= distance <= 0.001 * (1 + 1e-9)  # the band is used, not exceeded
     assert any("scatter" in w for w in got.warnings)
+
+
+def test_noise_inside_the_band_gives_the_cams_acceleration(indexer_and_table):
+    # Uniform noise of +/-1 um and smoothing_mm its bound: the cam itself lies within the
+    # band, so the smoothest spline within it is no rougher than the cam.
+    indexer, angle, lift, want = indexer_and_table
+    noisy = lift + np.random.default_rng(11).uniform(-0.001, 0.001, lift.size)
+    smooth = Program.from_table("band", angle, noisy, indexer.follower, smoothing_mm=0.001)
+    assert _band_distance(smooth, angle, noisy) <= 0.001 * (1 + 1e-9)
+    assert _peak_acceleration(smooth) == pytest.approx(_peak_acceleration(indexer), rel=0.10)
+    got = analyse(smooth, RPM, with_flight=False)
+    key = "max_kinematic_acceleration_m_s2"
+    assert _speeds(got, key) == pytest.approx(_speeds(want, key), rel=0.10)
+
+
+def _gauss(edges):
+    """3-point Gauss nodes and weights on each interval of ``edges`` (exact for ``j^2`` of a quintic)."""
+    nodes, weights = np.polynomial.legendre.leggauss(3)
+    a, b = np.asarray(edges)[:-1], np.asarray(edges)[1:]
+    x = (0.5 * (a + b)[:, None] + 0.5 * (b - a)[:, None] * nodes).ravel()
+    return x, (0.5 * (b - a)[:, None] * weights).ravel()
+
+
+def _jerk_energy(spline, knots):
+    """``int j^2`` of a scipy ``BSpline`` over ``knots``."""
+    x, w = _gauss(knots)
+    return float(np.sum(w * spline.derivative(3)(x) ** 2))
+
+
+def test_table_fit_is_scipys_spline_and_the_smoothest_within_the_band():
+    from scipy.interpolate import BSpline, make_interp_spline
+    from scipy.optimize import lsq_linear
+
+    # Interpolating: scipy's quintic through the same points with v = a = 0 at both ends
+    # (its knots are the points, as the table law's).
+    angle = np.linspace(0.0, 100.0, 41)
+    tau = angle / 100.0
+    lift = 20.0 * cycloid(tau)[0] + 0.3 * np.sin(7 * tau)
+    rest = [(1, 0.0), (2, 0.0)]
+    reference = make_interp_spline(tau, lift, k=5, bc_type=(rest, rest))
+    law = TableLaw.fit(angle, lift)
+    t = np.linspace(0.0, 1.0, 2001)
+    rise = lift[-1] - lift[0]
+    for order in range(4):
+        got = rise * np.asarray(law.evaluate(t)[order]) + (lift[0] if order == 0 else 0.0)
+        want = reference.derivative(order)(t) if order else reference(t)
+        assert np.max(np.abs(got - want)) < 1e-9 * np.max(np.abs(want)), order
+    # A whole turn: scipy's periodic quintic.
+    indexer = Program.load(example_path("indexer"))
+    turn = np.arange(0.0, 360.0, 2.0)
+    table = Program.from_table("t", turn, indexer.lift(turn)[0], indexer.follower)
+    x = np.append(turn, 360.0)
+    periodic = make_interp_spline(x, np.append(indexer.lift(turn)[0], indexer.lift(0.0)[0]), k=5, bc_type="periodic")
+    theta = np.linspace(0.0, 360.0, 3601)
+    for order in range(3):
+        want = periodic.derivative(order)(theta) if order else periodic(theta)
+        assert np.max(np.abs(table.lift(theta)[order] - want)) < 1e-9 * np.max(np.abs(want)), order
+
+    # Smoothing: the least int j^2 within the band, against scipy's bounded-variable least
+    # squares on the same quintic B-spline space.  Its variables are the spline's values at
+    # the inner points (with the ends at rest at the first and last lift they fix the
+    # spline), bounded by the band; the residual is sqrt(w) j at Gauss nodes.
+    noisy = lift + np.random.default_rng(3).uniform(-0.05, 0.05, lift.size)
+    band = 0.05
+    smooth = TableLaw.fit(angle, noisy, smoothing_mm=band)
+    rise = noisy[-1] - noisy[0]
+    mine = noisy[0] + rise * np.asarray(smooth.s(tau))
+    assert np.max(np.abs(mine - noisy)) <= band * (1 + 1e-9)
+    knots = np.r_[[0.0] * 5, tau, [1.0] * 5]
+    size = len(knots) - 6
+    basis = [BSpline(knots, np.eye(size)[i], 5) for i in range(size)]
+
+    def rows(x, order):
+        return np.array([b.derivative(order)(x) if order else b(x) for b in basis]).T
+
+    inner = slice(1, -1)
+    to_coefficients = np.linalg.inv(np.concatenate([rows(tau[inner], 0)] + [rows(np.array([0.0, 1.0]), k) for k in range(3)]))
+    ends = np.array([noisy[0], noisy[-1], 0, 0, 0, 0])
+    nodes, weights = _gauss(tau)
+    jerk = np.sqrt(weights)[:, None] * rows(nodes, 3)
+    free, fixed = jerk @ to_coefficients[:, : size - 6], jerk @ to_coefficients[:, size - 6 :] @ ends
+    result = lsq_linear(free, -fixed, bounds=(noisy[inner] - band, noisy[inner] + band), method="bvls", tol=1e-14)
+    assert result.success, result.message
+    spline = BSpline(knots, to_coefficients @ np.concatenate([result.x, ends]), 5)
+    scipy_energy = _jerk_energy(spline, tau)
+    mine_energy = rise**2 * _jerk_energy_of_law(smooth)
+    assert mine_energy <= scipy_energy * (1 + 1e-6)
+    assert mine_energy == pytest.approx(scipy_energy, rel=1e-6)
+    assert np.max(np.abs(noisy[0] + rise * np.asarray(smooth.s(t)) - spline(t))) < 1e-4 * band
+    # The band binds: a spline through the points has several times the energy.
+    assert _jerk_energy(make_interp_spline(tau, noisy, k=5, bc_type=(rest, rest)), tau) > 3 * mine_energy
+
+
+def _jerk_energy_of_law(law):
+    """``int j^2`` of a table law over its knots."""
+    x, w = _gauss(law.edges)
+    return float(np.sum(w * np.asarray(law.j(x)) ** 2))
 
 
 def test_sparse_table_warns():
@@ -224,3 +332,17 @@ def test_inline_points_and_their_errors():
     data["segment"][0]["points"] = [[0, 0]] * 3
     with pytest.raises(ValueError, match=r"segment 1: 3 point\(s\)"):
         Program.from_dict(data)
+
+
+def test_tab_separated_table_reads_as_the_comma_one(tmp_path):
+    theta = np.linspace(0.0, 360.0, 721)
+    comma = Program.load(_program_with(tmp_path, GOOD))
+    tab = Program.load(_program_with(tmp_path, "angle_deg\tlift_mm\n" + _rows(ANGLES, LIFTS, "\t")))
+    np.testing.assert_array_equal(tab.lift(theta)[0], comma.lift(theta)[0])
+    space = _program_with(tmp_path, "angle_deg lift_mm\n" + _rows(ANGLES, LIFTS, " "))
+    with pytest.raises(ValueError, match=r"lift\.csv: line 1: the header must name the columns angle_deg and "
+                                         r"lift_mm \(got 'angle_deg lift_mm', no tab, ';' or ',' separates its names\)"):
+        Program.load(space)
+    semicolon = _program_with(tmp_path, "angle;lift\n" + _rows(ANGLES, LIFTS, ";"))
+    with pytest.raises(ValueError, match=r"\(got 'angle' \| 'lift', read as semicolon-separated\); missing angle_deg"):
+        Program.load(semicolon)

@@ -44,5 +44,6 @@ from ._table import MIN_TABLE_POINTS as MIN_TABLE_POINTS
 from ._table import TableFit as TableFit
 from ._table import TableLaw as TableLaw
 from ._table import evaluate_pieces as evaluate_pieces
+from ._table import peak_acceleration as peak_acceleration
 from ._table import spline_fit as spline_fit
 from ._table import table_checks as table_checks

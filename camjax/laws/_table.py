@@ -2,8 +2,9 @@
 
 The fit is a B-spline of degree 5 with a knot at every point (``spline_fit``), so the jerk
 is continuous and the acceleration is a smooth cubic between points.  Interpolating, it
-passes through every point; smoothing, it minimises the jerk energy ``int j^2`` while
-staying within a stated distance of every point (the penalty found by bisection).  The
+passes through every point; smoothing, it is the spline of least jerk energy ``int j^2``
+within a stated distance of every point (``smoothest_within``: a quadratic programme
+solved by an interior-point method).  Every matrix is sparse and banded.  The
 law keeps the spline as one degree-5 polynomial per piece (Taylor coefficients about the
 piece's midpoint): its ``s, v, a, j`` are the spline's own, exactly.
 """
@@ -17,17 +18,21 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+import scipy.sparse as sp
+from scipy.interpolate import BSpline
+from scipy.sparse.linalg import splu
 
 from .._custom_types import Breakpoints, LawValues
 from ._base import AbstractSearchedPeaksLaw, float_leaf
-from ._spline import _basis, _derivative_matrix, max_abs_piecewise
+from ._spline import max_abs_piecewise
 
 DEGREE = 5
 MIN_TABLE_POINTS = DEGREE + 1
 MAX_TABLE_POINTS = 4000
-"""Most points of one table: the fit solves a dense system of about that many unknowns."""
-_LOG_PENALTY = (-14.0, 12.0)  # bisection range of log10 of the relative penalty
-_BISECTIONS = 30
+"""Most points of one table: each point is a piece of the law, which the engine's grid and
+peak searches visit (the fit itself is sparse, about 2 s at 4000 points)."""
+_INTERIOR_STEPS = 100
+"""Most steps of the smoothing fit's interior-point search (it converges in a few tens)."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -54,6 +59,11 @@ class TableFit:
     source: str = "points"
     turn: tuple | None = None
     """A piece of a whole cam's periodic table: that table's points (the program writes it back)."""
+    spacing_check: str = "a fit through every other point"
+    """What ``spacing_ratio`` compares with; its ratio is NaN where the table has too few
+    points to drop every other one."""
+    notes: tuple = ()
+    """Lines for the report's warnings: what was read from a drawing, and how."""
 
     # A record, not a part of the law's function: every record compares equal, so that laws
     # of the same knots share their compiled code (it is a static field of ``TableLaw``).
@@ -153,21 +163,44 @@ def _table_peak(law: TableLaw, order: int):
 
 # -- the fit ------------------------------------------------------------------------------
 
-def _design(knots: np.ndarray, x: np.ndarray, order: int) -> np.ndarray:
-    """Rows taking B-spline coefficients to the ``order``-th derivative at ``x``."""
-    matrix = _derivative_matrix(tuple(map(float, knots)), DEGREE, order)
+def _derivative_operator(knots: np.ndarray, order: int) -> sp.csr_matrix:
+    """Sparse map from B-spline coefficients to those of the ``order``-th derivative (a
+    spline of degree ``DEGREE - order`` on ``knots[order:-order]``)."""
+    operator = sp.identity(len(knots) - DEGREE - 1, format="csr")
+    for r in range(order):
+        p = DEGREE - r
+        t = knots[r: len(knots) - r]
+        m = len(t) - p - 1
+        span = t[p + 1: p + m] - t[1:m]
+        w = np.where(span > 0, p / np.where(span > 0, span, 1.0), 0.0)
+        operator = sp.diags([-w, w], [0, 1], shape=(m - 1, m), format="csr") @ operator
+    return operator.tocsr()
+
+
+def _design(knots: np.ndarray, x: np.ndarray, order: int) -> sp.csr_matrix:
+    """Sparse rows taking B-spline coefficients to the ``order``-th derivative at ``x``."""
     trimmed = knots[order: len(knots) - order]
-    return np.asarray(_basis(trimmed, DEGREE - order, np.asarray(x, float))) @ matrix
+    basis = BSpline.design_matrix(np.asarray(x, float), trimmed, DEGREE - order)
+    return (basis @ _derivative_operator(knots, order)).tocsr()
 
 
-def _jerk_energy(knots: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """``P`` with ``c' P c = int j^2`` over ``edges`` (3-point Gauss: ``j^2`` is a quartic)."""
+def _weighted_jerk(knots: np.ndarray, edges: np.ndarray) -> sp.csr_matrix:
+    """``L`` with ``|L c|^2 = int j^2`` over ``edges``: the jerk at 3 Gauss nodes a piece,
+    each row times its weight's root (exact: ``j^2`` is a quartic); banded."""
     nodes, weights = np.polynomial.legendre.leggauss(3)
     mid, half = 0.5 * (edges[:-1] + edges[1:]), 0.5 * np.diff(edges)
     x = (mid[:, None] + half[:, None] * nodes).ravel()
     w = (half[:, None] * weights).ravel()
-    jerk = _design(knots, x, 3)
-    return jerk.T @ (w[:, None] * jerk)
+    return (sp.diags(np.sqrt(w)) @ _design(knots, x, 3)).tocsr()
+
+
+def _solve(matrix, rhs) -> np.ndarray:
+    """A sparse square system by LU (SuperLU); ``None`` where it is singular."""
+    try:
+        out = splu(sp.csc_matrix(matrix)).solve(np.asarray(rhs, float))
+    except RuntimeError:  # "Factor is exactly singular"
+        return None
+    return out if np.all(np.isfinite(out)) else None
 
 
 def spline_fit(x, y, smoothing_mm=None, *, ends=None, period: float | None = None,
@@ -177,87 +210,145 @@ def spline_fit(x, y, smoothing_mm=None, *, ends=None, period: float | None = Non
     ``ends=(y_first, y_last)``: clamped at ``x[0]`` and ``x[-1]`` (those lifts, ``v = a = 0``
     there); ``period``: periodic over ``[x[0], x[0] + period)`` instead.  Interpolating
     where ``smoothing_mm`` is ``None``, else the least ``int j^2`` within ``smoothing_mm``
-    of every point.  Returns ``((edges, taylor), deviation)``: the knots, each piece's
-    Taylor coefficients about its midpoint (``(pieces, 6)``), and the largest ``|f(x) - y|``.
-    ``angle_scale`` (degrees per unit of ``x``) puts the point's angle in a tolerance's error.
+    of every point (``smoothest_within``).  Returns ``((edges, taylor), deviation)``: the
+    knots, each piece's Taylor coefficients about its midpoint (``(pieces, 6)``), and the
+    largest ``|f(x) - y|``.  ``angle_scale`` (degrees per unit of ``x``) puts the point's
+    angle in a tolerance's error.  Every matrix is sparse (banded): time and memory grow
+    as the number of points.
     """
     x, y = np.asarray(x, float), np.asarray(y, float)
     n = x.size
     if period is None:
         knots = np.concatenate([np.full(DEGREE + 1, x[0]), x[1:-1], np.full(DEGREE + 1, x[-1])])
         edges = x
-        fold = np.eye(n + DEGREE - 1)
-        value, slope, curve = (_design(knots, x[[0, -1]], k) for k in range(3))
-        constraint = np.concatenate([value, slope, curve])
+        fold = sp.identity(n + DEGREE - 1, format="csr")
+        constraint = sp.vstack([_design(knots, x[[0, -1]], k) for k in range(3)]).tocsr()
         target = np.array([ends[0], ends[1], 0, 0, 0, 0], float)
+        boxed = np.arange(1, n - 1)  # the end points are the end conditions'
     else:
         # Knots wrapped past both ends; the first DEGREE basis functions are the last
         # DEGREE shifted by a period, so they share coefficients (``fold``).
         index = np.arange(-DEGREE, n + DEGREE + 1)
         knots = x[index % n] + period * np.floor_divide(index, n)
         edges = np.append(x, x[0] + period)
-        fold = np.zeros((n + DEGREE, n))
-        fold[np.arange(n + DEGREE), np.arange(n + DEGREE) % n] = 1.0
-        constraint, target = np.zeros((0, n)), np.zeros(0)
-    collocation = _design(knots, x, 0) @ fold
-    energy = fold.T @ _jerk_energy(knots, edges) @ fold
-    constraint = constraint @ fold if constraint.size else constraint
-    # Every fit is c = base + Z z (``Z`` spans the end conditions' null space), z minimising
-    # |A c - y|^2 + p c' E c.  With N = Z'A'AZ = L L' and L^-1 Z'EZ L^-T = U diag(d) U',
-    # z(p) = L^-T U (1 + p d)^-1 U' L^-1 (g - p h): one decomposition, then each penalty
-    # of the bisection is a few matrix-vector products.
-    if constraint.size:
-        base = np.linalg.lstsq(constraint, target, rcond=None)[0]
-        _, _, vt = np.linalg.svd(constraint)
-        null = vt[constraint.shape[0]:].T
-    else:
-        base, null = np.zeros(n), np.eye(n)
-    reduced = collocation @ null
-    factor = np.linalg.cholesky(reduced.T @ reduced)
-    inv_factor = np.linalg.inv(factor)
-    weighted = inv_factor @ (null.T @ energy @ null) @ inv_factor.T
-    d, u = np.linalg.eigh(0.5 * (weighted + weighted.T))
-    d = np.maximum(d, 0.0)
-    g = u.T @ (inv_factor @ (reduced.T @ (y - collocation @ base)))
-    h = u.T @ (inv_factor @ (null.T @ (energy @ base)))
-    back = null @ inv_factor.T @ u
-    positive = d[d > d.max() * 1e-12]
-    scale = 1.0 / float(np.median(positive)) if positive.size else 1.0
-
-    def solve(log_penalty: float | None):
-        if log_penalty is None:  # interpolating: the points and the end conditions fix the spline
-            rows = slice(1, -1) if constraint.size else slice(None)
-            coefficients = np.linalg.solve(np.concatenate([collocation[rows], constraint]),
-                                           np.concatenate([y[rows], target]))
-        else:
-            penalty = scale * 10.0**log_penalty
-            coefficients = base + back @ ((g - penalty * h) / (1.0 + penalty * d))
-        return coefficients, float(np.max(np.abs(collocation @ coefficients - y)))
-
-    coefficients, deviation = solve(None)
+        rows = np.arange(n + DEGREE)
+        fold = sp.csr_matrix((np.ones(rows.size), (rows, rows % n)), shape=(n + DEGREE, n))
+        constraint, target = sp.csr_matrix((0, n)), np.zeros(0)
+        boxed = np.arange(n)
+    collocation = (_design(knots, x, 0) @ fold).tocsr()
+    constraint = (constraint @ fold).tocsr() if period is None else constraint
+    interpolating = sp.vstack([collocation[boxed], constraint])
+    coefficients = _solve(interpolating, np.concatenate([y[boxed], target]))
+    if coefficients is None:
+        raise ValueError("the points do not determine an interpolating spline (angles too close together)")
+    residual = collocation @ coefficients - y
+    deviation = float(np.max(np.abs(residual)))
     if smoothing_mm is not None:
         if deviation > smoothing_mm:
-            k = int(np.argmax(np.abs(collocation @ coefficients - y)))
+            k = int(np.argmax(np.abs(residual)))
             angle = (x[k] - x[0]) * (angle_scale or 1.0)
             raise ValueError(f"smoothing_mm = {smoothing_mm:g} cannot be met: even the interpolating "
                              f"spline is {deviation:.3g} mm from point {k + 1} (angle_deg {angle:g}); "
                              "give a larger tolerance or none")
-        lo, hi = _LOG_PENALTY
-        best = solve(hi)
-        if best[1] > smoothing_mm:
-            best = (coefficients, deviation)
-            for _ in range(_BISECTIONS):
-                mid = 0.5 * (lo + hi)
-                trial = solve(mid)
-                if trial[1] <= smoothing_mm:
-                    lo, best = mid, trial
-                else:
-                    hi = mid
-        coefficients, deviation = best
+        jerk = (_weighted_jerk(knots, edges) @ fold).tocsr()
+        coefficients = smoothest_within(jerk, collocation, y, smoothing_mm, constraint, target, boxed)
+        deviation = float(np.max(np.abs(collocation @ coefficients - y)))
     full = fold @ coefficients
     mids = 0.5 * (edges[:-1] + edges[1:])
     taylor = np.stack([_design(knots, mids, k) @ full / math.factorial(k) for k in range(DEGREE + 1)], axis=1)
     return (edges, taylor), deviation
+
+
+def _saddle(hessian, blocks) -> sp.csr_matrix:
+    """The KKT matrix ``[[H, B'], [B, 0]]`` of ``H`` under the constraint rows ``B`` (the
+    non-empty ``blocks`` stacked)."""
+    rows = [b for b in blocks if b.shape[0]]
+    if not rows:
+        return hessian
+    b = sp.vstack(rows).tocsr()
+    return sp.bmat([[hessian, b.T], [b, None]]).tocsr()
+
+
+def smoothest_within(jerk, collocation, y, tolerance: float, constraint, target, boxed) -> np.ndarray:
+    """The coefficients ``c`` of least ``c' E c = |L c|^2`` (the jerk energy, ``L`` the
+    weighted ``jerk`` rows) with every boxed point within ``tolerance``, ``|(A c)_i - y_i|
+    <= tolerance``, and ``C c = target``.  The energy's gradient is taken as ``L' (L c)``,
+    not ``E c``: with thousands of points the jerk energy of a smooth lift is far below the
+    round-off of ``E c``'s cancelling terms.
+
+    A convex quadratic programme, solved by a primal-dual interior-point method (Mehrotra's
+    predictor-corrector): each step solves one sparse banded KKT system ``[[E + A' W A,
+    C'], [C, 0]]``, and some twenty steps reach the KKT conditions to round-off.  It
+    starts from the least-squares spline through the points (inside every band).
+    ``ValueError`` where it does not converge (the message says so).
+    """
+    a = collocation[boxed].tocsr()
+    yb = y[boxed]
+    energy = (jerk.T @ jerk).tocsr()
+    unit = float(energy.diagonal().mean())
+    e = (energy / unit).tocsr()
+    lower = (jerk / math.sqrt(unit)).tocsr()
+
+    def gradient(c):
+        return lower.T @ (lower @ c)
+
+    k, m = e.shape[0], yb.size
+    g = sp.vstack([a, -a]).tocsr()
+    h = np.concatenate([yb + tolerance, tolerance - yb])
+    start = _solve(_saddle(a.T @ a + 1e-12 * sp.identity(k), [constraint]), np.concatenate([a.T @ yb, target]))
+    if start is None:
+        raise ValueError(f"smoothing_mm = {tolerance:g}: the points do not determine a spline")
+    c = start[:k]
+    s = np.maximum(h - g @ c, 1e-3 * tolerance)
+    z = np.ones(2 * m) * max(1e-12, float(np.max(np.abs(gradient(c))))) / tolerance
+    mu_eq = np.zeros(constraint.shape[0])
+
+    def direction(r_d, r_p, r_i, r_c):
+        w = z / s
+        matrix = _saddle((e + g.T @ sp.diags(w) @ g).tocsr(), [constraint])
+        rhs = np.concatenate([-r_d - g.T @ ((-r_c + z * r_i) / s), -r_p])
+        out = _solve(matrix, rhs)
+        if out is None:
+            return None
+        dc, dmu = out[:k], out[k:]
+        ds = -r_i - g @ dc
+        dz = (-r_c - z * ds) / s
+        return dc, ds, dz, dmu
+
+    def step_to_boundary(v, dv):
+        shrinking = dv < 0
+        return min(1.0, float(np.min(-v[shrinking] / dv[shrinking]))) if shrinking.any() else 1.0
+
+    for _ in range(_INTERIOR_STEPS):
+        r_d = gradient(c) + g.T @ z + (constraint.T @ mu_eq if mu_eq.size else 0.0)
+        r_p = constraint @ c - target if mu_eq.size else np.zeros(0)
+        r_i = g @ c + s - h
+        gap = float(s @ z) / s.size
+        # Judged against the energy's gradient now, not at the start's: the noise's jerk
+        # makes that some ten orders of magnitude larger than the answer's.  The dual
+        # residual stalls at round-off (a few per cent of the gradient at 4000 points)
+        # while the complementarity gap still falls; the gap decides.
+        scale_d = float(np.max(np.abs(gradient(c)))) + 1e-300
+        if (np.max(np.abs(r_d)) <= 0.1 * scale_d and np.max(np.abs(r_i), initial=0.0) <= 1e-12 * float(np.max(np.abs(h)))
+                and gap <= 1e-12 * scale_d * tolerance):
+            break
+        affine = direction(r_d, r_p, r_i, s * z)
+        if affine is None:
+            break
+        alpha = min(step_to_boundary(s, affine[1]), step_to_boundary(z, affine[2]))
+        sigma = (float((s + alpha * affine[1]) @ (z + alpha * affine[2])) / s.size / gap) ** 3
+        step = direction(r_d, r_p, r_i, s * z + affine[1] * affine[2] - sigma * gap)
+        if step is None:
+            break
+        dc, ds, dz, dmu = step
+        alpha = 0.99 * min(step_to_boundary(s, ds), step_to_boundary(z, dz))
+        c, s, z = c + alpha * dc, s + alpha * ds, z + alpha * dz
+        mu_eq = mu_eq + alpha * dmu
+    slack = 1e-9 * tolerance + 1e-12 * float(np.max(np.abs(y)))
+    if not np.all(np.isfinite(c)) or np.max(np.abs(collocation @ c - y)) > tolerance + slack:
+        raise ValueError(f"smoothing_mm = {tolerance:g}: the smoothest spline within it was not found "
+                         "(the interior-point search did not converge); give a slightly different tolerance")
+    return c
 
 
 def evaluate_pieces(edges, taylor, x, order: int = 0) -> np.ndarray:
@@ -271,7 +362,8 @@ def evaluate_pieces(edges, taylor, x, order: int = 0) -> np.ndarray:
     return out
 
 
-def _peak_acceleration(edges, taylor) -> float:
+def peak_acceleration(edges, taylor) -> float:
+    """The largest ``|f''|`` of ``spline_fit``'s pieces (sampled 9 to a piece)."""
     x = np.concatenate([np.linspace(a, b, 9) for a, b in zip(edges[:-1], edges[1:])])
     return float(np.max(np.abs(evaluate_pieces(edges, taylor, x, 2))))
 
@@ -300,26 +392,31 @@ def noise_estimate(x, y) -> float:
     return float(np.median(np.abs(r)) / 0.6745)
 
 
-def table_checks(x, y, smoothing_mm, deviation, taylor, *, ends=None, period=None) -> TableFit:
+def table_checks(x, y, smoothing_mm, deviation, taylor, *, ends=None, period=None,
+                 check_spacing: bool = True) -> TableFit:
     """The fit's record with the two checks of its acceleration: against a fit smoothed to
-    three times the points' scatter, and against a fit through every other point."""
+    three times the points' scatter, and (``check_spacing``) against a fit through every
+    other point (NaN where too few points are left for a spline)."""
     x, y = np.asarray(x, float), np.asarray(y, float)
     edges = np.append(x, x[0] + period) if period is not None else x
-    peak = _peak_acceleration(edges, taylor)
+    peak = peak_acceleration(edges, taylor)
     noise = noise_estimate(x, y)
     noise = noise if noise > 1e-7 * max(1.0, float(np.ptp(y))) else 0.0
     reference_tol = max(smoothing_mm or 0.0, 3 * noise) or None
     reference = peak
     if reference_tol is not None and reference_tol != smoothing_mm:
         (_, smooth), _ = spline_fit(x, y, reference_tol, ends=ends, period=period)
-        reference = _peak_acceleration(edges, smooth)
+        reference = peak_acceleration(edges, smooth)
     spacing = 1.0
-    if noise == 0 and x.size >= 2 * MIN_TABLE_POINTS + 1 and (period is None or x.size % 2 == 0):
-        keep = np.arange(0, x.size, 2)
-        if period is None and keep[-1] != x.size - 1:
-            keep = np.append(keep, x.size - 1)
-        (half_edges, half), _ = spline_fit(x[keep], y[keep], reference_tol, ends=ends, period=period)
-        spacing = _peak_acceleration(half_edges, half) / max(reference, 1e-300)
+    keep = np.arange(0, x.size, 2)
+    if period is None and keep[-1] != x.size - 1:
+        keep = np.append(keep, x.size - 1)
+    if noise == 0 and check_spacing:
+        if keep.size < MIN_TABLE_POINTS:
+            spacing = math.nan
+        else:
+            (half_edges, half), _ = spline_fit(x[keep], y[keep], reference_tol, ends=ends, period=period)
+            spacing = peak_acceleration(half_edges, half) / max(reference, 1e-300)
     ratio = peak / max(reference, 1e-300)
     return TableFit(points=(), deviation_mm=float(deviation), smoothing_mm=smoothing_mm, noise_mm=noise,
                     acceleration_ratio=float(ratio), spacing_ratio=float(spacing))

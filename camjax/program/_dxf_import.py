@@ -38,33 +38,73 @@ BASE_RADIUS_TOLERANCE_MM = 0.01
 """How closely the follower's ``base_radius_mm`` must match the profile's base circle."""
 DEFAULT_POINTS = 720
 """Cam angles of the lift table by default (0.5 degree apart): the whole-cam table's
-quintic spline through them follows the lift within 1e-7 mm on the example cams, and a
-denser table costs its fit far more time than it gains."""
+quintic spline through them follows the lift within 1e-7 mm on the example cams; a denser
+table gains little there and costs the engine a piece per point."""
 _CURVES = ("LWPOLYLINE", "POLYLINE", "SPLINE", "CIRCLE", "ELLIPSE")
 _CHUNK = 128
 _ARC_BEZIERS = 128
 
 
+ROTATIONS = ("ccw", "cw")
+"""How the drawn cam turns: counter-clockwise (camjax's convention) or clockwise (read as
+its mirror image in the follower's axis, ``x -> -x``, which turns counter-clockwise)."""
+UNITS = {"mm": 4, "cm": 5, "m": 6, "in": 1, "ft": 2}
+"""Units a drawing's lengths may be read in (``units=``, ``dxf_units``), by ``$INSUNITS`` code."""
+SIZE_RANGE_MM = (1.0, 2000.0)
+"""Base radii outside this range (mm) are warned of: a drawing read in the wrong unit."""
+
+
 class DxfProfile(NamedTuple):
     """The closed profile read from a DXF file: polygon vertices (counter-clockwise, mm),
-    the entity's layer and type, and its base radius (least distance from the centre)."""
+    the entity's layer and type, and its base radius (least distance from the centre).
+    ``units``: how its lengths were read (``$INSUNITS`` and the scale to mm);
+    ``rotation``: ``"ccw"`` or ``"cw"`` (mirrored to turn counter-clockwise)."""
 
     points: np.ndarray
     layer: str
     entity: str
     base_radius_mm: float
+    units: str = "mm"
+    rotation: str = "ccw"
+    scale: float = 1.0
+
+    def note(self, path) -> str:
+        """One line saying what was read from the drawing and how."""
+        turning = ("counter-clockwise (dxf_rotation = \"ccw\")" if self.rotation == "ccw" else
+                   "clockwise (dxf_rotation = \"cw\": read as its mirror image, x -> -x)")
+        return (f"the cam's profile is the {self.entity} on layer {self.layer!r} of {Path(path).name}, "
+                f"lengths {self.units}, the cam turning {turning}; base radius {self.base_radius_mm:.6g} mm")
+
+    def size_warning(self, path) -> str | None:
+        """A warning where the base radius is implausible for a cam in mm: the wrong unit."""
+        lo, hi = SIZE_RANGE_MM
+        if lo <= self.base_radius_mm <= hi:
+            return None
+        other = [n for n, code in UNITS.items() if n != "mm" or self.scale != 1.0]
+        return (f"{Path(path).name}: the profile's base radius is {self.base_radius_mm:.6g} mm "
+                f"(lengths {self.units}), outside {lo:g} to {hi:g} mm: if the drawing is in another "
+                f"unit, say which with dxf_units (one of {', '.join(other)})")
 
 
-def read_dxf_profile(path, layer: str | None = None) -> DxfProfile:
+def read_dxf_profile(path, layer: str | None = None, *, rotation: str = "ccw",
+                     units: str | None = None) -> DxfProfile:
     """The cam profile in a DXF file: the one closed curve (on ``layer`` if given; else the
-    one on layer ``PROFILE``, ``write_dxf``'s, if there is one; else the only closed curve).
+    one on layer ``PROFILE``, ``write_dxf``'s, if there is one; else the only closed curve,
+    unless it lies on a layer named for a pitch curve).
 
+    Lengths are scaled to mm from the unit the file's ``$INSUNITS`` names (unitless: mm),
+    or from ``units`` (a key of ``UNITS``) where given.  ``rotation="cw"``: the drawn cam
+    turns clockwise, and its mirror image in the follower's axis (``x -> -x``) is read.
     Several closed curves with no way to choose between them, none, a file that is not a
     DXF, or a profile that does not enclose the cam centre are each a one-line
     ``ValueError`` naming the file.
     """
     import ezdxf
 
+    if rotation not in ROTATIONS:
+        raise ValueError(f"rotation must be one of {', '.join(map(repr, ROTATIONS))}, got {rotation!r}")
+    if units is not None and units not in UNITS:
+        raise ValueError(f"units must be one of {', '.join(map(repr, UNITS))}, got {units!r}")
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: DXF file not found")
@@ -73,7 +113,7 @@ def read_dxf_profile(path, layer: str | None = None) -> DxfProfile:
     except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as error:
         detail = str(error).splitlines()[0] if str(error) else type(error).__name__
         raise ValueError(f"{path}: not a readable DXF file ({detail})") from None
-    scale = _to_mm(doc)
+    scale, unit_text = _to_mm(doc, units)
     entities = [e for e in doc.modelspace() if e.dxftype() in _CURVES]
     if layer is not None:
         entities = [e for e in entities if e.dxf.layer == layer]
@@ -92,6 +132,10 @@ def read_dxf_profile(path, layer: str | None = None) -> DxfProfile:
     if len(closed) > 1 and layer is None:
         on_profile = [c for c in closed if c[0].dxf.layer == "PROFILE"]
         closed = on_profile or closed
+    if len(closed) == 1 and layer is None and "PITCH" in str(closed[0][0].dxf.layer).upper():
+        raise ValueError(f"{path}: the only closed curve, a {closed[0][0].dxftype()} on layer "
+                         f"{closed[0][0].dxf.layer!r}, looks like a pitch curve (the roller centre's "
+                         "path), not the profile; give its layer (dxf_layer, layer=) to read it as the profile")
     if len(closed) > 1:
         names = ", ".join(f"{e.dxftype()} on layer {e.dxf.layer!r}" for e, _ in closed)
         hint = ("draw the profile alone on its own layer" if layer is not None else
@@ -99,6 +143,8 @@ def read_dxf_profile(path, layer: str | None = None) -> DxfProfile:
         raise ValueError(f"{path}: {len(closed)} closed curves{where} ({names}); {hint}")
     entity, points = closed[0]
     points = points * scale
+    if rotation == "cw":
+        points = points * np.array([-1.0, 1.0])
     if _signed_area(points) < 0:
         points = points[::-1]
     name = f"{path}: {entity.dxftype()} on layer {entity.dxf.layer!r}"
@@ -106,16 +152,29 @@ def read_dxf_profile(path, layer: str | None = None) -> DxfProfile:
         raise ValueError(f"{name} does not enclose the cam centre (the origin): the profile must be "
                          "drawn about the cam's centre")
     radius = float(np.min(np.hypot(points[:, 0], points[:, 1])))
-    return DxfProfile(points, str(entity.dxf.layer), entity.dxftype(), radius)
+    return DxfProfile(points, str(entity.dxf.layer), entity.dxftype(), radius, unit_text, rotation, scale)
 
 
-def _to_mm(doc) -> float:
+def _to_mm(doc, units: str | None) -> tuple[float, str]:
+    """The scale from the drawing's lengths to mm, and how it was found (for the note)."""
     import ezdxf.units
 
-    units = doc.header.get("$INSUNITS", 0)
-    if units in (0, ezdxf.units.MM):
-        return 1.0
-    return float(ezdxf.units.conversion_factor(units, ezdxf.units.MM))
+    code = doc.header.get("$INSUNITS", 0)
+    try:
+        name = ezdxf.units.unit_name(code)
+    except (KeyError, IndexError, TypeError):
+        name = "unknown"
+    said = f"$INSUNITS = {code} ({name})"
+    if units is not None:
+        scale = float(ezdxf.units.conversion_factor(UNITS[units], ezdxf.units.MM))
+        return scale, f"in {units} (dxf_units; the file's {said})" + (f", times {scale:g} to mm" if scale != 1 else "")
+    if code in (0, ezdxf.units.MM):
+        return 1.0, f"in mm ({said})"
+    try:
+        scale = float(ezdxf.units.conversion_factor(code, ezdxf.units.MM))
+    except (KeyError, IndexError, TypeError, ZeroDivisionError):
+        return 1.0, f"in mm ({said}, a unit camjax does not know)"
+    return scale, f"scaled from {said} by {scale:g} to mm"
 
 
 def _flattened(entity, path: Path) -> np.ndarray | None:
@@ -170,13 +229,14 @@ def _encloses_origin(p: np.ndarray) -> bool:
     return abs(turn) > np.pi
 
 
-def lift_from_dxf(path, follower, *, points: int = DEFAULT_POINTS, layer: str | None = None):
+def lift_from_dxf(path, follower, *, points: int = DEFAULT_POINTS, layer: str | None = None,
+                  rotation: str = "ccw", units: str | None = None):
     """``(angle_deg, lift_mm)`` of the cam drawn in a DXF file under ``follower`` (a
     ``camjax.program.Follower``): ``points`` angles evenly over the turn from 0, the lift
     measured from the follower's base circle (for a swinging follower the arc of the roller
     centre or the face's swing times ``arm_mm``, as ``Program.lift``).
 
-    The profile is ``read_dxf_profile``'s.  A ``ValueError`` naming the file says why a
+    The profile is ``read_dxf_profile``'s (``layer``, ``rotation``, ``units`` as there).  A ``ValueError`` naming the file says why a
     profile is not a cam for this follower: its base circle is not ``base_radius_mm``, the
     roller cannot reach a hollow narrower than itself, a flat face meets a non-convex
     profile, the follower does not reach the profile or its pivot lies inside it.
@@ -188,7 +248,12 @@ def lift_from_dxf(path, follower, *, points: int = DEFAULT_POINTS, layer: str | 
         raise ValueError(f"points must be a whole number of cam angles from {MIN_TABLE_POINTS} to {MAX_TABLE_POINTS:,}, "
                          f"got {points!r}")
     _check_follower(follower)
-    cam = read_dxf_profile(path, layer)
+    cam = read_dxf_profile(path, layer, rotation=rotation, units=units)
+    return _lift(cam, path, follower, int(points))
+
+
+def _lift(cam: DxfProfile, path, follower, points: int):
+    """The lift table of ``lift_from_dxf`` for a profile already read."""
     name = f"{Path(path)}: {cam.entity} on layer {cam.layer!r}"
     f = follower
     if abs(cam.base_radius_mm - f.base_radius_mm) > BASE_RADIUS_TOLERANCE_MM:
@@ -352,3 +417,24 @@ def _check_convex(q: np.ndarray, name: str, kind: str) -> None:
         raise ValueError(f"{name}: the profile is not convex near {_polar_deg(q[worst]):.4g} deg on the cam "
                          f"({depth[worst]:.4g} mm inside its convex hull): a {kind} follower's face cannot "
                          "touch it")
+
+
+def dxf_segments(path, follower, *, points: int = DEFAULT_POINTS, layer: str | None = None,
+                 rotation: str = "ccw", units: str | None = None, smoothing_mm: float | None = None,
+                 source: str | None = None):
+    """A whole cam's segments from its drawing: ``turn_segments`` of ``lift_from_dxf``'s
+    table, their record (``TableFit``) carrying what was read (``DxfProfile.note``), a
+    warning where its size suggests the wrong unit, and the spacing check (for fewer than
+    12 angles, against the drawing itself read at twice the angles)."""
+    from ..laws import MIN_TABLE_POINTS as MIN_POINTS
+    from ._table import turn_segments
+
+    angle, lift = lift_from_dxf(path, follower, points=points, layer=layer, rotation=rotation, units=units)
+    cam = read_dxf_profile(path, layer, rotation=rotation, units=units)
+    # Too few angles for a fit through every other one (the tables' spacing check): the
+    # drawing read at twice the angles instead.  Not always: between a polyline's vertices
+    # the denser read follows its chords' kinks, and reads them as acceleration.
+    denser = _lift(cam, path, follower, 2 * int(points)) if (int(points) + 1) // 2 < MIN_POINTS else None
+    notes = (cam.note(path),) + tuple(w for w in (cam.size_warning(path),) if w)
+    return turn_segments(angle, lift, smoothing_mm, str(path) if source is None else source, "",
+                         denser=denser, notes=notes)

@@ -413,7 +413,7 @@ def design_warnings(program: Program, report=None) -> list[str]:
     trusted as they stand.  ``analyse`` puts them in its report (``Report.warnings``, in
     ``--format json`` and the studio); ``camjax program`` prints them on stderr.
     """
-    out = []
+    out = table_warnings(program)  # first: a drawing's or table's note says what was read
     f, materials = program.follower, program.materials
     report = report.as_dict() if hasattr(report, "as_dict") else report
     limit = MAX_PRESSURE_ANGLE_DEG.get(f.kind)
@@ -443,7 +443,6 @@ def design_warnings(program: Program, report=None) -> list[str]:
     if f.contact_width_mm is not None and f.contact_width_mm > 20 * f.base_radius_mm:
         out.append(f"follower.contact_width_mm = {f.contact_width_mm:g} is more than ten times the "
                    f"base circle's diameter: check the unit (mm)")
-    out += table_warnings(program)
     if report is None:
         return out
     out += speed_warnings(program, [s["rpm"] for s in report["speeds"]])
@@ -500,14 +499,20 @@ def table_warnings(program: Program) -> list[str]:
         if fit.turn is not None:
             seen.add(fit.turn)
         where += f" ({fit.source})"
+        out += list(fit.notes)
         if fit.acceleration_ratio > NOISY_ACCELERATION_RATIO:
             out.append(f"{where}: the points scatter by about {fit.noise_mm:.2g} mm; the fit's peak "
                        f"acceleration is {fit.acceleration_ratio:.3g} times that of a fit within "
                        f"{3 * fit.noise_mm:.2g} mm of them, so its accelerations and forces follow the "
                        f"noise: set smoothing_mm = {3 * fit.noise_mm:.2g} (about three times the scatter)")
+        elif math.isnan(fit.spacing_ratio):
+            count = len(fit.turn if fit.turn is not None else fit.points)
+            out.append(f"{where}: its {count} points are too few to check that they resolve the "
+                       "acceleration (a fit through every other point needs 6); give points closer together")
         elif abs(fit.spacing_ratio - 1) > COARSE_SPACING_CHANGE:
-            spacing = max(b[0] - a[0] for a, b in zip(fit.points[:-1], fit.points[1:]))
+            angles = [a for a, _ in (fit.turn if fit.turn is not None else fit.points)]
+            spacing = max(np.diff(angles + ([360.0] if fit.turn is not None else [])))
             out.append(f"{where}: its points (up to {spacing:.3g} deg apart) are too sparse for its "
-                       f"acceleration: a fit through every other point changes the peak acceleration "
+                       f"acceleration: against {fit.spacing_check}, the peak acceleration differs "
                        f"by {100 * abs(fit.spacing_ratio - 1):.3g}%; give points closer together")
     return out

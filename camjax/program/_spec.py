@@ -40,7 +40,7 @@ reported apart, so 100,000 slivers took minutes and megabytes of output; more is
 before any work."""
 TABLE_KEYS = ("file", "points", "smoothing_mm")
 """A ``law = "table"`` segment's keys (and a whole cam's, in ``[program]``)."""
-DXF_KEYS = ("dxf", "dxf_layer", "dxf_points")
+DXF_KEYS = ("dxf", "dxf_layer", "dxf_points", "dxf_rotation", "dxf_units")
 """``[program]`` keys of a whole cam drawn in a DXF file (with ``smoothing_mm``)."""
 _LIFT_TOLERANCE_MM = 1e-9
 
@@ -203,18 +203,24 @@ class Program:
 
     @classmethod
     def from_dxf(cls, name: str, path, follower: Follower, *, points: int | None = None, layer: str | None = None,
-                 smoothing_mm: float | None = None, materials: Materials = Materials()) -> Program:
+                 smoothing_mm: float | None = None, rotation: str = "ccw", units: str | None = None,
+                 materials: Materials = Materials()) -> Program:
         """A whole cam from its profile drawn in a DXF file (``write_dxf``'s inverse): the
-        lift ``lift_from_dxf`` finds for ``follower`` at ``points`` angles, through
-        ``from_table`` (``smoothing_mm`` as there).  Errors are one-line ``ValueError``s
-        naming the file."""
-        from ._dxf_import import DEFAULT_POINTS, lift_from_dxf
+        lift ``lift_from_dxf`` finds for ``follower`` at ``points`` angles (``layer``,
+        ``rotation``, ``units`` as there), fitted as ``from_table`` fits a table
+        (``smoothing_mm`` as there).  Errors are one-line ``ValueError``s naming the file."""
+        from ._dxf_import import DEFAULT_POINTS, dxf_segments
 
-        angle, lift = lift_from_dxf(path, follower, points=DEFAULT_POINTS if points is None else points, layer=layer)
+        if smoothing_mm is not None and _finite(smoothing_mm, "smoothing_mm") <= 0:
+            raise ValueError(f"smoothing_mm must be a positive tolerance in mm, got {smoothing_mm:g}")
+        points = DEFAULT_POINTS if points is None else points
         try:
-            return cls.from_table(name, angle, lift, follower, smoothing_mm=smoothing_mm, materials=materials)
+            parts = dxf_segments(path, follower, points=points, layer=layer, rotation=rotation, units=units,
+                                 smoothing_mm=smoothing_mm)
         except ValueError as error:
-            raise ValueError(f"{path}: {_dxf_table_error(error)}") from None
+            message = _dxf_table_error(error)
+            raise ValueError(message if message.startswith(str(path)) else f"{path}: {message}") from None
+        return cls(name, tuple(Segment(a, h, law) for a, h, law in parts), follower, materials)
 
     def unnamed_laws(self) -> dict[int, AbstractMotionLaw]:
         """The laws ``to_toml`` can only name by a file (``law_files``), by 1-based segment:
@@ -403,27 +409,34 @@ def _dxf_header(header: dict, segments_data) -> str | None:
 def _dxf_segments(name: str, header: dict, follower_data: dict, base: Path | None):
     """A whole cam's segments from ``[program] dxf`` (path relative to the program file) and
     the follower's fields, ``base_radius_mm`` taken from the profile when not given."""
-    from ._dxf_import import DEFAULT_POINTS, lift_from_dxf, read_dxf_profile
+    from ._dxf_import import DEFAULT_POINTS, ROTATIONS, UNITS, dxf_segments, read_dxf_profile
 
     path = Path(name) if base is None else base / name
     layer = header.get("dxf_layer")
     if layer is not None and not isinstance(layer, str):
         raise ValueError(f"[program] dxf_layer must be a layer name, got {layer!r}")
+    rotation = header.get("dxf_rotation", "ccw")
+    if rotation not in ROTATIONS:
+        raise ValueError(f"[program] dxf_rotation must be one of {', '.join(map(repr, ROTATIONS))} (how the drawn "
+                         f"cam turns), got {rotation!r}")
+    units = header.get("dxf_units")
+    if units is not None and units not in UNITS:
+        raise ValueError(f"[program] dxf_units must be one of {', '.join(map(repr, UNITS))} (the drawing's "
+                         f"length unit, in place of its $INSUNITS), got {units!r}")
     points = header.get("dxf_points", DEFAULT_POINTS)
     smoothing = header.get("smoothing_mm")
     if smoothing is not None and _finite(smoothing, "[program] smoothing_mm") <= 0:
         raise ValueError(f"[program] smoothing_mm must be a positive tolerance in mm, got {smoothing:g}")
     try:
         if "base_radius_mm" not in follower_data:
-            follower_data = {**follower_data, "base_radius_mm": read_dxf_profile(path, layer).base_radius_mm}
-        angle, lift = lift_from_dxf(path, Follower(**follower_data), points=points, layer=layer)
+            cam = read_dxf_profile(path, layer, rotation=rotation, units=units)
+            follower_data = {**follower_data, "base_radius_mm": cam.base_radius_mm}
+        parts = dxf_segments(path, Follower(**follower_data), points=points, layer=layer, rotation=rotation,
+                             units=units, smoothing_mm=smoothing, source=name)
     except ValueError as error:
-        message = str(error).replace("points must", "dxf_points must", 1)
+        message = _dxf_table_error(error).replace("points must", "dxf_points must", 1)
         raise ValueError(f"[program] dxf: {message}") from None
-    try:
-        return [Segment(a, h, law) for a, h, law in turn_segments(angle, lift, smoothing, name)], follower_data
-    except ValueError as error:
-        raise ValueError(_dxf_table_error(error)) from None
+    return [Segment(a, h, law) for a, h, law in parts], follower_data
 
 
 def _dxf_table_error(error: ValueError) -> str:
@@ -433,7 +446,18 @@ def _dxf_table_error(error: ValueError) -> str:
     if "angle 0 must be on the base circle" in message or "highest lift must lie after angle 0" in message:
         message += ("; in the drawing, the follower stands at angle 0 (a translating one on the +y axis): "
                     "turn the profile so that the base circle is there")
-    return message
+    return message + _units_hint(message)
+
+
+def _units_hint(message: str) -> str:
+    """A note on the drawing's unit where a DXF error's lengths are implausibly large."""
+    import re
+
+    lengths = [float(x) for x in re.findall(r"(-?\d+(?:\.\d+)?(?:e[+-]?\d+)?) mm", message)]
+    if lengths and max(map(abs, lengths)) > 2000.0 and "dxf_units" not in message:
+        return ("; lengths that large suggest a drawing read in the wrong unit (its $INSUNITS): "
+                "say which with dxf_units")
+    return ""
 
 
 def _table_arrays(angle_deg, lift_mm):

@@ -1,7 +1,7 @@
 """Lift tables: a segment, or a whole cam, given by its points.
 
-A table is ``angle_deg, lift_mm`` rows: a CSV file (a header naming the two columns, comma
-or semicolon separated, ``.`` decimals) or inline ``points = [[angle, lift], ...]``.  A
+A table is ``angle_deg, lift_mm`` rows: a CSV file (a header naming the two columns, tab,
+semicolon or comma separated, ``.`` decimals) or inline ``points = [[angle, lift], ...]``.  A
 segment's table runs from 0 to the segment's angle and becomes one ``TableLaw`` (rest to
 rest); a whole cam's table starts at 0 and ends below 360 degrees and is fitted
 periodically, then cut at its highest point into a rise and a return, so that the
@@ -23,11 +23,14 @@ from ..laws import (
     TableFit,
     TableLaw,
     evaluate_pieces,
+    peak_acceleration,
     spline_fit,
     table_checks,
 )
 
 COLUMNS = ("angle_deg", "lift_mm")
+SEPARATORS = {"\t": "tab", ";": "semicolon", ",": "comma"}
+"""A table's column separators, the first found in its header chosen."""
 _LIFT_MATCH_MM = 1e-6
 """How closely a table segment's ``lift_mm`` must equal its table's last minus first lift
 (plus its ``smoothing_mm``)."""
@@ -47,12 +50,15 @@ def read_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if not lines:
         raise ValueError(f"{path}: empty; a lift table has a header ({', '.join(COLUMNS)}) and rows")
     n_head, head = lines[0]
-    sep = ";" if ";" in head else ","
+    sep = next((s for s in SEPARATORS if s in head), ",")
     names = [c.strip().strip('"').lower() for c in head.split(sep)]
     missing = [c for c in COLUMNS if c not in names]
     if missing:
+        read_as = (f"read as {SEPARATORS[sep]}-separated" if sep in head else
+                   "no tab, ';' or ',' separates its names")
         raise ValueError(f"{path}: line {n_head}: the header must name the columns "
-                         f"{' and '.join(COLUMNS)} (got {', '.join(names)}); missing {', '.join(missing)}")
+                         f"{' and '.join(COLUMNS)} (got {' | '.join(map(repr, names))}, {read_as}); "
+                         f"missing {', '.join(missing)}")
     columns = [names.index(c) for c in COLUMNS]
     rows, line_numbers = [], []
     for n, line in lines[1:]:
@@ -64,7 +70,7 @@ def read_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
             try:
                 value = float(cells[k])
             except ValueError:
-                hint = " (decimals take '.', not ',')" if "," in cells[k] or (sep == ";" and "," in line) else ""
+                hint = " (decimals take '.', not ',')" if "," in cells[k] or (sep != "," and "," in line) else ""
                 raise ValueError(f"{path}: line {n}: {name} {cells[k]!r} is not a number{hint}") from None
             if not math.isfinite(value):
                 raise ValueError(f"{path}: line {n}: {name} must be finite, got {cells[k]!r}")
@@ -161,33 +167,45 @@ def segment_law(where: str, angle_deg, lift_mm, data: dict, base: Path | None):
     return lift_mm, law
 
 
-def turn_segments(angle, lift, smoothing_mm: float | None, source: str, where: str = "[program]"):
+def turn_segments(angle, lift, smoothing_mm: float | None, source: str, where: str = "[program]", *,
+                  denser=None, notes: tuple[str, ...] = ()):
     """The segments ``(angle_deg, lift_mm, TableLaw)`` of a whole cam's periodic table: a
-    rise from 0 degrees to its highest point and a return to 360."""
+    rise from 0 degrees to its highest point and a return to 360.  ``denser``: the same
+    cam's ``(angle, lift)`` at more angles (a drawing read again), against whose fit the
+    spacing is checked instead of a fit through every other point; ``notes`` go to the
+    report's warnings.  Errors start ``where: source:`` (``source:`` where ``where`` is empty)."""
+    prefix = f"{where}: {source}" if where else source
     if angle[0] != 0.0:
-        raise ValueError(f"{where}: {source}: a whole cam's table starts at angle_deg 0, got {angle[0]:g}")
+        raise ValueError(f"{prefix}: a whole cam's table starts at angle_deg 0, got {angle[0]:g}")
     if angle[-1] >= 360.0:
-        raise ValueError(f"{where}: {source}: the last angle_deg ({angle[-1]:g}) must be below 360 "
+        raise ValueError(f"{prefix}: the last angle_deg ({angle[-1]:g}) must be below 360 "
                          "(360 is 0 again: the table closes over the turn)")
     widest = float(np.max(np.diff(angle)))
     if 360.0 - angle[-1] > 2.0 * widest:
-        raise ValueError(f"{where}: {source}: the table ends at {angle[-1]:g} deg and does not close "
+        raise ValueError(f"{prefix}: the table ends at {angle[-1]:g} deg and does not close "
                          f"over the turn (its gap to 360 is more than twice its widest spacing, "
                          f"{widest:g} deg); give the whole turn")
     try:
         (edges, taylor), deviation = spline_fit(angle / 360.0, lift, smoothing_mm, period=1.0, angle_scale=360.0)
     except ValueError as error:
-        raise ValueError(f"{where}: {source}: {error}") from None
-    info = table_checks(angle / 360.0, lift, smoothing_mm, deviation, taylor, period=1.0)
+        raise ValueError(f"{prefix}: {error}") from None
+    info = table_checks(angle / 360.0, lift, smoothing_mm, deviation, taylor, period=1.0,
+                        check_spacing=denser is None)
+    if denser is not None:
+        (dense_edges, dense), _ = spline_fit(np.asarray(denser[0]) / 360.0, denser[1], smoothing_mm, period=1.0)
+        ratio = peak_acceleration(edges, taylor) / max(peak_acceleration(dense_edges, dense), 1e-300)
+        info = dataclasses.replace(info, spacing_ratio=float(ratio),
+                                   spacing_check=f"the drawing read at {len(denser[0])} angles")
+    info = dataclasses.replace(info, notes=tuple(notes))
     slack = max(1e-6, smoothing_mm or 0.0, 3 * info.noise_mm)
     low = int(np.argmin(lift))
     if lift[low] < lift[0] - slack:
-        raise ValueError(f"{where}: {source}: angle 0 must be on the base circle (the program's lift "
+        raise ValueError(f"{prefix}: angle 0 must be on the base circle (the program's lift "
                          f"is measured from it), but the lift there is {lift[0]:g} mm and at "
                          f"{angle[low]:g} deg {lift[low]:g} mm; start the table at its lowest point")
     top = int(np.argmax(lift))
     if top == 0 or np.ptp(lift) == 0:
-        raise ValueError(f"{where}: {source}: the highest lift must lie after angle 0 (angle 0 is "
+        raise ValueError(f"{prefix}: the highest lift must lie after angle 0 (angle 0 is "
                          "the base circle, where the program's lift is 0)")
     turn = tuple(zip(map(float, angle), map(float, lift)))
     y0 = _value(edges, taylor, 0)
