@@ -19,8 +19,8 @@ own source files (an edit of the code or an upgrade is a new folder).  The newes
 ``KEPT_VERSIONS`` folders (by last use) are kept and older ones deleted when a new one is
 made.  Anything unreadable is traced afresh and written again; a program ``jax.export``
 cannot keep (one with a host callback) is reported once (a warning naming it), marked,
-and traced in each process.  Each ``exported_jit`` remembers at most ``MEMO_SIZE`` loaded
-programs in its process (the least recently used go first).
+and traced in each process.  Each ``exported_jit`` remembers at most ``memo_size``
+(``MEMO_SIZE``) loaded programs in its process (the least recently used go first).
 """
 
 from __future__ import annotations
@@ -120,10 +120,10 @@ class exported_jit:
     ``equinox.filter_jit`` as they are, untouched by the cache.
     """
 
-    def __init__(self, fn, name: str):
-        self.fn, self.name = fn, name
+    def __init__(self, fn, name: str, memo_size: int = MEMO_SIZE):
+        self.fn, self.name, self.memo_size = fn, name, memo_size
         self.jitted = eqx.filter_jit(fn)
-        self.loaded: collections.OrderedDict[tuple, object] = collections.OrderedDict()  # MEMO_SIZE at most
+        self.loaded: collections.OrderedDict[tuple, object] = collections.OrderedDict()  # memo_size at most
         functools.update_wrapper(self, fn)
 
     def __call__(self, *args):
@@ -151,7 +151,7 @@ class exported_jit:
                 key = hashlib.sha256(text.encode()).hexdigest()[:32]
                 program = self._program(directory / f"{self.name}-{key}.bin", tree, static, leaves)
             self.loaded[memo] = program
-            if len(self.loaded) > MEMO_SIZE:
+            if len(self.loaded) > self.memo_size:
                 self.loaded.popitem(last=False)
         return self.jitted(*args) if program is _UNKEPT else program(leaves)
 

@@ -9,8 +9,7 @@ from helpers import FOLLOWER, two_cycloids
 
 import camjax.program as cp
 from camjax import laws
-from camjax.program._dynamics import SteadyState
-from camjax.program._jump import ContactForceBound, jump_speed_checked, scan_speeds
+from camjax.program import ContactForceBound, SteadyState, scan_speeds
 
 TRANSFER = Path(__file__).resolve().parents[1] / "experiments" / "benchmarks" / "transfer.toml"
 
@@ -84,7 +83,7 @@ def test_bound_rules_out_the_low_speeds_of_the_scan():
 @pytest.mark.parametrize("name", [*BUILT_IN, *OWN])
 def test_jump_speed_equals_the_plain_search(name):
     steady = SteadyState({**BUILT_IN, **OWN}[name](), 200.0)
-    found = jump_speed_checked(steady, 200.0, 1400.0)
+    found = cp.jump_speed_rpm(steady, 200.0, 1400.0)
     expected = plain_jump_speed(steady, 200.0, 1400.0)
     assert expected is not None and 200.0 < expected < 1400.0  # a search with something to find
     assert found == pytest.approx(expected, abs=0.01)

@@ -69,15 +69,15 @@ def test_the_key_tells_two_programs_of_one_shape_apart(tmp_path):
 
 
 def test_old_versions_are_pruned(tmp_path):
-    from camjax import _traces
+    from camjax import caches
 
     for age in range(6):
         folder = tmp_path / f"version{age}"
         folder.mkdir()
         os.utime(folder, (1e9 - age, 1e9 - age))  # version0 the newest
-    removed = _traces.prune(tmp_path, keep=_traces.KEPT_VERSIONS)
-    assert sorted(p.name for p in tmp_path.iterdir()) == [f"version{i}" for i in range(_traces.KEPT_VERSIONS)]
-    assert len(removed) == 6 - _traces.KEPT_VERSIONS
+    removed = caches.prune_traces(tmp_path, keep=caches.KEPT_VERSIONS)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"version{i}" for i in range(caches.KEPT_VERSIONS)]
+    assert len(removed) == 6 - caches.KEPT_VERSIONS
 
 
 def test_a_program_that_cannot_be_kept_is_reported_once(tmp_path, monkeypatch):
@@ -88,7 +88,7 @@ def test_a_program_that_cannot_be_kept_is_reported_once(tmp_path, monkeypatch):
     import numpy as np
     import pytest
 
-    from camjax import _traces
+    from camjax import caches
 
     monkeypatch.setenv("CAMJAX_CACHE_DIR", str(tmp_path))
 
@@ -96,27 +96,26 @@ def test_a_program_that_cannot_be_kept_is_reported_once(tmp_path, monkeypatch):
         y = jax.pure_callback(lambda v: np.asarray(v) * 2.0, jax.ShapeDtypeStruct(x.shape, x.dtype), x)
         return y + 1.0
 
-    jitted = _traces.exported_jit(with_callback, "callback-test")
+    jitted = caches.exported_jit(with_callback, "callback-test")
     with pytest.warns(RuntimeWarning, match="'callback-test' cannot be kept on disk"):
         assert float(jitted(jnp.asarray(1.5))) == 4.0
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert float(jitted(jnp.asarray(2.5))) == 6.0  # remembered: no second warning
-        again = _traces.exported_jit(with_callback, "callback-test")  # a new process's view: the marker
+        again = caches.exported_jit(with_callback, "callback-test")  # a new process's view: the marker
         assert float(again(jnp.asarray(0.5))) == 2.0
 
 
 def test_the_memo_is_bounded_and_the_setting_is_explicit(tmp_path, monkeypatch):
     import jax.numpy as jnp
 
-    from camjax import _traces
+    from camjax import caches
 
     monkeypatch.setenv("CAMJAX_CACHE_DIR", "off")
-    assert not _traces.kept()
+    assert not caches.traces_kept()
     monkeypatch.setenv("CAMJAX_CACHE_DIR", str(tmp_path))
-    assert _traces.kept()
-    monkeypatch.setattr(_traces, "MEMO_SIZE", 2)
-    square = _traces.exported_jit(lambda x: x * x, "square-test")
+    assert caches.traces_kept()
+    square = caches.exported_jit(lambda x: x * x, "square-test", memo_size=2)
     for n in range(1, 5):
         assert float(square(jnp.full(n, 3.0)).sum()) == 9.0 * n
     assert len(square.loaded) == 2
