@@ -11,10 +11,11 @@ from camjax.program import Follower, Program, Segment, SteadyState, analyse
 
 def test_a_very_stiff_train_is_refused_with_the_speed_that_would_fit():
     """1e12 N/mm ran 105 s and ended out of memory; now refused at once."""
+    program = two_cycloids(stiffness_n_per_mm=1e12)  # its laws' evaluation compiles here
     with compiled_programs() as compiled, pytest.raises(
             ValueError, match=r"a turn at 600 rpm needs [\d,]+ grid intervals \(the limit is "
                               r"1,048,576\).*run at .* rpm or faster, or lower follower.stiffness_n_per_mm"):
-        SteadyState(two_cycloids(stiffness_n_per_mm=1e12), 600.0)
+        SteadyState(program, 600.0)
     assert compiled == []  # refused before any work (its time: experiments/benchmarks/refusal_speed.py)
 
 

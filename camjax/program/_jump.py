@@ -46,22 +46,25 @@ def scan_speeds(program, rpm_lo: float, rpm_hi: float, per_cycle: float) -> np.n
     return even_periods(rpm_lo, rpm_hi, max(16, math.ceil(per_cycle * cycles) + 1))
 
 
-def jump_speed_rpm(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1):
+def jump_speed_rpm(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1, *,
+                   rule_out: bool = True):
     """Lowest speed in ``[rpm_lo, rpm_hi]`` at which the contact force goes negative, or ``None``.
 
     The scan samples evenly in ``1/rpm`` with 16 samples per natural-frequency cycle
     that a cycle of the cam gains or loses across the range (every period ratio of the
     program moves by 1/16 between samples), then bisects the first crossing to
-    ``tolerance_rpm``.
+    ``tolerance_rpm``.  The scan's low speeds where ``ContactForceBound`` holds contact are
+    not computed (``rule_out=False``: every scan speed is, as the benchmarks' baseline).
     """
     rpm_lo = float(check_rpm(rpm_lo, name="rpm_lo")[0])
     rpm_hi = float(check_rpm(rpm_hi, name="rpm_hi")[0])
     if not rpm_lo <= rpm_hi:
         raise ValueError(f"need rpm_lo <= rpm_hi, got {rpm_lo:g}, {rpm_hi:g}")
-    return jump_speed_checked(steady, rpm_lo, rpm_hi, tolerance_rpm)
+    return jump_speed_checked(steady, rpm_lo, rpm_hi, tolerance_rpm, rule_out=rule_out)
 
 
-def jump_speed_checked(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1):
+def jump_speed_checked(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1,
+                       *, rule_out: bool = True):
     """``jump_speed_rpm`` over speeds already checked (``check_rpm``, ``rpm_lo <= rpm_hi``).
 
     The scan's speeds up to the first one where ``ContactForceBound`` does not hold
@@ -69,12 +72,18 @@ def jump_speed_checked(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolera
     of the least contact force); the rest of the scan runs in waves of speed blocks up to
     the first loss of contact, and each round of the bisection is one block.  The scan's
     speeds and the rounds are the ones of a plain scan, so the answer is the same.
+    ``rule_out=False`` is that plain scan: every scan speed computed, in one dispatch (the
+    benchmarks' baseline).
     """
     if steady.program.follower.form_closed:
         return None
     rpm = scan_speeds(steady.program, rpm_lo, rpm_hi, 16)
     rpm[0], rpm[-1] = rpm_lo, rpm_hi
-    i = _first_loss(steady, rpm)
+    if rule_out:
+        i = _first_loss(steady, rpm)
+    else:
+        lost = np.flatnonzero(steady.min_contact_force_checked(rpm) < 0)
+        i = int(lost[0]) if lost.size else None
     if i is None:
         return None
     if i == 0:
@@ -108,22 +117,12 @@ def _first_loss(steady: SteadyState, rpm: np.ndarray) -> int | None:
     """Index of the first speed of the scan ``rpm`` (ascending) where contact is lost, or
     None: the speeds that ``ContactForceBound`` holds in contact are skipped, the rest
     computed in waves of ``_SCAN_WAVE`` speeds up to the first wave with a loss."""
-    for start in range(_first_unbounded(ContactForceBound(steady), rpm), rpm.size, _SCAN_WAVE):
+    for start in range(ContactForceBound(steady).first_unheld(rpm), rpm.size, _SCAN_WAVE):
         force = steady.min_contact_force_checked(rpm[start : start + _SCAN_WAVE])
         lost = np.flatnonzero(force < 0)
         if lost.size:
             return start + int(lost[0])
     return None
-
-
-def _first_unbounded(bound: ContactForceBound, rpm: np.ndarray) -> int:
-    """Index of the first speed of ``rpm`` (ascending) where ``bound`` does not rule out a
-    loss of contact (``rpm.size`` if none)."""
-    for start in range(0, rpm.size, _BOUND_CHUNK):
-        held = bound(rpm[start : start + _BOUND_CHUNK]) > _BOUND_MARGIN * bound.preload
-        if not held.all():
-            return start + int(np.argmin(held))
-    return rpm.size
 
 
 class ContactForceBound:
@@ -191,6 +190,18 @@ class ContactForceBound:
         )
         rest = rest + (self.variation[0] + beta * self.variation[1]) / np.abs(lam) ** _BOUND_ORDER
         return self.preload + quasi_static - np.abs(gain) * rest / -np.expm1(lam.real)
+
+
+    def first_unheld(self, rpm) -> int:
+        """Index of the first speed of ``rpm`` (ascending) where the bound, less
+        ``_BOUND_MARGIN`` of the preload, does not hold contact (``rpm.size`` if none):
+        the speeds before it need no steady state."""
+        rpm = np.asarray(rpm, dtype=float)
+        for start in range(0, rpm.size, _BOUND_CHUNK):
+            held = self(rpm[start : start + _BOUND_CHUNK]) > _BOUND_MARGIN * self.preload
+            if not held.all():
+                return start + int(np.argmin(held))
+        return rpm.size
 
 
 def _falling(m, n):
