@@ -21,5 +21,13 @@ from ._traces import kept as traces_kept
 from ._traces import prune as prune_traces
 from ._traces import version_key as version_key
 
-__all__ = ["SETTING", "KEPT_VERSIONS", "MEMO_SIZE", "configured_dir", "exported_jit", "prune_traces",
-           "traces_kept", "version_key"]
+__all__ = [
+    "SETTING",
+    "KEPT_VERSIONS",
+    "MEMO_SIZE",
+    "configured_dir",
+    "exported_jit",
+    "prune_traces",
+    "traces_kept",
+    "version_key",
+]

@@ -18,15 +18,20 @@ def _harmonic_with_jumps():
     """Simple harmonic rise and return: the acceleration jumps at every segment end, the
     bound's first-order remainder."""
     law = laws.get("simple-harmonic")
-    return cp.Program("harmonic", (cp.Segment(120, 25.0, law), cp.Segment(60), cp.Segment(120, -25.0, law),
-                                   cp.Segment(60)), cp.Follower(**{**FOLLOWER, "preload_n": 500.0}))
+    return cp.Program(
+        "harmonic",
+        (cp.Segment(120, 25.0, law), cp.Segment(60), cp.Segment(120, -25.0, law), cp.Segment(60)),
+        cp.Follower(**{**FOLLOWER, "preload_n": 500.0}),
+    )
 
 
 def _stiff_modified_sine():
     law = laws.get("modified-sine")
-    return cp.Program("stiff", (cp.Segment(90, 30.0, law), cp.Segment(90), cp.Segment(140, -30.0, law),
-                                cp.Segment(40)),
-                      cp.Follower(**{**FOLLOWER, "stiffness_n_per_mm": 5000.0, "damping_ratio": 0.08}))
+    return cp.Program(
+        "stiff",
+        (cp.Segment(90, 30.0, law), cp.Segment(90), cp.Segment(140, -30.0, law), cp.Segment(40)),
+        cp.Follower(**{**FOLLOWER, "stiffness_n_per_mm": 5000.0, "damping_ratio": 0.08}),
+    )
 
 
 OWN = {
@@ -34,9 +39,11 @@ OWN = {
     "harmonic": _harmonic_with_jumps,
     "stiff-modified-sine": _stiff_modified_sine,
 }
-BUILT_IN = {"feed": lambda: cp.Program.load(cp.example_path("feed")),
-            "indexer": lambda: cp.Program.load(cp.example_path("indexer")),
-            "transfer": lambda: cp.Program.load(TRANSFER)}
+BUILT_IN = {
+    "feed": lambda: cp.Program.load(cp.example_path("feed")),
+    "indexer": lambda: cp.Program.load(cp.example_path("indexer")),
+    "transfer": lambda: cp.Program.load(TRANSFER),
+}
 
 
 def plain_jump_speed(steady, rpm_lo, rpm_hi, tolerance_rpm=0.1):

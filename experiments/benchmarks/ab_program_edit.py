@@ -47,8 +47,13 @@ for line in sys.stdin:
 
 def _worker(root: Path, program: str, rpm: str):
     env = dict(os.environ, PYTHONPATH=str(root))
-    process = subprocess.Popen([sys.executable, "-c", WORKER, program, rpm], env=env, text=True,
-                               stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    process = subprocess.Popen(
+        [sys.executable, "-c", WORKER, program, rpm],
+        env=env,
+        text=True,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+    )
     return process
 
 
@@ -60,14 +65,18 @@ def main(argv=None) -> int:
     parser.add_argument("--edits", type=int, default=10)
     args = parser.parse_args(argv)
     program = str(TRANSFER) if args.program == "transfer" else args.program
-    workers = {"this": _worker(Path(__file__).resolve().parents[2], program, args.rpm),
-               "baseline": _worker(args.baseline, program, args.rpm)}
+    workers = {
+        "this": _worker(Path(__file__).resolve().parents[2], program, args.rpm),
+        "baseline": _worker(args.baseline, program, args.rpm),
+    }
     for process in workers.values():
         assert process.stdout.readline().strip() == "ready"
     rows = []
     for k in range(1, args.edits + 1):
         row = {}
-        for label in (("this", "baseline") if k % 2 else ("baseline", "this")):  # alternate who goes first
+        for label in (
+            ("this", "baseline") if k % 2 else ("baseline", "this")
+        ):  # alternate who goes first
             workers[label].stdin.write(f"{1.0 + 0.01 * k}\n")
             workers[label].stdin.flush()
             row[label] = json.loads(workers[label].stdout.readline())
@@ -75,19 +84,29 @@ def main(argv=None) -> int:
     for process in workers.values():
         process.stdin.close()
         process.wait()
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                            cwd=Path(__file__).parent).stdout.strip()
-    print(f"# {args.program} over --rpm {args.rpm}, edits in turn; commit {commit} against {args.baseline}, "
-          f"{time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores")
+    commit = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"],
+        capture_output=True,
+        text=True,
+        cwd=Path(__file__).parent,
+    ).stdout.strip()
+    print(
+        f"# {args.program} over --rpm {args.rpm}, edits in turn; commit {commit} against {args.baseline}, "
+        f"{time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores"
+    )
     print("| edit | this s | baseline s | ratio | same jump speed |")
     print("|---|---|---|---|---|")
     for k, row in enumerate(rows, 1):
-        print(f"| {k} | {row['this'][0]:.3f} | {row['baseline'][0]:.3f} | "
-              f"{row['this'][0] / row['baseline'][0]:.3f} | {row['this'][1] == row['baseline'][1]} |")
+        print(
+            f"| {k} | {row['this'][0]:.3f} | {row['baseline'][0]:.3f} | "
+            f"{row['this'][0] / row['baseline'][0]:.3f} | {row['this'][1] == row['baseline'][1]} |"
+        )
     this, base = ([r[lab][0] for r in rows] for lab in ("this", "baseline"))
     ratios = [a / b for a, b in zip(this, base)]
-    print(f"| median | {statistics.median(this):.3f} | {statistics.median(base):.3f} | "
-          f"{statistics.median(ratios):.3f} (median of the ratios) | |")
+    print(
+        f"| median | {statistics.median(this):.3f} | {statistics.median(base):.3f} | "
+        f"{statistics.median(ratios):.3f} (median of the ratios) | |"
+    )
     print(f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     return 0
 

@@ -20,8 +20,13 @@ import time
 from pathlib import Path
 
 TRANSFER = Path(__file__).resolve().parent / "transfer.toml"
-CASES = (("feed", 300.0, 900.0), ("feed", 200.0, 1400.0), ("indexer", 200.0, 1400.0),
-         ("transfer", 200.0, 1400.0), ("transfer", 300.0, 900.0))
+CASES = (
+    ("feed", 300.0, 900.0),
+    ("feed", 200.0, 1400.0),
+    ("indexer", 200.0, 1400.0),
+    ("transfer", 200.0, 1400.0),
+    ("transfer", 300.0, 900.0),
+)
 
 
 def main(argv=None) -> int:
@@ -30,11 +35,19 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     import camjax.program as cp
 
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                            cwd=Path(__file__).parent).stdout.strip()
-    print(f"# jump speed search, bound and waves against every scan speed, in turn; commit {commit}, "
-          f"{time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores")
-    print("| program | rpm | scan speeds | ruled out | with bound s | every speed s | ratio | same |")
+    commit = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"],
+        capture_output=True,
+        text=True,
+        cwd=Path(__file__).parent,
+    ).stdout.strip()
+    print(
+        f"# jump speed search, bound and waves against every scan speed, in turn; commit {commit}, "
+        f"{time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores"
+    )
+    print(
+        "| program | rpm | scan speeds | ruled out | with bound s | every speed s | ratio | same |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for name, lo, hi in CASES:
         program = cp.Program.load(TRANSFER if name == "transfer" else cp.example_path(name))
@@ -45,14 +58,16 @@ def main(argv=None) -> int:
         times = {True: [], False: []}
         answers = set()
         for k in range(args.repeats):
-            for rule_out in ((True, False) if k % 2 == 0 else (False, True)):
+            for rule_out in (True, False) if k % 2 == 0 else (False, True):
                 start = time.perf_counter()
                 answers.add((rule_out, cp.jump_speed_rpm(steady, lo, hi, rule_out=rule_out)))
                 times[rule_out].append(time.perf_counter() - start)
         ratios = [a / b for a, b in zip(times[True], times[False])]
         same = len({a for _, a in answers}) == 1
-        print(f"| {name} | {lo:g}-{hi:g} | {rpm.size} | {ruled_out} | {statistics.median(times[True]):.3f} | "
-              f"{statistics.median(times[False]):.3f} | {statistics.median(ratios):.3f} | {same} |")
+        print(
+            f"| {name} | {lo:g}-{hi:g} | {rpm.size} | {ruled_out} | {statistics.median(times[True]):.3f} | "
+            f"{statistics.median(times[False]):.3f} | {statistics.median(ratios):.3f} | {same} |"
+        )
     print(f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     return 0
 

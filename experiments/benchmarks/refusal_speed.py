@@ -26,10 +26,21 @@ def _stiff_turn():
     from camjax.program import Follower, Program, Segment, SteadyState
 
     law = laws.get("cycloidal")
-    follower = Follower(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=1e12, damping_ratio=0.05,
-                        spring_rate_n_per_mm=10.0, preload_n=300.0, base_radius_mm=40.0, roller_radius_mm=12.0)
-    program = Program("stiff", (Segment(100, 20.0, law), Segment(80), Segment(100, -20.0, law), Segment(80)),
-                      follower)
+    follower = Follower(
+        kind="translating-roller",
+        mass_kg=1.5,
+        stiffness_n_per_mm=1e12,
+        damping_ratio=0.05,
+        spring_rate_n_per_mm=10.0,
+        preload_n=300.0,
+        base_radius_mm=40.0,
+        roller_radius_mm=12.0,
+    )
+    program = Program(
+        "stiff",
+        (Segment(100, 20.0, law), Segment(80), Segment(100, -20.0, law), Segment(80)),
+        follower,
+    )
     SteadyState(program, 600.0)
 
 
@@ -37,8 +48,9 @@ def _groove_budget():
     from camjax.program import Program, example_path, groove_turns
 
     base = Program.load(example_path("indexer"))
-    follower = dataclasses.replace(base.follower, spring_rate_n_per_mm=None, preload_n=0.0,
-                                   groove_clearance_mm=0.05)
+    follower = dataclasses.replace(
+        base.follower, spring_rate_n_per_mm=None, preload_n=0.0, groove_clearance_mm=0.05
+    )
     groove_turns(dataclasses.replace(base, follower=follower), [50.0])
 
 
@@ -49,9 +61,15 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args(argv)
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                            cwd=Path(__file__).parent).stdout.strip()
-    print(f"# refusals before any work; commit {commit}, {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores")
+    commit = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"],
+        capture_output=True,
+        text=True,
+        cwd=Path(__file__).parent,
+    ).stdout.strip()
+    print(
+        f"# refusals before any work; commit {commit}, {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores"
+    )
     print("| refusal | first s | median s | largest s |")
     print("|---|---|---|---|")
     for name, case in CASES.items():
@@ -64,7 +82,9 @@ def main(argv=None) -> int:
                 seconds.append(time.perf_counter() - start)
             else:
                 raise SystemExit(f"{name}: not refused")
-        print(f"| {name} | {seconds[0]:.3f} | {statistics.median(seconds):.3f} | {max(seconds):.3f} |")
+        print(
+            f"| {name} | {seconds[0]:.3f} | {statistics.median(seconds):.3f} | {max(seconds):.3f} |"
+        )
     print(f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     return 0
 
