@@ -50,6 +50,7 @@ def _worker(root: Path, program: str, rpm: str):
     process = subprocess.Popen(
         [sys.executable, "-c", WORKER, program, rpm],
         env=env,
+        cwd=root,  # ``python -c`` puts the working directory first on the path: the checkout's own
         text=True,
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
