@@ -3,55 +3,98 @@
 JAX's persistent cache saves a new process the XLA compile of a program it has seen, but
 not the tracing and lowering that come first: for the cam program's steady state that is
 most of a cached command's wait.  ``exported_jit(fn, name)`` is ``jax.jit(fn)`` that, when
-the compilation cache is on, keeps each shape's traced program (``jax.export``,
-serialised StableHLO) under ``<compilation cache>/traces/<source hash>/`` and reads it back
-in the next process instead of tracing again (the compile itself then comes from JAX's
-cache).
+the trace cache is on, keeps each shape's traced program (``jax.export``, serialised
+StableHLO) under ``DIR/traces/<version>/`` and reads it back in the next process instead
+of tracing again (the compile itself then comes from JAX's cache).
+
+The one switch is the setting ``CAMJAX_CACHE_DIR`` (``camjax._cache_dir``): the library
+keeps traces when it names a directory ``DIR``, and the command sets it to its own cache
+directory, so both take the same path.  Without it ``exported_jit`` is plain
+``equinox.filter_jit``.
 
 A kept program is found by a key of everything that changes it: the function's name, the
-arguments' structure, shapes and dtypes, their constants, the platform, JAX's version and
-the x64 flag, in a folder named by a hash of camjax's own source files (an edit of the
-code is a new folder).  Anything unreadable is traced afresh and written again; a program
-``jax.export`` cannot keep (one with a host callback) is marked and traced in each process.
-Without the compilation cache (a library call that did not turn it on) it is plain
-``jax.jit``.
+arguments' structure, shapes and dtypes, their constants, the platform and the x64 flag,
+in a folder named by a hash of the versions of JAX, jaxlib and equinox and of camjax's
+own source files (an edit of the code or an upgrade is a new folder).  The newest
+``KEPT_VERSIONS`` folders (by last use) are kept and older ones deleted when a new one is
+made.  Anything unreadable is traced afresh and written again; a program ``jax.export``
+cannot keep (one with a host callback) is reported once (a warning naming it), marked,
+and traced in each process.  Each ``exported_jit`` remembers at most ``memo_size``
+(``MEMO_SIZE``) loaded programs in its process (the least recently used go first).
 """
 
 from __future__ import annotations
 
+import collections
 import functools
 import hashlib
+import importlib.metadata
 import os
+import shutil
 import tempfile
+import warnings
 from pathlib import Path
 
 import equinox as eqx
 import jax
 from jax import export
 
+from ._cache_dir import configured_dir
+
 _PACKAGE = Path(__file__).resolve().parent
+
+KEPT_VERSIONS = 3
+"""Version folders kept under ``traces/`` (the most recently used); older ones are deleted."""
+
+MEMO_SIZE = 32
+"""Loaded programs each ``exported_jit`` keeps in its process (shapes and constants)."""
 
 
 @functools.cache
-def _source_hash() -> str:
-    """A hash of camjax's Python source (the files' bytes, in path order)."""
+def version_key() -> str:
+    """A hash of what shapes a trace besides its arguments: the versions of JAX, jaxlib and
+    equinox, and camjax's Python source (the files' bytes, in path order)."""
     digest = hashlib.sha256()
+    for package in ("jax", "jaxlib", "equinox"):
+        try:
+            version = importlib.metadata.version(package)
+        except importlib.metadata.PackageNotFoundError:
+            version = "absent"
+        digest.update(f"{package}={version};".encode())
     for path in sorted(_PACKAGE.rglob("*.py")):
         digest.update(str(path.relative_to(_PACKAGE)).encode())
         digest.update(path.read_bytes())
-    return digest.hexdigest()
+    return digest.hexdigest()[:16]
+
+
+def _root() -> Path | None:
+    """``DIR/traces`` of the setting, or None (off)."""
+    directory = configured_dir()
+    return directory / "traces" if directory is not None else None
 
 
 def _directory() -> Path | None:
-    """``<compilation cache>/traces/<source hash>``: one folder per version of camjax's code
-    (an old one may be deleted to reclaim its space), or None without the cache."""
-    root = jax.config.jax_compilation_cache_dir
-    return Path(root) / "traces" / _source_hash()[:16] if root else None
+    """``DIR/traces/<version_key>``, or None without the setting."""
+    root = _root()
+    return root / version_key() if root is not None else None
 
 
 def kept() -> bool:
-    """Whether traced programs are kept on disk in this process (the compilation cache is on)."""
-    return bool(jax.config.jax_compilation_cache_dir)
+    """Whether traced programs are kept on disk in this process (``CAMJAX_CACHE_DIR``)."""
+    return _root() is not None
+
+
+def prune(root: Path, keep: int = KEPT_VERSIONS) -> list[Path]:
+    """Delete all but the ``keep`` most recently used version folders under ``root``;
+    returns the deleted ones."""
+    try:
+        folders = sorted((p for p in root.iterdir() if p.is_dir()), key=lambda p: p.stat().st_mtime,
+                         reverse=True)
+    except OSError:
+        return []
+    for old in folders[keep:]:
+        shutil.rmtree(old, ignore_errors=True)
+    return folders[keep:]
 
 
 def register_types(*types) -> None:
@@ -77,10 +120,10 @@ class exported_jit:
     ``equinox.filter_jit`` as they are, untouched by the cache.
     """
 
-    def __init__(self, fn, name: str):
-        self.fn, self.name = fn, name
+    def __init__(self, fn, name: str, memo_size: int = MEMO_SIZE):
+        self.fn, self.name, self.memo_size = fn, name, memo_size
         self.jitted = eqx.filter_jit(fn)
-        self.loaded: dict[tuple, object] = {}  # by structure, shapes and constants
+        self.loaded: collections.OrderedDict[tuple, object] = collections.OrderedDict()  # memo_size at most
         functools.update_wrapper(self, fn)
 
     def __call__(self, *args):
@@ -96,16 +139,20 @@ class exported_jit:
             program = self.loaded.get(memo)
         except TypeError:  # a structure holding something unhashable
             return self.jitted(*args)
-        if program is None:
+        if program is not None:
+            self.loaded.move_to_end(memo)
+        else:
             described = str(tree)
             if not all(isinstance(x, _PLAIN) for x in constants) or " at 0x" in described:
                 program = _UNKEPT  # no key that a new process would find again
             else:
                 text = "|".join([self.name, described, repr(constants), repr(shapes), jax.default_backend(),
-                                 jax.__version__, str(jax.config.jax_enable_x64)])
+                                 str(jax.config.jax_enable_x64)])
                 key = hashlib.sha256(text.encode()).hexdigest()[:32]
                 program = self._program(directory / f"{self.name}-{key}.bin", tree, static, leaves)
             self.loaded[memo] = program
+            if len(self.loaded) > self.memo_size:
+                self.loaded.popitem(last=False)
         return self.jitted(*args) if program is _UNKEPT else program(leaves)
 
     def _program(self, path: Path, tree, static, leaves):
@@ -117,15 +164,30 @@ class exported_jit:
             return jax.jit(flat)
         try:
             exported = export.deserialize(bytearray(path.read_bytes()))
+            _touch(path.parent)
         except Exception:  # absent, truncated or from another JAX: trace afresh
             try:
                 exported = export.export(jax.jit(flat))(leaves)
                 data = exported.serialize()
-            except Exception:  # not exportable or its output not writable: this process traces it
+            except Exception as error:  # not exportable or its output not writable
+                warnings.warn(f"camjax: the traced program {self.name!r} cannot be kept on disk "
+                              f"({type(error).__name__}: {error}); it is traced in each process",
+                              RuntimeWarning, stacklevel=3)
                 _write(plain, b"")
                 return jax.jit(flat)
+            new_version = not path.parent.exists()
             _write(path, data)
+            if new_version:  # the first program of this version: older versions beyond the newest go
+                prune(path.parent.parent)
         return jax.jit(exported.call)
+
+
+def _touch(folder: Path) -> None:
+    """Mark a version folder as used now (``prune`` keeps the most recently used)."""
+    try:
+        os.utime(folder)
+    except OSError:
+        pass
 
 
 def _write(path: Path, data: bytes) -> None:

@@ -37,6 +37,38 @@ SDOF_LIMITS = {
 }
 
 
+COMPILED_RTOL = 1e-10
+"""Relative agreement of two compilations of one computation: eager and jit, one call and
+a vmap, a law alone and in a stack, one device and a sharded batch, a trace read back
+from disk, the executable's XLA flags and the library's.  XLA may fuse, reorder and
+contract float64 operations differently, each rounding at 1.1e-16; the exact propagation
+over up to 1e5 intervals, the peaks' root searches and the quadratures carry such
+roundings to about 1e-12 relative (more where terms cancel).  1e-10 leaves that room and
+stays far below what each method promises against an independent reference (1e-8 and
+coarser), so a change of method still fails it."""
+
+COMPILED_ATOL = 1e-13
+"""Absolute agreement of the same, for values that are zero but for roundings (residual
+vibration of a law at an integer period ratio): 1e-13 of values of order one."""
+
+
+def assert_same_numbers(got, expected, rtol=COMPILED_RTOL, atol=COMPILED_ATOL):
+    """Equal structure, strings and flags; numbers (in nested dicts and lists, as a JSON
+    report holds them) equal to ``rtol`` (``COMPILED_RTOL``: two compilations)."""
+    if isinstance(expected, dict):
+        assert sorted(got) == sorted(expected)
+        for key in expected:
+            assert_same_numbers(got[key], expected[key], rtol, atol)
+    elif isinstance(expected, list | tuple):
+        assert len(got) == len(expected)
+        for a, b in zip(got, expected):
+            assert_same_numbers(a, b, rtol, atol)
+    elif isinstance(expected, float) and not isinstance(got, bool):
+        np.testing.assert_allclose(got, expected, rtol=rtol, atol=atol)
+    else:
+        assert got == expected
+
+
 FOLLOWER = dict(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0, damping_ratio=0.05,
                 spring_rate_n_per_mm=10.0, preload_n=300.0, base_radius_mm=40.0, roller_radius_mm=12.0)
 """The program tests' follower (a ``camjax.program.Follower``'s fields)."""

@@ -4,6 +4,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import COMPILED_ATOL, COMPILED_RTOL
 
 import camjax
 from camjax import distributed
@@ -35,7 +36,7 @@ def test_map_in_chunks_equals_one_vmap(members):
     got = jax.jit(lambda b: map_in_chunks(_member, b, members))(batch)
     for key in expected:
         assert got[key].shape == expected[key].shape
-        np.testing.assert_allclose(got[key], expected[key], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(got[key], expected[key], rtol=COMPILED_RTOL, atol=COMPILED_ATOL)
 
 
 def test_chunked_map_sizes_chunks_by_nodes():
@@ -43,7 +44,7 @@ def test_chunked_map_sizes_chunks_by_nodes():
     x = jnp.linspace(0.0, 1.0, 37)
     one = lambda v: jnp.sin(v) * v  # noqa: E731
     for chunk in (1, 64, 1000, 10**6):
-        np.testing.assert_array_equal(chunked_map(one, x, 16, chunk=chunk), jax.vmap(one)(x))
+        np.testing.assert_allclose(chunked_map(one, x, 16, chunk=chunk), jax.vmap(one)(x), rtol=COMPILED_RTOL)
 
 
 def test_sizes_by_backend(monkeypatch):

@@ -6,6 +6,7 @@ import os
 
 import numpy as np
 import pytest
+from helpers import COMPILED_RTOL, assert_same_numbers
 
 import camjax
 from camjax import laws
@@ -42,9 +43,9 @@ def test_ct_json_matches_the_library(capsys):
     assert data["method"] == "exact" and list(data["laws"]) == ["modified-sine", "cycloidal"]
     curve = camjax.ct_curve(laws.ModifiedSine(), [2.0, 5.5, 9.0], damping=0.05)
     entry = data["laws"]["modified-sine"]
-    np.testing.assert_allclose(entry["ct"], curve.ct, rtol=1e-12)
-    np.testing.assert_allclose(entry["residual"], curve.residual, rtol=1e-12)
-    np.testing.assert_allclose(entry["peak_in_motion"], curve.peak_in_motion, rtol=1e-12)
+    np.testing.assert_allclose(entry["ct"], curve.ct, rtol=COMPILED_RTOL)
+    np.testing.assert_allclose(entry["residual"], curve.residual, rtol=COMPILED_RTOL)
+    np.testing.assert_allclose(entry["peak_in_motion"], curve.peak_in_motion, rtol=COMPILED_RTOL)
     assert entry["Ca"] == pytest.approx(5.52796, abs=1e-5) and "Cv" in entry and "Cj" in entry
 
 
@@ -200,22 +201,6 @@ def test_cache_dir_follows_the_environment(monkeypatch, tmp_path):
     assert cache_dir().name == "jax" and "camjax" in str(cache_dir())
 
 
-def _assert_same_json(got, expected):
-    """Equal structure and strings; numbers equal to 1e-12 relative."""
-    if isinstance(expected, dict):
-        assert sorted(got) == sorted(expected)
-        for key in expected:
-            _assert_same_json(got[key], expected[key])
-    elif isinstance(expected, list):
-        assert len(got) == len(expected)
-        for a, b in zip(got, expected):
-            _assert_same_json(a, b)
-    elif isinstance(expected, float):
-        np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-14)
-    else:
-        assert got == expected
-
-
 def test_the_executable_ends_early_without_losing_output_or_exit_status(capsys, tmp_path):
     """``python -m camjax`` skips interpreter shutdown (camjax.cli.command): its output, files
     and exit status must equal those of ``main`` run in this process (numbers to rounding:
@@ -231,7 +216,7 @@ def test_the_executable_ends_early_without_losing_output_or_exit_status(capsys, 
     assert done.returncode == 0, done.stderr
     code, out, _ = run(capsys, *argv)
     assert code == 0
-    _assert_same_json(json.loads(done.stdout), json.loads(out))
+    assert_same_numbers(json.loads(done.stdout), json.loads(out))
     assert done.stderr.startswith(f"wrote {tmp_path}/")
     rows = (tmp_path / "ct.csv").read_text().splitlines()
     assert len(rows) == 3 and rows[1].startswith("cycloidal,2,")

@@ -210,3 +210,41 @@ def test_expected_residual_against_a_quadrature_of_the_closed_form():
     assert objective.report(law) == pytest.approx(expected, rel=1e-6)
     value = float(objective.value(objective.features(law), float(law.Ca), 1.0))
     assert value == pytest.approx(expected, rel=1e-6)
+
+
+def test_a_second_design_of_one_shape_compiles_nothing():
+    """The design's steps are module-level compiled functions with the law map, the
+    objectives and the optimiser as arguments: a second design in a process reuses them."""
+    from helpers import compiled_programs
+
+    kwargs = dict(knots=10, steps=20, optimizer="adam", progress=False)
+    first = D.design(D.Residual(7.3), **kwargs)
+    with compiled_programs() as names:
+        second = D.design(D.Residual(7.3), **kwargs)
+    assert names == []
+    np.testing.assert_array_equal(first.law.coefficients, second.law.coefficients)
+
+
+def test_an_optax_transformation_in_place_of_a_name():
+    """Adam written out (its direction and the decaying rate) and L-BFGS as objects give
+    the named optimisers' designs; the same object again compiles nothing."""
+    import optax
+    from helpers import compiled_programs
+
+    steps = 20
+    adam = optax.chain(optax.scale_by_adam(), optax.scale_by_learning_rate(optax.exponential_decay(1e-2, steps, 0.01)))
+    kwargs = dict(knots=10, steps=steps, progress=False)
+    named = D.design(D.Residual(7.3), optimizer="adam", **kwargs)
+    given = D.design(D.Residual(7.3), optimizer=adam, **kwargs)
+    # The named Adam's rates come from NumPy and the chain's from XLA, each rounded its own
+    # way; Adam divides by the root of tiny second moments, which carries that to ~1e-9.
+    np.testing.assert_allclose(given.law.coefficients, named.law.coefficients, rtol=1e-6, atol=1e-12)
+    assert given.values["R(n=7.3)"] == pytest.approx(named.values["R(n=7.3)"], rel=1e-6)
+    with compiled_programs() as names:
+        D.design(D.Residual(7.3), optimizer=adam, **kwargs)
+    assert names == []
+    lbfgs = D.design(D.Residual(7.3), optimizer=optax.lbfgs(memory_size=40), **{**kwargs, "steps": 40})
+    named = D.design(D.Residual(7.3), optimizer="lbfgs", **{**kwargs, "steps": 40})
+    np.testing.assert_allclose(lbfgs.law.coefficients, named.law.coefficients, rtol=1e-9, atol=1e-12)
+    with pytest.raises(ValueError, match="optimizer must be"):
+        D.design(D.Residual(7.3), optimizer="sgd", **kwargs)

@@ -8,6 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import COMPILED_RTOL
 
 from camjax import program as cp
 from camjax.checks import MAX_SPEEDS
@@ -92,7 +93,7 @@ def test_a_traced_speed_is_checked_when_the_computation_runs(feed):
     # good speeds pass the check unchanged: the force of the same speeds given concretely
     # (inside a jit too: eagerly the vmap runs op by op, 12 s)
     concrete = jax.jit(lambda: cp.node_contact_force(feed, [1000.0, 1200.0]))()
-    np.testing.assert_allclose(force(jnp.array([1000.0, 1200.0])), concrete, rtol=1e-12)  # constants folded
+    np.testing.assert_allclose(force(jnp.array([1000.0, 1200.0])), concrete, rtol=COMPILED_RTOL)  # constants folded
     for bad in (-300.0, np.nan, np.inf):
         with pytest.raises(Exception, match="rpm must be positive and finite"):
             jax.block_until_ready(force(jnp.array([1200.0, bad])))

@@ -5,6 +5,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import COMPILED_RTOL
 
 import camjax
 from camjax import laws
@@ -100,4 +101,4 @@ def test_traced_laws_still_pass():
     free = laws.BSplineLaw.fit(laws.get("cycloidal"), 4, 5).coefficients
     value = ct(jnp.asarray(free), 0.4)
     assert np.isfinite(float(value)) and float(value) == pytest.approx(
-        float(camjax.torsion_factor("cycloidal-asym:0.4", 3.0, resolution=256)), rel=1e-12)
+        float(camjax.torsion_factor("cycloidal-asym:0.4", 3.0, resolution=256)), rel=COMPILED_RTOL)

@@ -5,7 +5,8 @@ run loads them from disk instead (seconds saved per command).  It is on by defau
 the user's cache directory (``platformdirs.user_cache_dir("camjax")/jax``).  The
 environment variable ``CAMJAX_CACHE_DIR`` moves it (a directory) or turns it off
 (``0``, ``off``, ``false``, ``no`` or empty).  A cache that JAX_COMPILATION_CACHE_DIR (or
-the caller's ``jax.config``) already set is left alone.
+the caller's ``jax.config``) already set is left alone.  The traced programs kept beside
+it follow the same setting (``camjax._cache_dir``).
 """
 
 from __future__ import annotations
@@ -13,20 +14,16 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-ENV = "CAMJAX_CACHE_DIR"
-_OFF = {"", "0", "off", "false", "no"}
+from .._cache_dir import ENV, configured_dir
 
 
 def cache_dir() -> Path | None:
     """Where the command caches compiled programs, or None when ``CAMJAX_CACHE_DIR`` turns it off."""
-    value = os.environ.get(ENV)
-    if value is None:
-        import platformdirs
+    if os.environ.get(ENV) is not None:
+        return configured_dir()
+    import platformdirs
 
-        return Path(platformdirs.user_cache_dir("camjax")) / "jax"
-    if value.strip().lower() in _OFF:
-        return None
-    return Path(value).expanduser()
+    return Path(platformdirs.user_cache_dir("camjax")) / "jax"
 
 
 def enable_compilation_cache() -> Path | None:
@@ -39,7 +36,10 @@ def enable_compilation_cache() -> Path | None:
     import jax
 
     if jax.config.jax_compilation_cache_dir:
-        return Path(jax.config.jax_compilation_cache_dir)
+        path = Path(jax.config.jax_compilation_cache_dir)
+        if cache_dir() is not None:
+            os.environ.setdefault(ENV, str(path))  # the traces beside it (camjax._cache_dir)
+        return path
     path = cache_dir()
     if path is None:
         return None
@@ -47,6 +47,7 @@ def enable_compilation_cache() -> Path | None:
         path.mkdir(parents=True, exist_ok=True)
     except OSError:
         return None  # an unwritable cache only costs time: run without it
+    os.environ.setdefault(ENV, str(path))  # the library's traces follow (camjax._cache_dir)
     jax.config.update("jax_compilation_cache_dir", str(path))
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)

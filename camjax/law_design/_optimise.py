@@ -118,10 +118,118 @@ def linear_maps(features, knots: int):
     return maps(jnp.zeros(knots))
 
 
-def _linearised(features, knots: int):
-    """``features`` as matrix products (``linear_maps``), which is all the optimiser needs."""
-    offset, jacobian = linear_maps(features, knots)
-    return lambda theta: jax.tree.map(lambda b, m: b + m @ theta, offset, jacobian)
+class _Constant:
+    """A pytree compiled in as constants (a static argument of the compiled steps), equal to
+    another of the same structure and values: a boundary polynomial's end states stay
+    concrete inside the trace (a program objective checks its joins with them)."""
+
+    def __init__(self, value):
+        self.value = value
+        leaves, tree = jax.tree.flatten(value)
+        self._key = (tree, tuple((np.shape(x), np.asarray(x).tobytes()) for x in leaves))
+
+    def __hash__(self):
+        return hash(self._key)
+
+    def __eq__(self, other):
+        return isinstance(other, _Constant) and self._key == other._key
+
+
+class _LawMap(eqx.Module):
+    """The designed law of a step ``theta`` in acceleration coordinates: a B-spline
+    (``base`` None) or a boundary polynomial with a B-spline correction."""
+
+    start: jax.Array
+    to_coefficients: jax.Array
+    degree: int = eqx.field(static=True)
+    base: _Constant | None = eqx.field(static=True, default=None)
+
+    def __call__(self, theta):
+        coefficients = self.start + self.to_coefficients @ theta
+        if self.base is None:
+            return BSplineLaw(coefficients, self.degree)
+        return CorrectedPolynomial(self.base.value, coefficients, self.degree)
+
+
+def _design_features(law_map: _LawMap, objectives, caps: Caps, theta):
+    """The objectives' features, the caps' features and (without a Ca cap) the dense
+    acceleration of the law at ``theta``: all affine in ``theta``."""
+    # The optimiser's own coefficients: no runtime checks (host callbacks) in its
+    # programs; a step gone NaN is the optimiser's failure, caught where it reports.
+    with checks.checked_outside():
+        law = law_map(theta)
+        acceleration = law.a(dense_tau(law)) if caps.max_ca is None else jnp.zeros(())
+        return [o.features(law) for o in objectives], caps.features(law), acceleration
+
+
+@eqx.filter_jit
+def _design_maps(law_map: _LawMap, objectives, caps: Caps, zero):
+    """``linear_maps`` of ``_design_features``, compiled once per shape of the design (the
+    law map, objectives and caps are arguments, not closures)."""
+    offset, tangent = jax.linearize(lambda theta: _design_features(law_map, objectives, caps, theta), zero)
+    return offset, jax.vmap(tangent, out_axes=-1)(jnp.eye(zero.size))
+
+
+class _Problem(eqx.Module):
+    """A design's training loss: its linear features (``offset + jacobian @ theta``), the
+    objectives' weights and the caps' penalty.  An argument of the compiled steps, so a
+    design of the same shape compiles nothing."""
+
+    offset: list
+    jacobian: list
+    weights: jax.Array
+    penalty: jax.Array
+    margin: jax.Array
+    objectives: tuple
+    caps: Caps
+
+    def raw_values(self, theta, p):
+        objective_features, _, acceleration = self.features(theta)
+        # With a Ca cap, R trains normalised by the cap: the problem stays convex, and the
+        # cap bounds the true Ca, so the reported R (divided by the true Ca) is what it is.
+        ca = self.caps.max_ca if self.caps.max_ca is not None else jnp.max(jnp.abs(acceleration))
+        return jnp.stack([o.value(f, ca, p) for o, f in zip(self.objectives, objective_features)])
+
+    def features(self, theta):
+        return jax.tree.map(lambda b, m: b + m @ theta, self.offset, self.jacobian)
+
+    def loss(self, theta, p):
+        cap_penalty = self.caps.penalty_of(self.features(theta)[1], self.margin)
+        return jnp.dot(self.weights, self.raw_values(theta, p)) + self.penalty * cap_penalty
+
+
+@eqx.filter_jit
+def _raw_values(problem: _Problem, theta, p):
+    return problem.raw_values(theta, p)
+
+
+@eqx.filter_jit
+def _run_chunk(problem: _Problem, optimizer, line_search: bool, theta, state, ps, rates):
+    """``len(ps)`` optimiser steps at sharpness ``ps``, each update scaled by ``rates``
+    (ones for a transformation with its own rate): one program per shape of the design and
+    optimiser, compiled once in a process."""
+
+    def step(carry, xs):
+        theta, state = carry
+        p, rate = xs
+        fn = lambda x: problem.loss(x, p)  # noqa: E731
+        if line_search:
+            value, grad = optax.value_and_grad_from_state(fn)(theta, state=state)
+            updates, state = optimizer.update(grad, state, theta, value=value, grad=grad, value_fn=fn)
+        else:
+            value, grad = jax.value_and_grad(fn)(theta)
+            updates, state = optimizer.update(grad, state, theta)
+            updates = jax.tree.map(lambda u: rate * u, updates)
+        return (optax.apply_updates(theta, updates), state), value
+
+    (theta, state), values = jax.lax.scan(step, (theta, state), (ps, rates))
+    return theta, state, values
+
+
+_LBFGS = optax.lbfgs(memory_size=40)
+"""``optimizer="lbfgs"``: one transformation for every design (a new one would compile again)."""
+_ADAM_DIRECTION = optax.scale_by_adam()
+"""``optimizer="adam"``: Adam's direction; its decaying rate is passed per step (``rates``)."""
 
 
 def design(
@@ -131,7 +239,7 @@ def design(
     knots: int = 24,
     degree: int = 5,
     initial: AbstractMotionLaw | str = "cycloidal",
-    optimizer: str = "lbfgs",
+    optimizer: str | optax.GradientTransformation = "lbfgs",
     steps: int = DEFAULT_STEPS,
     learning_rate: float = 1e-2,
     sharpness: tuple[float, float] = (8.0, 8192.0),
@@ -155,8 +263,12 @@ def design(
             ``CorrectedPolynomial`` family instead: the polynomial plus a B-spline
             correction of ``knots`` coefficients, so the design keeps its end states.
         optimizer: ``"lbfgs"`` (optax L-BFGS with zoom line search, restarted at each
-            sharpness stage) or ``"adam"`` (rate decaying 100-fold, sharpness ramped
-            geometrically over the run).
+            sharpness stage), ``"adam"`` (rate decaying 100-fold, sharpness ramped
+            geometrically over the run) or an optax ``GradientTransformation`` (its own
+            rate; run in sharpness stages like L-BFGS where its state keeps a line
+            search's ``value``, else ramped like Adam).  The compiled steps are shared by
+            every design of one shape in a process: pass the same transformation object
+            again to reuse them.
         steps: optimiser steps in all; L-BFGS splits them evenly over the stages (rounded
             up to whole chunks of at most 200) and moves to the next stage early once a
             stage has converged.
@@ -178,8 +290,9 @@ def design(
     started = time.perf_counter()
     caps = Caps() if caps is None else caps
     objectives = _as_objectives(objective)
-    if optimizer not in ("adam", "lbfgs"):
-        raise ValueError(f"optimizer must be 'adam' or 'lbfgs', got {optimizer!r}")
+    if not (optimizer in ("adam", "lbfgs") or isinstance(optimizer, optax.GradientTransformation)):
+        raise ValueError(f"optimizer must be 'adam', 'lbfgs' or an optax GradientTransformation, "
+                         f"got {optimizer!r}")
     if not 1 <= int(steps) <= MAX_STEPS:
         raise ValueError(f"steps must be from 1 to {MAX_STEPS:,}, got {steps}")
     if not 1 <= int(knots) <= MAX_KNOTS:
@@ -194,88 +307,62 @@ def design(
         same_size = (isinstance(start_law, CorrectedPolynomial) and start_law.spline_degree == degree
                      and len(start_law.coefficients) == knots)
         start_coefficients = start_law.coefficients if same_size else jnp.zeros(knots)
-        to_coefficients = _acceleration_coordinates(knots, degree, 4 if base.degree == 7 else 3)
-
-        def law_of(theta):
-            return CorrectedPolynomial(base, start_coefficients + to_coefficients @ theta, degree)
+        law_of = _LawMap(jnp.asarray(start_coefficients),
+                         _acceleration_coordinates(knots, degree, 4 if base.degree == 7 else 3), degree,
+                         _Constant(base))
     else:
         start = BSplineLaw.fit(start_law, knots, degree)
-        to_coefficients = _acceleration_coordinates(knots, degree)
+        law_of = _LawMap(jnp.asarray(start.coefficients), _acceleration_coordinates(knots, degree), degree)
 
-        def law_of(theta):
-            return BSplineLaw(start.coefficients + to_coefficients @ theta, degree)
-
-    def features(theta):
-        # The optimiser's own coefficients: no runtime checks (host callbacks) in its
-        # programs; a step gone NaN is the optimiser's failure, caught where it reports.
-        with checks.checked_outside():
-            law = law_of(theta)
-            acceleration = law.a(dense_tau(law)) if caps.max_ca is None else jnp.zeros(())
-            return [o.features(law) for o in objectives], caps.features(law), acceleration
-
-    linear = _linearised(features, knots)
-
-    def raw_values(theta, p):
-        objective_features, _, acceleration = linear(theta)
-        # With a Ca cap, R trains normalised by the cap: the problem stays convex, and the
-        # cap bounds the true Ca, so the reported R (divided by the true Ca) is what it is.
-        ca = caps.max_ca if caps.max_ca is not None else jnp.max(jnp.abs(acceleration))
-        return jnp.stack([o.value(f, ca, p) for o, f in zip(objectives, objective_features)])
+    offset, jacobian = _design_maps(law_of, objectives, caps, jnp.zeros(knots))
+    problem = _Problem(offset, jacobian, jnp.ones(len(objectives)), jnp.asarray(float(penalty)),
+                       jnp.asarray(float(margin)), objectives, caps)
 
     theta0 = jnp.zeros(knots)
     if noise:
         theta0 = noise * jax.random.normal(jax.random.PRNGKey(seed), (knots,))
-    scale = np.asarray(jax.jit(raw_values)(theta0, sharpness[0]))
+    scale = np.asarray(_raw_values(problem, theta0, jnp.asarray(float(sharpness[0]))))
     # |value|: an objective may be signed (a required preload can be negative, a margin).
     weights = np.array([o.weight for o in objectives]) / np.maximum(np.abs(scale), 1e-300)
-
-    def loss(theta, p):
-        cap_penalty = caps.penalty_of(linear(theta)[1], margin)
-        return jnp.dot(weights, raw_values(theta, p)) + penalty * cap_penalty
+    problem = eqx.tree_at(lambda pr: pr.weights, problem, jnp.asarray(weights))
 
     if optimizer == "adam":
-        opt = optax.adam(optax.exponential_decay(learning_rate, int(steps), 0.01))
-        stages = [np.geomspace(sharpness[0], sharpness[1], int(steps))]
+        opt, line_search = _ADAM_DIRECTION, False
+    elif optimizer == "lbfgs":
+        opt, line_search = _LBFGS, True
     else:
+        opt = optimizer
+        line_search = optax.tree_utils.tree_get(opt.init(theta0), "value", None) is not None
+    if line_search:
         # L-BFGS needs one fixed objective per run (its line search caches values and
         # its memory holds curvature): each sharpness stage is a fresh run.
-        opt = optax.lbfgs(memory_size=40)
         exponents = _sharpness_stages(sharpness)
         per_stage = math.ceil(int(steps) / len(exponents))
         stages = [np.full(per_stage, p) for p in exponents]
+    else:
+        stages = [np.geomspace(sharpness[0], sharpness[1], int(steps))]
     chunk = min(200, max(len(ps) for ps in stages))
-
-    @jax.jit
-    def run_chunk(theta, state, ps):
-        def step(carry, p):
-            theta, state = carry
-            fn = lambda x: loss(x, p)  # noqa: E731
-            if optimizer == "adam":
-                value, grad = jax.value_and_grad(fn)(theta)
-                updates, state = opt.update(grad, state, theta)
-            else:
-                value, grad = optax.value_and_grad_from_state(fn)(theta, state=state)
-                updates, state = opt.update(grad, state, theta, value=value, grad=grad,
-                                            value_fn=fn)
-            return (optax.apply_updates(theta, updates), state), value
-
-        (theta, state), values = jax.lax.scan(step, (theta, state), ps)
-        return theta, state, values
 
     theta, history, done = theta0, [], 0
     total = sum(chunk * math.ceil(len(ps) / chunk) for ps in stages)
     report = progress if callable(progress) else None
     with tqdm(total=total, disable=report is not None or not progress, desc="design", unit="step") as bar:
         for ps in stages:
-            # Strongly typed, as run_chunk returns it, so that one compilation serves all.
+            # Strongly typed, as _run_chunk returns it, so that one compilation serves all.
             state = jax.tree.map(lambda x: jnp.asarray(x, dtype=x.dtype), opt.init(theta))
             ps = np.concatenate([ps, np.full((-len(ps)) % chunk, ps[-1])]).reshape(-1, chunk)
+            if optimizer == "adam":  # optax.adam's exponential decay, step by step
+                rates = -learning_rate * 0.01 ** (np.arange(ps.size) / int(steps))
+            else:
+                rates = np.ones(ps.size)
+            rates = rates.reshape(ps.shape)
             for i, chunk_ps in enumerate(ps):
-                theta, state, values = run_chunk(theta, state, jnp.asarray(chunk_ps))
+                theta, state, values = _run_chunk(problem, opt, line_search, theta, state, jnp.asarray(chunk_ps),
+                                                  jnp.asarray(rates[i]))
                 values = np.asarray(values)
                 history.append(values)
                 bar.set_postfix(loss=f"{values[-1]:.4g}", p=f"{chunk_ps[0]:.4g}")
-                converged = optimizer == "lbfgs" and values[0] - values[-1] <= 1e-13 * abs(values[-1])
+                converged = line_search and values[0] - values[-1] <= 1e-13 * abs(values[-1])
                 advance = chunk * (len(ps) - i if converged else 1)
                 bar.update(advance)
                 done += advance

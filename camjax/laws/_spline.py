@@ -204,14 +204,19 @@ class BSplineLaw(AbstractSearchedPeaksLaw):
     ) -> BSplineLaw:
         """Least-squares fit of another law's displacement (a starting point for design)."""
         n_fixed = 4 if zero_jerk else 3
-        knots = np.asarray(_knots(n_free + 2 * n_fixed, degree))
         tau = np.linspace(0.0, 1.0, 40 * (n_free + 2 * n_fixed))
-        # One compiled call: evaluated eagerly, the basis and the law dispatch many small ops.
-        basis, s = jax.jit(lambda t: (_basis(knots, degree, t), law.s(t)))(jnp.asarray(tau))
+        basis, s = _fit_samples(law, n_free + 2 * n_fixed, degree, jnp.asarray(tau))
         basis = np.asarray(basis)
         target = np.asarray(s) - basis[:, -n_fixed:].sum(axis=1)
         free = np.linalg.lstsq(basis[:, n_fixed:-n_fixed], target, rcond=None)[0]
         return cls(jnp.asarray(free), degree=degree, zero_jerk=zero_jerk)
+
+
+@eqx.filter_jit
+def _fit_samples(law: AbstractMotionLaw, n_basis: int, degree: int, tau):
+    """The B-spline basis and ``law``'s displacement at ``tau``, for ``BSplineLaw.fit``: one
+    compiled call per law and size (evaluated eagerly they dispatch many small ops)."""
+    return _basis(np.asarray(_knots(n_basis, degree)), degree, tau), law.s(tau)
 
 
 # Compiled once per spline size: eager evaluation dispatches hundreds of small ops.

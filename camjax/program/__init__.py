@@ -64,12 +64,14 @@ from ._groove import GrooveTurn as GrooveTurn
 from ._groove import Impact as Impact
 from ._groove import TurnLaw as TurnLaw
 from ._groove import groove_turns as groove_turns
+from ._jump import ContactForceBound as ContactForceBound
 from ._jump import Flight as Flight
 from ._jump import flight as flight
 from ._jump import flights as flights
 from ._jump import flights_at as flights_at
 from ._jump import jump_speed_rpm as jump_speed_rpm
 from ._jump import min_preload_n as min_preload_n
+from ._jump import scan_speeds as scan_speeds
 from ._machine import ABSURD_SIZES as ABSURD_SIZES
 from ._machine import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
 from ._machine import MAX_HALF_WIDTH_RATIO as MAX_HALF_WIDTH_RATIO

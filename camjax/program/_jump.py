@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from ..sdof import eigenvalue, psi_host, step_within_host
-from ._dynamics import SteadyState
+from ._dynamics import SPEED_BLOCK, SteadyState
 from ._probes import min_preload_n as min_preload_n
 from ._speeds import Speeds
 
@@ -43,25 +43,45 @@ def scan_speeds(program, rpm_lo: float, rpm_hi: float, per_cycle: float) -> np.n
     return even_periods(rpm_lo, rpm_hi, max(16, math.ceil(per_cycle * cycles) + 1))
 
 
-def jump_speed_rpm(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1):
+def jump_speed_rpm(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1, *,
+                   rule_out: bool = True):
     """Lowest speed in ``[rpm_lo, rpm_hi]`` at which the contact force goes negative, or ``None``.
 
     The scan samples evenly in ``1/rpm`` with 16 samples per natural-frequency cycle
     that a cycle of the cam gains or loses across the range (every period ratio of the
     program moves by 1/16 between samples), then bisects the first crossing to
-    ``tolerance_rpm``.
+    ``tolerance_rpm``.  The scan's low speeds where ``ContactForceBound`` holds contact are
+    not computed (``rule_out=False``: every scan speed is, as the benchmarks' baseline).
     """
     rpm_lo, rpm_hi = Speeds.of(rpm_lo, "rpm_lo")[0], Speeds.of(rpm_hi, "rpm_hi")[0]
     if not rpm_lo <= rpm_hi:
         raise ValueError(f"need rpm_lo <= rpm_hi, got {rpm_lo:g}, {rpm_hi:g}")
+    return _jump_speed(steady, rpm_lo, rpm_hi, tolerance_rpm, rule_out=rule_out)
+
+
+def _jump_speed(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm: float = 0.1,
+                *, rule_out: bool = True):
+    """``jump_speed_rpm`` over speeds already made ``Speeds`` (``rpm_lo <= rpm_hi``).
+
+    The scan's speeds up to the first one where ``ContactForceBound`` does not hold
+    contact are ruled out without computing their steady state (the bound is a lower bound
+    of the least contact force); the rest of the scan runs in waves of speed blocks up to
+    the first loss of contact, and each round of the bisection is one block.  The scan's
+    speeds and the rounds are the ones of a plain scan, so the answer is the same.
+    ``rule_out=False`` is that plain scan: every scan speed computed, in one dispatch (the
+    benchmarks' baseline).
+    """
     if steady.program.follower.form_closed:
         return None
     rpm = scan_speeds(steady.program, rpm_lo, rpm_hi, 16)
     rpm[0], rpm[-1] = rpm_lo, rpm_hi
-    force = steady.min_contact_force_n(rpm)
-    if not np.any(force < 0):
+    if rule_out:
+        i = _first_loss(steady, rpm)
+    else:
+        lost = np.flatnonzero(steady.min_contact_force_n(rpm) < 0)
+        i = int(lost[0]) if lost.size else None
+    if i is None:
         return None
-    i = int(np.argmax(force < 0))
     if i == 0:
         return float(rpm_lo)
     lo, hi = rpm[i - 1], rpm[i]
@@ -75,6 +95,117 @@ def jump_speed_rpm(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_
         else:
             lo = trial[-1]
     return float(0.5 * (lo + hi))
+
+
+_BOUND_MARGIN = 0.01
+"""Share of the preload the bound must clear to rule a speed out: room for its minimum,
+which is taken over samples (``_BOUND_SAMPLES`` per grid interval) of a smooth curve."""
+_BOUND_SAMPLES = 3
+_BOUND_ORDER = 3  # derivatives of the forcing in the quasi-static part
+_BOUND_CHUNK = 256  # speeds per evaluation of the bound (a (chunk, samples) array)
+
+
+_SCAN_WAVE = 2 * SPEED_BLOCK
+"""Scan speeds per wait: the scan stops at the first wave with a loss of contact."""
+
+
+def _first_loss(steady: SteadyState, rpm: np.ndarray) -> int | None:
+    """Index of the first speed of the scan ``rpm`` (ascending) where contact is lost, or
+    None: the speeds that ``ContactForceBound`` holds in contact are skipped, the rest
+    computed in waves of ``_SCAN_WAVE`` speeds up to the first wave with a loss."""
+    for start in range(ContactForceBound(steady).first_unheld(rpm), rpm.size, _SCAN_WAVE):
+        force = steady.min_contact_force_n(rpm[start : start + _SCAN_WAVE])
+        lost = np.flatnonzero(force < 0)
+        if lost.size:
+            return start + int(lost[0])
+    return None
+
+
+class ContactForceBound:
+    """A lower bound of the periodic steady state's least contact force at any speed, from
+    the program's forcing alone (no propagation): what rules out whole speed ranges of the
+    jump's scan.
+
+    The mode obeys ``q' = lam q + f`` in turn time (``f = y_ss + beta y`` on each interval);
+    its periodic solution is ``q(s) = int_0^inf exp(lam u) f(s - u) du``.  Integrating by
+    parts three times, ``q = -f/lam - f'/lam^2 - f''/lam^3 + R`` with
+    ``|R| <= (J_f/|lam| + J_f'/|lam|^2 + V_f''/|lam|^3) / (1 - exp(Re lam))``, where
+    ``J_g`` sums the jumps of ``g`` over a turn and ``V_f''`` is the total variation of
+    ``f''`` (its jumps included).  The contact force is ``F_0 + Re(G q)`` (``G`` the force
+    gain), so it is at least ``F_0 + min_s Re(G (-f/lam - f'/lam^2 - f''/lam^3)) - |G| |R|``:
+    the quasi-static force less a remainder that grows with the speed.  At low speeds,
+    where the scan is densest (it is even in the period), the bound holds contact and
+    those speeds need no steady state.
+    """
+
+    def __init__(self, steady: SteadyState):
+        grid, train = steady.grid, steady.train
+        widths = np.asarray(grid.piece_width)[np.asarray(grid.motion.piece)][:, None]
+
+        def sampled(coefficients, count):
+            """``(f, f', f'')`` at ``count`` points of every interval, from its monomial
+            coefficients in the local ``sigma``."""
+            sigma = np.linspace(0.0, 1.0, count)[:, None]
+            c = np.asarray(coefficients, dtype=float)
+            m = np.arange(6)
+            return tuple(
+                c[:, n:] @ (_falling(m[n:], n) * sigma ** m[: 6 - n]).T / widths**n
+                for n in range(_BOUND_ORDER)
+            )
+
+        def jumps(v):  # the turn closes on its start
+            return float(np.abs(v[:, 0] - np.roll(v[:, -1], 1)).sum())
+
+        def variation(v):  # a polynomial sampled at 33 points per interval, and its jumps
+            return float(np.abs(np.diff(v, axis=1)).sum()) + jumps(v)
+
+        fine = sampled(grid.motion.forcing, 33), sampled(grid.lift, 33)
+        self.jumps = [[jumps(v[n]) for v in fine] for n in range(_BOUND_ORDER - 1)]
+        self.variation = [variation(v[-1]) for v in fine]
+        coarse = sampled(grid.motion.forcing, _BOUND_SAMPLES), sampled(grid.lift, _BOUND_SAMPLES)
+        self.samples = np.stack([v[n].ravel() for n in range(_BOUND_ORDER) for v in coarse])
+        self.train = train
+        self.preload = float(train.preload)
+
+    def __call__(self, rpm) -> np.ndarray:
+        """The bound (N) at each speed of ``rpm``."""
+        train = self.train
+        rpm = np.asarray(rpm, dtype=float)
+        period = 60.0 / rpm
+        w = np.asarray(train.omega_per_turn(rpm), dtype=float)
+        lam = eigenvalue(w, float(train.zeta))
+        # deflection_gains, on the host (an eager JAX op would compile for each size)
+        e_gain, e_rate_gain = -1j / lam.imag, 1.0 - 1j * lam.real / lam.imag
+        gain = 1e-3 * float(train.k) * e_gain + 1e-3 * float(train.c) / period * e_rate_gain  # N/mm
+        beta = float(train.ks / train.m) * period**2
+        terms = [(-gain / lam ** (n + 1)).real for n in range(_BOUND_ORDER)]
+        weights = np.stack([x for t in terms for x in (t, t * beta)], axis=1)
+        quasi_static = (weights @ self.samples).min(axis=1)
+        rest = sum(
+            (acc + beta * lift) / np.abs(lam) ** (n + 1) for n, (acc, lift) in enumerate(self.jumps)
+        )
+        rest = rest + (self.variation[0] + beta * self.variation[1]) / np.abs(lam) ** _BOUND_ORDER
+        return self.preload + quasi_static - np.abs(gain) * rest / -np.expm1(lam.real)
+
+
+    def first_unheld(self, rpm) -> int:
+        """Index of the first speed of ``rpm`` (ascending) where the bound, less
+        ``_BOUND_MARGIN`` of the preload, does not hold contact (``rpm.size`` if none):
+        the speeds before it need no steady state."""
+        rpm = np.asarray(rpm, dtype=float)
+        for start in range(0, rpm.size, _BOUND_CHUNK):
+            held = self(rpm[start : start + _BOUND_CHUNK]) > _BOUND_MARGIN * self.preload
+            if not held.all():
+                return start + int(np.argmin(held))
+        return rpm.size
+
+
+def _falling(m, n):
+    """``m (m - 1) ... (m - n + 1)``: the factor of ``sigma^(m - n)`` in the n-th derivative of ``sigma^m``."""
+    out = np.ones_like(m)
+    for j in range(n):
+        out = out * (m - j)
+    return out
 
 
 @dataclasses.dataclass(frozen=True)

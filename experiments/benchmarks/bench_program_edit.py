@@ -1,14 +1,19 @@
 """A cam program at the speed of an edit: analyse, edit a lift, analyse again.
 
-For each built-in program (the feed cam and the indexer) in one process: the first
-``analyse`` over ``--rpm`` (compiles), then ``--edits`` edits that keep the program's
-shape (every moving segment's lift scaled by a factor near 1), each analysed with the jump
-speed and the flights, timed (wall) with the number of XLA compilations it caused
-(``jax.monitoring``'s backend-compile events).  ``--baseline DIR`` runs the same
+For each program (the built-in feed cam and indexer, and ``transfer``: the transfer cam
+of ``transfer.toml`` beside this script, a 368 Hz follower whose jump speed lies inside
+the studio's default range 200:1400:7) in one process: the first ``analyse`` over
+``--rpm`` (compiles), then ``--edits`` edits that keep the program's shape (every moving
+segment's lift scaled by a factor near 1), each analysed with the jump speed and the
+flights, timed (wall) with the number of XLA compilations it caused (``jax.monitoring``'s
+backend-compile events), and the median of the edits.  ``--baseline DIR`` runs the same
 measurement on another checkout (its code first on ``PYTHONPATH``) in a subprocess of
-the same run, and prints both side by side with their ratios.
+the same run, and prints both side by side with their ratios; the load average
+(``os.getloadavg``) is printed with each run, since the machine may be shared.
 
     python experiments/benchmarks/bench_program_edit.py [--rpm 300:900:101] [--edits 3] [--baseline DIR]
+    python experiments/benchmarks/bench_program_edit.py --rpm 200:1400:7 --edits 10 --programs transfer \
+        --baseline /work/main --baseline-edits 10
 """
 
 from __future__ import annotations
@@ -16,12 +21,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 import time
 from pathlib import Path
 
-PROGRAMS = ("feed", "indexer")
+PROGRAMS = ("feed", "indexer", "transfer")
+TRANSFER = Path(__file__).resolve().parent / "transfer.toml"
 
 
 def measure(rpm_spec: str, edits: int, programs) -> dict:
@@ -40,7 +47,7 @@ def measure(rpm_spec: str, edits: int, programs) -> dict:
     rpm = np.linspace(lo, hi, int(count))
     out = {}
     for name in programs:
-        program = cp.Program.load(cp.example_path(name))
+        program = cp.Program.load(TRANSFER if name == "transfer" else cp.example_path(name))
         rows = []
         for k in range(edits + 1):
             factor = 1.0 + 0.01 * k
@@ -57,6 +64,7 @@ def measure(rpm_spec: str, edits: int, programs) -> dict:
             rows.append({"edit": k, "seconds": time.perf_counter() - start,
                          "compilations": len(compiles) - before, "jump_speed_rpm": jump})
         out[name] = rows
+    out["load"] = os.getloadavg()
     return out
 
 
@@ -105,9 +113,16 @@ def main(argv=None) -> int:
                 base = runs["baseline"][name]
                 ratio = f" {runs['this'][name][k]['seconds'] / base[k]['seconds']:.4f} |" if k < len(base) else " - |"
             print(f"| {name} | {'first' if k == 0 else k} | " + " | ".join(cells) + " |" + ratio)
+        medians = {lab: statistics.median(r["seconds"] for r in runs[lab][name][1:])
+                   for lab in runs if len(runs[lab][name]) > 1}
+        print(f"| {name} | median of edits | " + " | ".join(
+            f"{medians[lab]:.3f} | -" if lab in medians else "- | -" for lab in runs) + " |"
+            + (f" {medians['this'] / medians['baseline']:.4f} |" if len(medians) == 2 else ""))
         for lab in runs:
             jumps = {str(r["jump_speed_rpm"]) for r in runs[lab][name]}
             print(f"  {lab}: jump speeds {sorted(jumps)}")
+    for lab in runs:
+        print(f"  {lab}: load average after the run {' '.join(f'{x:.2f}' for x in runs[lab]['load'])}")
     return 0
 
 
