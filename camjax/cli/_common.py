@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import re
 from pathlib import Path
@@ -175,6 +176,13 @@ def parse_range(text: str, what: str):
         from ..checks import period_ratio_count as check_count
     with options_named():
         return _parse_range(text, what, check_count)
+
+
+def sweep_options_for(args: argparse.Namespace, model) -> dict:
+    """The command's sweep options (``args.sweep_options``, ``compile_for_one_run``) that
+    ``model``'s options take (the peak search is the exact path's alone)."""
+    fields = {field.name for field in dataclasses.fields(model.options_type)}
+    return {name: value for name, value in args.sweep_options.items() if name in fields}
 
 
 def add_format(parser: argparse.ArgumentParser, choices=("table", "json", "csv")) -> None:
