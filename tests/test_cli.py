@@ -271,8 +271,7 @@ def test_a_short_commands_sweep_options_reach_the_library(monkeypatch, capsys):
     """``camjax ct`` run as the executable runs it (``one_run``) passes its sweep options to
     ``ct_curve`` (the exact path takes both; another model only ``sweep``), and reports
     the numbers of the library's defaults within the peak search's tolerance."""
-    from camjax.cli import build_parser
-    from camjax.cli._common import sweep_options_for
+    from camjax.cli import build_parser, sweep_options_for
     from camjax.metrics import PEAK_TOLERANCE
     from camjax.sharding import SweepOptions
 

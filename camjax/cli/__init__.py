@@ -16,6 +16,7 @@ from ._common import HelpFormatter
 from ._common import dump_json as dump_json
 from ._common import laws_of as laws_of
 from ._common import split_law_specs as split_law_specs
+from ._common import sweep_options_for as sweep_options_for
 
 
 class _Parser(argparse.ArgumentParser):
