@@ -178,11 +178,16 @@ def parse_range(text: str, what: str):
         return _parse_range(text, what, check_count)
 
 
-def sweep_options_for(args: argparse.Namespace, model) -> dict:
-    """The command's sweep options (``args.sweep_options``, ``compile_for_one_run``) that
-    ``model``'s options take (the peak search is the exact path's alone)."""
+def sweep_options_for(args: argparse.Namespace, model=None) -> dict:
+    """The command's sweep options (``compile_for_one_run`` puts them in
+    ``args.sweep_options``; none where a command's own parser built ``args``), those that
+    ``model``'s options take where a model is given (the peak search is the exact path's
+    alone)."""
+    chosen = dict(vars(args).get("sweep_options", {}))
+    if model is None:
+        return chosen
     fields = {field.name for field in dataclasses.fields(model.options_type)}
-    return {name: value for name, value in args.sweep_options.items() if name in fields}
+    return {name: value for name, value in chosen.items() if name in fields}
 
 
 def add_format(parser: argparse.ArgumentParser, choices=("table", "json", "csv")) -> None:

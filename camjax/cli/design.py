@@ -16,6 +16,7 @@ from ._common import (
     options_named,
     output_dir,
     parse_float_list,
+    sweep_options_for,
 )
 from .program import is_machine, program_path
 
@@ -155,6 +156,7 @@ def run(args) -> int:
     out = output_dir(args.out)
     if args.program:
         return _run_program(args, out)
+    sweep_options = sweep_options_for(args)
     if args.objective == "preload":
         raise CliError("--objective preload needs --program (a whole cam with its follower)")
     if args.band is None and args.n is None:
@@ -181,10 +183,10 @@ def run(args) -> int:
     # compiles and runs, so the two compiles share the machine's cores).
     with ThreadPoolExecutor(1) as pool:
         standard = pool.submit(_standard_laws_compared, ratios, args.damping, args.knots,
-                               args.sweep_options)
+                               sweep_options)
         result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=steps,
                           optimizer=args.optimizer, progress=not args.quiet,
-                          sweep_options=args.sweep_options)
+                          sweep_options=sweep_options)
         law = result.law
         save(law, out / "law.json")
         tau = np.linspace(0.0, 1.0, 10001)
@@ -195,7 +197,7 @@ def run(args) -> int:
         # standard laws share one compiled sweep.  The bar covers the rest of the command.
         bar = tqdm(total=3, desc="compare", unit="step", disable=args.quiet, file=sys.stderr)
         bar.set_postfix_str("designed law")
-        sweeps = {"designed": ct_curve(law, ratios, damping=args.damping, **args.sweep_options)}
+        sweeps = {"designed": ct_curve(law, ratios, damping=args.damping, **sweep_options)}
         # The design already refined its own peaks (one compiled call fewer).
         peaks = {"designed": result.coefficients}
         laws = {"designed": law}
@@ -211,7 +213,7 @@ def run(args) -> int:
         # A band objective's report is the maximum over these same ratios.
         value = (float(r.max()) if isinstance(objective, D.MaxResidual) else
                  float(load.max()) if isinstance(objective, D.MaxCaCt)
-                 else objective.report(each, **args.sweep_options))
+                 else objective.report(each, **sweep_options))
         rows.append({"law": name, "objective": value, "Ca": peaks[name]["Ca"],
                      "Cj": peaks[name]["Cj"], "max_R": float(r.max()), "max_CaCt": float(load.max())})
     where = ("the objective on 2000 period ratios across the band" if band else
