@@ -10,6 +10,7 @@ result, so callers see exactly the single-device answer.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import os
@@ -97,23 +98,72 @@ CPU_COMPILER_OPTIONS: tuple[tuple[str, object], ...] = (("xla_cpu_prefer_vector_
 the CPU has them (AVX-512; XLA's default prefers 256).  On a 2-core AVX-512 machine
 (2026-11-26) ``camjax.ct_curves`` of 256 SCCA laws ran 1.05-1.14x faster and a one-law
 curve's kernel 1.05-1.08x, compiled as fast; a CPU without them keeps its widest.
-``sweeps_run_once`` drops them."""
-_sweep_options = {"cpu": CPU_COMPILER_OPTIONS}
+``SweepOptions.run_once`` drops them."""
+
+ACCELERATOR_CHUNK_NODES = 2**24
+"""Grid nodes that ``camjax.sdof.chunked_map`` vmaps over at once on a GPU (or any backend
+other than the CPU), which runs each operation over the whole chunk at once: small chunks
+leave it waiting on launches (on an H200, a 100,000-ratio curve's kernel took 45 ms in
+chunks of 2**17 nodes, 5 ms in 2**24, using 0.5 GiB).  It also bounds the grid nodes of a
+stack's laws swept at once."""
+
+ACCELERATOR_STACK_EVALUATIONS = 65536
+"""(law, period ratio) pairs of a stack swept at once on a GPU: 65 laws of 1000 ratios (on
+an H200, 256 SCCA laws' kernel took 125 ms one law at a time, 20 ms 64 at a time, using
+0.8 GiB)."""
 
 
-def sweeps_run_once(once: bool = True) -> None:
-    """Compile the sweeps with XLA's own CPU options (not ``CPU_COMPILER_OPTIONS``), for a
-    process whose sweeps each run once: under XLA's classic emitters, which a short
-    ``camjax`` command uses, the wider vectors took 0.05 s longer to compile (``camjax
-    ct``, 0.55 against 0.50 s), more than its 7000 ratios gain from them.  ``once=False``
-    restores ``CPU_COMPILER_OPTIONS``."""
-    _sweep_options["cpu"] = () if once else CPU_COMPILER_OPTIONS
+@dataclasses.dataclass(frozen=True)
+class SweepOptions:
+    """How a sweep's program is compiled and batched: the ``sweep`` field of every model's
+    options (``camjax.models.Options``), so a call passes its choice (``ct_curve(...,
+    sweep=SweepOptions.run_once())``) and each choice compiles its own program.  None of
+    them changes a result.
+
+    Attributes:
+        cpu_compiler_options: XLA options of the sweeps' programs on CPU (default
+            ``CPU_COMPILER_OPTIONS``); XLA's defaults on any other backend.
+        accelerator_chunk_nodes: grid nodes vmapped at once off the CPU
+            (``ACCELERATOR_CHUNK_NODES``; a CPU keeps ``camjax.sdof.CHUNK_NODES``).
+        accelerator_stack_evaluations: (law, ratio) pairs of a stack swept at once off the
+            CPU (``ACCELERATOR_STACK_EVALUATIONS``).  Both sizes are a device's own tuning,
+            as experiments/benchmarks/device_check.py measures it.
+    """
+
+    cpu_compiler_options: tuple[tuple[str, object], ...] = CPU_COMPILER_OPTIONS
+    accelerator_chunk_nodes: int = ACCELERATOR_CHUNK_NODES
+    accelerator_stack_evaluations: int = ACCELERATOR_STACK_EVALUATIONS
+
+    def __post_init__(self):
+        for name in ("accelerator_chunk_nodes", "accelerator_stack_evaluations"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+                raise ValueError(f"SweepOptions {name} must be a positive integer, got {value!r}")
+            object.__setattr__(self, name, int(value))
+        options = self.cpu_compiler_options
+        try:
+            options = tuple((str(key), value) for key, value in options)
+            hash(options)
+        except (TypeError, ValueError):
+            raise ValueError("SweepOptions cpu_compiler_options must be (name, value) pairs of "
+                             f"hashable values, got {self.cpu_compiler_options!r}") from None
+        object.__setattr__(self, "cpu_compiler_options", options)
+
+    @classmethod
+    def run_once(cls) -> SweepOptions:
+        """XLA's own CPU options (not ``CPU_COMPILER_OPTIONS``), for sweeps that each run
+        once: under XLA's classic emitters, which a short ``camjax`` command uses, the
+        wider vectors took 0.05 s longer to compile (``camjax ct``, 0.55 against 0.50 s),
+        more than its 7000 ratios gain from them."""
+        return cls(cpu_compiler_options=())
+
+    def compiler_options(self) -> tuple[tuple[str, object], ...]:
+        """The XLA options a sweep compiles with on JAX's default backend now."""
+        return self.cpu_compiler_options if on_cpu() else ()
 
 
-def sweep_compiler_options() -> tuple[tuple[str, object], ...]:
-    """The XLA options the sweeps compile with on CPU now: ``CPU_COMPILER_OPTIONS``, or
-    none after ``sweeps_run_once``."""
-    return _sweep_options["cpu"]
+DEFAULT_SWEEP_OPTIONS = SweepOptions()
+"""The library's defaults (a frozen value: a call that wants others passes its own)."""
 
 
 @functools.cache
@@ -134,44 +184,56 @@ def outside_traces() -> bool | None:
 
 
 class OptionsJit:
-    """``equinox.filter_jit(fun)``, compiled with ``options()`` when called outside any
-    trace, and with XLA's defaults inside one: XLA takes options only for a top-level
-    program (a caller's ``jit`` inlines this one; JAX refuses options there), and XLA's
-    defaults where JAX cannot say.  Decided at each call, as the default backend may
-    change.  ``fun`` itself is ``__wrapped__``."""
+    """``equinox.filter_jit(fun)``, compiled with ``options(*args, **kwargs)`` (the XLA
+    options the call's own arguments pick) when called outside any trace, and with XLA's
+    defaults inside one: XLA takes options only for a top-level program (a caller's
+    ``jit`` inlines this one; JAX refuses options there), and XLA's defaults where JAX
+    cannot say.  Decided at each call, as the default backend may change.  ``fun`` itself
+    is ``__wrapped__``."""
 
     def __init__(self, fun, options):
         functools.update_wrapper(self, fun)
         self._fun, self._options = fun, options
 
-    def compiler_options(self) -> tuple[tuple[str, object], ...]:
-        """The XLA options a call made here and now compiles with (none inside a trace)."""
-        return self._options() if outside_traces() else ()
+    def compiler_options(self, *args, **kwargs) -> tuple[tuple[str, object], ...]:
+        """The XLA options a call with these arguments, made here and now, compiles with
+        (none inside a trace)."""
+        return self._options(*args, **kwargs) if outside_traces() else ()
 
-    def program(self) -> eqx.Module:
-        """The jitted program a call made here and now runs: one per function and options,
-        shared by every ``OptionsJit`` of ``fun`` that picks the same options."""
-        return _filter_jit(self._fun, self.compiler_options())
+    def program(self, *args, **kwargs) -> eqx.Module:
+        """The jitted program a call with these arguments, made here and now, runs: one per
+        function and options, shared by every ``OptionsJit`` of ``fun`` that picks the same
+        options."""
+        return _filter_jit(self._fun, self.compiler_options(*args, **kwargs))
 
     def __call__(self, *args, **kwargs):
-        return self.program()(*args, **kwargs)
+        return self.program(*args, **kwargs)(*args, **kwargs)
 
     def lower(self, *args, **kwargs):
         """The program's ``lower`` (trace and lower without compiling)."""
-        return self.program().lower(*args, **kwargs)
+        return self.program(*args, **kwargs).lower(*args, **kwargs)
+
+
+def sweep_options_of(*args, **kwargs) -> SweepOptions:
+    """The ``SweepOptions`` of a sweep's call: the ``sweep`` field of its last argument (a
+    model's options), or the defaults."""
+    options = kwargs.get("options", args[-1] if args else None)
+    sweep = getattr(options, "sweep", None)
+    return sweep if isinstance(sweep, SweepOptions) else DEFAULT_SWEEP_OPTIONS
 
 
 def sweep_jit(fun) -> OptionsJit:
     """``equinox.filter_jit`` for the sweeps' programs (and ``shard_batch``'s split of
-    them), which run the engine over whole batches: on CPU they compile with
-    ``CPU_COMPILER_OPTIONS`` (unless ``sweeps_run_once``)."""
-    return OptionsJit(fun, lambda: _sweep_options["cpu"] if on_cpu() else ())
+    them), which run the engine over whole batches and take the model's options last: on
+    CPU they compile with those options' ``sweep.cpu_compiler_options``
+    (``CPU_COMPILER_OPTIONS`` by default)."""
+    return OptionsJit(fun, lambda *args, **kwargs: sweep_options_of(*args, **kwargs).compiler_options())
 
 
 def cpu_options_jit(fun, cpu_options: tuple[tuple[str, object], ...]) -> OptionsJit:
     """``equinox.filter_jit`` that compiles with ``cpu_options`` on CPU (a model's
     ``cpu_compiler_options``, for its ``solve``)."""
-    return OptionsJit(fun, lambda: cpu_options if on_cpu() else ())
+    return OptionsJit(fun, lambda *args, **kwargs: cpu_options if on_cpu() else ())
 
 
 def _started() -> bool:
@@ -252,21 +314,16 @@ def _sharded_call(fn, mesh, args, batched_argnums):
     )(*leaves)
 
 
-def _no_options() -> tuple:
-    return ()
+def _split_options(fn, mesh, args, batched_argnums) -> tuple:
+    """The XLA options of ``shard_batch``'s split of ``fn``: those ``fn`` picks for its
+    arguments where it is an ``OptionsJit`` (a sweep), so that the split batch compiles as
+    the whole one would; XLA's defaults otherwise (a function that runs on one device, as
+    a program's speed batch)."""
+    return fn._options(*args) if isinstance(fn, OptionsJit) else ()
 
 
-@functools.cache
-def _sharded_program(options) -> OptionsJit:
-    return OptionsJit(_sharded_call, options)
-
-
-def split_program(fn) -> OptionsJit:
-    """The jitted program ``shard_batch`` runs to split ``fn``'s batch over devices: with
-    ``fn``'s options where ``fn`` is an ``OptionsJit`` (a sweep), so that the split batch
-    compiles as the whole one would; with XLA's defaults otherwise (a function that runs
-    on one device, as a program's speed batch)."""
-    return _sharded_program(fn._options if isinstance(fn, OptionsJit) else _no_options)
+split_program = OptionsJit(_sharded_call, _split_options)
+"""The jitted program ``shard_batch`` runs to split a batch over devices (``_split_options``)."""
 
 
 def shard_batch(fn, *args, batched_argnums=(0,), devices=None):
@@ -298,5 +355,5 @@ def shard_batch(fn, *args, batched_argnums=(0,), devices=None):
         for i, arg in enumerate(args)
     )
     mesh = Mesh(np.asarray(chosen), (AXIS,))
-    out = split_program(fn)(fn, mesh, padded, batched_argnums)
+    out = split_program(fn, mesh, padded, batched_argnums)
     return jax.tree.map(lambda x: x[:size], out)

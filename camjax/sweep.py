@@ -93,7 +93,7 @@ def laws_at_once(template: AbstractModel, options, ratios: int) -> int:
     would run every law for the longest)."""
     if template.sweeps_in_turn(options):
         return 1
-    return stack_laws(ratios, getattr(options, "resolution", None) or 1)
+    return stack_laws(ratios, getattr(options, "resolution", None) or 1, options.sweep)
 
 
 def stack_of(laws) -> AbstractMotionLaw:

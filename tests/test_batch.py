@@ -12,13 +12,12 @@ from camjax.sdof import (
     ACCELERATOR_CHUNK_NODES,
     ACCELERATOR_STACK_EVALUATIONS,
     CHUNK_NODES,
-    accelerator_sizes,
     chunk_nodes,
     chunked_map,
     map_in_chunks,
-    set_accelerator_sizes,
     stack_laws,
 )
+from camjax.sharding import SweepOptions
 
 
 def _member(tree):
@@ -56,6 +55,12 @@ def test_sizes_by_backend(monkeypatch):
     assert stack_laws(10**6) == 1
     # a fine grid bounds the laws at once by nodes: 2**24 // (1000 * 4096)
     assert stack_laws(1000, 4096) == 4 and stack_laws(100, 2**20) == 1
+    # A device's own sizes, passed in: min(1000 // 100, 2**14 // (100 * 4)) laws at once.
+    tuned = SweepOptions(accelerator_chunk_nodes=2**14, accelerator_stack_evaluations=1000)
+    assert chunk_nodes(tuned) == 2**14 and stack_laws(100, 4, tuned) == 10
+    assert stack_laws(100, 64, tuned) == 2
+    monkeypatch.setattr(jax, "default_backend", lambda: "cpu")
+    assert chunk_nodes(tuned) == CHUNK_NODES and stack_laws(100, 4, tuned) == 1
 
 
 def test_a_model_that_sweeps_in_turn_takes_its_laws_in_turn(monkeypatch):
@@ -91,15 +96,13 @@ def test_accelerator_sizes_give_the_cpu_curves(monkeypatch):
     stack = camjax.ct_curves(laws, n)
     jax.clear_caches()
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
-    before = set_accelerator_sizes(stack_evaluations=5 * n.size)  # 3 chunks of 5, padded
+    sweep = SweepOptions(accelerator_stack_evaluations=5 * n.size)  # 3 chunks of 5, padded
     try:
-        assert accelerator_sizes() == (before[0], 5 * n.size) and stack_laws(n.size) == 5
-        single_gpu = camjax.ct_curve("modified-sine", n, damping=0.05)
-        stack_gpu = camjax.ct_curves(laws, n)
+        assert stack_laws(n.size, 1, sweep) == 5
+        single_gpu = camjax.ct_curve("modified-sine", n, damping=0.05, sweep=sweep)
+        stack_gpu = camjax.ct_curves(laws, n, sweep=sweep)
     finally:
-        set_accelerator_sizes(*before)
         jax.clear_caches()  # no program sized for another backend outlives the test
-    assert accelerator_sizes() == (ACCELERATOR_CHUNK_NODES, ACCELERATOR_STACK_EVALUATIONS)
     for a, b in [(single, single_gpu), *((stack[k], stack_gpu[k]) for k in laws)]:
         for metric in ("ct", "residual", "peak_in_motion"):
             np.testing.assert_allclose(getattr(b, metric), getattr(a, metric), rtol=1e-11, atol=1e-11)
@@ -130,9 +133,21 @@ def test_a_stack_of_host_laws_stays_on_the_host():
         np.testing.assert_array_equal(s.cosine, [0.5, 0.0])
 
 
-def test_accelerator_sizes_are_positive_integers():
-    before = accelerator_sizes()
+def test_sweep_options_are_checked_values():
+    """Sizes positive integers, compiler options (name, value) pairs, the ``sweep`` option
+    a ``SweepOptions``: each a one-line ``ValueError`` naming the field; equal options are
+    one static value (one compiled program)."""
     for bad in (0, -4, 2.5, True):
-        with pytest.raises(ValueError, match="chunk_nodes must be a positive integer"):
-            set_accelerator_sizes(chunk_nodes=bad)
-    assert set_accelerator_sizes() == before == accelerator_sizes()  # nothing changed
+        with pytest.raises(ValueError, match="accelerator_chunk_nodes must be a positive integer"):
+            SweepOptions(accelerator_chunk_nodes=bad)
+        with pytest.raises(ValueError, match="accelerator_stack_evaluations must be a positive"):
+            SweepOptions(accelerator_stack_evaluations=bad)
+    with pytest.raises(ValueError, match="cpu_compiler_options must be"):
+        SweepOptions(cpu_compiler_options=("xla_cpu_prefer_vector_width",))
+    with pytest.raises(ValueError, match="sweep must be a camjax.sharding.SweepOptions"):
+        camjax.ct_curve("cycloidal", [1.0], sweep={"accelerator_chunk_nodes": 4})
+    assert SweepOptions(accelerator_chunk_nodes=np.int64(64)) == SweepOptions(accelerator_chunk_nodes=64)
+    assert hash(SweepOptions()) == hash(SweepOptions(cpu_compiler_options=[("xla_cpu_prefer_vector_width", 512)]))
+    default = SweepOptions()
+    assert (default.accelerator_chunk_nodes, default.accelerator_stack_evaluations) == (
+        ACCELERATOR_CHUNK_NODES, ACCELERATOR_STACK_EVALUATIONS) == (2**24, 65536)

@@ -1,6 +1,5 @@
 """The core commands: output shapes, files written, and exit status 2 on bad input."""
 
-import contextlib
 import json
 import os
 
@@ -11,7 +10,6 @@ from helpers import COMPILED_RTOL, assert_same_numbers
 import camjax
 from camjax import laws
 from camjax.cli import main
-from camjax.sdof import peak_search_kind, set_peak_search
 
 
 @pytest.fixture(autouse=True)
@@ -229,22 +227,6 @@ def test_the_executable_ends_early_without_losing_output_or_exit_status(capsys, 
         assert done.returncode == status, (argv, done.stderr)
 
 
-@contextlib.contextmanager
-def _default_tuning():
-    """The library's defaults (bounded peak search, the sweeps' CPU options) for the block,
-    and whatever was set before restored after it."""
-    from camjax import sharding
-
-    kind, options = peak_search_kind(), sharding.sweep_compiler_options()
-    set_peak_search("bounded")
-    sharding.sweeps_run_once(False)
-    try:
-        yield
-    finally:
-        set_peak_search(kind)
-        sharding.sweeps_run_once(options == ())
-
-
 @pytest.mark.parametrize("argv, expected", [
     (["ct", "--out", "d"], True),
     (["program", "feed"], True),
@@ -254,27 +236,49 @@ def _default_tuning():
     (["bench"], False),
 ])
 def test_short_commands_compile_with_the_classic_cpu_emitters(monkeypatch, argv, expected):
-    """... and the dense peak search (cheaper to compile) and XLA's own vector width;
-    long ones keep the bounded search and the sweeps' CPU options."""
-    from camjax import sharding
+    """... and pass the sweeps the dense peak search (cheaper to compile) and XLA's own
+    vector width; long ones keep the library's defaults (no options given)."""
     from camjax.cli import build_parser, compile_for_one_run
+    from camjax.sharding import SweepOptions
 
     monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=1")
-    with _default_tuning():
-        compile_for_one_run(build_parser().parse_args(argv))
-        flags = os.environ["XLA_FLAGS"]
-        assert ("--xla_cpu_use_fusion_emitters=false" in flags) == expected
-        assert flags.startswith("--xla_force_host_platform_device_count=1")
-        assert peak_search_kind() == ("dense" if expected else "bounded")
-        assert sharding.sweep_compiler_options() == (() if expected else sharding.CPU_COMPILER_OPTIONS)
+    args = build_parser().parse_args(argv)
+    assert args.sweep_options == {}
+    compile_for_one_run(args)
+    flags = os.environ["XLA_FLAGS"]
+    assert ("--xla_cpu_use_fusion_emitters=false" in flags) == expected
+    assert flags.startswith("--xla_force_host_platform_device_count=1")
+    one_run = {"peak_search": "dense", "sweep": SweepOptions(cpu_compiler_options=())}
+    assert args.sweep_options == (one_run if expected else {})
+
+
+def test_a_short_commands_sweep_options_reach_the_library(monkeypatch, capsys):
+    """``camjax ct`` run as the executable runs it (``one_run``) passes its sweep options to
+    ``ct_curve`` (the exact path takes both; another model only ``sweep``), and reports
+    the numbers of the library's defaults within the peak search's tolerance."""
+    from camjax.cli import build_parser, sweep_options_for
+    from camjax.metrics import PEAK_TOLERANCE
+    from camjax.sharding import SweepOptions
+
+    monkeypatch.setenv("XLA_FLAGS", os.environ.get("XLA_FLAGS", ""))  # restored afterwards
+    argv = ["ct", "--law", "modified-trapezoid", "--n", "2,5.5,9", "--format", "json"]
+    assert main(argv, one_run=True) == 0
+    data = json.loads(capsys.readouterr().out)["laws"]["modified-trapezoid"]
+    curve = camjax.ct_curve("modified-trapezoid", [2.0, 5.5, 9.0])
+    for metric in ("ct", "residual", "peak_in_motion"):
+        np.testing.assert_allclose(data[metric], getattr(curve, metric), rtol=PEAK_TOLERANCE)
+    args = build_parser().parse_args(["ct"])
+    args.sweep_options = {"peak_search": "dense", "sweep": SweepOptions.run_once()}
+    assert sweep_options_for(args, camjax.SpringMass(1.0)) == args.sweep_options
+    assert sweep_options_for(args, camjax.CoulombFriction(1.0, 0.05)) == {
+        "sweep": SweepOptions.run_once()}
 
 
 def test_a_users_emitter_flag_wins(monkeypatch):
     from camjax.cli import build_parser, compile_for_one_run
 
     monkeypatch.setenv("XLA_FLAGS", "--xla_cpu_use_fusion_emitters=true")
-    with _default_tuning():
-        compile_for_one_run(build_parser().parse_args(["ct"]))
+    compile_for_one_run(build_parser().parse_args(["ct"]))
     assert os.environ["XLA_FLAGS"] == "--xla_cpu_use_fusion_emitters=true"
 
 

@@ -158,6 +158,24 @@ def test_same_seed_same_design():
     assert not np.array_equal(a.law.coefficients, c.law.coefficients)
 
 
+def test_a_design_reports_with_the_sweep_options_passed_in():
+    """``design(sweep_options=...)`` reaches the sweeps that report the objectives: the dense
+    peak search reports the design's Ca*Ct within ``PEAK_TOLERANCE`` of the default's
+    (the same design: training does not sweep), and a bad option is named."""
+    from camjax.metrics import PEAK_TOLERANCE
+
+    kwargs = dict(knots=10, steps=20, optimizer="adam", progress=False)
+    default = D.design(D.CaCt(7.3), **kwargs)
+    dense = D.design(D.CaCt(7.3), sweep_options={"peak_search": "dense"}, **kwargs)
+    np.testing.assert_array_equal(dense.law.coefficients, default.law.coefficients)
+    label = D.CaCt(7.3).label
+    assert dense.values[label] == pytest.approx(default.values[label], rel=PEAK_TOLERANCE)
+    assert default.values[label] == pytest.approx(
+        float(camjax.ct_curve(default.law, [7.3]).ca_ct[0]), rel=1e-12)
+    with pytest.raises(ValueError, match="peak_search must be one of bounded, dense"):
+        D.design(D.CaCt(7.3), sweep_options={"peak_search": "fast"}, **kwargs)
+
+
 @pytest.mark.slow
 def test_within_five_percent_of_the_convex_optimum():
     """Slow (30 s on the loaded 2-core machine, 2026-11-27): a whole 24-knot design at the default step count, and its 24-knot LP; the smaller designs of this file run by default."""

@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+import camjax
 from camjax.metrics import (
     PEAK_GROUP,
     PEAK_TOLERANCE,
@@ -150,18 +151,9 @@ def test_nan_anywhere_gives_nan():
         assert np.isnan(bounded_peak(*broken)), (which, index)
 
 
-@pytest.fixture
-def peak_search_kind():
-    """``camjax.sdof.set_peak_search``, put back to the default ("bounded") afterwards."""
-    from camjax.sdof import set_peak_search
-
-    yield set_peak_search
-    set_peak_search("bounded")
-
-
 @pytest.mark.parametrize("damping", [0.0, 0.2])
-def test_sdof_peak_in_motion_bounded_equals_dense(peak_search_kind, damping):
-    """The Ct kernel's two searches (``camjax.sdof.set_peak_search``) agree, on a law with
+def test_sdof_peak_in_motion_bounded_equals_dense(damping):
+    """The Ct kernel's two searches (``peak_in_motion``'s ``search``) agree, on a law with
     a plateau (many equal crests) and one without, across n in [1, 60]: within
     ``PEAK_TOLERANCE``, by which the bounded search leaves a plateau's equal crests after
     the first (about 1.5e-12 here)."""
@@ -173,11 +165,9 @@ def test_sdof_peak_in_motion_bounded_equals_dense(peak_search_kind, damping):
         grid = motion_grid(laws.as_law(name), 384)  # w h <= 0.98 at n = 60, within the SDOF path's step
 
         def peaks(kind, grid=grid):
-            peak_search_kind(kind)
-
             def one(x):
                 w = 2 * jnp.pi * x
-                return peak_in_motion(propagate(grid, w, damping), grid, w, damping)
+                return peak_in_motion(propagate(grid, w, damping), grid, w, damping, kind)
 
             return jax.jit(jax.vmap(one))(n)
 
@@ -288,11 +278,36 @@ def test_equal_samples_give_an_exact_constant_with_the_interpolants_gradient():
     np.testing.assert_allclose(jacobian, to_monomial_matrix, rtol=1e-15)
 
 
-def test_set_peak_search_refuses_an_unknown_kind():
-    from camjax.sdof import set_peak_search
+def test_an_unknown_peak_search_is_refused_in_one_line():
+    """``peak_in_motion``, ``SpringMassOptions`` and a sweep name the option and the kinds."""
+    from camjax.models import SpringMassOptions
+    from camjax.sdof import motion_grid, peak_in_motion
 
-    with pytest.raises(ValueError, match="peak search must be one of"):
-        set_peak_search("fast")
+    grid = motion_grid(camjax.laws.as_law("cycloidal"), 16)
+    message = "peak_search must be one of bounded, dense, got 'fast'"
+    with pytest.raises(ValueError, match=message):
+        peak_in_motion(jnp.zeros(grid.nodes.shape, complex), grid, 2.0, 0.0, "fast")
+    with pytest.raises(ValueError, match=message):
+        SpringMassOptions(peak_search="fast").checked(3.0)
+    with pytest.raises(ValueError, match=message):
+        camjax.ct_curve("cycloidal", [1.0, 2.0], peak_search="fast")
+    with pytest.raises(ValueError, match="unknown option 'peak_search' for CoulombFriction"):
+        camjax.ct_curve("cycloidal", [1.0], model=camjax.CoulombFriction(1.0, 0.05),
+                        peak_search="dense")
+
+
+def test_a_sweep_with_each_peak_search_in_one_process():
+    """The peak search is a sweep's option, not a process switch: both in one process,
+    alternately, give the same curve (within ``PEAK_TOLERANCE``) and the default is
+    unchanged by a dense sweep run before it."""
+    n = np.linspace(1.0, 30.0, 60)
+    first = camjax.ct_curve("modified-trapezoid", n)
+    dense = camjax.ct_curve("modified-trapezoid", n, peak_search="dense")
+    again = camjax.ct_curve("modified-trapezoid", n)
+    np.testing.assert_array_equal(again.ct, first.ct)
+    for metric in ("ct", "residual", "peak_in_motion"):
+        np.testing.assert_allclose(getattr(dense, metric), getattr(first, metric),
+                                   rtol=PEAK_TOLERANCE, atol=0)
 
 
 @pytest.mark.parametrize("damping", [0.0, 0.1])
@@ -311,7 +326,6 @@ def test_sdof_peak_at_the_grid_step_against_septics_eight_times_finer(damping):
         output_jets,
         peak_in_motion,
         propagate,
-        set_peak_search,
     )
 
     n = jnp.linspace(0.5, 60.0, 41)
@@ -328,13 +342,9 @@ def test_sdof_peak_at_the_grid_step_against_septics_eight_times_finer(damping):
 
         expected = np.asarray(jax.jit(jax.vmap(reference))(n))
         for kind in ("bounded", "dense"):
-            set_peak_search(kind)
-            try:
-                got = jax.jit(jax.vmap(lambda x, grid=grid: peak_in_motion(
-                    propagate(grid, 2 * jnp.pi * x, damping, resolved=True), grid,
-                    2 * jnp.pi * x, damping)))(n)
-            finally:
-                set_peak_search("bounded")
+            got = jax.jit(jax.vmap(lambda x, grid=grid, kind=kind: peak_in_motion(
+                propagate(grid, 2 * jnp.pi * x, damping, resolved=True), grid,
+                2 * jnp.pi * x, damping, kind)))(n)
             np.testing.assert_allclose(np.asarray(got), expected, rtol=1e-11, atol=0,
                                        err_msg=f"{name}, {kind}")
 

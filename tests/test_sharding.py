@@ -163,31 +163,43 @@ def test_shard_batch_one_device_and_batch_checks():
 
 
 def test_sweeps_compile_with_the_cpu_options_only_at_the_top_level():
-    """``sweep_jit``: on CPU a sweep's program compiles with ``CPU_COMPILER_OPTIONS`` (XLA
-    refuses options on a nested jit, so a call inside a caller's trace takes none); the options change no
-    number beyond the peak search's tolerance (``PEAK_TOLERANCE``, 1e-11 relative: rounding
-    may settle a crest in another interval; 7e-13 measured at n = 30)."""
+    """``sweep_jit``: on CPU a sweep's program compiles with its options'
+    ``sweep.cpu_compiler_options`` (``CPU_COMPILER_OPTIONS`` by default, none with
+    ``SweepOptions.run_once``; XLA refuses options on a nested jit, so a call inside a
+    caller's trace takes none); the options change no number beyond the peak search's
+    tolerance (``PEAK_TOLERANCE``, 1e-11 relative: rounding may settle a crest in another
+    interval; 7e-13 measured at n = 30)."""
+    import dataclasses
+
     from camjax import sharding
     from camjax.sweep import prepare_sweep, sweep_program
 
-    sharding.sweeps_run_once(False)  # whatever an earlier test left
     n, template, options = prepare_sweep(np.linspace(1.0, 30.0, 200), damping=0.05)
     law = template.sweep_law(camjax.laws.get("modified-sine"), options)
     args = (law, template, jax.numpy.asarray(n), options)
+    once = dataclasses.replace(options, sweep=sharding.SweepOptions.run_once())
     on_cpu = jax.default_backend() == "cpu"
     chosen = sharding.CPU_COMPILER_OPTIONS if on_cpu else ()
-    assert sharding.sweep_compiler_options() == sharding.CPU_COMPILER_OPTIONS
-    assert sweep_program.compiler_options() == chosen
+    assert options.sweep == sharding.SweepOptions() and options.sweep.cpu_compiler_options == (
+        sharding.CPU_COMPILER_OPTIONS)
+    assert sweep_program.compiler_options(*args) == chosen
+    assert sweep_program.compiler_options(*args[:3], options=options) == chosen
+    assert sweep_program.compiler_options(*args[:3], once) == ()
     plain = eqx.filter_jit(sweep_program.__wrapped__)  # XLA's defaults
     # Split over devices, a sweep compiles with the same options; any other function
     # (a program's speed batch) with XLA's defaults, as it runs on one device.
-    assert sharding.split_program(sweep_program).compiler_options() == chosen
-    assert sharding.split_program(plain).compiler_options() == ()
+    split = (jax.numpy.asarray(n), args, 2)
+    assert sharding.split_program.compiler_options(sweep_program, *split) == chosen
+    assert sharding.split_program.compiler_options(sweep_program, split[0], (*args[:3], once),
+                                                   2) == ()
+    assert sharding.split_program.compiler_options(plain, *split) == ()
     picked = []
-    jax.jit(lambda r: picked.append(sweep_program.compiler_options()) or r)(n)
+    jax.jit(lambda r: picked.append(sweep_program.compiler_options(*args)) or r)(n)
     assert picked == [()]
     if on_cpu:
         assert sharding.CPU_COMPILER_OPTIONS == (("xla_cpu_prefer_vector_width", 512),)
+    run_once = sweep_program(*args[:3], once)[0]
+    np.testing.assert_allclose(run_once.ct, plain(*args)[0].ct, rtol=1e-11, atol=0)
     with_options, without = sweep_program(*args)[0], plain(*args)[0]
     for field in ("ct", "residual", "peak_in_motion"):
         np.testing.assert_allclose(getattr(with_options, field), getattr(without, field),

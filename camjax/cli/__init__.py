@@ -16,6 +16,7 @@ from ._common import HelpFormatter
 from ._common import dump_json as dump_json
 from ._common import laws_of as laws_of
 from ._common import split_law_specs as split_law_specs
+from ._common import sweep_options_for as sweep_options_for
 
 
 class _Parser(argparse.ArgumentParser):
@@ -36,6 +37,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
                                 parser_class=_Parser)
+    # The sweeps' static options a command passes to the library (compile_for_one_run).
+    parser.set_defaults(sweep_options={})
     for name in COMMANDS:
         importlib.import_module(f"camjax.cli.{name}").register(sub)
     return parser
@@ -103,17 +106,26 @@ LONG_CT_SWEEP = 100_000
 """Period ratios from which ``camjax ct`` is a long sweep and keeps XLA's default emitters."""
 
 
+def one_run_sweep_options() -> dict:
+    """The sweeps' options of a short command: the dense peak search
+    (``SpringMassOptions.peak_search``) compiles a smaller program than the bounded one,
+    which pays only when a program runs many times (docs/performance.md); so do the wider
+    vectors of ``camjax.sharding.CPU_COMPILER_OPTIONS`` (``SweepOptions.run_once`` drops
+    them)."""
+    from ..sharding import SweepOptions
+
+    return {"peak_search": "dense", "sweep": SweepOptions.run_once()}
+
+
 def compile_for_one_run(args: argparse.Namespace) -> None:
-    """XLA's classic CPU fusion emitters, its own vector width and the dense peak search,
-    for a short command (``args``, parsed).
+    """XLA's classic CPU fusion emitters, and the sweeps' options of a short command
+    (``one_run_sweep_options``, into ``args.sweep_options``, which the commands pass to
+    the library), for ``args`` (parsed).
 
     The emitters compile camjax's programs in about half the time and run them about 1.2x
     slower (the exact kernel, 2026-11-25): a cold ``camjax ct`` took 0.86x, ``camjax
     program`` 0.69x and ``camjax design`` 0.77x the time with them.  A flag the user set in
-    ``XLA_FLAGS`` wins; it must be set before JAX starts its CPU backend, as here.  The
-    dense peak search (``camjax.sdof.set_peak_search``) compiles a smaller program than
-    the bounded one, which pays only when a program runs many times (docs/performance.md);
-    so do the wider vectors of ``camjax.sharding.CPU_COMPILER_OPTIONS``.
+    ``XLA_FLAGS`` wins; it must be set before JAX starts its CPU backend, as here.
     """
     if args.command not in SHORT_COMMANDS:
         return
@@ -125,11 +137,7 @@ def compile_for_one_run(args: argparse.Namespace) -> None:
     flags = os.environ.get("XLA_FLAGS", "")
     if "xla_cpu_use_fusion_emitters" not in flags:
         os.environ["XLA_FLAGS"] = f"{flags} --xla_cpu_use_fusion_emitters=false".strip()
-    from ..sdof import set_peak_search
-    from ..sharding import sweeps_run_once
-
-    set_peak_search("dense")
-    sweeps_run_once()
+    args.sweep_options = one_run_sweep_options()
 
 
 def _end_process(status: dict) -> None:

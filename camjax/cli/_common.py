@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import re
 from pathlib import Path
@@ -181,6 +182,18 @@ def parse_range(text: str, what: str):
         if check_count is not None:
             check_count(values.size, what)  # a list V1,V2,... as long
         return values
+
+
+def sweep_options_for(args: argparse.Namespace, model=None) -> dict:
+    """The command's sweep options (``compile_for_one_run`` puts them in
+    ``args.sweep_options``; none where a command's own parser built ``args``), those that
+    ``model``'s options take where a model is given (the peak search is the exact path's
+    alone)."""
+    chosen = dict(vars(args).get("sweep_options", {}))
+    if model is None:
+        return chosen
+    fields = {field.name for field in dataclasses.fields(model.options_type)}
+    return {name: value for name, value in chosen.items() if name in fields}
 
 
 def add_format(parser: argparse.ArgumentParser, choices=("table", "json", "csv")) -> None:

@@ -22,6 +22,7 @@ from ._common import (
     options_named,
     output_dir,
     parse_range,
+    sweep_options_for,
 )
 
 DEFAULT_N = "1:30:1000"
@@ -200,7 +201,7 @@ def run(args) -> int:
                           disable=not sys.stderr.isatty()):
         # A failed ratio does not end the sweep: it is NaN in the output, named on stderr.
         curves[name] = ct_curve(law, n, model=model, method=args.method, dwell=args.dwell,
-                                throw=False)
+                                throw=False, **sweep_options_for(args, model))
     for name, curve in curves.items():
         warning = failure_warning(name, curve)
         if warning:

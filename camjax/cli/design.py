@@ -16,6 +16,7 @@ from ._common import (
     options_named,
     output_dir,
     parse_float_list,
+    sweep_options_for,
 )
 from .program import is_machine, program_path
 
@@ -124,7 +125,7 @@ def _band(text: str) -> tuple[float, float]:
     return n1, n2
 
 
-def _standard_laws_compared(ratios, damping: float, knots: int) -> dict:
+def _standard_laws_compared(ratios, damping: float, knots: int, sweep_options: dict) -> dict:
     """``(law, CtCurve, peak coefficients)`` of every standard law over ``ratios``, swept by
     the program that will sweep the designed spline of ``knots`` coefficients."""
     from ..laws import BSplineLaw, standard_laws
@@ -132,7 +133,7 @@ def _standard_laws_compared(ratios, damping: float, knots: int) -> dict:
 
     laws = {law.name: law for law in standard_laws()}
     designed_size = BSplineLaw(np.zeros(knots))  # the designed law's pieces, any values
-    curves = ct_curves(laws, ratios, damping=damping, like=[designed_size])
+    curves = ct_curves(laws, ratios, damping=damping, like=[designed_size], **sweep_options)
     return {name: (law, curves[name], law.peak_coefficients()) for name, law in laws.items()}
 
 
@@ -161,6 +162,7 @@ def run(args) -> int:
     out = output_dir(args.out)
     if args.program:
         return _run_program(args, out)
+    sweep_options = sweep_options_for(args)
     if args.objective == "preload":
         raise CliError("--objective preload needs --program (a whole cam with its follower)")
     if args.objective == "rms-acceleration":
@@ -188,9 +190,11 @@ def run(args) -> int:
     # traced, compiled and run on a thread beside the design (XLA releases the GIL while it
     # compiles and runs, so the two compiles share the machine's cores).
     with ThreadPoolExecutor(1) as pool:
-        standard = pool.submit(_standard_laws_compared, ratios, args.damping, args.knots)
+        standard = pool.submit(_standard_laws_compared, ratios, args.damping, args.knots,
+                               sweep_options)
         result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=steps,
-                          optimizer=args.optimizer, progress=not args.quiet)
+                          optimizer=args.optimizer, progress=not args.quiet,
+                          sweep_options=sweep_options)
         law = result.law
         save(law, out / "law.json")
         tau = np.linspace(0.0, 1.0, 10001)
@@ -201,7 +205,7 @@ def run(args) -> int:
         # standard laws share one compiled sweep.  The bar covers the rest of the command.
         bar = tqdm(total=3, desc="compare", unit="step", disable=args.quiet, file=sys.stderr)
         bar.set_postfix_str("designed law")
-        sweeps = {"designed": ct_curve(law, ratios, damping=args.damping)}
+        sweeps = {"designed": ct_curve(law, ratios, damping=args.damping, **sweep_options)}
         # The design already refined its own peaks (one compiled call fewer).
         peaks = {"designed": result.coefficients}
         laws = {"designed": law}
@@ -216,7 +220,8 @@ def run(args) -> int:
         curves[name] = (r, load)
         # A band objective's report is the maximum over these same ratios.
         value = (float(r.max()) if isinstance(objective, D.MaxResidual) else
-                 float(load.max()) if isinstance(objective, D.MaxCaCt) else objective.report(each))
+                 float(load.max()) if isinstance(objective, D.MaxCaCt)
+                 else objective.report(each, **sweep_options))
         rows.append({"law": name, "objective": value, "Ca": peaks[name]["Ca"],
                      "Cj": peaks[name]["Cj"], "max_R": float(r.max()), "max_CaCt": float(load.max())})
     where = ("the objective on 2000 period ratios across the band" if band else

@@ -94,8 +94,10 @@ class AbstractObjective(eqx.Module):
         return self.value(self.features(law), ca, sharpness)
 
     @abc.abstractmethod
-    def report(self, law) -> float:
-        """Reported value."""
+    def report(self, law, **sweep_options) -> float:
+        """Reported value; ``sweep_options``: static options of the exact-path sweep that
+        computes it, where one does (``camjax.ct_curve``'s, such as ``peak_search`` or
+        ``sweep``), which change how it compiles, not the value."""
 
     @property
     @abc.abstractmethod
@@ -126,8 +128,8 @@ class Residual(AbstractObjective):
     def value(self, features, ca, sharpness):
         return _modulus(features)[0] / ca
 
-    def report(self, law) -> float:
-        return float(_exact_curve(law, [self.period_ratio], self.damping).residual[0])
+    def report(self, law, **sweep_options) -> float:
+        return float(_exact_curve(law, [self.period_ratio], self.damping, **sweep_options).residual[0])
 
     def evaluation_ratios(self):
         return np.array([self.period_ratio])
@@ -162,8 +164,9 @@ class MaxResidual(AbstractObjective):
     def evaluation_ratios(self):
         return np.linspace(self.n1, self.n2, EVALUATION_SAMPLES)
 
-    def report(self, law) -> float:
-        return float(np.max(_exact_curve(law, self.evaluation_ratios(), self.damping).residual))
+    def report(self, law, **sweep_options) -> float:
+        return float(np.max(_exact_curve(law, self.evaluation_ratios(), self.damping,
+                                         **sweep_options).residual))
 
     @property
     def label(self):
@@ -198,8 +201,8 @@ class ExpectedResidual(AbstractObjective):
     def value(self, features, ca, sharpness):
         return jnp.dot(self._rule()[1], _modulus(features)) / ca
 
-    def report(self, law) -> float:
-        n, w = self._rule()
+    def report(self, law, **sweep_options) -> float:
+        n, w = self._rule()  # the closed-form residual: no sweep
         return float(jnp.dot(w, residual(law, n, self.damping)))
 
     def evaluation_ratios(self):
@@ -288,8 +291,8 @@ class CaCt(AbstractObjective):
     def value(self, features, ca, sharpness):
         return _peak_load_value(features, [self.period_ratio], self.damping, self.dwell, sharpness)
 
-    def report(self, law) -> float:
-        return float(peak_loads(law, [self.period_ratio], self.damping, self.dwell)[0])
+    def report(self, law, **sweep_options) -> float:
+        return float(peak_loads(law, [self.period_ratio], self.damping, self.dwell, **sweep_options)[0])
 
     def evaluation_ratios(self):
         return np.array([self.period_ratio])
@@ -328,27 +331,30 @@ class MaxCaCt(AbstractObjective):
     def evaluation_ratios(self):
         return np.linspace(self.n1, self.n2, EVALUATION_SAMPLES)
 
-    def report(self, law) -> float:
-        return float(np.max(peak_loads(law, self.evaluation_ratios(), self.damping, self.dwell)))
+    def report(self, law, **sweep_options) -> float:
+        return float(np.max(peak_loads(law, self.evaluation_ratios(), self.damping, self.dwell,
+                                       **sweep_options)))
 
     @property
     def label(self):
         return f"max Ca*Ct over [{self.n1:g}, {self.n2:g}]"
 
 
-def peak_loads(law, period_ratios, damping=0.0, dwell=1.0, *, devices=None) -> np.ndarray:
+def peak_loads(law, period_ratios, damping=0.0, dwell=1.0, *, devices=None, **sweep_options
+               ) -> np.ndarray:
     """Ca*Ct at every period ratio from one vmapped exact-path call (NumPy).
 
     The ratios (a band's evaluation grid) are split over ``devices`` (default: every
-    local device; ``camjax.sharding.shard_batch``), with results equal to one device's.
+    local device; ``camjax.sharding.shard_batch``), with results equal to one device's;
+    ``sweep_options`` are the sweep's static options (``camjax.ct_curve``'s).
     """
-    return _exact_curve(law, period_ratios, damping, dwell, devices=devices).ca_ct
+    return _exact_curve(law, period_ratios, damping, dwell, devices=devices, **sweep_options).ca_ct
 
 
-def _exact_curve(law, period_ratios, damping, dwell=1.0, *, devices=None):
+def _exact_curve(law, period_ratios, damping, dwell=1.0, *, devices=None, **sweep_options):
     """The exact-path sweep of ``law`` (one compiled program for every law of up to
     eight pieces, and one for longer splines): what reports and comparisons show."""
     from ..sweep import ct_curve
 
     return ct_curve(law, np.atleast_1d(np.asarray(period_ratios, dtype=float)),
-                    damping=damping, dwell=dwell, devices=devices)
+                    damping=damping, dwell=dwell, devices=devices, **sweep_options)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import equinox as eqx
 import jax
@@ -248,6 +248,7 @@ def design(
     seed: int = 0,
     noise: float = 0.0,
     progress: bool | Callable[[int, int, float], None] = True,
+    sweep_options: Mapping | None = None,
 ) -> DesignResult:
     """Design a B-spline rise minimising ``sum(weight * objective)`` under ``caps``.
 
@@ -284,6 +285,9 @@ def design(
             after each compiled chunk of steps as ``progress(step, total, loss)`` (steps
             done and in all, counting a converged stage's rest as done; the training loss)
             in place of the bar, for a caller that shows progress its own way.
+        sweep_options: static options of the exact-path sweeps that report the objectives
+            (``camjax.ct_curve``'s, such as ``peak_search`` or ``sweep``): how they
+            compile, not what they report.
     Raises:
         CapError: the result breaks a cap and cannot be repaired.
     """
@@ -381,9 +385,10 @@ def design(
         if any(v > 0 for v in violations.values()):  # pragma: no cover - Caps.repair guarantees it
             raise CapError(f"the design breaks its caps: {_describe(violations)}")
         bar.set_postfix_str("reporting the objectives")
-        values = {o.label: o.report(final) for o in objectives}
+        sweep_options = dict(sweep_options or {})
+        values = {o.label: o.report(final, **sweep_options) for o in objectives}
         start = law_of(jnp.zeros(knots))
-        initial_values = {o.label: o.report(start) for o in objectives}
+        initial_values = {o.label: o.report(start, **sweep_options) for o in objectives}
         kept = not _improved(objectives, values, initial_values) and caps.met(start)
         if kept:
             warnings.warn("the design did not improve on the law it started from ("

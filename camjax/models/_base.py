@@ -21,6 +21,7 @@ from equinox import AbstractVar
 from ..checks import is_concrete, require
 from ..errors import RESULTS
 from ..laws import AbstractMotionLaw
+from ..sharding import DEFAULT_SWEEP_OPTIONS, SweepOptions
 
 
 @dataclasses.dataclass(frozen=True)
@@ -30,10 +31,13 @@ class Options:
     Attributes:
         method: solution method; each model lists its own (``Model.methods``).
         dwell: length of the dwell after the rise, in motion periods (Ct looks over it).
+        sweep: how a period-ratio sweep's program is compiled and batched
+            (``camjax.sharding.SweepOptions``; no result depends on it).
     """
 
     method: str
     dwell: float = 1.0
+    sweep: SweepOptions = DEFAULT_SWEEP_OPTIONS
 
     def checked(self, max_period_ratio: float) -> "Options":
         """These options validated (``ValueError`` naming the field), filled in."""
@@ -42,6 +46,8 @@ class Options:
             math.isfinite(dwell) and dwell >= 0,
             f"dwell must be a non-negative number of motion periods, got {self.dwell}",
         )
+        require(isinstance(self.sweep, SweepOptions),
+                f"sweep must be a camjax.sharding.SweepOptions, got {self.sweep!r}")
         return dataclasses.replace(self, dwell=dwell)
 
 

@@ -36,6 +36,8 @@ from ..sdof import (
     SUBSTEPS_PER_INTERVAL,
     MotionGrid,
     SampledLaw,
+    checked_peak_search,
+    chunk_nodes,
     chunked_map,
     default_resolution,
     eigenvalue,
@@ -66,6 +68,9 @@ class SpringMassOptions(Options):
             times the grid's interval count, ``w h <= 0.5`` per step).
         max_steps: step limit of diffrax solvers; reaching it is an error.
         use_jump_ts: stop adaptive diffrax solvers at the law's breakpoints.
+        peak_search: how the peak in motion is refined between nodes, ``"bounded"``
+            (default) or ``"dense"`` (``camjax.sdof.PEAK_SEARCHES``): the same answer, the
+            dense program cheaper to compile and slower to run.
     """
 
     method: str = "exact"
@@ -75,6 +80,7 @@ class SpringMassOptions(Options):
     steps: int | None = None
     max_steps: int = 100_000
     use_jump_ts: bool = True
+    peak_search: str = "bounded"
 
     def checked(self, max_period_ratio: float) -> SpringMassOptions:
         base = super().checked(max_period_ratio)
@@ -90,6 +96,7 @@ class SpringMassOptions(Options):
             f"per rise; the limit is {MAX_GRID_INTERVALS:,} (period ratios up to about "
             f"{MAX_GRID_INTERVALS * MAX_PHASE_STEP / (2 * math.pi):,.0f} at the default resolution)",
         )
+        checked_peak_search(self.peak_search)
         for label, value in (("rtol", self.rtol), ("atol", self.atol)):
             require(math.isfinite(value) and value > 0, f"{label} must be positive, got {value}")
         options = dataclasses.replace(
@@ -152,7 +159,7 @@ class SpringMass(AbstractModel):
     def response(self, law, options) -> SpringMassResponse:
         model = self.validated()
         grid, q, result, steps = _mode(law, model, options)
-        metrics = _metrics(q, grid, model, law.Ca, options.dwell)
+        metrics = _metrics(q, grid, model, law.Ca, options)
         omega, zeta = model.omega, model.damping
         lam = eigenvalue(omega, zeta)
         # Sampled at the nodes and, exactly, at SUBSTEPS_PER_INTERVAL parts of every interval
@@ -180,7 +187,7 @@ class SpringMass(AbstractModel):
     def metrics(self, law, options):
         model = self.validated()
         grid, q, result, _ = _mode(law, model, options)
-        return _metrics(q, grid, model, law.Ca, options.dwell), result
+        return _metrics(q, grid, model, law.Ca, options), result
 
     def sweep(self, law, period_ratios, options):
         metrics, result, _ = batch_metrics(law, period_ratios, self.damping, options)
@@ -240,10 +247,10 @@ def _mode(law, model, options):
     return grid, q, result, steps
 
 
-def _metrics(q, grid, model: SpringMass, ca, dwell: float) -> Metrics:
+def _metrics(q, grid, model: SpringMass, ca, options: SpringMassOptions) -> Metrics:
     omega, zeta = model.omega, model.damping
-    in_motion = peak_in_motion(q, grid, omega, zeta)
-    in_dwell = residual_of_mode(q[-1], omega, zeta, dwell)  # the residual: max |x''| in the dwell
+    in_motion = peak_in_motion(q, grid, omega, zeta, options.peak_search)
+    in_dwell = residual_of_mode(q[-1], omega, zeta, options.dwell)  # the residual: max |x''| in the dwell
     return Metrics(jnp.maximum(in_motion, in_dwell) / ca, in_dwell / ca, in_motion / ca)
 
 
@@ -266,9 +273,9 @@ def batch_metrics(law, period_ratio, damping, options: SpringMassOptions):
     def one(n):
         model = _resolved(SpringMass(n, damping), options)  # ct_curve checks concretely
         q, result, steps = _mode_at_nodes(law, grid, model, options)
-        return _metrics(q, grid, model, law.Ca, options.dwell), result, steps
+        return _metrics(q, grid, model, law.Ca, options), result, steps
 
-    return chunked_map(one, period_ratio, grid.nodes.shape[0])
+    return chunked_map(one, period_ratio, grid.nodes.shape[0], chunk_nodes(options.sweep))
 
 
 TRACED_RESOLUTION = 704

@@ -127,7 +127,7 @@ class MaxPreload(AbstractProgramObjective):
         force = SteadyState(program, self.rpm_lo).min_contact_force_n(self.evaluation_speeds())
         return min_preload_n(force, program.follower.preload_n)
 
-    def report(self, law) -> float:
+    def report(self, law, **sweep_options) -> float:  # the program's engine: no sweep options
         return float(np.max(self.required_preload(law)))
 
     @property
@@ -175,7 +175,7 @@ class MaxProgramResidual(AbstractProgramObjective):
         out = steady.summary(self.evaluation_speeds())
         return np.max(out.residual_vibration_mm, axis=1)
 
-    def report(self, law) -> float:
+    def report(self, law, **sweep_options) -> float:  # the program's engine: no sweep options
         return float(np.max(self.residual_mm(law)))
 
     @property

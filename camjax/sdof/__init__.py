@@ -12,23 +12,21 @@ studies, and a cam program's turn at machine speed (``camjax.program``):
   steady state (``periodic_propagate``) and the exact state between nodes
   (``mode_between``);
 - outputs ``Re(G q)`` and their refined peaks (``peak_in_motion``, bounded or dense:
-  ``set_peak_search``, ``peak_search_kind``, with ``plateau_bound`` on constant-acceleration intervals;
+  ``PEAK_SEARCHES``, chosen by ``SpringMassOptions.peak_search``, with ``plateau_bound`` on constant-acceleration intervals;
   ``refined_extremes``), the dwell's peak and the residual vibration;
 - the same equation through diffrax (``integrate``, ``sdof_term``);
 - one chunked vmap for batches (``chunked_map``), its chunks sized by backend
   (``chunk_nodes``, ``stack_laws``; their sizes ``CHUNK_NODES`` on a CPU,
   ``ACCELERATOR_CHUNK_NODES`` and ``ACCELERATOR_STACK_EVALUATIONS`` elsewhere by default,
-  ``set_accelerator_sizes`` to tune a device).
+  a call's ``camjax.sharding.SweepOptions`` to tune a device).
 """
 
 from ._batch import ACCELERATOR_CHUNK_NODES as ACCELERATOR_CHUNK_NODES
 from ._batch import ACCELERATOR_STACK_EVALUATIONS as ACCELERATOR_STACK_EVALUATIONS
 from ._batch import CHUNK_NODES as CHUNK_NODES
-from ._batch import accelerator_sizes as accelerator_sizes
 from ._batch import chunk_nodes as chunk_nodes
 from ._batch import chunked_map as chunked_map
 from ._batch import map_in_chunks as map_in_chunks
-from ._batch import set_accelerator_sizes as set_accelerator_sizes
 from ._batch import stack_laws as stack_laws
 from ._grid import GAUSS_POINTS as GAUSS_POINTS
 from ._grid import INTERPOLATION_DEGREE as INTERPOLATION_DEGREE
@@ -46,19 +44,19 @@ from ._grid import to_monomial as to_monomial
 from ._ode import integrate as integrate
 from ._ode import sdof_term as sdof_term
 from ._ode import vector_field as vector_field
+from ._peaks import PEAK_SEARCHES as PEAK_SEARCHES
+from ._peaks import checked_peak_search as checked_peak_search
 from ._peaks import deflection_gains as deflection_gains
 from ._peaks import dwell_peak as dwell_peak
 from ._peaks import gain_derivatives as gain_derivatives
 from ._peaks import mode_gain as mode_gain
 from ._peaks import output_jets as output_jets
 from ._peaks import peak_in_motion as peak_in_motion
-from ._peaks import peak_search_kind as peak_search_kind
 from ._peaks import plateau_bound as plateau_bound
 from ._peaks import refined_extremes as refined_extremes
 from ._peaks import refined_max as refined_max
 from ._peaks import residual_amplitude as residual_amplitude
 from ._peaks import residual_of_mode as residual_of_mode
-from ._peaks import set_peak_search as set_peak_search
 from ._step import eigenvalue as eigenvalue
 from ._step import mode_between as mode_between
 from ._step import periodic_propagate as periodic_propagate

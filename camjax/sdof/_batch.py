@@ -5,67 +5,32 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from ..sharding import on_cpu
+from ..sharding import ACCELERATOR_CHUNK_NODES as ACCELERATOR_CHUNK_NODES
+from ..sharding import ACCELERATOR_STACK_EVALUATIONS as ACCELERATOR_STACK_EVALUATIONS
+from ..sharding import DEFAULT_SWEEP_OPTIONS, SweepOptions, on_cpu
 
 CHUNK_NODES = 131072
 """Grid nodes (batch members x nodes per member) that ``chunked_map`` vmaps over at once on
 a CPU: a working set that stays in cache."""
 
-ACCELERATOR_CHUNK_NODES = 2**24
-"""The same on a GPU (or any backend other than the CPU), which runs each operation over
-the whole chunk at once: small chunks leave it waiting on launches (on an H200, a
-100,000-ratio curve's kernel took 45 ms in chunks of 2**17 nodes, 5 ms in 2**24, using
-0.5 GiB).  It also bounds the grid nodes of a stack's laws swept at once."""
 
-ACCELERATOR_STACK_EVALUATIONS = 65536
-"""(law, period ratio) pairs of a stack swept at once on a GPU: 65 laws of 1000 ratios (on
-an H200, 256 SCCA laws' kernel took 125 ms one law at a time, 20 ms 64 at a time, using
-0.8 GiB)."""
-
-
-_accelerator = {"chunk_nodes": ACCELERATOR_CHUNK_NODES, "stack_evaluations": ACCELERATOR_STACK_EVALUATIONS}
-
-
-def accelerator_sizes() -> tuple[int, int]:
-    """The batch sizes off the CPU now: ``(chunk nodes, stack evaluations)``, by default
-    ``ACCELERATOR_CHUNK_NODES`` and ``ACCELERATOR_STACK_EVALUATIONS``."""
-    return _accelerator["chunk_nodes"], _accelerator["stack_evaluations"]
-
-
-def set_accelerator_sizes(chunk_nodes: int | None = None, stack_evaluations: int | None = None
-                          ) -> tuple[int, int]:
-    """Size the batches off the CPU (a device's own tuning, as
-    experiments/benchmarks/device_check.py measures it); ``None`` keeps a size.  Returns
-    the sizes before, to restore them.  The sizes are read when a sweep is traced, so
-    JAX's caches are cleared on a change.  The CPU's ``CHUNK_NODES`` stays."""
-    before = accelerator_sizes()
-    for key, value in (("chunk_nodes", chunk_nodes), ("stack_evaluations", stack_evaluations)):
-        if value is None:
-            continue
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise ValueError(f"{key} must be a positive integer, got {value!r}")
-        _accelerator[key] = value
-    if accelerator_sizes() != before:
-        jax.clear_caches()
-    return before
-
-
-def chunk_nodes() -> int:
+def chunk_nodes(sweep: SweepOptions = DEFAULT_SWEEP_OPTIONS) -> int:
     """Grid nodes per chunk of ``chunked_map``: ``CHUNK_NODES`` (131,072) on a CPU, the
-    accelerator's chunk (``accelerator_sizes``, default ``ACCELERATOR_CHUNK_NODES``, 2**24)
-    on JAX's default backend otherwise (``camjax.sharding.on_cpu``)."""
-    return CHUNK_NODES if on_cpu() else _accelerator["chunk_nodes"]
+    accelerator's chunk (``sweep.accelerator_chunk_nodes``, default
+    ``ACCELERATOR_CHUNK_NODES``, 2**24) on JAX's default backend otherwise
+    (``camjax.sharding.on_cpu``)."""
+    return CHUNK_NODES if on_cpu() else sweep.accelerator_chunk_nodes
 
 
-def stack_laws(ratios: int, nodes_per_ratio: int = 1) -> int:
+def stack_laws(ratios: int, nodes_per_ratio: int = 1, sweep: SweepOptions = DEFAULT_SWEEP_OPTIONS) -> int:
     """Laws of a stack swept at once, each against ``ratios`` period ratios on a grid of
     ``nodes_per_ratio`` nodes: one on a CPU (a vmap over laws outgrows its cache);
-    otherwise up to the accelerator's stack evaluations ((law, ratio) pairs) and chunk
-    nodes at once (``accelerator_sizes``)."""
+    otherwise up to ``sweep``'s accelerator stack evaluations ((law, ratio) pairs) and
+    chunk nodes at once."""
     if on_cpu():
         return 1
     ratios, nodes = max(1, int(ratios)), max(1, int(nodes_per_ratio))
-    chunk, evaluations = accelerator_sizes()
+    chunk, evaluations = sweep.accelerator_chunk_nodes, sweep.accelerator_stack_evaluations
     return max(1, min(evaluations // ratios, chunk // (ratios * nodes)))
 
 

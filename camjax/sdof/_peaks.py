@@ -77,28 +77,19 @@ def _output_columns(gain, lam, q, one_left, one_right):
 
 
 PEAK_SEARCHES = ("bounded", "dense")
-_peak_search = {"kind": "bounded"}
+"""How ``peak_in_motion`` refines between nodes (its ``search``; a sweep's
+``SpringMassOptions.peak_search``): ``"bounded"`` (default: ``camjax.metrics.peak_search``,
+only the intervals that can hold the peak; a sweep's kernel 1.7-1.9x faster warm, its
+program larger to compile) or ``"dense"`` (``camjax.metrics.refined_peak``, every
+interval).  Both give the same answer; the ``camjax`` command picks ``"dense"`` for its
+short commands, whose time is mostly compilation."""
 
 
-def peak_search_kind() -> str:
-    """The peak search now in use (``set_peak_search``): ``"bounded"`` or ``"dense"``."""
-    return _peak_search["kind"]
-
-
-def set_peak_search(kind: str) -> None:
-    """How ``peak_in_motion`` (every Ct and residual sweep's peak) refines between nodes:
-    ``"bounded"`` (default: ``camjax.metrics.peak_search``, only the intervals that can
-    hold the peak; a sweep's kernel 1.7-1.9x faster warm, its program larger to compile)
-    or ``"dense"`` (``camjax.metrics.refined_peak``, every interval).  Both give the same
-    answer.  Set it before the first sweep: JAX's caches are cleared, so programs traced
-    before are traced again.  The ``camjax`` command picks ``"dense"`` for its short
-    commands, whose time is mostly compilation.
-    """
-    if kind not in PEAK_SEARCHES:
-        raise ValueError(f"peak search must be one of {PEAK_SEARCHES}, got {kind!r}")
-    if kind != _peak_search["kind"]:
-        _peak_search["kind"] = kind
-        jax.clear_caches()
+def checked_peak_search(search: str) -> str:
+    """``search`` if it names one of ``PEAK_SEARCHES``, else a one-line ``ValueError``."""
+    if not isinstance(search, str) or search not in PEAK_SEARCHES:
+        raise ValueError(f"peak_search must be one of {', '.join(PEAK_SEARCHES)}, got {search!r}")
+    return search
 
 
 REFINED_DERIVATIVES = 5
@@ -145,9 +136,10 @@ def plateau_bound(values, slope_left, slope_right, forcing, omega, zeta):
     return jnp.where(constant, jnp.abs(p) + vibration, jnp.inf)
 
 
-def peak_in_motion(q, grid: MotionGrid, omega, zeta):
+def peak_in_motion(q, grid: MotionGrid, omega, zeta, search: str = "bounded"):
     """Max ``|x''|`` over the grid's span: ``x'' = Re(K q)`` at the nodes, refined between
-    (``set_peak_search``) by an interpolant of degree 11 on each interval.
+    by an interpolant of degree 11 on each interval (``search``, one of
+    ``PEAK_SEARCHES``).
 
     The bounded search takes every interval's bound from the septic (three derivatives per
     end) in one pass over the jets; only the intervals it refines get their five
@@ -157,11 +149,12 @@ def peak_in_motion(q, grid: MotionGrid, omega, zeta):
     refinement instead of up to ten: undamped, such laws' kernels run 1.5x faster.  The dense
     search refines every interval.
     """
+    checked_peak_search(search)
     gain, lam = mode_gain(omega, zeta), eigenvalue(omega, zeta)
     widths = grid.widths
     double = jnp.finfo(jnp.result_type(q)).bits >= 64
     one_left, one_right = grid.one_sided(REFINED_DERIVATIVES if double else 3)
-    if _peak_search["kind"] == "dense":
+    if search == "dense":
         values, left, right = _output_columns(gain, lam, q, one_left, one_right)
         return refined_peak(values, widths, jnp.stack(left, axis=1), jnp.stack(right, axis=1))
     values, left, right = _output_columns(gain, lam, q, one_left[:, :3], one_right[:, :3])

@@ -9,7 +9,8 @@ result is compared with a reference written on another machine (``--write-refere
 on the CPU) by its largest difference in Ct and residual.
 
 On a backend other than the CPU, ``--configs`` times each pair ``K:E`` of
-``camjax.sdof.set_accelerator_sizes(2**K, E)``
+``camjax.sharding.SweepOptions(accelerator_chunk_nodes=2**K, accelerator_stack_evaluations=E)``,
+passed to every sweep
 (``17:1``: the CPU's chunks, a stack's laws one at a time) in one process (compiled anew for each), with the device's peak memory where it reports one.
 
     python experiments/benchmarks/device_check.py --write-reference ref.npz            # on the CPU
@@ -29,6 +30,7 @@ import numpy as np
 
 import camjax
 from camjax import distributed, sdof, sweep
+from camjax.sharding import SweepOptions
 
 LAWS = ("cycloidal", "modified-sine", "4-5-6-7")
 BIG = "cycloidal"
@@ -53,31 +55,31 @@ def timed(fn, repeats: int) -> tuple[float, float]:
     return first, float(np.median(runs))
 
 
-def results(repeats: int) -> tuple[dict, dict]:
-    """(timings, arrays) of the three cases."""
+def results(repeats: int, sizes: SweepOptions) -> tuple[dict, dict]:
+    """(timings, arrays) of the three cases, every sweep with the options ``sizes``."""
     timings, arrays = {}, {}
     cases = [(name, 1000, repeats) for name in LAWS] + [(BIG, 100_000, max(3, repeats // 4))]
     for name, count, reps in cases:
         n = np.linspace(1.0, 30.0, count)
         law = camjax.laws.as_law(name)
-        first, call = timed(lambda law=law, n=n: camjax.ct_curve(law, n).ct, reps)
-        ratios, template, options = sweep.prepare_sweep(n)
+        first, call = timed(lambda law=law, n=n: camjax.ct_curve(law, n, sweep=sizes).ct, reps)
+        ratios, template, options = sweep.prepare_sweep(n, sweep=sizes)
         sampled = template.sweep_law(law, options)
         _, kernel = timed(lambda s=sampled, r=ratios, t=template, o=options: sweep.sweep_metrics(s, r, t, o),
                           reps)
-        curve = camjax.ct_curve(law, n)
+        curve = camjax.ct_curve(law, n, sweep=sizes)
         key = f"{name} x {count}"
         timings[key] = {"first_s": first, "call_ms": 1e3 * call, "kernel_ms": 1e3 * kernel,
                         "host_ms": 1e3 * (call - kernel)}
         arrays[f"{key}/ct"], arrays[f"{key}/residual"] = curve.ct, curve.residual
     laws = scca_laws()
     n = np.linspace(1.0, 30.0, 1000)
-    first, call = timed(lambda: camjax.ct_curves(laws, n), max(3, repeats // 4))
-    ratios, template, options = sweep.prepare_sweep(n)
+    first, call = timed(lambda: camjax.ct_curves(laws, n, sweep=sizes), max(3, repeats // 4))
+    ratios, template, options = sweep.prepare_sweep(n, sweep=sizes)
     stacked = sweep.stack_of(laws.values())
     _, kernel = timed(lambda: sweep.sweep_law_stack(stacked, ratios, template, options),
                       max(3, repeats // 4))
-    curves = camjax.ct_curves(laws, n)
+    curves = camjax.ct_curves(laws, n, sweep=sizes)
     key = f"{len(laws)} SCCA x 1000"
     timings[key] = {"first_s": first, "call_ms": 1e3 * call, "kernel_ms": 1e3 * kernel,
                     "host_ms": 1e3 * (call - kernel)}
@@ -103,11 +105,11 @@ def main() -> None:
     configs = [tuple(map(int, c.split(":"))) for c in args.configs] if accelerator else []
     rows = []
     for config in configs or [None]:
-        if config is not None:
-            sdof.set_accelerator_sizes(2 ** config[0], config[1])
-        jax.clear_caches()
-        setting = {"chunk_nodes": sdof.chunk_nodes(), "stack_laws": sdof.stack_laws(1000)}
-        timings, arrays = results(args.repeats)
+        sizes = SweepOptions() if config is None else SweepOptions(
+            accelerator_chunk_nodes=2 ** config[0], accelerator_stack_evaluations=config[1])
+        jax.clear_caches()  # each configuration timed from its first compilation
+        setting = {"chunk_nodes": sdof.chunk_nodes(sizes), "stack_laws": sdof.stack_laws(1000, 1, sizes)}
+        timings, arrays = results(args.repeats, sizes)
         stats = device.memory_stats() or {}
         for key, row in timings.items():
             if reference is not None:
