@@ -18,8 +18,9 @@ in a folder named by a hash of the versions of JAX, jaxlib and equinox and of ca
 own source files (an edit of the code or an upgrade is a new folder).  The newest
 ``KEPT_VERSIONS`` folders (by last use) are kept and older ones deleted when a new one is
 made.  Anything unreadable is traced afresh and written again; a program ``jax.export``
-cannot keep (one with a host callback) is reported once (a warning naming it), marked,
-and traced in each process.  Each ``exported_jit`` remembers at most ``memo_size``
+cannot keep is marked and traced in each process: silently where JAX says why (a host
+callback, which ``jax.export`` does not serialise: a known limit, nothing to act on), else
+reported once (a ``RuntimeWarning`` naming the program and the error).  Each ``exported_jit`` remembers at most ``memo_size``
 (``MEMO_SIZE``) loaded programs in its process (the least recently used go first).
 """
 
@@ -170,9 +171,10 @@ class exported_jit:
                 exported = export.export(jax.jit(flat))(leaves)
                 data = exported.serialize()
             except Exception as error:  # not exportable or its output not writable
-                warnings.warn(f"camjax: the traced program {self.name!r} cannot be kept on disk "
-                              f"({type(error).__name__}: {error}); it is traced in each process",
-                              RuntimeWarning, stacklevel=3)
+                if not _host_callback(error):
+                    warnings.warn(f"camjax: the traced program {self.name!r} cannot be kept on disk "
+                                  f"({type(error).__name__}: {error}); it is traced in each process",
+                                  RuntimeWarning, stacklevel=3)
                 _write(plain, b"")
                 return jax.jit(flat)
             new_version = not path.parent.exists()
@@ -180,6 +182,11 @@ class exported_jit:
             if new_version:  # the first program of this version: older versions beyond the newest go
                 prune(path.parent.parent)
         return jax.jit(exported.call)
+
+
+def _host_callback(error: Exception) -> bool:
+    """Whether ``jax.export`` refused a program for its host callback (a known limit)."""
+    return isinstance(error, NotImplementedError) and "host_callback" in str(error)
 
 
 def _touch(folder: Path) -> None:

@@ -130,7 +130,7 @@ def test_constant_velocity_and_names():
         laws.BoundaryPolynomial(degree=6)
     with pytest.raises(ValueError, match="degree-5 polynomial cannot meet a jerk"):
         laws.BoundaryPolynomial(j0=1.0, degree=5)
-    with pytest.raises(ValueError, match="polynomial5 takes 4 boundary values"):
+    with pytest.raises(ValueError, match=r"polynomial5:V0,A0,V1,A1 takes 4 numbers after the colon \(boundary values"):
         laws.get("polynomial5:1,2")
 
 

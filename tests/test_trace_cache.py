@@ -80,7 +80,9 @@ def test_old_versions_are_pruned(tmp_path):
     assert len(removed) == 6 - caches.KEPT_VERSIONS
 
 
-def test_a_program_that_cannot_be_kept_is_reported_once(tmp_path, monkeypatch):
+def test_a_program_that_cannot_be_kept_is_marked_and_an_unexpected_failure_reported_once(tmp_path, monkeypatch):
+    """A host callback (jax.export's known limit) is marked and traced without a word; any
+    other failure to export is a warning naming the program, once (then the marker)."""
     import warnings
 
     import jax
@@ -88,7 +90,7 @@ def test_a_program_that_cannot_be_kept_is_reported_once(tmp_path, monkeypatch):
     import numpy as np
     import pytest
 
-    from camjax import caches
+    from camjax import _traces, caches
 
     monkeypatch.setenv("CAMJAX_CACHE_DIR", str(tmp_path))
 
@@ -96,14 +98,25 @@ def test_a_program_that_cannot_be_kept_is_reported_once(tmp_path, monkeypatch):
         y = jax.pure_callback(lambda v: np.asarray(v) * 2.0, jax.ShapeDtypeStruct(x.shape, x.dtype), x)
         return y + 1.0
 
-    jitted = caches.exported_jit(with_callback, "callback-test")
-    with pytest.warns(RuntimeWarning, match="'callback-test' cannot be kept on disk"):
-        assert float(jitted(jnp.asarray(1.5))) == 4.0
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert float(jitted(jnp.asarray(2.5))) == 6.0  # remembered: no second warning
+        jitted = caches.exported_jit(with_callback, "callback-test")
+        assert float(jitted(jnp.asarray(1.5))) == 4.0
         again = caches.exported_jit(with_callback, "callback-test")  # a new process's view: the marker
         assert float(again(jnp.asarray(0.5))) == 2.0
+    assert list(tmp_path.rglob("callback-test-*.plain"))
+
+    def refused(*args, **kwargs):
+        raise ValueError("an export failure nobody expected")
+
+    monkeypatch.setattr(_traces.export, "export", refused)
+    broken = caches.exported_jit(lambda x: 3.0 * x, "broken-test")
+    with pytest.warns(RuntimeWarning, match="'broken-test' cannot be kept on disk .ValueError: an export failure"):
+        assert float(broken(jnp.asarray(2.0))) == 6.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert float(broken(jnp.asarray(2.5))) == 7.5  # remembered: no second warning
+        assert float(caches.exported_jit(lambda x: 3.0 * x, "broken-test")(jnp.asarray(1.0))) == 3.0
 
 
 def test_the_memo_is_bounded_and_the_setting_is_explicit(tmp_path, monkeypatch):
