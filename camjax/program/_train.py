@@ -867,6 +867,7 @@ def train_section(program, chain: Chain, rpm: np.ndarray) -> tuple[dict, ChainSu
         for i, r in enumerate(rpm)
     ]
     section = {
+        "one_body": chain.spells_follower,
         "note": ONE_BODY_NOTE if chain.spells_follower else CHAIN_NOTE,
         "bodies": list(chain.names),
         **frequencies,
