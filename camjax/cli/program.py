@@ -28,8 +28,11 @@ def register(subparsers) -> None:
             "fluctuation and flywheel, the Hertz contact stress (with follower.contact_width_mm) "
             "and the cam's geometry.  FILE may be a machine file ([[cam]] tables: program files "
             "with phase angles on one shaft): each cam's report and the shaft's torque.  "
+            "A program file with a [[train]] (the follower as a chain of bodies, docs/valve-trains.md) "
+            "adds the train's table: natural frequencies, harmonic check, each body's peak "
+            "acceleration, the spring's seat force and surge, the chain's jump speed.  "
             "Without FILE, the built-in 'indexer' example; FILE may also name a built-in "
-            "example ('indexer', 'feed')."
+            "example ('indexer', 'feed', 'valve')."
         ),
     )
     parser.add_argument("file", nargs="?", metavar="FILE",
@@ -127,15 +130,23 @@ def _table(typed, grooved: bool = False) -> str:
     report = typed.as_dict()
     lines = [f"program {typed.program}"]
     columns = _block(typed, "speed")
-    lines.append(_header(columns) + "  period ratios   residual mm")
-    for s in typed.speeds:
-        lines.append(_row(s, columns) + f"  {_numbers(s.period_ratios, '{:.3f}'):<15} "
-                     f"{_numbers(s.residual_vibration_mm)}")
-    lines.append("Fc: contact force of the periodic steady state with contact held (linear); period "
-                 "ratios per moving segment; residual: vibration amplitude at the start of each dwell "
-                 "and constant-velocity stroke")
+    chain = typed.train is not None and not typed.train["one_body"]
+    if chain:  # a chain's rows: only what its steady state gives (Report.train's note)
+        lines += _rows(typed.speeds, columns)
+        lines.append("Fc: contact force at the cam of the chain's periodic steady state with contact held "
+                     "(linear); max|x''|: the last body's")
+    else:
+        lines.append(_header(columns) + "  period ratios   residual mm")
+        for s in typed.speeds:
+            lines.append(_row(s, columns) + f"  {_numbers(s.period_ratios, '{:.3f}'):<15} "
+                         f"{_numbers(s.residual_vibration_mm)}")
+        lines.append("Fc: contact force of the periodic steady state with contact held (linear); period "
+                     "ratios per moving segment; residual: vibration amplitude at the start of each dwell "
+                     "and constant-velocity stroke")
     for table in dict.fromkeys(p.table for p in typed.columns() if p.table != "speed"):
         columns = _block(typed, table)
+        if chain:
+            columns = tuple(p for p in columns if any(getattr(s, p.name) is not None for s in typed.speeds))
         if columns:
             lines += _rows(typed.speeds, columns)
     if grooved:
@@ -154,6 +165,8 @@ def _table(typed, grooved: bool = False) -> str:
             lines.append(f"at {s['rpm']:g} rpm the roller strikes the {i['flank']} flank at {i['angle_deg']:.3f} deg, "
                          f"{i['velocity_m_s']:.4g} m/s, peak force {i['peak_force_n']:.5g} N")
     lines += _motion_lines(report)
+    if report.get("train") is not None:
+        lines += _train_lines(report["train"])
     speed = report["jump_speed_rpm"]
     if report["jump_below_range"]:
         lowest = min(s["rpm"] for s in report["speeds"])
@@ -164,6 +177,30 @@ def _table(typed, grooved: bool = False) -> str:
     if report.get("geometry") is not None:
         lines += _geometry_lines(report["geometry"])
     return "\n".join(lines)
+
+
+def _train_lines(train: dict) -> list[str]:
+    """The train's block of the text table (``Report.train``)."""
+    names = train["bodies"]
+    lines = [f"train {' -> '.join(names)}: {train['note']}",
+             "natural frequencies, cam held: " + _numbers(train["natural_frequencies_held_hz"], "{:.5g}") + " Hz",
+             "natural frequencies, cam free: " + _numbers(train["natural_frequencies_free_hz"], "{:.5g}") + " Hz"]
+    for check in train["harmonic_check"]:
+        orders = check["orders"]
+        lines.append(f"harmonic check: {check['frequency_hz']:.5g} Hz met by cam orders "
+                     + (f"{orders[0]} to {orders[-1]}" if len(orders) > 1 else str(orders[0]) if orders else "none")
+                     + " in the speed range")
+    titles = ["min Fc N", "max Fc N", *(f"max|a| {n}"[:15] for n in names), "lift err mm", "min seat N",
+              "max seat N", "surge N"]
+    lines.append(f"{'rpm':>16}" + "".join(f"{t:>16}" for t in titles))
+    for s in train["speeds"]:
+        cells = [s["min_contact_force_n"], s["max_contact_force_n"], *s["max_acceleration_m_s2"].values(),
+                 s["max_lift_error_mm"], s["min_seat_force_n"], s["max_seat_force_n"], s["max_surge_n"]]
+        lines.append(f"{s['rpm']:>16.6g}" + "".join(f"{v:>16.6g}" for v in cells))
+    lines.append("max|a|: each body's peak acceleration (m/s2); lift err: the last body's largest distance "
+                 "from its kinematic lift; seat: the spring's force at its seat; surge: that force's largest "
+                 "distance from the static spring force")
+    return lines
 
 
 def _machine_table(report) -> str:
@@ -256,9 +293,12 @@ def run(args) -> int:
     with file_named(path), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # the library's speed warnings, shown below
         program = Program.load(path)
+        if args.out is not None and not program.one_body:
+            raise CliError("--out: the files of a report (histories over the turn, figures) are the one-body "
+                           "follower's; a train's are not written yet: use --format json")
         motors = _motors(args, program)  # before the analysis: a bad motor file fails at once
         out = output_dir(args.out)
-        steady = SteadyState(program, rpm)
+        steady = SteadyState(program, rpm) if program.one_body else None
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
                          speed_fluctuation=args.speed_fluctuation)
         if out is not None:

@@ -23,9 +23,10 @@ from ._machine import (
     refined_contact_stress,
 )
 from ._motion import Join, segment_kinematics
-from ._probes import Outputs, Probe, ProbeContext, kinematic_peak_m_s2
+from ._probes import Outputs, Probe, ProbeContext, kinematic_peak_m_s2, min_preload_n
 from ._spec import Program
 from ._speeds import Speeds
+from ._train import train_section
 
 
 def kinematic_acceleration_m_s2(program: Program, rpm) -> np.ndarray:
@@ -102,7 +103,10 @@ class Report:
     at any speed; the cam's ``Geometry`` and the coefficient of speed fluctuation the
     flywheel is sized for.  ``to_json`` and ``to_csv`` write it as ``camjax program`` prints
     it, its per-speed columns read from the set of outputs it was computed with
-    (``outputs``, ``columns``)."""
+    (``outputs``, ``columns``).  ``train``: a program with a chain of bodies
+    (``Program.chain``): its natural frequencies, harmonic check, per-speed
+    ``ChainSummary`` and jump speed (``train_section``; its ``note`` says what the rows
+    mean for the chain), else ``None``."""
 
     program: str
     speeds: tuple[SpeedReport, ...]
@@ -114,13 +118,15 @@ class Report:
     speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION
     warnings: tuple[str, ...] = ()  # design_warnings: input or results past the design rules
     outputs: Outputs = dataclasses.field(default_factory=Outputs)  # the per-speed outputs computed
+    train: dict | None = None
 
     def as_dict(self) -> dict:
+        train = {} if self.train is None else {"train": self.train}
         return {"program": self.program, "speeds": [s.as_dict() for s in self.speeds],
                 "jump_speed_rpm": self.jump_speed_rpm, "jump_below_range": self.jump_below_range,
                 "segments": list(self.segments), "joins": [j.as_dict() for j in self.joins],
                 "geometry": None if self.geometry is None else self.geometry.as_dict(),
-                "speed_fluctuation": self.speed_fluctuation, "warnings": list(self.warnings)}
+                "speed_fluctuation": self.speed_fluctuation, "warnings": list(self.warnings), **train}
 
     def columns(self) -> tuple[Probe, ...]:
         """The per-speed outputs this report holds, in order: every built-in one and the
@@ -181,6 +187,8 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     rpm = speeds.rpm
     outputs = Outputs.of(outputs)
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
+    if not program.one_body:
+        return _chain_analysis(program, speeds, outputs, speed_fluctuation)
     steady = steady or SteadyState(program, speeds, devices=devices)
     out = steady.summary(speeds, outputs)
     closed = program.follower.form_closed
@@ -211,7 +219,37 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
         jump_speed = jump_speed_rpm(steady, speeds.min(), speeds.max())
     geometry = cam_geometry(program, np.union1d(theta_nodes[:-1], np.arange(3600) * 0.1))
     report = Report(program.name, tuple(rows), jump_speed, below, tuple(segment_kinematics(program)),
-                    tuple(program.joins()), geometry, speed_fluctuation, outputs=outputs)
+                    tuple(program.joins()), geometry, speed_fluctuation, outputs=outputs,
+                    train=None if program.chain is None else train_section(program, program.chain, rpm)[0])
+    return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))
+
+
+def _chain_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed_fluctuation: float) -> Report:
+    """``analyse`` of a program whose follower is a chain of bodies: the rows hold what the
+    chain's steady state gives (the contact force at the cam, the preload that keeps it,
+    jump, the last body's peak acceleration as the payload's, the cam's own acceleration)
+    and no other output (``None``): the one-body ones would be wrong numbers for a chain."""
+    rpm = speeds.rpm
+    chain = program.chain
+    section, summary = train_section(program, chain, rpm)
+    spring = chain.spring is not None
+    levers = float(np.prod([b.ratio for b in chain.bodies if not b.rides]))
+    known = {
+        "max_payload_acceleration_m_s2": summary.max_acceleration_m_s2[:, -1],
+        "max_kinematic_acceleration_m_s2": kinematic_peak_m_s2(program, rpm),
+        "min_contact_force_n": summary.min_contact_force_n,
+        "max_contact_force_n": summary.max_contact_force_n,
+        "min_preload_n": min_preload_n(summary.min_contact_force_n / levers, chain.spring.preload_n)
+        if spring else None,
+        "jump": summary.min_contact_force_n < 0 if spring else np.zeros(rpm.size, bool),
+    }
+    rows = tuple(SpeedReport(rpm=float(r), values={
+        name: None if known.get(name) is None else np.asarray(known[name])[i].item() for name in outputs})
+        for i, r in enumerate(rpm))
+    geometry = cam_geometry(program, np.union1d(program.start_deg, np.arange(3600) * 0.1))
+    report = Report(program.name, rows, section["jump_speed_rpm"], section["jump_below_range"],
+                    tuple(segment_kinematics(program)), tuple(program.joins()), geometry, speed_fluctuation,
+                    outputs=outputs, train=section)
     return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))
 
 

@@ -234,6 +234,11 @@ def compensate(
     if len(speeds) != 1:
         raise ValueError(f"rpm: compensation is designed at one speed, got {len(speeds)}")
     rpm = speeds[0]
+    if not program.one_body:
+        raise ValueError(
+            "compensation of a chain of bodies ([[train]]) is not built yet: "
+            "compensated_lift takes a chain's arrays, compensate only the one-body follower"
+        )
     follower = program.follower
     if follower.groove_clearance_mm is not None:
         raise ValueError(

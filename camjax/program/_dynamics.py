@@ -452,6 +452,9 @@ class SteadyState:
     """
 
     def __init__(self, program: Program, rpm_min: float | Speeds, *, devices=None):
+        if not program.one_body:
+            raise ValueError(f"program {program.name!r} drives a chain of bodies ([[train]]): the one-body "
+                             "steady state is not its own (analyse reports it, ChainSteadyState gives its turn)")
         if not program.follower.damping_ratio > 0:
             raise ValueError("the periodic steady state needs follower.damping_ratio > 0 "
                              "(without damping the start-up never settles)")

@@ -32,6 +32,7 @@ from ._motion import (
 from ._motor import Drive, Motor, motors_from_program_file
 from ._table import points_toml, read_points, table_points, turn_segments
 from ._table import segment_law as table_segment_law
+from ._train import CLASSIC_FIELDS, Chain, chain_from_dict
 from ._turn import JOIN_TOLERANCE_DEG, Turn
 
 MAX_SEGMENTS = 360
@@ -90,7 +91,10 @@ class Program:
     every join, the wrap from the last segment to the first included (an acceleration
     step is allowed: ``joins``); the follower's numbers positive and finite.  Any number
     of segments up to ``MAX_SEGMENTS``, in any order.  Polynomial segments get their laws solved from their end
-    states (``"match"`` reads the neighbour's).
+    states (``"match"`` reads the neighbour's).  ``chain``: the follower as a chain of
+    bodies (a program file's ``[[train]]``; docs/valve-trains.md): the follower's one-body
+    fields are then set from it (``Chain.follower_fields``, whatever was given); ``None``:
+    the classic one-body follower.
     """
 
     name: str
@@ -99,6 +103,7 @@ class Program:
     materials: Materials = Materials()
     drive: Drive | None = None  # a servo's transmission ([drive]), for motor sizing
     motors: tuple[Motor, ...] = ()  # [motor] records (or a catalogue file) to size
+    chain: Chain | None = None  # the follower as a chain of bodies ([[train]]); None: the classic one
 
     def __post_init__(self):
         object.__setattr__(self, "segments", tuple(self.segments))
@@ -127,7 +132,17 @@ class Program:
         if is_concrete([s.law for s in self.segments]):
             check_excursions(self.segments, self.start_lift_mm)
             self.joins()
+        if self.chain is not None:
+            if not isinstance(self.chain, Chain):
+                raise ValueError(f"chain must be a camjax.program.Chain or None, got {self.chain!r}")
+            object.__setattr__(self, "follower", dataclasses.replace(self.follower, **self.chain.follower_fields()))
         _check_follower(self.follower)
+
+    @property
+    def one_body(self) -> bool:
+        """Whether the follower's one-body dynamics are this program's: no chain, or a chain
+        that only spells the classic follower (``Chain.spells_follower``)."""
+        return self.chain is None or self.chain.spells_follower
 
     def joins(self):
         """Every join of the turn (``camjax.program.Join``: velocity, acceleration either
@@ -149,7 +164,9 @@ class Program:
     @classmethod
     def from_dict(cls, data: dict, *, base: Path | None = None) -> Program:
         """A program from the TOML structure (``program``, ``segment`` list, ``follower``)."""
-        _no_unknown(data, {"program", "segment", "follower", "materials", "drive", "motor"}, "top level")
+        _no_unknown(data, {"program", "segment", "follower", "materials", "drive", "motor", "train", "spring",
+                           "seat"}, "top level")
+        chain = chain_from_dict(data)  # refuses a [[train]] beside the classic follower fields
         header = data.get("program", {})
         _no_unknown(header, {"name", *TABLE_KEYS, *DXF_KEYS}, "[program]")
         segments_data = data.get("segment")
@@ -175,6 +192,8 @@ class Program:
             raise ValueError("no [follower] table")
         fields = {f.name for f in dataclasses.fields(Follower)}
         _no_unknown(follower_data, fields, "[follower]")
+        if chain is not None:
+            follower_data = {**follower_data, **chain.follower_fields()}
         for required in ("mass_kg", "stiffness_n_per_mm"):
             if required not in follower_data:
                 raise ValueError(f"[follower] needs {required}")
@@ -187,7 +206,7 @@ class Program:
         drive = Drive.from_dict(data["drive"]) if "drive" in data else None
         motors = motors_from_program_file(data["motor"], base) if "motor" in data else ()
         return cls(str(header.get("name", "program")), tuple(segments), Follower(**follower_data),
-                   Materials(**materials), drive, motors)
+                   Materials(**materials), drive, motors, chain)
 
     @classmethod
     def from_table(cls, name: str, angle_deg, lift_mm, follower: Follower, *,
@@ -266,6 +285,8 @@ class Program:
             value = getattr(self.follower, field.name)
             if field.name == "roller_radius_mm" and self.follower.flat_face:
                 continue
+            if self.chain is not None and field.name in CLASSIC_FIELDS:
+                continue  # the chain's tables below give them
             if value is not None:
                 lines.append(f'{field.name} = "{value}"' if isinstance(value, str) else f"{field.name} = {value!r}")
         if self.materials != Materials():
@@ -275,7 +296,9 @@ class Program:
             lines += ["", self.drive.toml()]
         for motor in self.motors:
             lines += ["", motor.toml().replace("[motor]", "[[motor]]")]
-        return "\n".join(lines) + "\n"
+        if self.chain is not None:
+            lines += ["", *self.chain.toml_lines()]
+        return "\n".join(lines).rstrip("\n") + "\n"
 
     # -- the lift over the turn ----------------------------------------------------------
 
@@ -534,13 +557,16 @@ def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -
 
 
 def example_path(name: str = "indexer") -> Path:
-    """Path of a program file shipped with camjax (``camjax/program/examples``)."""
-    return Path(__file__).parent / "examples" / f"{name}.toml"
+    """Path of a program file shipped with camjax (``camjax/program/examples``, or its
+    ``trains`` folder: 'valve')."""
+    examples = Path(__file__).parent / "examples"
+    train = examples / "trains" / f"{name}.toml"
+    return train if train.exists() and not (examples / f"{name}.toml").exists() else examples / f"{name}.toml"
 
 
 def program_path(text: str | None, default: str = "indexer") -> Path:
     """The program file ``text`` names: a path, or a built-in example's name ('indexer',
-    'feed') where no such file exists; without ``text``, the example ``default``."""
+    'feed', 'valve') where no such file exists; without ``text``, the example ``default``."""
     if not text:
         return example_path(default)
     path = Path(text)

@@ -19,6 +19,7 @@ propagation (``camjax.sdof.periodic_propagate``), the one-body follower its firs
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from typing import NamedTuple
 
@@ -158,6 +159,73 @@ class Chain:
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(b.name for b in self.bodies)
+
+    @property
+    def spells_follower(self) -> bool:
+        """Whether this chain is a classic follower spelled as a train (one body on its
+        element, a spring without mass, no lever, lash or seat): then the program's one-body
+        numbers are exactly the chain's."""
+        (body, *rest), s = self.bodies, self.spring
+        return (
+            not rest
+            and not body.rides
+            and body.ratio == 1.0
+            and not body.lever_mass_kg
+            and not body.lash_mm
+            and self.seat is None
+            and (s is None or not s.surges)
+            and body.damping_n_s_per_m < 2 * math.sqrt(1e3 * body.stiffness_n_per_mm * body.mass_kg)
+        )
+
+    def follower_fields(self) -> dict:
+        """The classic ``[follower]`` fields this chain stands for: ``of_follower``'s inverse
+        where the chain ``spells_follower``; else a one-body stand-in with the bodies'
+        summed mass (less where needed) and the first natural frequency with the cam held,
+        which only the period ratios of a speed's plausibility check and of a segment's
+        design band read (the report gives a chain's own numbers, ``train_section``)."""
+        s = self.spring
+        rate = None if s is None else s.rate_n_per_mm
+        preload = 0.0 if s is None else s.preload_n
+        if self.spells_follower:
+            body = self.bodies[0]
+            k = 1e3 * body.stiffness_n_per_mm
+            zeta = body.damping_n_s_per_m / (2 * math.sqrt(k * body.mass_kg))
+            mass, stiffness = body.mass_kg, body.stiffness_n_per_mm
+        else:
+            w2 = (2 * math.pi * self.natural_frequencies(contact=True)[0][0]) ** 2
+            mass, k_s = sum(b.mass_kg for b in self.bodies), 1e3 * (rate or 0.0)
+            if mass * w2 <= 2 * k_s:
+                mass = 2 * k_s / w2
+            stiffness, zeta = 1e-3 * (mass * w2 - k_s), 0.0
+        return {
+            "mass_kg": float(mass),
+            "stiffness_n_per_mm": float(stiffness),
+            "damping_ratio": float(zeta),
+            "spring_rate_n_per_mm": rate,
+            "preload_n": preload,
+        }
+
+    def toml_lines(self) -> list[str]:
+        """The ``[[train]]``, ``[spring]`` and ``[seat]`` tables (``chain_from_dict``'s
+        inverse), defaults left out."""
+        lines = []
+        for body in self.bodies:
+            lines += ["[[train]]", f"name = {json.dumps(body.name)}"]
+            for field in dataclasses.fields(Body)[1:]:
+                value = getattr(body, field.name)
+                if value != field.default:
+                    lines.append(f"{field.name} = {value!r}")
+            lines.append("")
+        for table, obj in (("spring", self.spring), ("seat", self.seat)):
+            if obj is None:
+                continue
+            lines.append(f"[{table}]")
+            for field in dataclasses.fields(obj):
+                value = getattr(obj, field.name)
+                if value != field.default or field.default is dataclasses.MISSING:
+                    lines.append(f"{field.name} = {value!r}")
+            lines.append("")
+        return lines
 
     # -- the assembled system ------------------------------------------------------------
 
@@ -754,3 +822,61 @@ class ChainSteadyState:
             k = np.nonzero(force <= 0)[0]
             a, b = (inner[k[0] - 1] if k[0] > 0 else a, inner[k[0]]) if k.size else (inner[-1], b)
         return 0.5 * (a + b)
+
+
+CHAIN_NOTE = (
+    "a train: the rows give the chain's contact force at the cam (min Fc, max Fc, the "
+    "preload that keeps it, jump) and its last body's peak acceleration as the payload's; "
+    "the one-body outputs (drive torque, Hertz stress, residual vibration, period ratios, "
+    "flights) are not computed for a chain and left empty"
+)
+ONE_BODY_NOTE = "a one-body train: the classic follower's rows are this chain's (the same numbers)"
+
+
+def train_section(program, chain: Chain, rpm: np.ndarray) -> tuple[dict, ChainSummary]:
+    """The report's ``train`` section over the speeds ``rpm``: the natural frequencies held
+    and free with their mode shapes, the harmonic check over the speed range, the chain's
+    ``ChainSummary`` per speed and its jump speed (``None`` where the contact holds over
+    the range, only one speed is given, or it is lost at the lowest already:
+    ``jump_below_range``); with the summary itself for the report's rows."""
+    rpm = np.asarray(rpm, dtype=float)
+    steady = ChainSteadyState(program, chain, float(rpm.min()))
+    summary = steady.summary(rpm)
+    spring = chain.spring is not None  # without one the cam is form-closed: no jump
+    jump, below = None, spring and bool(summary.min_contact_force_n[np.argmin(rpm)] <= 0)
+    if spring and not below and rpm.size > 1 and rpm.max() > rpm.min():
+        jump = steady.jump_speed(float(rpm.max()))
+    frequencies = {}
+    for key, contact in (("held", True), ("free", False)):
+        hz, shapes = chain.natural_frequencies(contact=contact)
+        frequencies[f"natural_frequencies_{key}_hz"] = hz.tolist()
+        frequencies[f"mode_shapes_{key}"] = shapes.T.tolist()  # one row per mode, over the bodies
+    speeds = [
+        {
+            "rpm": float(r),
+            "min_contact_force_n": float(summary.min_contact_force_n[i]),
+            "max_contact_force_n": float(summary.max_contact_force_n[i]),
+            "max_acceleration_m_s2": dict(
+                zip(chain.names, summary.max_acceleration_m_s2[i].tolist())
+            ),
+            "max_lift_error_mm": float(summary.max_lift_error_mm[i]),
+            "min_seat_force_n": float(summary.min_seat_force_n[i]),
+            "max_seat_force_n": float(summary.max_seat_force_n[i]),
+            "max_surge_n": float(summary.max_surge_n[i]),
+        }
+        for i, r in enumerate(rpm)
+    ]
+    section = {
+        "one_body": chain.spells_follower,
+        "note": ONE_BODY_NOTE if chain.spells_follower else CHAIN_NOTE,
+        "bodies": list(chain.names),
+        **frequencies,
+        "harmonic_check": [
+            {"frequency_hz": f, "orders": orders}
+            for f, orders in chain.harmonic_check(float(rpm.min()), float(rpm.max()))
+        ],
+        "speeds": speeds,
+        "jump_speed_rpm": jump,
+        "jump_below_range": below,
+    }
+    return section, summary

@@ -1,0 +1,223 @@
+"""A train in the program file and the report: the one-body train against the classic
+follower's report, a two-body program's train section against ``ChainSteadyState`` called
+directly and its natural frequencies against the two-mass closed form, the preload it
+reports against the chain's own contact force, the command's JSON and bad input."""
+
+import json
+import math
+import tomllib
+
+import numpy as np
+import pytest
+from helpers import two_cycloids
+
+from camjax.cli import main
+from camjax.program import (
+    Chain,
+    ChainSteadyState,
+    Program,
+    SteadyState,
+    analyse,
+    example_path,
+    program_path,
+)
+
+CLASSIC = ("mass_kg", "stiffness_n_per_mm", "damping_ratio", "spring_rate_n_per_mm", "preload_n")
+
+
+def tables(program: Program) -> dict:
+    """``program``'s file as TOML tables."""
+    return tomllib.loads(program.to_toml())
+
+
+def one_body_train(program: Program) -> dict:
+    """``program``'s file with its follower spelled as a one-body ``[[train]]``."""
+    data = tables(program)
+    f = program.follower
+    data["follower"] = {k: v for k, v in data["follower"].items() if k not in CLASSIC}
+    damping = 2 * f.damping_ratio * math.sqrt(1e3 * f.stiffness_n_per_mm * f.mass_kg)
+    data["train"] = [
+        {
+            "name": "follower",
+            "mass_kg": f.mass_kg,
+            "stiffness_n_per_mm": f.stiffness_n_per_mm,
+            "damping_n_s_per_m": damping,
+        }
+    ]
+    data["spring"] = {"rate_n_per_mm": f.spring_rate_n_per_mm, "preload_n": f.preload_n}
+    return data
+
+
+TWO = dict(tappet=0.4, valve=0.6, element=300.0, damping=40.0, rate=20.0, preload=150.0)
+
+
+def two_body(**edit) -> Program:
+    """The two-cycloids cam driving a tappet that rides on it and a valve on an element."""
+    t = {**TWO, **edit}
+    data = tables(two_cycloids())
+    data["follower"] = {k: v for k, v in data["follower"].items() if k not in CLASSIC}
+    data["train"] = [
+        {"name": "tappet", "mass_kg": t["tappet"]},
+        {
+            "name": "valve",
+            "mass_kg": t["valve"],
+            "stiffness_n_per_mm": t["element"],
+            "damping_n_s_per_m": t["damping"],
+        },
+    ]
+    data["spring"] = {"rate_n_per_mm": t["rate"], "preload_n": t["preload"]}
+    return Program.from_dict(data)
+
+
+def test_one_body_train_gives_the_classic_report():
+    """The same numbers in every row; the train section's contact force, from the chain's
+    own engine, within 1e-10 of the peak force (test_train.py's tolerance)."""
+    classic = two_cycloids()
+    train = Program.from_dict(one_body_train(classic))
+    assert train.one_body and train.chain == Chain.of_follower(classic.follower)
+    rpm = [100.0, 125.0, 150.0]
+    a, b = analyse(classic, rpm), analyse(train, rpm)
+    assert a.train is None and "train" not in a.as_dict()
+    for x, y in zip(a.speeds, b.speeds):
+        for name, value in x.values.items():
+            other = y.values[name]
+            if isinstance(value, float):
+                assert abs(value - other) <= 1e-10 * max(abs(value), 1.0), name
+            else:
+                assert value == other, name
+        assert x.residual_vibration_mm == pytest.approx(
+            y.residual_vibration_mm, rel=1e-10, abs=1e-15
+        )
+    assert (a.jump_speed_rpm, a.jump_below_range) == (b.jump_speed_rpm, b.jump_below_range)
+    peak = max(s.max_contact_force_n for s in a.speeds)
+    for row, chain_row in zip(a.speeds, b.train["speeds"]):
+        assert abs(chain_row["min_contact_force_n"] - row.min_contact_force_n) < 1e-10 * peak
+        assert abs(chain_row["max_contact_force_n"] - row.max_contact_force_n) < 1e-10 * peak
+        accel = chain_row["max_acceleration_m_s2"]["follower"]
+        assert abs(accel - row.max_payload_acceleration_m_s2) < 1e-10 * accel
+    assert b.train["one_body"]
+
+
+def test_two_body_report_is_the_chain_steady_state():
+    program = two_body()
+    rpm = np.array([600.0, 900.0, 1200.0, 1500.0])
+    report = analyse(program, rpm)
+    steady = ChainSteadyState(program, program.chain, rpm.min())
+    direct = steady.summary(rpm)
+    train = report.train
+    assert not train["one_body"] and train["bodies"] == ["tappet", "valve"]
+    for i, s in enumerate(train["speeds"]):
+        assert s["min_contact_force_n"] == pytest.approx(direct.min_contact_force_n[i], rel=1e-12)
+        assert s["max_contact_force_n"] == pytest.approx(direct.max_contact_force_n[i], rel=1e-12)
+        assert list(s["max_acceleration_m_s2"].values()) == pytest.approx(
+            direct.max_acceleration_m_s2[i], rel=1e-12
+        )
+        assert s["max_lift_error_mm"] == pytest.approx(direct.max_lift_error_mm[i], rel=1e-12)
+        assert s["min_seat_force_n"] == pytest.approx(direct.min_seat_force_n[i], rel=1e-12)
+        assert s["max_seat_force_n"] == pytest.approx(direct.max_seat_force_n[i], rel=1e-12)
+        assert s["max_surge_n"] == pytest.approx(direct.max_surge_n[i], rel=1e-12)
+        row = report.speeds[i]  # the rows: the chain's numbers or none
+        assert row.min_contact_force_n == pytest.approx(direct.min_contact_force_n[i], rel=1e-12)
+        assert row.max_payload_acceleration_m_s2 == pytest.approx(
+            direct.max_acceleration_m_s2[i, -1], rel=1e-12
+        )
+        assert row.jump == (direct.min_contact_force_n[i] < 0)
+        assert row.max_drive_torque_n_m is None and row.flights is None and row.period_ratios == ()
+    held = train["natural_frequencies_held_hz"][0]  # the cam orders meeting it from 600 to 1500 rpm
+    assert train["harmonic_check"][0]["orders"] == [
+        k for k in range(1, 500) if 600 <= 60 * held / k <= 1500
+    ]
+    # the tappet rides on the cam: its peak acceleration is the cam's
+    kinematic = [r.max_kinematic_acceleration_m_s2 for r in report.speeds]
+    assert direct.max_acceleration_m_s2[:, 0] == pytest.approx(kinematic, rel=1e-6)
+    jump = steady.jump_speed(rpm.max())
+    assert (report.jump_speed_rpm is None) == (jump is None)
+    if jump is not None:
+        assert report.jump_speed_rpm == pytest.approx(jump, abs=1e-3)
+    with pytest.raises(ValueError, match="chain of bodies"):
+        SteadyState(program, 600.0)  # the one-body engine would give wrong numbers
+
+
+def test_two_body_natural_frequencies_against_the_closed_form():
+    t = TWO
+    m1, m2, k, ks = t["tappet"], t["valve"], 1e3 * t["element"], 1e3 * t["rate"]
+    train = analyse(two_body(), [600.0]).train
+    held = math.sqrt((k + ks) / m2) / (2 * math.pi)  # the tappet held on the cam
+    assert train["natural_frequencies_held_hz"] == pytest.approx([held], rel=1e-12)
+    # free: roots of m1 m2 w^4 - ((k + ks) m1 + k m2) w^2 + k ks = 0
+    roots = np.roots([m1 * m2, -((k + ks) * m1 + k * m2), k * ks])
+    free = np.sort(np.sqrt(roots)) / (2 * math.pi)
+    assert train["natural_frequencies_free_hz"] == pytest.approx(free, rel=1e-10)
+
+
+def test_the_reported_least_preload_just_keeps_contact():
+    """The chain is linear in the preload: with the preload the report asks for, the least
+    contact force at the cam is zero (a lever between them scales it)."""
+    rpm = 1500.0
+    program = two_body()
+    needed = analyse(program, [rpm]).speeds[0].min_preload_n
+    assert needed > 0
+    again = analyse(two_body(preload=needed), [rpm]).speeds[0]
+    assert abs(again.min_contact_force_n) < 1e-9 * again.max_contact_force_n
+
+
+def test_a_chain_program_round_trips_through_its_file():
+    program = Program.load(example_path("valve"))
+    assert program_path("valve") == example_path("valve")
+    again = Program.from_dict(tomllib.loads(program.to_toml()))
+    assert again == program and again.chain == program.chain
+    # the follower's one-body fields stand in for the chain, and are not written
+    assert "[[train]]" in program.to_toml() and "\nmass_kg = 0.08" not in program.to_toml()
+
+
+def test_cli_json_carries_the_train(capsys):
+    assert main(["program", "valve", "--rpm", "1000,2000", "--format", "json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    train = report["train"]
+    assert train["bodies"] == ["tappet", "valve"] and len(train["speeds"]) == 2
+    direct = ChainSteadyState(
+        *(lambda p: (p, p.chain))(Program.load(example_path("valve"))), 1000.0
+    )
+    summary = direct.summary(np.array([1000.0, 2000.0]))
+    assert [s["max_surge_n"] for s in train["speeds"]] == pytest.approx(
+        summary.max_surge_n, rel=1e-12
+    )
+    assert report["speeds"][0]["max_drive_torque_n_m"] is None
+    assert main(["program", "valve", "--rpm", "1000"]) == 0
+    text = capsys.readouterr().out
+    assert "train tappet -> valve" in text and "natural frequencies, cam held: 298.54" in text
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (
+            lambda d: d["follower"].update(mass_kg=1.0),
+            r"\[follower\] mass_kg: a file with a \[\[train\]\]",
+        ),
+        (lambda d: d.pop("train"), r"\[spring\] belongs to a \[\[train\]\]"),
+        (lambda d: d["train"][1].update(ratio=0.0), r"body 2 \(valve\) ratio must be positive"),
+        (lambda d: d.update(gears=1), "top level: unknown field"),
+    ],
+)
+def test_bad_train_program_is_one_line(tmp_path, edit, message):
+    data = tables(two_body())
+    edit(data)
+    path = tmp_path / "bad.toml"
+    lines = [f"{key} = {value}" for key, value in data.items() if isinstance(value, int)]
+    for key in ("program", "follower", "spring"):
+        if key in data:
+            lines += [f"[{key}]"] + [f"{k} = {json.dumps(v)}" for k, v in data[key].items()]
+    for key in ("segment", "train"):
+        for table in data.get(key, []):
+            lines += [f"[[{key}]]"] + [f"{k} = {json.dumps(v)}" for k, v in table.items()]
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ValueError, match=message) as error:
+        Program.load(path)
+    assert "\n" not in str(error.value) and str(path) in str(error.value)
+
+
+def test_cli_refuses_out_for_a_chain(tmp_path, capsys):
+    assert main(["program", "valve", "--rpm", "1000", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--out" in err and "train" in err
