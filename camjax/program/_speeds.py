@@ -10,9 +10,11 @@ from .. import checks
 from .._plain import parse_range
 from ._spec import Program
 
-IMPLAUSIBLE_RPM, IMPLAUSIBLE_PERIOD_RATIO = 100_000.0, 0.05
-"""Speeds no cam runs at, warned of (not refused): above 100,000 rpm, or a moving segment's
-period ratio below 0.05 (the follower cannot follow its motion at all): often a unit slip."""
+IMPLAUSIBLE_RPM = 100_000.0
+"""A speed above it is warned of (not refused): no cam runs so fast, often a unit slip."""
+IMPLAUSIBLE_PERIOD_RATIO = 0.05
+"""A moving segment's period ratio below it is warned of (not refused): the follower cannot
+follow the motion at all, often a unit slip."""
 
 
 class Speeds:
