@@ -90,7 +90,7 @@ def test_a_program_that_cannot_be_kept_is_marked_and_an_unexpected_failure_repor
     import numpy as np
     import pytest
 
-    from camjax import _traces, caches
+    from camjax import caches
 
     monkeypatch.setenv("CAMJAX_CACHE_DIR", str(tmp_path))
 
@@ -109,7 +109,7 @@ def test_a_program_that_cannot_be_kept_is_marked_and_an_unexpected_failure_repor
     def refused(*args, **kwargs):
         raise ValueError("an export failure nobody expected")
 
-    monkeypatch.setattr(_traces.export, "export", refused)
+    monkeypatch.setattr(jax.export, "export", refused)  # the module camjax keeps traces with
     broken = caches.exported_jit(lambda x: 3.0 * x, "broken-test")
     with pytest.warns(RuntimeWarning, match="'broken-test' cannot be kept on disk .ValueError: an export failure"):
         assert float(broken(jnp.asarray(2.0))) == 6.0
