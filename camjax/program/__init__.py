@@ -28,6 +28,9 @@ from ._analysis import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s
 from ._analysis import max_contact_stress as max_contact_stress
 from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
+from ._chain_steady import ChainModes as ChainModes
+from ._chain_steady import ChainSteadyState as ChainSteadyState
+from ._chain_steady import ChainSummary as ChainSummary
 from ._compensate import Compensation as Compensation
 from ._compensate import check_smooth as check_smooth
 from ._compensate import compensate as compensate
@@ -133,9 +136,6 @@ from ._speeds import Speeds as Speeds
 from ._speeds import warn_implausible as warn_implausible
 from ._train import Body as Body
 from ._train import Chain as Chain
-from ._train import ChainModes as ChainModes
-from ._train import ChainSteadyState as ChainSteadyState
-from ._train import ChainSummary as ChainSummary
 from ._train import Seat as Seat
 from ._train import Spring as Spring
 from ._train import chain_from_dict as chain_from_dict

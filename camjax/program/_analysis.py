@@ -10,6 +10,7 @@ import json
 import numpy as np
 
 from .._plain import json_ready, plot_speed
+from ._chain_steady import train_section
 from ._dynamics import SteadyState
 from ._groove import Impact, groove_turns
 from ._jump import Flight, _Turns, flights_at, jump_speed_rpm
@@ -26,7 +27,6 @@ from ._motion import Join, segment_kinematics
 from ._probes import Outputs, Probe, ProbeContext, kinematic_peak_m_s2, min_preload_n
 from ._spec import Program
 from ._speeds import Speeds
-from ._train import train_section
 
 
 def kinematic_acceleration_m_s2(program: Program, rpm) -> np.ndarray:

@@ -447,14 +447,10 @@ class DutyCycle:
     load_inertia_kg_m2: float
 
 
-def duty_cycle(program, drive: Drive, rpm: float, response: dict | None = None) -> DutyCycle:
+def duty_cycle(program, drive: Drive, rpm: float, response: dict) -> DutyCycle:
     """The motor's duty over one turn at master speed ``rpm`` (see the module's equations);
-    ``response`` is ``camjax.program.response(program, rpm)`` when already computed."""
-    from ._analysis import response as steady_response
-
+    ``response`` is the steady state there, ``camjax.program.response(program, rpm)``."""
     rpm = float(rpm)
-    if response is None:
-        response = steady_response(program, rpm)
     follower = program.follower
     theta = np.asarray(response["theta_deg"], dtype=float)
     y, dy, ddy = program.lift(theta)
