@@ -704,6 +704,7 @@ function drawTorqueSpeed(sizing) {
   for (const [sx, sy] of [[1, 1], [-1, 1], [1, -1], [-1, -1]]) {
     ctx.beginPath();
     env.forEach(([n, t], i) => (i ? ctx.lineTo : ctx.moveTo).call(ctx, X(sx * n), Y(sy * t)));
+    ctx.lineTo(X(sx * env[env.length - 1][0]), Y(0));  // no torque past the last speed
     ctx.stroke();
   }
   ctx.lineWidth = 1;
