@@ -87,6 +87,7 @@ def test_report_is_the_cli_json(server):
     assert status == 200
     assert_same(report, cli_json("feed", "--rpm", RPM))
     assert report["jump_speed_rpm"] is not None
+    assert "motor" not in report  # no [drive] and motors: no motor panel
 
 
 def test_post_program_is_its_analysis(server, edited):
@@ -213,6 +214,38 @@ def test_design_from_the_api(server, tmp_path):
     saved = cp.Program.load(tmp_path / "program.toml")
     reference = json.loads(cp.analyse(saved, np.linspace(400, 1000, 4)).to_json())
     assert_same(kept, reference)
+
+
+SERVO_RPM = "60:120:2"
+
+
+def test_servo_report_carries_the_motor_sizing():
+    """The studio's report for the servo example carries the sizing of the picked motor at
+    every speed analysed, equal (1e-9) to ``choose_motor`` on duty cycles computed here from
+    the steady state."""
+    running = studio("servo", rpm=SERVO_RPM)
+    try:
+        status, report = call(running.url + "api/report")
+    finally:
+        running.stop()
+    assert status == 200
+    program = cp.Program.load(cp.example_path("servo"))
+    speeds = [60.0, 120.0]
+    steady = cp.SteadyState(program, speeds)  # the nodes the studio's analysis solves on
+    duties = [cp.duty_cycle(program, program.drive, r, cp.response(program, r, steady=steady)) for r in speeds]
+    choice = cp.choose_motor(program.motors, duties)
+    assert choice.picked is not None and len(program.motors) > 1
+    index = list(program.motors).index(choice.picked)
+    sizings = [json.loads(dump_json(s.as_dict())) for s in choice.sizings[index]]
+    motor = report["motor"]
+    assert motor["picked"] == motor["shown"] == choice.picked.name
+    assert motor["closest"] is None and motor["closest_failed_check"] is None
+    assert [s["rpm"] for s in motor["sizings"]] == speeds
+    assert_same(motor["sizings"], sizings, "motor.sizings")
+    assert motor["envelope"] == [list(p) for p in choice.picked.envelope]
+    dynamic = motor["sizings"][1]["dynamic"]
+    assert dynamic["rms_torque_n_m"] != motor["sizings"][1]["rigid"]["rms_torque_n_m"]
+    assert {c["name"] for c in dynamic["checks"]} >= {"inertia ratio (load reflected / rotor)"}
 
 
 def test_jerk_is_the_derivative_of_the_acceleration():
@@ -463,3 +496,42 @@ def test_design_progress_is_the_loss_history():
     steps = [c[0] for c in calls]
     assert steps == [200, 400] and calls[-1][1] == result.loss_history.size == 400
     np.testing.assert_array_equal([c[2] for c in calls], result.loss_history[np.array(steps) - 1])
+
+
+def test_page_shows_the_servo_motor_panel():
+    """The servo example's page shows the motor panel: the picked motor, a row per speed, a
+    row per check and the torque-speed plot drawn; an edit keeps the [drive] and [motor] (the
+    panel is there after it, from the edited program's report)."""
+    sync_playwright = _browser()
+    idle = "document.body.dataset.busy === '0'"
+    running = studio("servo", rpm=SERVO_RPM)
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            page = browser.new_page(viewport={"width": 1600, "height": 1250})
+            errors = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(running.url)
+            page.wait_for_selector("#motor-box:not([hidden])", timeout=2 * REDRAW_MS)
+            page.wait_for_function(idle, timeout=REDRAW_MS)
+            report = call(running.url + "api/report")[1]["motor"]
+            assert page.get_attribute("#motor-verdict", "data-motor") == report["picked"]
+            assert page.locator("#motor-speeds tbody tr").count() == 2
+            checks = report["sizings"][0]["dynamic"]["checks"]
+            assert page.locator("#motor-checks tbody tr").count() == len(checks)
+            drawn = "(() => { const c = document.getElementById('motor-plot'); const d = c.getContext('2d')" \
+                    ".getImageData(0, 0, c.width, c.height).data; return d.some((v, i) => i % 4 === 3 && v > 0); })()"
+            assert page.evaluate(drawn)
+            if shots := os.environ.get("CAMJAX_STUDIO_SCREENSHOTS"):
+                page.locator("#motor-box").screenshot(path=str(Path(shots) / "studio-motor.png"))
+            page.fill('input[data-seg="2"][data-key="lift_mm"]', "30")
+            page.fill('input[data-seg="4"][data-key="lift_mm"]', "-30")
+            page.wait_for_function(f"!document.querySelector('.err') && {idle} && "
+                                   "document.querySelector('#motor-speeds td:nth-child(2)').textContent !== "
+                                   f"{json.dumps(page.inner_text('#motor-speeds td:nth-child(2)'))}",
+                                   timeout=REDRAW_MS)
+            assert page.is_visible("#motor-box")
+            assert errors == []
+            browser.close()
+    finally:
+        running.stop()

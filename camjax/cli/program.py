@@ -344,20 +344,17 @@ def _motors(args, program) -> tuple:
 def _servo(args, program, motors, rpm, steady, report, out) -> dict:
     """The motor sizing (``--motor`` or the program's [motor]) and the compensation
     (``--compensate``), as the JSON keys ``motor`` and ``compensation``."""
-    from ..program import choose_motor, duty_cycle, response
+    from ..program import program_motor_choice
 
     result = {}
     if motors:
-        duties = [duty_cycle(program, program.drive, r, response(program, r, steady=steady)) for r in rpm]
-        choice = choose_motor(motors, duties)
+        choice = program_motor_choice(program, rpm, steady=steady, motors=motors)
         result["motor"] = choice.as_dict()
         result["motor_summary"] = choice.summary()
         if out is not None:
             from ..program import motor_figure
 
-            shown = choice.picked or choice.closest
-            index = [m.name for m in motors].index(shown.name) if shown in motors else 0
-            motor_figure(choice.sizings[index], out / "motor.png")
+            motor_figure(choice.sizings[list(motors).index(choice.shown)], out / "motor.png")
     if args.compensate is not None:
         from ..program import compensate, deviation_from_law, write_drive_table
 

@@ -14,7 +14,8 @@ the profile, the figures); ``analyse_machine`` adds the torques of several cams 
 preload over a speed range).  ``Chain`` is the follower as a chain of bodies (a valve
 train, a spring that surges) and ``ChainSteadyState`` its exact periodic steady state; a
 servo's ``Drive`` and ``Motor`` give the motor's torque over the turn (``duty_cycle``,
-``size_motor``, ``choose_motor`` from a catalogue), and ``compensate`` the cam lift that
+``size_motor``, ``choose_motor`` from a catalogue, ``program_motor_choice`` at a program's
+speeds), and ``compensate`` the cam lift that
 makes the payload follow its law at one speed.  The equations are in docs/program.md,
 docs/machine.md, docs/valve-trains.md and docs/servo.md.
 """
@@ -104,6 +105,7 @@ from ._motor import MotorLoad as MotorLoad
 from ._motor import MotorSizing as MotorSizing
 from ._motor import choose_motor as choose_motor
 from ._motor import duty_cycle as duty_cycle
+from ._motor import program_motor_choice as program_motor_choice
 from ._motor import read_motors as read_motors
 from ._motor import size_motor as size_motor
 from ._probes import BUILT_IN as BUILT_IN

@@ -577,6 +577,32 @@ class MotorChoice:
             "motors": [[s.as_dict() for s in per_speed] for per_speed in self.sizings],
         }
 
+    @property
+    def shown(self) -> Motor:
+        """The motor a report shows: the picked one, else the closest."""
+        return self.picked if self.picked is not None else self.closest
+
+    def shown_dict(self) -> dict:
+        """The pick (or the closest and its failing check), the summary and the shown motor's
+        envelope and sizing at every speed (with its (speed, torque) points): what a page draws
+        without every motor's points."""
+        index = next(
+            i for i, per_speed in enumerate(self.sizings) if per_speed[0].motor is self.shown
+        )
+        envelope = self.shown.envelope
+        if envelope is None:  # the flat envelope envelope_torque assumes
+            top = self.shown.maximum_speed_rpm
+            envelope = [[0.0, self.shown.maximum_torque_n_m], [top, self.shown.maximum_torque_n_m]]
+        out = self.as_dict()
+        del out["motors"]
+        return {
+            **out,
+            "summary": self.summary(),
+            "shown": self.shown.name,
+            "envelope": [list(map(float, point)) for point in envelope],
+            "sizings": [s.as_dict() for s in self.sizings[index]],
+        }
+
     def summary(self) -> str:
         if self.picked is not None:
             return f"picked motor: {self.picked.name} (the smallest that passes every check at every speed)"
@@ -602,6 +628,25 @@ def choose_motor(motors, duties, **limits) -> MotorChoice:
     ]
     best = max(range(len(motors)), key=lambda i: worst[i].margin)
     return MotorChoice(sizings, None, motors[best], worst[best])
+
+
+def program_motor_choice(program, speeds, *, steady=None, motors=None) -> MotorChoice:
+    """``choose_motor`` for ``program`` (its ``[drive]``) at master ``speeds`` from the
+    dynamic steady state (``steady``: a ``SteadyState`` already solved at those speeds);
+    ``motors``: a catalogue in place of the program's own ``[motor]``."""
+    from ._analysis import response
+
+    motors = program.motors if motors is None else tuple(motors)
+    if program.drive is None:
+        raise ValueError(
+            "motor sizing needs the program's [drive] (travel_mm_per_rev or degrees_per_rev, "
+            "gear_ratio, efficiencies, inertias: docs/servo.md)"
+        )
+    duties = [
+        duty_cycle(program, program.drive, rpm, response(program, rpm, steady=steady))
+        for rpm in speeds
+    ]
+    return choose_motor(motors, duties)
 
 
 def motors_from_program_file(data, base: Path | None) -> tuple[Motor, ...]:

@@ -245,7 +245,7 @@ class Workbench:
         """``(program, steady state, report, warnings)`` of ``toml`` at ``rpm``, changing
         nothing.  The same program (the same TOML structure, whatever its layout and
         comments) at the same speeds and outputs (``output_set``) is analysed once per ``cache``."""
-        from ..program import Program, SteadyState, analyse
+        from ..program import Program, SteadyState, analyse, program_motor_choice
 
         data = parse_toml(toml)
         if self.access is not None:
@@ -259,6 +259,8 @@ class Workbench:
             steady = SteadyState(program, rpm)
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
                                         speed_fluctuation=self.speed_fluctuation, outputs=outputs))
+            if program.motors:  # a servo: the motor sizing at the same speeds (the page's motor panel)
+                report["motor"] = json_ready(program_motor_choice(program, rpm, steady=steady).shown_dict())
             return program, steady, report, list(report.get("warnings", ()))
 
         return self.cache.get(key, compute)

@@ -59,6 +59,7 @@ function toToml(m) {
   }
   lines.push(...table("follower", m.follower));
   if (m.materials) lines.push(...table("materials", m.materials));
+  lines.push(...servoTables(m));
   return lines.join("\n");
 }
 
@@ -548,6 +549,7 @@ function draw() {
   renderNotes();
   if (!isTable()) renderDesign();
   drawProfile();
+  drawMotor();
 }
 
 function drawHeadline() {
@@ -638,6 +640,83 @@ function drawProfile() {
   }
   ctx.lineWidth = 1;
   ctx.beginPath(); ctx.arc(cx, cy, 3, 0, 2 * Math.PI); ctx.fillStyle = "#000"; ctx.fill();
+}
+
+// ---- the servo motor ------------------------------------------------------------------
+// A program with a [drive] and motors: the report's "motor" (camjax.program.program_motor_choice)
+// drawn as a table per speed, its checks, and the (speed, torque) points over the envelope.
+
+// The program's [drive] and [motor] kept through an edit ([[motor]] records one by one).
+function servoTables(m) {
+  const lines = m.drive ? table("drive", m.drive) : [];
+  if (Array.isArray(m.motor)) for (const record of m.motor) lines.push(...table("motor", record).map((l, i) => i ? l : "[[motor]]"));
+  else if (m.motor) lines.push(...table("motor", m.motor));
+  return lines;
+}
+
+function drawMotor() {
+  const box = $("motor-box"), sizing = report.motor;
+  box.hidden = !sizing;
+  if (!sizing) return;
+  const verdict = sizing.picked ? `picked motor <b>${sizing.picked}</b>, the smallest that passes at every speed` :
+    `no motor passes; the closest is <b>${sizing.closest}</b>`;
+  $("motor-verdict").innerHTML = verdict;
+  $("motor-verdict").dataset.motor = sizing.shown;
+  const pct = (v) => `${(100 * v).toFixed(1)}%`;
+  $("motor-speeds").querySelector("tbody").innerHTML = sizing.sizings.map((s) => {
+    const d = s.dynamic, g = s.rigid;
+    return `<tr class="${s.passed ? "" : "bad"}"><td>${fmt(s.rpm, 5)}</td>` +
+      `<td>${fmt(d.peak_torque_n_m)} (${fmt(g.peak_torque_n_m)})</td><td>${fmt(d.rms_torque_n_m)} (${fmt(g.rms_torque_n_m)})</td>` +
+      `<td>${fmt(d.max_speed_rpm, 5)}</td><td>${fmt(s.inertia_ratio, 3)}</td><td>${pct(d.thermal_use)}</td>` +
+      `<td>${s.passed ? "passes" : "fails"}</td></tr>`;
+  }).join("");
+  const names = sizing.sizings[0].dynamic.checks.map((c) => c.name);
+  $("motor-checks").querySelector("thead").innerHTML =
+    `<tr><th>check (dynamic)</th>${sizing.sizings.map((s) => `<th>${fmt(s.rpm, 5)} rpm</th>`).join("")}</tr>`;
+  $("motor-checks").querySelector("tbody").innerHTML = names.map((name, i) => `<tr><td>${name}</td>` +
+    sizing.sizings.map((s) => {
+      const c = s.dynamic.checks[i];
+      return `<td class="${c.passed ? "" : "bad"}" title="${fmt(c.value)} against ${fmt(c.limit)}">` +
+        `${c.passed ? "pass" : "FAIL"} ${c.margin >= 0 ? "+" : ""}${pct(c.margin)}</td>`;
+    }).join("") + "</tr>").join("");
+  drawTorqueSpeed(sizing);
+}
+
+// The (speed, torque) points of every speed over one turn (dynamic: dots, rigid: a thin line)
+// inside the envelope mirrored to the four quadrants, as camjax.program.motor_figure draws them.
+function drawTorqueSpeed(sizing) {
+  const canvas = $("motor-plot"), ctx = canvas.getContext("2d");
+  canvas.width = Math.max(300, $("motor-box").clientWidth - 16);
+  const w = canvas.width, h = canvas.height, pad = 44;
+  const env = sizing.envelope;
+  const points = sizing.sizings.flatMap((s) => [...s.dynamic.points, ...s.rigid.points]);
+  const xmax = 1.05 * Math.max(...env.map((p) => p[0]), ...points.map((p) => Math.abs(p[0])));
+  const ymax = 1.1 * Math.max(...env.map((p) => p[1]), ...points.map((p) => Math.abs(p[1])));
+  const X = (v) => pad + (v + xmax) / (2 * xmax) * (w - 2 * pad), Y = (v) => h / 2 - v / ymax * (h / 2 - 20);
+  ctx.clearRect(0, 0, w, h);
+  ctx.font = "12px system-ui"; ctx.fillStyle = "#222"; ctx.textAlign = "center";
+  ctx.fillText(`motor ${sizing.shown}: torque (N m) against speed (rpm) over one turn`, w / 2, 13);
+  ctx.strokeStyle = "#ccc"; ctx.beginPath();
+  ctx.moveTo(X(-xmax), Y(0)); ctx.lineTo(X(xmax), Y(0)); ctx.moveTo(X(0), Y(-ymax)); ctx.lineTo(X(0), Y(ymax)); ctx.stroke();
+  ctx.fillText(`\u00b1${fmt(xmax, 3)} rpm`, X(xmax) - 30, Y(0) - 4);
+  ctx.textAlign = "left"; ctx.fillText(`${fmt(ymax, 3)} N m`, X(0) + 4, Y(ymax) + 10);
+  ctx.strokeStyle = "#000"; ctx.lineWidth = 1.5;
+  for (const [sx, sy] of [[1, 1], [-1, 1], [1, -1], [-1, -1]]) {
+    ctx.beginPath();
+    env.forEach(([n, t], i) => (i ? ctx.lineTo : ctx.moveTo).call(ctx, X(sx * n), Y(sy * t)));
+    ctx.lineTo(X(sx * env[env.length - 1][0]), Y(0));  // no torque past the last speed
+    ctx.stroke();
+  }
+  ctx.lineWidth = 1;
+  const colors = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b"];
+  sizing.sizings.forEach((s, k) => {
+    const color = colors[k % colors.length];
+    ctx.strokeStyle = color; ctx.globalAlpha = 0.6; ctx.beginPath();
+    s.rigid.points.forEach(([n, t], i) => (i ? ctx.lineTo : ctx.moveTo).call(ctx, X(n), Y(t)));
+    ctx.stroke(); ctx.globalAlpha = 1; ctx.fillStyle = color;
+    for (const [n, t] of s.dynamic.points) ctx.fillRect(X(n) - 1, Y(t) - 1, 2, 2);
+    ctx.fillText(`${fmt(s.rpm, 5)} rpm: dots dynamic, line rigid`, pad, h - 8 - 14 * (sizing.sizings.length - 1 - k));
+  });
 }
 
 // ---- wiring ----------------------------------------------------------------------------
