@@ -105,7 +105,6 @@ from ._motor import MotorLoad as MotorLoad
 from ._motor import MotorSizing as MotorSizing
 from ._motor import choose_motor as choose_motor
 from ._motor import duty_cycle as duty_cycle
-from ._motor import program_motor_choice as program_motor_choice
 from ._motor import read_motors as read_motors
 from ._motor import size_motor as size_motor
 from ._probes import BUILT_IN as BUILT_IN
@@ -117,6 +116,7 @@ from ._probes import default_outputs as default_outputs
 from ._probes import probe as probe
 from ._probes import register_probe as register_probe
 from ._probes import unregister_probe as unregister_probe
+from ._servo import program_motor_choice as program_motor_choice
 from ._shaft import Machine as Machine
 from ._shaft import MachineReport as MachineReport
 from ._shaft import ShaftSpeedReport as ShaftSpeedReport

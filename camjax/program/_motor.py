@@ -630,25 +630,6 @@ def choose_motor(motors, duties, **limits) -> MotorChoice:
     return MotorChoice(sizings, None, motors[best], worst[best])
 
 
-def program_motor_choice(program, speeds, *, steady=None, motors=None) -> MotorChoice:
-    """``choose_motor`` for ``program`` (its ``[drive]``) at master ``speeds`` from the
-    dynamic steady state (``steady``: a ``SteadyState`` already solved at those speeds);
-    ``motors``: a catalogue in place of the program's own ``[motor]``."""
-    from ._analysis import response
-
-    motors = program.motors if motors is None else tuple(motors)
-    if program.drive is None:
-        raise ValueError(
-            "motor sizing needs the program's [drive] (travel_mm_per_rev or degrees_per_rev, "
-            "gear_ratio, efficiencies, inertias: docs/servo.md)"
-        )
-    duties = [
-        duty_cycle(program, program.drive, rpm, response(program, rpm, steady=steady))
-        for rpm in speeds
-    ]
-    return choose_motor(motors, duties)
-
-
 def motors_from_program_file(data, base: Path | None) -> tuple[Motor, ...]:
     """A program file's ``[motor]``: one record, ``[[motor]]`` records, or ``file = "..."``
     (a motor TOML or a catalogue CSV, relative to the program file)."""
