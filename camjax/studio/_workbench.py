@@ -21,8 +21,9 @@ import numpy as np
 from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, plot_speed
 from ..checks import MAX_SPEEDS as MAX_SPEEDS
 
-DEFAULT_RPM = "200:1400:7"
-"""The speed range a workbench starts with (wide enough to show the examples' jump speeds)."""
+DEFAULT_RPM = "200:1400:101"
+"""The speed range a workbench starts with: wide enough to show the examples' jump speeds,
+dense enough for smooth curves over it, an edit about half a second (docs/studio.md)."""
 TURN_POINTS = 721
 """Cam angles over the turn for the kinematic curves (every half degree)."""
 PROFILE_POINTS = 720
