@@ -535,3 +535,78 @@ def test_page_shows_the_servo_motor_panel():
             browser.close()
     finally:
         running.stop()
+
+
+def test_page_edits_materials_undoes_and_draws_the_swinging_arm():
+    """A swinging roller: its arm and pivot drawn beyond the cam; a ``[materials]`` field
+    edited scales the Hertz peak by the square root of the contact modulus (the force does
+    not depend on it); Ctrl+Z and the Undo button give back the program before each edit."""
+    sync_playwright = _browser()
+    indexer = cp.Program.load(cp.example_path("indexer"))
+    swinging = dataclasses.replace(indexer, follower=dataclasses.replace(
+        indexer.follower, kind="swinging-roller", arm_mm=98.0, pivot_mm=110.0, contact_width_mm=10.0))
+    rpm = "300:600:2"
+    running = studio(swinging, rpm=rpm)
+    idle = "document.body.dataset.busy === '0'"
+    ready = f"document.querySelector('#status').textContent === 'ready' && {idle}"
+    posted = lambda r: "/api/program" in r.url and r.request.method == "POST"  # noqa: E731
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            page = browser.new_page(viewport={"width": 1600, "height": 1250})
+            errors = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(running.url)
+            page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
+            page.wait_for_function(ready, timeout=REDRAW_MS)
+            session = page.evaluate("SESSION")
+            assert "counter-clockwise" in page.inner_text("#rotation")
+            assert page.is_disabled("#undo")
+            # red (the follower's colour) beyond the cam's reach: only the arm and its pivot are there
+            beyond = page.evaluate("""() => {
+                const canvas = document.getElementById('profile'), p = curves.profile, f = curves.follower;
+                const pts = [...p.pitch, ...p.profile];
+                const cam = Math.max(...pts.map(([x, y]) => Math.hypot(x, y))) + f.roller_radius_mm;
+                const reach = Math.max(cam + f.roller_radius_mm + 5, f.pivot_mm + 8);
+                const scale = canvas.width / 2 / reach, from = Math.ceil(canvas.width / 2 + scale * (cam + 2));
+                const data = canvas.getContext('2d').getImageData(from, 0, canvas.width - from, canvas.height).data;
+                let red = 0;
+                for (let i = 0; i < data.length; i += 4) if (data[i] > 180 && data[i + 1] < 90 && data[i + 2] < 90) red++;
+                return red;
+            }""")
+            assert beyond > 20, beyond
+            stress = lambda: [s["max_contact_stress_mpa"]  # noqa: E731
+                              for s in call(running.url + f"api/report?session={session}")[1]["speeds"]]
+            before = stress()
+            assert all(s > 0 for s in before)
+            field = '#materials input[data-key="cam_youngs_modulus_gpa"]'
+            assert page.locator("#materials input").count() == 4
+            assert page.inner_text('#materials .fnote[data-note="cam_youngs_modulus_gpa"]') == "empty: 210 (the default)"
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill(field, "70")
+            page.wait_for_function(ready, timeout=REDRAW_MS)
+            state = call(running.url + f"api/program?session={session}")[1]
+            assert state["program"]["materials"] == {"cam_youngs_modulus_gpa": 70}
+            # 1/E* = 0.91/70 + 0.91/210 against 2 * 0.91/210: E* halves, the stress goes as its root
+            np.testing.assert_allclose(stress(), np.sqrt(0.5) * np.asarray(before), rtol=1e-6)
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill('#follower input[data-key="preload_n"]', "350")
+            page.wait_for_function(ready, timeout=REDRAW_MS)
+            assert page.evaluate("undoStack.length") == 2
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.keyboard.press("Control+z")  # the preload back
+            page.wait_for_function(ready, timeout=REDRAW_MS)
+            state = call(running.url + f"api/program?session={session}")[1]
+            assert state["program"]["follower"]["preload_n"] == 300
+            assert state["program"]["materials"] == {"cam_youngs_modulus_gpa": 70}
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.click("#undo")  # the materials back: the program as it was
+            page.wait_for_function(ready, timeout=REDRAW_MS)
+            state = call(running.url + f"api/program?session={session}")[1]
+            assert cp.Program.from_dict(state["program"]) == swinging
+            assert page.input_value(field) == "" and page.is_disabled("#undo")
+            np.testing.assert_allclose(stress(), before, rtol=1e-12)
+            assert not errors, errors
+            browser.close()
+    finally:
+        running.stop()

@@ -7,7 +7,7 @@ import sys
 from ._common import CliError
 
 DEFAULT_PORT = 8765
-DEFAULT_RPM = "200:1400:7"  # camjax.studio.DEFAULT_RPM (not imported: JAX loads late)
+DEFAULT_RPM = "200:1400:101"  # camjax.studio.DEFAULT_RPM (not imported: JAX loads late)
 
 
 def register(subparsers) -> None:

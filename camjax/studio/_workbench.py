@@ -21,8 +21,9 @@ import numpy as np
 from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, plot_speed
 from ..checks import MAX_SPEEDS as MAX_SPEEDS
 
-DEFAULT_RPM = "200:1400:7"
-"""The speed range a workbench starts with (wide enough to show the examples' jump speeds)."""
+DEFAULT_RPM = "200:1400:101"
+"""The speed range a workbench starts with: wide enough to show the examples' jump speeds,
+dense enough for smooth curves over it, an edit about half a second (docs/studio.md)."""
 TURN_POINTS = 721
 """Cam angles over the turn for the kinematic curves (every half degree)."""
 PROFILE_POINTS = 720
@@ -301,14 +302,17 @@ class Workbench:
         })
 
     def state(self) -> dict:
-        """The program as its TOML structure (for the page's tables), its text and the speeds;
-        ``bundle``: whether it holds a designed law (saved as a zip with its law files)."""
+        """The program as its TOML structure (for the page's tables), its text and the speeds,
+        what an empty follower or ``[materials]`` field stands for; ``bundle``: whether it
+        holds a designed law (saved as a zip with its law files)."""
         from .. import laws
-        from ..program import Follower
+        from ..program import Follower, Materials
 
         defaults = {f.name: f.default for f in dataclasses.fields(Follower) if f.default is not dataclasses.MISSING}
+        materials = {f.name: f.default for f in dataclasses.fields(Materials)}
         return {"toml": self.toml, "program": tomllib.loads(self.toml), "rpm": self.rpm_text,
                 "laws": [*laws.names(), "constant-velocity", "polynomial"], "follower_defaults": defaults,
+                "materials_defaults": materials,
                 "bundle": self.law_dir is not None and self.law_dir.as_posix() in self.toml,
                 "design": {"steps": DESIGN_STEPS, "knots": DESIGN_KNOTS, "objectives": list(DESIGN_OBJECTIVES)}}
 

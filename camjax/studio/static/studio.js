@@ -255,6 +255,7 @@ function renderEditor() {
     box.appendChild(label);
   }
   renderFollowerNotes();
+  renderMaterials();
   rollerCleared = false;
   renderNotes();
   renderDesign();
@@ -303,6 +304,7 @@ function showError(message, from = "program") {
 }
 
 function edited() {
+  rememberEdit();
   dirty = true;
   clearTimeout(timer);
   timer = setTimeout(send, 400);
@@ -359,11 +361,13 @@ function load(state) {
   bundle = !!state.bundle;
   designDefaults = state.design || designDefaults;
   followerDefaults = state.follower_defaults || followerDefaults;
+  materialDefaults = state.materials_defaults || materialDefaults;
   renderLawNames();
   $("range").value = rpmText;
   $("save").href = api(bundle ? "program.zip" : "program.toml");
   markStale(false);
   renderEditor();
+  forgetEdits();
 }
 
 // ---- designing a segment's law ---------------------------------------------------------
@@ -614,7 +618,8 @@ function drawProfile() {
   $("angle-text").textContent = `${deg} deg`;
   ctx.clearRect(0, 0, canvas.width, canvas.height);
   const pts = [...p.pitch, ...p.profile, ...(p.outer || [])];
-  const reach = Math.max(...pts.map(([x, y]) => Math.hypot(x, y))) + (f.roller_radius_mm || 0) * 2 + 5;
+  const reach = Math.max(Math.max(...pts.map(([x, y]) => Math.hypot(x, y))) + (f.roller_radius_mm || 0) * 2 + 5,
+    f.kind.startsWith("swinging") ? f.pivot_mm + 8 : 0);
   const scale = canvas.width / 2 / reach, cx = canvas.width / 2, cy = canvas.height / 2;
   const t = deg * Math.PI / 180, c = Math.cos(t), s = Math.sin(t);
   // the cam turns by the cam angle; the follower stays on its axis (camjax.geometry's frame)
@@ -630,14 +635,18 @@ function drawProfile() {
   ctx.setLineDash([]);
   const i = Math.round(deg / 360 * p.theta_deg.length) % p.theta_deg.length;
   ctx.strokeStyle = "#d62728"; ctx.lineWidth = 2;
-  if (p.flat_face) {
+  if (p.flat_face && f.kind === "swinging-flat") {
+    drawSwingingArm(ctx, at(p.profile[i]), cx + scale * f.pivot_mm, cy, true);
+  } else if (p.flat_face) {
     const [u, v] = at(p.profile[i]);
     ctx.beginPath(); ctx.moveTo(u - 60, v); ctx.lineTo(u + 60, v); ctx.stroke();
   } else {
     const [u, v] = at(p.pitch[i]);
     ctx.beginPath(); ctx.arc(u, v, scale * f.roller_radius_mm, 0, 2 * Math.PI); ctx.stroke();
     if (f.kind === "translating-roller") { ctx.beginPath(); ctx.moveTo(u, v); ctx.lineTo(u, 0); ctx.stroke(); }
+    if (f.kind === "swinging-roller") drawSwingingArm(ctx, [u, v], cx + scale * f.pivot_mm, cy, false);
   }
+  drawRotation(ctx, cx, cy, Math.min(40, scale * f.base_radius_mm * 0.5));
   ctx.lineWidth = 1;
   ctx.beginPath(); ctx.arc(cx, cy, 3, 0, 2 * Math.PI); ctx.fillStyle = "#000"; ctx.fill();
 }
@@ -718,6 +727,128 @@ function drawTorqueSpeed(sizing) {
     ctx.fillText(`${fmt(s.rpm, 5)} rpm: dots dynamic, line rigid`, pad, h - 8 - 14 * (sizing.sizings.length - 1 - k));
   });
 }
+
+// ---- materials: [materials], the elastic constants of the Hertz stress --------------------
+
+const MATERIAL_FIELDS = ["cam_youngs_modulus_gpa", "cam_poisson_ratio", "follower_youngs_modulus_gpa",
+  "follower_poisson_ratio"];
+let materialDefaults = {};          // what an empty field stands for (GET /api/program)
+
+// Like the follower's fields: an empty one is left out of [materials] (its default said
+// beside it); no field set, no [materials] table.
+function renderMaterials() {
+  const box = $("materials");
+  box.innerHTML = "";
+  for (const key of MATERIAL_FIELDS) {
+    const label = document.createElement("label");
+    label.textContent = key + " ";
+    const note = document.createElement("span");
+    note.className = "fnote";
+    note.dataset.note = key;
+    const say = () => {
+      const d = materialDefaults[key];
+      note.textContent = (model.materials || {})[key] === undefined && d !== undefined ? `empty: ${d} (the default)` : "";
+    };
+    label.appendChild(input((model.materials || {})[key], (t) => {
+      const v = parseCell(t), m = model.materials = model.materials || {};
+      if (v === undefined) delete m[key]; else m[key] = v;
+      if (!Object.keys(m).length) delete model.materials;
+      say();
+    }, {key}));
+    label.appendChild(note);
+    say();
+    box.appendChild(label);
+  }
+}
+
+// ---- the profile view's follower arm and turning direction -------------------------------
+
+// A swinging follower's arm from its pivot (fixed at pivot_mm on the x axis, camjax.geometry's
+// frame) to the roller centre, or its face: the line through the pivot and the contact point.
+function drawSwingingArm(ctx, [u, v], px, py, face) {
+  ctx.beginPath(); ctx.moveTo(px, py);
+  if (face) {
+    const d = Math.hypot(u - px, v - py) || 1;
+    ctx.lineTo(u + 40 * (u - px) / d, v + 40 * (v - py) / d);
+  } else ctx.lineTo(u, v);
+  ctx.stroke();
+  ctx.lineWidth = 1;
+  ctx.beginPath(); ctx.arc(px, py, 5, 0, 2 * Math.PI); ctx.fillStyle = "#fff"; ctx.fill(); ctx.stroke();
+  ctx.beginPath(); ctx.moveTo(px - 8, py + 9); ctx.lineTo(px + 8, py + 9); ctx.stroke();  // the frame it hangs on
+  ctx.lineWidth = 2;
+}
+
+// The cam turns counter-clockwise (camjax's convention; the library has no other): an arrow
+// round the centre says so.
+function drawRotation(ctx, cx, cy, r) {
+  const end = -1.4;
+  ctx.save();
+  ctx.strokeStyle = "#555"; ctx.fillStyle = "#555"; ctx.lineWidth = 1; ctx.setLineDash([]);
+  ctx.beginPath(); ctx.arc(cx, cy, r, 0.2, end, true); ctx.stroke();
+  const x = cx + r * Math.cos(end), y = cy + r * Math.sin(end);
+  const tx = Math.sin(end), ty = -Math.cos(end);  // the direction of travel on the screen
+  ctx.beginPath(); ctx.moveTo(x + 7 * tx, y + 7 * ty);
+  ctx.lineTo(x - 3 * ty, y + 3 * tx); ctx.lineTo(x + 3 * ty, y - 3 * tx); ctx.closePath(); ctx.fill();
+  ctx.font = "11px system-ui, sans-serif";
+  ctx.fillText("counter-clockwise", cx + r * 0.75, cy - r * 0.75 - 4);
+  ctx.restore();
+}
+
+// ---- undo: the last edits, the program as the page holds it ------------------------------
+
+const UNDO_DEPTH = 50;
+const TYPING_MS = 1500;             // keystrokes in one field this close together are one edit
+const undoStack = [];               // earlier programs (the model as JSON text), the latest last
+let undoShown = null;               // the program the tables show now (JSON text)
+let undoField = null, undoAt = 0;   // the field and time of the last remembered edit
+
+function showUndo() {
+  $("undo").disabled = !undoStack.length;
+  $("undo").title = `undo the last edit (Ctrl+Z); ${undoStack.length} kept`;
+}
+
+// A program loaded (the start, Open TOML, a kept design): the edits before it are forgotten.
+function forgetEdits() {
+  undoStack.length = 0;
+  undoShown = JSON.stringify(model);
+  undoField = null;
+  showUndo();
+}
+
+// Called by each edit, after it changed the model: the program before it is kept.
+function rememberEdit() {
+  const now = JSON.stringify(model);
+  if (undoShown === null || now === undoShown) { undoShown = now; return; }
+  const typing = lastField !== null && lastField === undoField && Date.now() - undoAt < TYPING_MS;
+  if (!typing) {
+    undoStack.push(undoShown);
+    if (undoStack.length > UNDO_DEPTH) undoStack.shift();
+  }
+  undoShown = now; undoField = lastField; undoAt = Date.now();
+  showUndo();
+}
+
+function undo() {
+  if (!undoStack.length) return;
+  undoShown = undoStack.pop();
+  model = JSON.parse(undoShown);
+  lastField = null; undoField = null;
+  renderEditor();
+  showUndo();
+  dirty = true;
+  clearTimeout(timer);
+  timer = setTimeout(send, 0);     // analysed as any edit, without being remembered as one
+}
+
+$("undo").addEventListener("click", undo);
+// Ctrl+Z (Cmd+Z) undoes a program edit anywhere but in the speed and design fields, whose
+// text keeps the browser's own undo.
+document.addEventListener("keydown", (e) => {
+  if (!(e.ctrlKey || e.metaKey) || e.shiftKey || e.altKey || e.key.toLowerCase() !== "z") return;
+  if (e.target.closest && e.target.closest("#range, #chosen, #design")) return;
+  e.preventDefault();
+  undo();
+});
 
 // ---- wiring ----------------------------------------------------------------------------
 
