@@ -57,7 +57,7 @@ def read_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
         read_as = (f"read as {SEPARATORS[sep]}-separated" if sep in head else
                    "no tab, ';' or ',' separates its names")
         raise ValueError(f"{path}: line {n_head}: the header must name the columns "
-                         f"{' and '.join(COLUMNS)} (got {' | '.join(map(repr, names))}, {read_as}); "
+                         f"{' and '.join(COLUMNS)} (found {len(names)} name(s), {read_as}); "
                          f"missing {', '.join(missing)}")
     columns = [names.index(c) for c in COLUMNS]
     rows, line_numbers = [], []
@@ -71,9 +71,9 @@ def read_csv(path: Path) -> tuple[np.ndarray, np.ndarray]:
                 value = float(cells[k])
             except ValueError:
                 hint = " (decimals take '.', not ',')" if "," in cells[k] or (sep != "," and "," in line) else ""
-                raise ValueError(f"{path}: line {n}: {name} {cells[k]!r} is not a number{hint}") from None
+                raise ValueError(f"{path}: line {n}: {name} (column {k + 1}) is not a number{hint}") from None
             if not math.isfinite(value):
-                raise ValueError(f"{path}: line {n}: {name} must be finite, got {cells[k]!r}")
+                raise ValueError(f"{path}: line {n}: {name} (column {k + 1}) must be finite")
             row.append(value)
         rows.append(row)
         line_numbers.append(n)
