@@ -451,3 +451,22 @@ def test_cli_refuses_a_bad_motor_file_and_a_rough_law_in_one_line(tmp_path, caps
         and "jerk steps" in err
         and "degree 9" in err
     )
+
+
+def test_a_rotary_axis_drive_is_the_linear_drive_of_its_arc(sized):
+    """``degrees_per_rev`` with an arm moves the follower ``radians(degrees) * arm`` mm per
+    drive revolution: the duty equals that of a screw with that lead; without an arm (a
+    translating follower) the drive is refused in one line."""
+    import dataclasses
+
+    program, history, _, duty, _ = sized
+    degrees, arm = 30.0, 20.0 / math.radians(30.0)  # the arc of DRIVE's 20 mm lead
+    rotary = dataclasses.replace(DRIVE, travel_mm_per_rev=None, degrees_per_rev=degrees, arm_mm=arm)
+    turned = duty_cycle(program, rotary, RPM, history)
+    for name in ("motor_speed_rpm", "motor_acceleration_rad_s2", "dynamic_torque_n_m", "rigid_torque_n_m"):
+        np.testing.assert_allclose(getattr(turned, name), getattr(duty, name), rtol=1e-12, atol=1e-12)
+    assert turned.load_inertia_kg_m2 == pytest.approx(duty.load_inertia_kg_m2, rel=1e-12)
+    armless = dataclasses.replace(rotary, arm_mm=None)
+    with pytest.raises(ValueError, match=r"^\[drive\] degrees_per_rev needs arm_mm") as error:
+        duty_cycle(program, armless, RPM, history)
+    assert "\n" not in str(error.value)
