@@ -13,18 +13,19 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import scipy.sparse as sp
-from scipy.interpolate import BSpline
-from scipy.sparse.linalg import splu
 
 from .._custom_types import Breakpoints, LawValues
 from ._base import AbstractSearchedPeaksLaw, float_leaf
 from ._spline import max_abs_piecewise
+
+if TYPE_CHECKING:  # scipy is imported where a table is fitted, not when camjax starts
+    import scipy.sparse as sp
 
 DEGREE = 5
 MIN_TABLE_POINTS = DEGREE + 1
@@ -166,6 +167,7 @@ def _table_peak(law: TableLaw, order: int):
 def _derivative_operator(knots: np.ndarray, order: int) -> sp.csr_matrix:
     """Sparse map from B-spline coefficients to those of the ``order``-th derivative (a
     spline of degree ``DEGREE - order`` on ``knots[order:-order]``)."""
+    import scipy.sparse as sp
     operator = sp.identity(len(knots) - DEGREE - 1, format="csr")
     for r in range(order):
         p = DEGREE - r
@@ -179,6 +181,7 @@ def _derivative_operator(knots: np.ndarray, order: int) -> sp.csr_matrix:
 
 def _design(knots: np.ndarray, x: np.ndarray, order: int) -> sp.csr_matrix:
     """Sparse rows taking B-spline coefficients to the ``order``-th derivative at ``x``."""
+    from scipy.interpolate import BSpline
     trimmed = knots[order: len(knots) - order]
     basis = BSpline.design_matrix(np.asarray(x, float), trimmed, DEGREE - order)
     return (basis @ _derivative_operator(knots, order)).tocsr()
@@ -187,6 +190,7 @@ def _design(knots: np.ndarray, x: np.ndarray, order: int) -> sp.csr_matrix:
 def _weighted_jerk(knots: np.ndarray, edges: np.ndarray) -> sp.csr_matrix:
     """``L`` with ``|L c|^2 = int j^2`` over ``edges``: the jerk at 3 Gauss nodes a piece,
     each row times its weight's root (exact: ``j^2`` is a quartic); banded."""
+    import scipy.sparse as sp
     nodes, weights = np.polynomial.legendre.leggauss(3)
     mid, half = 0.5 * (edges[:-1] + edges[1:]), 0.5 * np.diff(edges)
     x = (mid[:, None] + half[:, None] * nodes).ravel()
@@ -196,6 +200,8 @@ def _weighted_jerk(knots: np.ndarray, edges: np.ndarray) -> sp.csr_matrix:
 
 def _solve(matrix, rhs) -> np.ndarray:
     """A sparse square system by LU (SuperLU); ``None`` where it is singular."""
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import splu
     try:
         out = splu(sp.csc_matrix(matrix)).solve(np.asarray(rhs, float))
     except RuntimeError:  # "Factor is exactly singular"
@@ -216,6 +222,7 @@ def spline_fit(x, y, smoothing_mm=None, *, ends=None, period: float | None = Non
     angle in a tolerance's error.  Every matrix is sparse (banded): time and memory grow
     as the number of points.
     """
+    import scipy.sparse as sp
     x, y = np.asarray(x, float), np.asarray(y, float)
     n = x.size
     if period is None:
@@ -262,6 +269,7 @@ def spline_fit(x, y, smoothing_mm=None, *, ends=None, period: float | None = Non
 def _saddle(hessian, blocks) -> sp.csr_matrix:
     """The KKT matrix ``[[H, B'], [B, 0]]`` of ``H`` under the constraint rows ``B`` (the
     non-empty ``blocks`` stacked)."""
+    import scipy.sparse as sp
     rows = [b for b in blocks if b.shape[0]]
     if not rows:
         return hessian
@@ -282,6 +290,7 @@ def smoothest_within(jerk, collocation, y, tolerance: float, constraint, target,
     starts from the least-squares spline through the points (inside every band).
     ``ValueError`` where it does not converge (the message says so).
     """
+    import scipy.sparse as sp
     a = collocation[boxed].tocsr()
     yb = y[boxed]
     energy = (jerk.T @ jerk).tocsr()
