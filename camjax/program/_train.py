@@ -270,12 +270,17 @@ class Chain:
         return Assembly(M, C, K, np.asarray(body_index), size - 1)
 
     @property
+    def lever_ratio(self) -> float:
+        """The last body's travel per unit of the cam's lift (its kinematic lift's scale),
+        and the factor of the spring's preload at the cam: the product of the levers."""
+        return float(np.prod([b.ratio for b in self.bodies if not b.rides]))
+
+    @property
     def cam_preload_n(self) -> float:
         """The static force at the cam: the spring's preload through every lever."""
         if self.spring is None:
             return 0.0
-        levers = [b.ratio for b in self.bodies if not b.rides]
-        return self.spring.preload_n * float(np.prod(levers))
+        return self.spring.preload_n * self.lever_ratio
 
     # -- natural frequencies -----------------------------------------------------------
 
