@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+import scipy.integrate
 import scipy.linalg
 import scipy.optimize
 from helpers import FOLLOWER, compiled_programs, two_cycloids
@@ -18,6 +19,7 @@ from camjax.program import (
     Oscillator,
     Spring,
     SteadyState,
+    analyse,
     chain_from_dict,
     jump_speed_rpm,
 )
@@ -415,3 +417,130 @@ def test_the_steady_state_refuses_what_it_does_not_model():
     alone = Chain((Body("tappet", 0.03),), Spring(52.0, 250.0))
     with pytest.raises(ValueError, match="nothing to vibrate"):
         Oscillator.of_chain(alone)
+
+
+# -- every output of the one-body follower, for a chain ---------------------------------
+
+
+def cycloid_slope(deg):
+    """The two-cycloids program's ``dy/dtheta`` (mm/deg), by hand."""
+    deg = np.mod(deg, 360.0)
+    rise = 0.2 * (1 - np.cos(2 * np.pi * deg / 100))
+    fall = -0.2 * (1 - np.cos(2 * np.pi * (deg - 180) / 100))
+    return np.select([deg < 100, deg < 180, deg < 280], [rise, 0.0, fall], 0.0)
+
+
+def test_a_chains_drive_torque_is_its_contact_force_times_the_velocity_ratio():
+    """``T = F_c dy/dtheta``: the three-body chain's peak drive torque against the
+    frequency-domain contact force times the cam's own slope, written here."""
+    program = dataclasses.replace(two_cycloids(), chain=three_body_chain())
+    rpm = np.array([600.0, 1100.0])
+    rows = SteadyState(program, 400.0).summary(rpm)
+    samples = 2**17
+    slope = cycloid_slope(360.0 * np.arange(samples) / samples) * 180 / math.pi * 1e-3  # m per rad
+    for i, r in enumerate(rpm):
+        torque = frequency_domain(r, samples)[0] * slope
+        peak = np.max(np.abs(torque))
+        assert abs(rows.max_drive_torque_n_m[i] - peak) < 1e-6 * peak
+        assert abs(rows.mean_drive_torque_n_m[i] - torque.mean()) < 1e-6 * peak
+
+
+TWO_FREE = dict(m=(0.4, 0.5), k=(2.0e6, 1.0e6), c=(60.0, 50.0), ks=2.0e4, preload=900.0)
+
+
+def two_free_bodies():
+    t = TWO_FREE
+    return Chain(
+        (
+            Body("a", t["m"][0], 1e-3 * t["k"][0], t["c"][0]),
+            Body("b", t["m"][1], 1e-3 * t["k"][1], t["c"][1]),
+        ),
+        Spring(1e-3 * t["ks"], t["preload"]),
+    )
+
+
+def test_a_chains_residual_vibration_against_scipy_over_the_dwell():
+    """Two bodies on elements (two modes): the periodic state at the dwell's start by a
+    scipy shooting solve, the last body's free vibration over the dwell by solve_ivp, and
+    its envelope ``sum_j |c_j|`` from scipy's own eigenvectors: the report's residual is
+    that envelope, and the vibration over the dwell stays under it."""
+    t = TWO_FREE
+    (m1, m2), (k1, k2), (c1, c2), ks = t["m"], t["k"], t["c"], t["ks"]
+    rpm = 900.0
+    period = 60.0 / rpm
+    rate = 360.0 / period
+    program = dataclasses.replace(two_cycloids(), chain=two_free_bodies())
+    residual = SteadyState(program, rpm).summary(np.array([rpm])).residual_vibration_mm[0]
+
+    def field(time, z, hold=None):
+        y = 1e-3 * (cycloid_lift(time / period) if hold is None else hold)
+        dy = 0.0 if hold is not None else 1e-3 * cycloid_slope(rate * time) * rate
+        x1, x2, v1, v2 = z
+        f1 = k1 * (y - x1) + c1 * (dy - v1) - k2 * (x1 - x2) - c2 * (v1 - v2)
+        f2 = k2 * (x1 - x2) + c2 * (v1 - v2) - ks * x2
+        return [v1, v2, f1 / m1, f2 / m2]
+
+    options = dict(method="DOP853", rtol=1e-12, atol=1e-15)
+    edges = np.array([0.0, 100.0, 180.0, 280.0, 360.0]) / rate
+
+    def turn(z0, stop=360.0):
+        z = np.asarray(z0, dtype=float)
+        for a, b in zip(edges[:-1], edges[1:]):
+            b = min(b, stop / rate)
+            if b > a:
+                z = scipy.integrate.solve_ivp(field, (a, b), z, **options).y[:, -1]
+        return z
+
+    c = turn(np.zeros(4))
+    phi = np.stack([turn(e) - c for e in np.eye(4)], axis=1)
+    start = np.linalg.solve(np.eye(4) - phi, c)  # the periodic state at 0 deg
+    at_dwell = turn(start, stop=100.0)
+    h = cycloid_lift(100.0 / 360.0)
+    static = np.linalg.solve([[k1 + k2, -k2], [-k2, k2 + ks]], [k1 * 1e-3 * h, 0.0])
+    free = at_dwell - np.concatenate([static, [0.0, 0.0]])
+    A = np.array(
+        [
+            [0, 0, 1, 0],
+            [0, 0, 0, 1],
+            [-(k1 + k2) / m1, k2 / m1, -(c1 + c2) / m1, c2 / m1],
+            [k2 / m2, -(k2 + ks) / m2, c2 / m2, -(c2) / m2],
+        ]
+    )
+    lam, V = scipy.linalg.eig(A)
+    amplitudes = V[1] * np.linalg.solve(V, free)  # x2's free vibration: sum_j a_j exp(lam_j t)
+    envelope = 1e3 * np.sum(np.abs(amplitudes))
+    assert abs(residual[0] - envelope) < 1e-6 * envelope
+    dwell = scipy.integrate.solve_ivp(
+        lambda s, z: field(s, z, hold=h), (0.0, 80.0 / rate), at_dwell, dense_output=True, **options
+    )
+    tau = np.linspace(0.0, 80.0 / rate, 20001)
+    vibration = 1e3 * (dwell.sol(tau)[1] - static[1])
+    modal = 1e3 * np.real(np.exp(np.outer(tau, lam)) @ amplitudes)
+    assert np.max(np.abs(vibration - modal)) < 1e-7 * envelope  # the modes are the dwell's motion
+    assert np.max(np.abs(vibration)) <= envelope * (1 + 1e-9)
+    assert np.max(np.abs(vibration)) > 0.3 * envelope
+
+
+def test_a_stiffening_chain_tends_to_the_one_body_follower_in_every_output():
+    """The three-body chain's drive torque, Hertz stress and residual vibration (the last
+    body's, through the lever) tend to the one body's of the lever-reduced mass."""
+    program = two_cycloids(contact_width_mm=12.0)
+    t = THREE
+    total = t["m"][0] + t["ratio"] ** 2 * (t["m"][1] + t["m"][2])
+    one = Chain(
+        (Body("one", total, 1e-3 * t["k"][0], t["c"][0]),),
+        Spring(1e-3 * t["ratio"] ** 2 * t["ks"], t["ratio"] * t["preload"]),
+    )
+    rpm = [800.0]
+
+    def outputs(chain, scale=1.0):
+        report = analyse(dataclasses.replace(program, chain=chain), rpm, with_flight=False)
+        row = report.speeds[0]
+        return np.array(
+            [row.max_drive_torque_n_m, row.max_contact_stress_mpa, *row.residual_vibration_mm]
+        ) / np.array([1.0, 1.0, scale, scale])
+
+    reference = outputs(one)
+    gaps = [np.abs(outputs(three_body_chain(s), t["ratio"]) - reference) for s in (10.0, 1000.0)]
+    assert np.all(gaps[1] < 0.05 * gaps[0]), gaps
+    assert np.all(gaps[1] < 2e-3 * reference), (gaps, reference)

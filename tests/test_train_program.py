@@ -216,3 +216,51 @@ def test_cli_refuses_out_for_a_chain(tmp_path, capsys):
     assert main(["program", "valve", "--rpm", "1000", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--out" in err and "train" in err
+
+
+def test_design_over_a_train_at_its_last_body(tmp_path, capsys):
+    """``design --program`` of a chain: the residual objective is the last body's through
+    the chain, its gradient matches central finite differences, and the designed program
+    is no worse than its start (or the design says it kept the start)."""
+    import warnings
+
+    import jax
+
+    from camjax import laws
+    from camjax.law_design import DesignNotImproved
+    from camjax.program import MaxProgramResidual, design_segment
+
+    program = two_body()
+    objective = MaxProgramResidual(program, 1, 900.0, 1100.0)
+    law = laws.BSplineLaw.fit(laws.get("cycloidal"), 8, 5)
+    value = jax.jit(lambda c, p: objective.train(laws.BSplineLaw(c, 5), 1.0, p))
+    direction = np.random.default_rng(1).normal(size=8)
+    gradient = jax.jit(jax.grad(value))(law.coefficients, 16.0)
+    h = 1e-5
+    difference = (
+        value(law.coefficients + h * direction, 16.0)
+        - value(law.coefficients - h * direction, 16.0)
+    ) / (2 * h)
+    assert float(gradient @ direction) == pytest.approx(float(difference), rel=1e-6)
+    # the training value at a sharp maximum is the report's largest residual (the last body's)
+    steady = SteadyState(program, 900.0)
+    report = np.max(steady.summary(objective.speeds()).residual_vibration_mm)
+    assert float(value(law.coefficients, 1e6)) == pytest.approx(report, rel=1e-2)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        designed, result = design_segment(
+            program, 1, 900.0, 1100.0, objective="residual", knots=8, steps=60, progress=False
+        )
+    label = objective.label
+    start = objective.report(program.segments[0].law)
+    assert result.initial_values[label] == pytest.approx(start, rel=1e-12)
+    if result.kept_initial:
+        assert any(issubclass(w.category, DesignNotImproved) for w in caught)
+        assert designed == program
+    else:
+        assert result.values[label] < start
+        assert objective.report(designed.segments[0].law) == pytest.approx(
+            result.values[label], rel=1e-9
+        )
+    with pytest.raises(ValueError, match="a chain of bodies .* residual or preload"):
+        design_segment(program, 1, 900.0, 1100.0, objective="ca-ct")

@@ -1,18 +1,18 @@
 """A cam program at machine speed, through the one SDOF engine: periodic steady state and start-up.
 
-Payload displacement ``x`` from its static position on the base circle, cam lift ``y``:
-
-    m x'' = k (y - x) + c (y' - x') - k_s x,    F_c = F_0 + k (y - x) + c (y' - x').
-
-In the deflection ``e = y - x`` this is ``e'' + (c/m) e' + ((k + k_s)/m) e = y'' + (k_s/m) y``,
-the linear SDOF of ``camjax.sdof`` with forcing ``y'' + (k_s/m) y``.  This module is the
-adapter from physical units to that engine: time runs in turns (``s = t / T``,
-``T = 60 / rpm``), so the forcing is ``y_ss + (k_s/m) T^2 y``, two arrays sampled once per
-program on the engine's grid (``camjax.sdof.piecewise_grid``) and mixed per speed; the
-engine's periodic start (``q(0) = F / (1 - E)``) gives the steady state exactly, and its
-gains and refined extremes give the payload acceleration and contact force in SI units.
-A speed sweep runs in blocks of ``SPEED_BLOCK`` speeds through one compiled program per
-shape of the turn, whose values are its arguments (``PaddedTurn``).
+The follower is an ``Oscillator`` (``_oscillator.py``): its modes in physical units, the
+classic one-body follower's (the deflection ``e = y - x`` of
+``m x'' = k (y - x) + c (y' - x') - k_s x``, one mode with forcing ``y'' + (k_s/m) y``) or a
+chain's.  Time runs in turns (``s = t / T``, ``T = 60 / rpm``), so mode ``j``'s forcing is
+``a_j y_ss + b_j T^2 y``, two arrays sampled once per program on the engine's grid
+(``camjax.sdof.piecewise_grid``) and mixed per speed; the engine's periodic start
+(``q(0) = F / (1 - E)``) gives each mode's steady state exactly, and the oscillator's gains
+give every output (contact force, payload acceleration, drive torque, Hertz stress, residual
+vibration, a train's own figures) in SI units, their extremes refined between nodes.  A
+speed sweep runs in blocks of ``SPEED_BLOCK`` speeds through one compiled program per shape
+of the turn (the number of modes and outputs, the bucketed grid), whose values are its
+arguments (``PaddedTurn``): another follower, one body or a chain of the same shape, or an
+edited one, compiles nothing.
 """
 
 from __future__ import annotations

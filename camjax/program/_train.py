@@ -11,8 +11,8 @@ need 28), and its internal damping is strain-rate (Kelvin-Voigt, ``tau = 2 zeta_
 
 Every coordinate is a displacement from the preloaded rest; the cam's lift drives the
 coordinate it holds.  This module holds the chain as a value (read, checked, written back,
-its natural frequencies); its periodic steady state over a program's turn is
-``_chain_steady.py``.
+its natural frequencies); its modes are ``_oscillator.py``'s ``Oscillator.of_chain``, and its
+periodic steady state over a program's turn the program's own (``SteadyState``).
 """
 
 from __future__ import annotations
