@@ -62,6 +62,7 @@ from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
 from ._follower import FOLLOWER_KINDS as FOLLOWER_KINDS
 from ._follower import MAX_PRESSURE_ANGLE_DEG as MAX_PRESSURE_ANGLE_DEG
+from ._follower import follower_kinds as follower_kinds
 from ._groove import MAX_GROOVE_SAMPLES as MAX_GROOVE_SAMPLES
 from ._groove import MAX_TURNS as MAX_TURNS
 from ._groove import SETTLED_DEG as SETTLED_DEG
