@@ -52,6 +52,9 @@ from ._export import profile as profile
 from ._export import shape as shape
 from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
+from ._follower import FOLLOWER_KINDS as FOLLOWER_KINDS
+from ._follower import MAX_PRESSURE_ANGLE_DEG as MAX_PRESSURE_ANGLE_DEG
+from ._follower import follower_kinds as follower_kinds
 from ._groove import MAX_GROOVE_SAMPLES as MAX_GROOVE_SAMPLES
 from ._groove import MAX_TURNS as MAX_TURNS
 from ._groove import SETTLED_DEG as SETTLED_DEG
@@ -71,7 +74,6 @@ from ._jump import scan_speeds as scan_speeds
 from ._machine import ABSURD_SIZES as ABSURD_SIZES
 from ._machine import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
 from ._machine import MAX_HALF_WIDTH_RATIO as MAX_HALF_WIDTH_RATIO
-from ._machine import MAX_PRESSURE_ANGLE_DEG as MAX_PRESSURE_ANGLE_DEG
 from ._machine import MODULUS_RANGE_GPA as MODULUS_RANGE_GPA
 from ._machine import ContactGeometry as ContactGeometry
 from ._machine import Geometry as Geometry

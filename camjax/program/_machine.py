@@ -125,21 +125,15 @@ class ContactGeometry(NamedTuple):
 
 
 def contact_geometry(program: Program, theta_deg) -> ContactGeometry:
-    """The cam's contact geometry at ``theta_deg`` from both one-sided jets of the lift."""
+    """The cam's contact geometry at ``theta_deg`` from both one-sided jets of the lift
+    (the follower geometry's ``contact_terms``)."""
     theta_deg = np.asarray(theta_deg, dtype=float)
     f = program.follower
-    sides = [shape(program, theta_deg, side) for side in ("before", "after")]
-    if f.flat_face:
-        radius = np.stack([np.asarray(s.radius_of_curvature) for s in sides])
-        position = np.stack([np.asarray(s.face_position) for s in sides])
-        pressure = np.zeros_like(radius)
-        normal = f.arm_mm / position if f.kind == "swinging-flat" else np.ones_like(radius)
-        return ContactGeometry(theta_deg, pressure, radius, np.full_like(radius, np.inf), normal, position)
-    pitch = np.stack([np.asarray(s.pitch_radius_of_curvature) for s in sides])
-    pressure = np.stack([np.degrees(np.asarray(s.pressure_angle)) for s in sides])
-    wall = f.roller_radius_mm + (f.groove_clearance_mm or 0.0)
-    return ContactGeometry(theta_deg, pressure, pitch - f.roller_radius_mm, -(pitch + wall),
-                           1.0 / np.cos(np.radians(pressure)), np.zeros_like(pitch))
+    follower = f.geometry
+    sides = [follower.contact_terms(shape(program, theta_deg, side), f.groove_clearance_mm or 0.0)
+             for side in ("before", "after")]
+    pressure, radius, outer, normal, position = (np.stack(side) for side in zip(*sides))
+    return ContactGeometry(theta_deg, np.degrees(pressure), radius, outer, normal, position)
 
 
 class NodeContact(NamedTuple):
@@ -155,9 +149,8 @@ class NodeContact(NamedTuple):
 
 def _effective_radius(program: Program, cam_radius: np.ndarray, where: str, theta_deg) -> np.ndarray:
     """``R'`` with ``1/R' = 1/r_roller + 1/rho_cam`` (``rho_cam`` alone under a flat face)."""
-    f = program.follower
     with np.errstate(divide="ignore"):
-        curvature = 1.0 / cam_radius + (0.0 if f.flat_face else 1.0 / f.roller_radius_mm)
+        curvature = program.follower.geometry.contact_curvature(cam_radius)
     bad = ~(curvature > 0)
     if bad.any():
         angles = np.broadcast_to(theta_deg, bad.shape)
@@ -368,9 +361,6 @@ def cam_geometry(program: Program, theta_deg) -> Geometry:
     )
 
 
-MAX_PRESSURE_ANGLE_DEG = {"translating-roller": 30.0, "swinging-roller": 45.0}
-"""The pressure angle above which a roller follower is taken to jam or wear (the design
-rule of thumb: 30 degrees translating, 45 swinging); flat faces have their own checks."""
 MODULUS_RANGE_GPA = (1.0, 1000.0)
 """Young's moduli of engineering solids, polymers to diamond: a value outside is taken for
 a unit slip (a modulus in Pa or MPa)."""
@@ -416,7 +406,7 @@ def design_warnings(program: Program, report=None) -> list[str]:
     out = table_warnings(program)  # first: a drawing's or table's note says what was read
     f, materials = program.follower, program.materials
     report = report.as_dict() if hasattr(report, "as_dict") else report
-    limit = MAX_PRESSURE_ANGLE_DEG.get(f.kind)
+    limit = f.geometry.max_pressure_angle_deg  # a roller's: 30 degrees translating, 45 swinging
     angle = ((report or {}).get("geometry") or {}).get("max_pressure_angle_deg")
     if limit is not None and angle is not None and abs(angle) > limit:
         out.append(f"the pressure angle reaches {abs(angle):.3g} deg, above the {limit:g} deg a "

@@ -303,15 +303,17 @@ class Workbench:
 
     def state(self) -> dict:
         """The program as its TOML structure (for the page's tables), its text and the speeds,
-        what an empty follower or ``[materials]`` field stands for; ``bundle``: whether it
-        holds a designed law (saved as a zip with its law files)."""
+        what an empty follower or ``[materials]`` field stands for, the follower's fields and
+        kinds (``camjax.program.follower_kinds``: the page keeps no list of its own);
+        ``bundle``: whether it holds a designed law (saved as a zip with its law files)."""
         from .. import laws
-        from ..program import Follower, Materials
+        from ..program import Follower, Materials, follower_kinds
 
         defaults = {f.name: f.default for f in dataclasses.fields(Follower) if f.default is not dataclasses.MISSING}
         materials = {f.name: f.default for f in dataclasses.fields(Materials)}
         return {"toml": self.toml, "program": tomllib.loads(self.toml), "rpm": self.rpm_text,
                 "laws": [*laws.names(), "constant-velocity", "polynomial"], "follower_defaults": defaults,
+                "follower_fields": [f.name for f in dataclasses.fields(Follower)], "follower_kinds": follower_kinds(),
                 "materials_defaults": materials,
                 "bundle": self.law_dir is not None and self.law_dir.as_posix() in self.toml,
                 "design": {"steps": DESIGN_STEPS, "knots": DESIGN_KNOTS, "objectives": list(DESIGN_OBJECTIVES)}}
