@@ -20,7 +20,7 @@ import numpy as np
 from .errors import RESULTS
 from .laws import rest_to_rest
 from .models import SpringMassOptions, batch_metrics
-from .sdof import default_resolution
+from .sdof import TARGET_PHASE_STEP, check_grid_size, default_resolution, period_ratio_reach
 from .solvers import FIXED_STEP_SOLVERS
 
 ACCURACY_GOAL = 1e-6
@@ -205,8 +205,14 @@ def _level_cases(level: str) -> list[Case]:
 
 
 def reference_resolution(max_period_ratio: float) -> int:
-    """Grid of the exact reference: four times the default one, and at least 8192."""
-    return max(8192, 4 * default_resolution(max_period_ratio))
+    """Grid of the exact reference: four times the default one, and at least 8192; refused
+    (``check_grid_size``) past ``MAX_GRID_INTERVALS``."""
+    resolution = max(8192, 4 * default_resolution(max_period_ratio))
+    largest = period_ratio_reach(TARGET_PHASE_STEP / 4)
+    check_grid_size(resolution, f"the reference (the exact path on a grid four times finer than w h = "
+                    f"{TARGET_PHASE_STEP:g}) at period ratio {max_period_ratio:g}",
+                    f"period ratios up to {math.floor(largest):,}")
+    return resolution
 
 
 def reference_metrics(law, period_ratios, max_period_ratio: float | None = None):

@@ -36,6 +36,7 @@ from ..sdof import (
     SUBSTEPS_PER_INTERVAL,
     MotionGrid,
     SampledLaw,
+    check_grid_size,
     checked_peak_search,
     chunk_nodes,
     chunked_map,
@@ -45,6 +46,7 @@ from ..sdof import (
     mode_gain,
     motion_grid,
     peak_in_motion,
+    period_ratio_reach,
     propagate,
     residual_of_mode,
     steps_within,
@@ -90,12 +92,13 @@ class SpringMassOptions(Options):
         )
         resolution = self.resolution or default_resolution(max_period_ratio, MAX_PHASE_STEP)
         require(int(resolution) >= 8, f"resolution must be at least 8 intervals, got {resolution}")
-        require(
-            int(resolution) <= MAX_GRID_INTERVALS,
-            f"period ratio {max_period_ratio or 0:g} needs a grid of {int(resolution):,} intervals "
-            f"per rise; the limit is {MAX_GRID_INTERVALS:,} (period ratios up to about "
-            f"{MAX_GRID_INTERVALS * MAX_PHASE_STEP / (2 * math.pi):,.0f} at the default resolution)",
-        )
+        reach = f"period ratios up to about {period_ratio_reach(MAX_PHASE_STEP):,.0f}"
+        if self.resolution is None:
+            check_grid_size(int(resolution), f"a rise at period ratio {max_period_ratio:g}",
+                            f"{reach} at the default resolution")
+        else:
+            check_grid_size(int(resolution), f"a rise at resolution {int(resolution):,}",
+                            f"pass resolution at most {MAX_GRID_INTERVALS:,} ({reach})")
         checked_peak_search(self.peak_search)
         for label, value in (("rtol", self.rtol), ("atol", self.atol)):
             require(math.isfinite(value) and value > 0, f"{label} must be positive, got {value}")

@@ -7,7 +7,10 @@ a piecewise-smooth forcing) is one complex mode ``q = e' - conj(lambda) e`` with
 studies, and a cam program's turn at machine speed (``camjax.program``):
 
 - the grid of any piecewise forcing over an interval (``piecewise_grid``; a law's rise:
-  ``motion_grid``, ``SampledLaw``), with its degree-5 interpolant on every interval;
+  ``motion_grid``, ``SampledLaw``; a turn cut into segments: ``segment_layout``), with its
+  degree-5 interpolant on every interval, sized by one policy (``default_resolution``: the
+  phase step ``w h``) and refused past ``MAX_GRID_INTERVALS`` by one check
+  (``check_grid_size``, the caller's words for what to change);
 - the exact step over the grid from rest or a given state (``propagate``), the periodic
   steady state (``periodic_propagate``) and the exact state between nodes
   (``mode_between``);
@@ -33,13 +36,21 @@ from ._grid import INTERPOLATION_DEGREE as INTERPOLATION_DEGREE
 from ._grid import MAX_GRID_INTERVALS as MAX_GRID_INTERVALS
 from ._grid import MAX_PHASE_STEP as MAX_PHASE_STEP
 from ._grid import SAMPLED_LAWS_KEPT as SAMPLED_LAWS_KEPT
+from ._grid import SEGMENT_MINIMUM as SEGMENT_MINIMUM
+from ._grid import SEGMENT_PIECE_MINIMUM as SEGMENT_PIECE_MINIMUM
+from ._grid import SEGMENTED_MINIMUM as SEGMENTED_MINIMUM
 from ._grid import SUBSTEPS_PER_INTERVAL as SUBSTEPS_PER_INTERVAL
 from ._grid import TARGET_PHASE_STEP as TARGET_PHASE_STEP
+from ._grid import GridSegment as GridSegment
 from ._grid import MotionGrid as MotionGrid
 from ._grid import SampledLaw as SampledLaw
+from ._grid import SegmentLayout as SegmentLayout
+from ._grid import check_grid_size as check_grid_size
 from ._grid import default_resolution as default_resolution
 from ._grid import motion_grid as motion_grid
+from ._grid import period_ratio_reach as period_ratio_reach
 from ._grid import piecewise_grid as piecewise_grid
+from ._grid import segment_layout as segment_layout
 from ._grid import to_monomial as to_monomial
 from ._ode import integrate as integrate
 from ._ode import sdof_term as sdof_term
