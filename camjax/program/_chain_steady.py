@@ -17,7 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..metrics import PEAK_TOLERANCE, bernstein_bound, hermite_data, peak_search
-from ..sdof import periodic_propagate
+from ..sdof import narrowed_crossing, periodic_propagate
 from ._dynamics import SPEED_BLOCK, PaddedTurn, cycle_grid
 from ._machine import NodeContact
 from ._speeds import Speeds
@@ -348,13 +348,9 @@ class ChainSteadyState:
         lost = np.nonzero(low <= 0)[0]
         if lost.size == 0:
             return None
-        a, b = speeds[lost[0] - 1], speeds[lost[0]]
-        while b - a > tolerance_rpm:
-            inner = np.linspace(a, b, 34)[1:-1]  # one block of speeds per step
-            force = self.summary(inner).min_contact_force_n
-            k = np.nonzero(force <= 0)[0]
-            a, b = (inner[k[0] - 1] if k[0] > 0 else a, inner[k[0]]) if k.size else (inner[-1], b)
-        return 0.5 * (a + b)
+        return narrowed_crossing(  # 32 speeds a round: one block
+            lambda inner: self.summary(inner).min_contact_force_n <= 0,
+            speeds[lost[0] - 1], speeds[lost[0]], tolerance_rpm, 32)
 
 
 CHAIN_NOTE = (

@@ -18,6 +18,9 @@ studies, and a cam program's turn at machine speed (``camjax.program``):
   ``PEAK_SEARCHES``, chosen by ``SpringMassOptions.peak_search``, with ``plateau_bound`` on constant-acceleration intervals;
   ``refined_extremes``), the dwell's peak and the residual vibration;
 - the same equation through diffrax (``integrate``, ``sdof_term``);
+- host-side searches on exact values, a batch a round (``narrowed_crossing``,
+  ``first_roots``, ``polished_maxima``): the program's jump speed, separations,
+  re-impacts and peak forces;
 - one chunked vmap for batches (``chunked_map``), its chunks sized by backend
   (``chunk_nodes``, ``stack_laws``; their sizes ``CHUNK_NODES`` on a CPU,
   ``ACCELERATOR_CHUNK_NODES`` and ``ACCELERATOR_STACK_EVALUATIONS`` elsewhere by default,
@@ -68,6 +71,9 @@ from ._peaks import refined_extremes as refined_extremes
 from ._peaks import refined_max as refined_max
 from ._peaks import residual_amplitude as residual_amplitude
 from ._peaks import residual_of_mode as residual_of_mode
+from ._search import first_roots as first_roots
+from ._search import narrowed_crossing as narrowed_crossing
+from ._search import polished_maxima as polished_maxima
 from ._step import eigenvalue as eigenvalue
 from ._step import mode_between as mode_between
 from ._step import periodic_propagate as periodic_propagate
