@@ -50,6 +50,7 @@ from ._grid import SampledLaw as SampledLaw
 from ._grid import SegmentLayout as SegmentLayout
 from ._grid import check_grid_size as check_grid_size
 from ._grid import default_resolution as default_resolution
+from ._grid import law_value_key as law_value_key
 from ._grid import motion_grid as motion_grid
 from ._grid import period_ratio_reach as period_ratio_reach
 from ._grid import piecewise_grid as piecewise_grid

@@ -350,7 +350,7 @@ class SampledLaw(eqx.Module):
         warm ``ct_curve`` of a law swept before skips its sampling (0.6 ms of about 6).
         """
         pieces = pieces or cls.padded_pieces(law)
-        key = (_value_key(law), int(resolution), pieces)
+        key = (law_value_key(law), int(resolution), pieces)
         if key in _SAMPLED:  # checked when it was sampled
             _SAMPLED.move_to_end(key)
             return _SAMPLED[key]
@@ -396,8 +396,10 @@ SAMPLED_LAWS_KEPT = 32
 _SAMPLED: OrderedDict = OrderedDict()
 
 
-def _value_key(law: AbstractMotionLaw):
-    """A hashable key equal for laws of one structure and equal values (concrete)."""
+def law_value_key(law: AbstractMotionLaw):
+    """A hashable key equal for laws of one structure and equal values (concrete): what a
+    cache of anything computed from a law is keyed by (not its name, which two laws of
+    different values may share)."""
     leaves, structure = jax.tree.flatten(law)
     values = tuple((x.dtype.str, x.shape, x.tobytes()) if isinstance(x, np.ndarray) else x
                    for x in (np.asarray(leaf) if eqx.is_array(leaf) else leaf for leaf in leaves))
