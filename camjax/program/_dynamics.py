@@ -5,7 +5,7 @@ classic one-body follower's (the deflection ``e = y - x`` of
 ``m x'' = k (y - x) + c (y' - x') - k_s x``, one mode with forcing ``y'' + (k_s/m) y``) or a
 chain's.  Time runs in turns (``s = t / T``, ``T = 60 / rpm``), so mode ``j``'s forcing is
 ``a_j y_ss + b_j T^2 y``, two arrays sampled once per program on the engine's grid
-(``camjax.sdof.piecewise_grid``) and mixed per speed; the engine's periodic start
+(``camjax.sdof.segment_layout``) and mixed per speed; the engine's periodic start
 (``q(0) = F / (1 - E)``) gives each mode's steady state exactly, and the oscillator's gains
 give every output (contact force, payload acceleration, drive torque, Hertz stress, residual
 vibration, a train's own figures) in SI units, their extremes refined between nodes.  A
@@ -35,12 +35,15 @@ from ..sdof import (
     GAUSS_POINTS,
     MAX_GRID_INTERVALS,
     TARGET_PHASE_STEP,
+    GridSegment,
     MotionGrid,
+    check_grid_size,
     mode_between,
+    period_ratio_reach,
     periodic_propagate,
-    piecewise_grid,
     propagate,
     refined_extremes,
+    segment_layout,
     to_monomial,
 )
 from ..sharding import resolve_devices, shard_batch
@@ -58,9 +61,6 @@ from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
 from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
 from ._speeds import Speeds
 from ._speeds import warn_implausible as warn_implausible
-
-_MIN_PER_SEGMENT = 64
-_MIN_PER_PIECE = 4
 
 
 class CycleGrid(NamedTuple):
@@ -98,55 +98,33 @@ class CycleGrid(NamedTuple):
         return self.motion._replace(forcing=forcing)
 
 
-def resolution(program: Program, rpm_min: float, vibration_hz: float | None = None) -> int:
-    """Intervals per turn the slowest speed asks for: ``w h <= 0.5`` at ``rpm_min``, 64 per
-    moving segment at least (``cycle_grid`` adds what each law piece needs); ``w`` is the
-    follower's, or ``2 pi vibration_hz`` where given (a chain's highest mode)."""
-    cycles = (program.follower.vibrations_per_turn(rpm_min) if vibration_hz is None
-              else vibration_hz * 60.0 / rpm_min)
-    needed = 2 * math.pi * cycles / TARGET_PHASE_STEP
-    shortest = min((program.segments[i].angle_deg / 360 for i in program.moving_segments()), default=1.0)
-    return 64 * math.ceil(max(needed, _MIN_PER_SEGMENT / shortest, 256) / 64)
-
-
-def check_grid_size(program: Program, rpm_min: float, intervals: int) -> None:
-    """The one refusal of a turn whose grid would pass ``MAX_GRID_INTERVALS``, before any
-    work, with what to change: the speed or the stiffness where the follower's vibration
-    asks for the intervals, the shortest segments where the laws' pieces do."""
-    if intervals <= MAX_GRID_INTERVALS:
-        return
-    cycles = program.follower.vibrations_per_turn(rpm_min)
+def _grid_refusal(program: Program, rpm_min: float, cycles: float) -> str:
+    """What to change where a turn's grid is too large (``check_grid_size``'s remedy): the
+    speed or the stiffness where the vibration asks for the intervals, the shortest
+    segments where the laws' pieces do."""
     by_speed = 2 * math.pi * cycles / TARGET_PHASE_STEP > MAX_GRID_INTERVALS / 2
-    slowest = 2 * math.pi * program.follower.vibrations_per_turn(TARGET_PHASE_STEP * MAX_GRID_INTERVALS)
+    slowest = rpm_min * cycles / period_ratio_reach(TARGET_PHASE_STEP)
     shortest = min(s.angle_deg for s in program.segments)
     remedies = ([f"run at {slowest:.3g} rpm or faster, or lower follower.stiffness_n_per_mm"] if by_speed else [])
     remedies.append(f"widen or merge the shortest segments ({len(program.segments)} segments, the shortest "
                     f"{shortest:g} degrees)")
-    raise ValueError(f"a turn at {rpm_min:g} rpm needs {intervals:,} grid intervals (the limit is "
-                     f"{MAX_GRID_INTERVALS:,}): the follower vibrates {cycles:,.0f} times per turn; "
-                     + "; or ".join(remedies))
+    return f"the follower vibrates {cycles:,.0f} times per turn; " + "; or ".join(remedies)
 
 
 def cycle_grid(program: Program, rpm_min: float, vibration_hz: float | None = None) -> CycleGrid:
     """Sample the program's lift and acceleration on the engine's grid for speeds from
-    ``rpm_min`` up (``resolution``; every law piece gets at least four intervals); a grid
-    past the limit is refused before it is built (``check_grid_size``)."""
-    intervals = resolution(program, rpm_min, vibration_hz)
-    edges, counts, first_piece = [0.0], [], []
-    for seg, start_deg in zip(program.segments, program.start_deg):
-        s0, f = start_deg / 360.0, seg.angle_deg / 360.0
-        local = [0.0, *seg.law.breakpoints(), 1.0] if seg.moving else [0.0, 1.0]
-        first_piece.append(len(counts))
-        for a, b in zip(local[:-1], local[1:]):
-            edges.append(s0 + f * b)
-            counts.append(max(_MIN_PER_PIECE, math.ceil(intervals * f * (b - a))))
-    edges[-1] = 1.0
-    counts = np.asarray(counts)
-    total = int(counts.sum())
-    check_grid_size(program, rpm_min, total)
-    motion, times = piecewise_grid(np.asarray(edges), counts)
-    piece_start = np.concatenate([[0], np.cumsum(counts)])
-    starts = piece_start[first_piece]
+    ``rpm_min`` up (``camjax.sdof.segment_layout``: ``w h <= TARGET_PHASE_STEP`` at
+    ``rpm_min``, ``w`` the follower's or ``2 pi vibration_hz`` where given, a chain's
+    highest mode); a grid past the limit is refused before it is built (``check_grid_size``)."""
+    cycles = (program.follower.vibrations_per_turn(rpm_min) if vibration_hz is None
+              else vibration_hz * 60.0 / rpm_min)
+    layout = segment_layout([GridSegment(start_deg / 360.0, seg.angle_deg / 360.0,
+                                         tuple(seg.law.breakpoints()) if seg.moving else None)
+                             for seg, start_deg in zip(program.segments, program.start_deg)], cycles)
+    total = layout.intervals
+    check_grid_size(total, f"a turn at {rpm_min:g} rpm", lambda: _grid_refusal(program, rpm_min, cycles))
+    motion, times = layout.grid()
+    starts = layout.segment_start
     stops = [*starts[1:], total]
     left = np.asarray(motion.nodes)[:-1]
     acc, lift = np.zeros_like(times), np.zeros_like(times)

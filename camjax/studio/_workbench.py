@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, plot_speed
+from ..caches import carried
 from ..checks import MAX_SPEEDS as MAX_SPEEDS
 
 DEFAULT_RPM = "200:1400:101"
@@ -339,7 +340,7 @@ class Workbench:
         segment_band(self.program, segment, rpm_lo, rpm_hi)  # its one-line error names what is wrong
         job = self.job = DesignJob(segment, objective, float(rpm_lo), float(rpm_hi), steps, knots,
                                    toml=self.toml, rpm=self.rpm, before=self.report)
-        threading.Thread(target=self._design, args=(job, self.program), name="camjax-studio-design",
+        threading.Thread(target=carried(self._design), args=(job, self.program), name="camjax-studio-design",
                          daemon=True).start()
         return job.as_dict()
 
