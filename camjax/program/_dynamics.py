@@ -47,7 +47,7 @@ from ..sdof import (
     to_monomial,
 )
 from ..sharding import resolve_devices, shard_batch
-from ._machine import NodeContact, contact_stress_squared, node_contact, torque_figures, torque_jets
+from ._contact import NodeContact, contact_stress_squared, node_contact
 from ._oscillator import (
     CONTACT_FORCE,
     PAYLOAD_ACCELERATION,
@@ -61,6 +61,7 @@ from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
 from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
 from ._speeds import Speeds
 from ._speeds import warn_implausible as warn_implausible
+from ._torque import torque_figures, torque_jets
 
 
 class CycleGrid(NamedTuple):
