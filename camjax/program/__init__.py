@@ -37,6 +37,8 @@ from ._contact import cam_geometry as cam_geometry
 from ._contact import contact_geometry as contact_geometry
 from ._contact import node_contact as node_contact
 from ._contact import refined_contact_stress as refined_contact_stress
+from ._cycle import Cycle as Cycle
+from ._cycle import TrainPeaks as TrainPeaks
 from ._design import design_segment as design_segment
 from ._design import write_program as write_program
 from ._drive import DRIVE_TABLE_FILE_NAMES as DRIVE_TABLE_FILE_NAMES
@@ -49,10 +51,8 @@ from ._drive import write_drive_table as write_drive_table
 from ._dxf_import import DxfProfile as DxfProfile
 from ._dxf_import import lift_from_dxf as lift_from_dxf
 from ._dxf_import import read_dxf_profile as read_dxf_profile
-from ._dynamics import Cycle as Cycle
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
-from ._dynamics import TrainPeaks as TrainPeaks
 from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
 from ._export import MAX_PROFILE_POINTS as MAX_PROFILE_POINTS
