@@ -123,6 +123,7 @@ from ._shaft import ShaftSpeedReport as ShaftSpeedReport
 from ._shaft import analyse_machine as analyse_machine
 from ._shaft import is_machine_file as is_machine_file
 from ._shaft import shaft_torque as shaft_torque
+from ._spec import FOLLOWER_KINDS as FOLLOWER_KINDS
 from ._spec import MAX_SEGMENTS as MAX_SEGMENTS
 from ._spec import Follower as Follower
 from ._spec import Materials as Materials
@@ -136,6 +137,7 @@ from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
 from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
 from ._speeds import Speeds as Speeds
 from ._speeds import warn_implausible as warn_implausible
+from ._train import CLASSIC_FIELDS as CLASSIC_FIELDS
 from ._train import Body as Body
 from ._train import Chain as Chain
 from ._train import Seat as Seat
