@@ -28,16 +28,17 @@ def fetch(url: str) -> bytes:
 
 
 def call(url: str, data: str | None = None):
-    """(status, decoded JSON) of a GET, or of a POST of a TOML text from the studio's own origin."""
+    """(status, decoded JSON) of a GET, or of a POST of a program's TOML text as the page posts
+    it (its structure as JSON) from the studio's own origin."""
     parts = urllib.parse.urlsplit(url)
     headers = (
         {}
         if data is None
-        else {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/toml"}
+        else {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/json"}
     )
     request = urllib.request.Request(
         url,
-        data=None if data is None else data.encode(),
+        data=None if data is None else json.dumps(tomllib.loads(data)).encode(),  # as the page posts it
         headers=headers,
         method="GET" if data is None else "POST",
     )
@@ -108,8 +109,9 @@ def test_toml_export_is_the_program(server, feed):
     text = fetch(server.url + "api/program.toml").decode()
     assert cp.Program.from_dict(tomllib.loads(text), base=cp.example_path("feed").parent) == feed
     # an edit is what the export then holds
-    edited = text.replace("lift_mm = 8\n", "lift_mm = 7\n").replace(
-        "lift_mm = -23\n", "lift_mm = -22\n"
+    assert text == feed.to_toml()  # the one writer of a program file
+    edited = text.replace("lift_mm = 8.0\n", "lift_mm = 7.0\n").replace(
+        "lift_mm = -23.0\n", "lift_mm = -22.0\n"
     )
     assert edited != text
     assert call(server.url + "api/program?session=edit", edited)[0] == 200
