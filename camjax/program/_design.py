@@ -45,7 +45,7 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     result's ``law`` the segment's, ``kept_initial`` true) with a ``DesignNotImproved`` warning.
     """
     from .. import law_design
-    from ._preload import MaxPreload, MaxProgramResidual  # import optax: only when designing
+    from ._objectives import MaxPreload, MaxProgramResidual  # import optax: only when designing
 
     n1, n2 = segment_band(program, segment, rpm_lo, rpm_hi)
     f = program.follower

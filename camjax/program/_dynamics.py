@@ -49,7 +49,7 @@ from ..sdof import (
 )
 from ..sharding import resolve_devices, shard_batch
 from ._machine import NodeContact, contact_stress_squared, node_contact, torque_figures, torque_jets
-from ._probes import Outputs, Probe
+from ._outputs import Outputs, Probe
 from ._spec import Program
 from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
 from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM

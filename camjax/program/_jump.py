@@ -22,7 +22,7 @@ import numpy as np
 
 from ..sdof import eigenvalue, psi_host, step_within_host
 from ._dynamics import SPEED_BLOCK, SteadyState
-from ._probes import min_preload_n as min_preload_n
+from ._outputs import min_preload_n as min_preload_n
 from ._speeds import Speeds
 
 _BISECTIONS = 3  # rounds of 64-way subdivision before the secant: a bracket shrinks by 65^3

@@ -24,7 +24,7 @@ from ._machine import (
     refined_contact_stress,
 )
 from ._motion import Join, segment_kinematics
-from ._probes import Outputs, Probe, ProbeContext, kinematic_peak_m_s2, min_preload_n
+from ._outputs import Outputs, Probe, ProbeContext, kinematic_peak_m_s2, min_preload_n
 from ._spec import Program
 from ._speeds import Speeds
 
