@@ -38,7 +38,9 @@ def call(url: str, data: str | None = None):
     )
     request = urllib.request.Request(
         url,
-        data=None if data is None else json.dumps(tomllib.loads(data)).encode(),  # as the page posts it
+        data=None
+        if data is None
+        else json.dumps(tomllib.loads(data)).encode(),  # as the page posts it
         headers=headers,
         method="GET" if data is None else "POST",
     )

@@ -73,8 +73,9 @@ def call(studio: Studio, path: str, body=None, content_type="application/json"):
     a ``str``) from the studio's own origin."""
     data = None if body is None else (body if isinstance(body, str) else json.dumps(body)).encode()
     headers = {} if data is None else {"Origin": studio.origin, "Content-Type": content_type}
-    request = urllib.request.Request(studio.url + path, data=data, headers=headers,
-                                     method="GET" if data is None else "POST")
+    request = urllib.request.Request(
+        studio.url + path, data=data, headers=headers, method="GET" if data is None else "POST"
+    )
     try:
         with urllib.request.urlopen(request, timeout=600) as response:
             text = response.read().decode()
@@ -89,7 +90,9 @@ def call(studio: Studio, path: str, body=None, content_type="application/json"):
 
 @pytest.fixture(scope="module")
 def running():
-    studio = Studio(cp.example_path("feed").read_text(), base=cp.example_path("feed").parent, rpm=RPM)
+    studio = Studio(
+        cp.example_path("feed").read_text(), base=cp.example_path("feed").parent, rpm=RPM
+    )
     studio.start(warm=False)
     yield studio
     studio.stop()
@@ -131,12 +134,22 @@ def test_a_chain_posted_as_json_is_its_file(running, tmp_path):
     assert report["train"]["bodies"] == ["tappet", "pushrod", "valve"]
     # the page's chain fields come from the chain's own types
     fields = state["fields"]
-    assert [f["name"] for f in fields["body"]] == ["name", "mass_kg", "stiffness_n_per_mm", "damping_n_s_per_m",
-                                                   "ratio", "lever_mass_kg", "lash_mm"]
+    assert [f["name"] for f in fields["body"]] == [
+        "name",
+        "mass_kg",
+        "stiffness_n_per_mm",
+        "damping_n_s_per_m",
+        "ratio",
+        "lever_mass_kg",
+        "lash_mm",
+    ]
     assert {f["name"]: f["default"] for f in fields["spring"]}["rate_n_per_mm"] is None  # required
     assert fields["chain_replaces"] == list(cp.CLASSIC_FIELDS)
     assert [k["kind"] for k in fields["follower_kinds"]] == list(cp.FOLLOWER_KINDS)
-    assert [k["kind"] for k in fields["follower_kinds"] if k["flat_face"]] == ["translating-flat", "swinging-flat"]
+    assert [k["kind"] for k in fields["follower_kinds"] if k["flat_face"]] == [
+        "translating-flat",
+        "swinging-flat",
+    ]
 
 
 def test_the_report_names_the_residual_segments(running):
@@ -156,16 +169,30 @@ def test_an_opened_file_is_read_by_the_server(running):
     status, answer = call(running, "api/open?session=open", {"toml": "[program\nname = 1"})
     assert status == 400 and answer["error"].startswith("not valid TOML (")
     status, answer = call(running, "api/open?session=open", {"text": text})
-    assert status == 400 and answer["error"] == 'the body must be {"toml": the program file\'s text}'
+    assert (
+        status == 400 and answer["error"] == 'the body must be {"toml": the program file\'s text}'
+    )
 
 
-@pytest.mark.parametrize(("body", "message"), [
-    ("[1, 2]", "the program must be a JSON object (its tables by name), got list"),
-    ('{"program": {"name": null}}', "program.name: null is no value (TOML has none): leave the key out"),
-    ('{"segment": [{"angle_deg": NaN}]}', "the program holds NaN: every number must be finite"),
-    ('{"segment": [{"angle_deg": Infinity}]}', "the program holds Infinity: every number must be finite"),
-    ("{", "not valid JSON (Expecting property name enclosed in double quotes: line 1 column 2 (char 1))"),
-])
+@pytest.mark.parametrize(
+    ("body", "message"),
+    [
+        ("[1, 2]", "the program must be a JSON object (its tables by name), got list"),
+        (
+            '{"program": {"name": null}}',
+            "program.name: null is no value (TOML has none): leave the key out",
+        ),
+        ('{"segment": [{"angle_deg": NaN}]}', "the program holds NaN: every number must be finite"),
+        (
+            '{"segment": [{"angle_deg": Infinity}]}',
+            "the program holds Infinity: every number must be finite",
+        ),
+        (
+            "{",
+            "not valid JSON (Expecting property name enclosed in double quotes: line 1 column 2 (char 1))",
+        ),
+    ],
+)
 def test_a_bad_json_body_is_a_400_in_one_line(running, body, message):
     status, answer = call(running, "api/program?session=bad", body)
     assert status == 400 and answer == {"error": message}
@@ -177,6 +204,8 @@ def test_a_whole_number_past_32_bits_is_read_as_a_float(running):
     TOML file's float), so no integer overflows the arrays."""
     from camjax.studio import parse_json_program
 
-    data = parse_json_program('{"a": 5, "b": 100000000000000000000, "c": -2147483648, "d": 2147483647}')
+    data = parse_json_program(
+        '{"a": 5, "b": 100000000000000000000, "c": -2147483648, "d": 2147483647}'
+    )
     assert data == {"a": 5, "b": 1e20, "c": -2147483648.0, "d": 2147483647}
     assert type(data["a"]) is int and type(data["b"]) is float and type(data["d"]) is int
