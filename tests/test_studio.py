@@ -193,7 +193,7 @@ def test_design_from_the_api(server, tmp_path):
     status, job = call(url + start, "")
     assert status == 202 and job["state"] == "running" and job["steps"] == DESIGN_STEPS
     status, answer = call(url + start, "")  # a second while one runs
-    assert status == 409 and "\n" not in answer["error"]
+    assert status == 409 and "\n" not in answer["error"], (answer, call(url + f"api/design?session={session}")[1])
     assert call(url + f"api/design/keep?session={session}", "")[0] == 409
     job = design_done(url, session)
     assert job["state"] == "done", job

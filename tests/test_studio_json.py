@@ -143,7 +143,9 @@ def test_a_chain_posted_as_json_is_its_file(running, tmp_path):
         "lever_mass_kg",
         "lash_mm",
     ]
-    assert {f["name"]: f["default"] for f in fields["spring"]}["rate_n_per_mm"] is None  # required
+    spring = {f["name"]: (f["required"], f["default"]) for f in fields["spring"]}
+    assert spring["rate_n_per_mm"] == (True, None) and spring["elements"] == (False, None)
+    assert spring["preload_n"] == (False, 0.0)
     assert fields["chain_replaces"] == list(cp.CLASSIC_FIELDS)
     assert [k["kind"] for k in fields["follower_kinds"]] == list(cp.FOLLOWER_KINDS)
     assert [k["kind"] for k in fields["follower_kinds"] if k["flat_face"]] == [

@@ -481,12 +481,13 @@ def designed_data(data: dict, program, segment: int, law_path: Path, base: Path 
 def program_fields() -> dict:
     """The fields the page edits, from the program's own types: the follower's kinds (each
     with whether it is a flat face, which has no roller, and swings) and fields, the chain's
-    body, spring and seat fields with their defaults (``None``: required), and the
+    body, spring and seat fields with their defaults (``required``: none), and the
     ``[follower]`` fields a chain replaces."""
     from ..program import CLASSIC_FIELDS, FOLLOWER_KINDS, Body, Follower, Seat, Spring
 
     def fields(record) -> list[dict]:
-        return [{"name": f.name, "default": None if f.default is dataclasses.MISSING else f.default}
+        return [{"name": f.name, "required": f.default is dataclasses.MISSING,
+                 "default": None if f.default is dataclasses.MISSING else f.default}
                 for f in dataclasses.fields(record)]
 
     kinds = [Follower(1.0, 1.0, kind=kind) for kind in FOLLOWER_KINDS]

@@ -456,6 +456,10 @@ function plot(id, title, x, series, opts = {}) {
   if (charts[id]) { charts[id].destroy(); delete charts[id]; }
   el.innerHTML = "";
   if (!series.length) return;
+  // a series the report leaves empty (not computed for this program) is not drawn; none: said
+  const given = series.filter((s) => s.y.some((v) => v !== null && v !== undefined));
+  if (!given.length) { el.textContent = `${title}: not in the report for this program`; return; }
+  series = given;
   const colors = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b"];
   const width = Math.max(300, el.clientWidth - 8);
   charts[id] = new uPlot({
@@ -726,16 +730,14 @@ function drawTorqueSpeed(sizing) {
 
 // ---- materials: [materials], the elastic constants of the Hertz stress --------------------
 
-const MATERIAL_FIELDS = ["cam_youngs_modulus_gpa", "cam_poisson_ratio", "follower_youngs_modulus_gpa",
-  "follower_poisson_ratio"];
-let materialDefaults = {};          // what an empty field stands for (GET /api/program)
+let materialDefaults = {};          // each field of [materials] and what it stands for empty (GET /api/program)
 
 // Like the follower's fields: an empty one is left out of [materials] (its default said
 // beside it); no field set, no [materials] table.
 function renderMaterials() {
   const box = $("materials");
   box.innerHTML = "";
-  for (const key of MATERIAL_FIELDS) {
+  for (const key of Object.keys(materialDefaults)) {
     const label = document.createElement("label");
     label.textContent = key + " ";
     const note = document.createElement("span");
@@ -800,6 +802,7 @@ function renderChain() {
   box.hidden = !Array.isArray(bodies);
   if (box.hidden) return;
   const columns = fields.body.map((x) => x.name);
+  const empty = Object.fromEntries(fields.body.map((x) => [x.name, x.required ? "required" : x.default === null ? "" : String(x.default)]));
   $("train").querySelector("thead").innerHTML =
     `<tr><th>#</th>${columns.map((c) => `<th>${c}</th>`).join("")}<th></th><th>notes</th></tr>`;
   const body = $("train").querySelector("tbody");
@@ -811,7 +814,8 @@ function renderChain() {
     for (const key of columns) {
       const text = key === "name" ? (t) => { if (t.trim() === "") delete b.name; else b.name = t; } :
         (t) => { const v = parseCell(t); if (v === undefined) delete b[key]; else b[key] = v; };
-      cell(row, input(b[key], text, {body: n, key, size: key === "name" ? 8 : 6}));
+      const el = cell(row, input(b[key], text, {body: n, key, size: key === "name" ? 8 : 6})).firstChild;
+      el.placeholder = key === "name" ? `body ${n}` : empty[key];  // what an empty field stands for
     }
     const tools = cell(row);
     tools.className = "tools";
@@ -829,7 +833,7 @@ function renderChain() {
 function renderRecord(table, spec) {
   const box = $(table);
   box.innerHTML = "";
-  for (const {name, default: d} of spec) {
+  for (const {name, required, default: d} of spec) {
     const label = document.createElement("label");
     label.textContent = name + " ";
     label.appendChild(input((model[table] || {})[name], (t) => {
@@ -839,7 +843,8 @@ function renderRecord(table, spec) {
     }, {table, key: name}));
     const note = document.createElement("span");
     note.className = "fnote";
-    note.textContent = (model[table] || {})[name] !== undefined ? "" : d === null ? "empty: required" : `empty: ${d}`;
+    note.textContent = (model[table] || {})[name] !== undefined ? "" : !required ? `empty: ${d === null ? "the library's choice" : d}` :
+      model[table] ? "empty: required" : `empty: no [${table}]`;
     label.appendChild(note);
     box.appendChild(label);
   }
@@ -860,7 +865,7 @@ function drawTrain() {
   $("train-facts").innerHTML =
     `<div>natural frequencies, cam contact held: <b id="train-held">${freq("natural_frequencies_held_hz")}</b> Hz</div>` +
     `<div>free (in flight): ${freq("natural_frequencies_free_hz")} Hz</div>` +
-    facts.map(([k, v]) => `<div>${k}: ${typeof v === "number" ? fmt(v, 6) : JSON.stringify(v)}</div>`).join("");
+    facts.map(([k, v]) => `<div>${k}: ${typeof v === "number" ? fmt(v, 6) : v === null ? "none" : JSON.stringify(v)}</div>`).join("");
   drawModes(t);
   drawHarmonics(t);
   drawTrainSpeeds(t);
@@ -871,12 +876,15 @@ function drawModes(t) {
   for (const id of Object.keys(charts).filter((k) => k.startsWith("c-mode-"))) { charts[id].destroy(); delete charts[id]; }
   box.innerHTML = "";
   const x = t.bodies.map((_, i) => i + 1);
-  held.forEach((shape, k) => {
+  // mode k held and free (the free chain has one more: the cam's contact let go)
+  [...Array(Math.max(held.length, free.length)).keys()].forEach((k) => {
     const el = document.createElement("div");
     el.className = "chart"; el.id = `c-mode-${k + 1}`;
     box.appendChild(el);
-    const series = [{label: `held ${fmt(t.natural_frequencies_held_hz[k], 5)} Hz`, y: shape}];
-    if (free[k]) series.push({label: `free ${fmt(t.natural_frequencies_free_hz[k], 5)} Hz`, y: free[k], dash: [4, 3]});
+    const series = [];
+    if (held[k]) series.push({label: `held ${fmt(t.natural_frequencies_held_hz[k], 5)} Hz`, y: held[k]});
+    if (free[k]) series.push({label: `free ${fmt(t.natural_frequencies_free_hz[k], 5)} Hz`, y: free[k], dash: [4, 3],
+      color: "#ff7f0e"});
     plot(el.id, `mode ${k + 1}`, x, series,
       {xlabel: `body (${t.bodies.join(", ")})`, points: true, height: 140, xticks: t.bodies});
   });
