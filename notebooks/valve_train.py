@@ -86,17 +86,18 @@ for hz, orders in chain.harmonic_check(1000.0, 3000.0):
 
 # %%
 rpm = np.linspace(1000.0, 4000.0, 31)
-steady = cp.ChainSteadyState(cam, chain, rpm.min())
+steady = cp.SteadyState(cam, rpm.min())  # the one steady state: the chain is its oscillator
 summary = steady.summary(rpm)
+train = summary.cycles.train  # the chain's own figures (TrainPeaks)
 fig, axes = plt.subplots(1, 3, figsize=(11, 3))
 axes[0].plot(rpm, summary.min_contact_force_n)
 axes[0].axhline(0.0, color="k", lw=0.5)
 axes[0].set_title("least contact force at the cam (N)")
-axes[1].plot(rpm, summary.max_acceleration_m_s2[:, -1])
+axes[1].plot(rpm, train.max_acceleration_m_s2[:, -1])
 axes[1].set_title("valve's peak acceleration (m/s^2)")
-axes[2].plot(rpm, summary.max_surge_n)
+axes[2].plot(rpm, train.max_surge_n)
 axes[2].set_title("spring surge at its seat (N)")
 for ax in axes:
     ax.set_xlabel("rpm")
 fig.tight_layout()
-print("jump speed (rpm):", steady.jump_speed(4000.0))
+print("jump speed (rpm):", cp.jump_speed_rpm(steady, 1000.0, 4000.0, tolerance_rpm=0.01))

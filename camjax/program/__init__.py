@@ -12,7 +12,8 @@ the profile, the figures); ``analyse_machine`` adds the torques of several cams 
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
 (``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
 preload over a speed range).  ``Chain`` is the follower as a chain of bodies (a valve
-train, a spring that surges) and ``ChainSteadyState`` its exact periodic steady state; a
+train, a spring that surges); ``Oscillator`` is the follower's modes in physical units,
+the classic one-body follower's or a chain's, which ``SteadyState`` takes alike; a
 servo's ``Drive`` and ``Motor`` give the motor's torque over the turn (``duty_cycle``,
 ``size_motor``, ``choose_motor`` from a catalogue, ``program_motor_choice`` at a program's
 speeds), and ``compensate`` the cam lift that
@@ -22,9 +23,6 @@ docs/machine.md, docs/valve-trains.md and docs/servo.md.
 
 from typing import TYPE_CHECKING
 
-from ._chain_steady import ChainModes as ChainModes
-from ._chain_steady import ChainSteadyState as ChainSteadyState
-from ._chain_steady import ChainSummary as ChainSummary
 from ._compensate import Compensation as Compensation
 from ._compensate import check_smooth as check_smooth
 from ._compensate import compensate as compensate
@@ -45,6 +43,7 @@ from ._dxf_import import read_dxf_profile as read_dxf_profile
 from ._dynamics import Cycle as Cycle
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
+from ._dynamics import TrainPeaks as TrainPeaks
 from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
 from ._export import MAX_PROFILE_POINTS as MAX_PROFILE_POINTS
@@ -100,6 +99,7 @@ from ._motor import choose_motor as choose_motor
 from ._motor import duty_cycle as duty_cycle
 from ._motor import read_motors as read_motors
 from ._motor import size_motor as size_motor
+from ._oscillator import Oscillator as Oscillator
 from ._outputs import BUILT_IN as BUILT_IN
 from ._outputs import OUTPUTS as OUTPUTS
 from ._outputs import Outputs as Outputs
