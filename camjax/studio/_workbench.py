@@ -317,8 +317,7 @@ class Workbench:
                self.speed_fluctuation, str(self.base), outputs)
 
         def compute():
-            # a chain of bodies is analysed by its own steady state (analyse's train section)
-            steady = SteadyState(program, rpm) if program.one_body else None
+            steady = SteadyState(program, rpm)  # a chain of bodies' too (the one compiled cycle)
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
                                         speed_fluctuation=self.speed_fluctuation, outputs=outputs))
             if program.motors:  # a servo: the motor sizing at the same speeds (the page's motor panel)
@@ -347,14 +346,14 @@ class Workbench:
             raise ValueError(f"rpm: the chosen speed must be at or above the lowest speed of the "
                              f"range ({lowest:g} rpm), got {rpm!r}")
         theta = np.linspace(0.0, 360.0, TURN_POINTS)
-        h = None  # a chain's turn at one speed is not the one-body response: its report is drawn
-        if program.one_body:
-            try:
-                with np.errstate(over="raise"):
-                    h = response(program, float(rpm), steady=self.steady)
-            except (OverflowError, FloatingPointError):
-                raise ValueError(f"rpm: {rpm:g} rpm is too fast to compute a turn at (a number overflows)") from None
-            h["rigid_contact_force_n"] = rigid_contact_force_n(program, h["lift_mm"], h["kinematic_acceleration_m_s2"])
+        try:
+            with np.errstate(over="raise"):
+                h = response(program, float(rpm), steady=self.steady)
+        except (OverflowError, FloatingPointError):
+            raise ValueError(f"rpm: {rpm:g} rpm is too fast to compute a turn at (a number overflows)") from None
+        # the rigid follower's force is the one-body train's limit; a chain's stand-in mass is not its own
+        h["rigid_contact_force_n"] = (rigid_contact_force_n(program, h["lift_mm"], h["kinematic_acceleration_m_s2"])
+                                      if program.one_body else None)
         prof = profile(program, PROFILE_POINTS)
         f = program.follower
         return json_ready({

@@ -457,7 +457,7 @@ function plot(id, title, x, series, opts = {}) {
   el.innerHTML = "";
   if (!series.length) return;
   // a series the report leaves empty (not computed for this program) is not drawn; none: said
-  const given = series.filter((s) => s.y.some((v) => v !== null && v !== undefined));
+  const given = series.filter((s) => (s.y || []).some((v) => v !== null && v !== undefined));
   if (!given.length) { el.textContent = `${title}: not in the report for this program`; return; }
   series = given;
   const colors = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b"];
@@ -505,20 +505,14 @@ function draw() {
   plot("c-acc", "acceleration y'' (mm/deg\u00b2)", k.theta_deg, [{label: "y''", y: k.acceleration_mm_per_deg2}]);
   plot("c-jerk", "jerk y''' (mm/deg\u00b3)", k.theta_deg, [{label: "y'''", y: k.jerk_mm_per_deg3}]);
   const at = `at ${fmt(curves.rpm, 5)} rpm`;
-  if (r) {
-    plot("c-payload", `acceleration ${at} (m/s\u00b2)`, r.theta_deg, [
-      {label: "payload x''", y: r.payload_acceleration_m_s2},
-      {label: "rigid follower y''", y: r.kinematic_acceleration_m_s2, dash: [4, 3]}]);
-    plot("c-force", `contact force ${at} (N)`, r.theta_deg, [
-      {label: "elastic train", y: r.contact_force_n},
-      {label: "rigid follower", y: r.rigid_contact_force_n, dash: [4, 3]}],
-    {marks: [{y: 0, color: "#000"}, ...(f.form_closed ? [] : [{y: f.preload_n, color: "#ff7f0e"}])]});
-  } else {  // a chain: its turn is not the one-body response; its report is drawn below
-    for (const id of ["c-payload", "c-force", "c-torque-turn", "c-stress-turn"]) {
-      plot(id, "", [], []);
-      $(id).textContent = "a chain of bodies: not drawn over the turn (the chain's report is below)";
-    }
-  }
+  // a chain's payload is its last body; its rigid force is not served (the one-body limit)
+  plot("c-payload", `acceleration ${at} (m/s\u00b2)`, r.theta_deg, [
+    {label: "payload x''", y: r.payload_acceleration_m_s2},
+    {label: "rigid follower y''", y: r.kinematic_acceleration_m_s2, dash: [4, 3]}]);
+  plot("c-force", `contact force ${at} (N)`, r.theta_deg, [
+    {label: "elastic train", y: r.contact_force_n},
+    {label: "rigid follower", y: r.rigid_contact_force_n, dash: [4, 3]}],
+  {marks: [{y: 0, color: "#000"}, ...(f.form_closed ? [] : [{y: f.preload_n, color: "#ff7f0e"}])]});
   const speeds = report.speeds, rpm = speeds.map((s) => s.rpm);
   const jumpMark = report.jump_speed_rpm === null ? [] :
     [{x: report.jump_speed_rpm, label: `jump ${report.jump_speed_rpm.toFixed(1)} rpm`}];
@@ -533,14 +527,14 @@ function draw() {
   plot("c-torque-speed", "drive torque (N m) vs speed", rpm, [
     {label: "peak |T|", y: speeds.map((s) => s.max_drive_torque_n_m)},
     {label: "RMS T", y: speeds.map((s) => s.rms_drive_torque_n_m)}], so);
-  if (r) plot("c-torque-turn", `drive torque ${at} (N m)`, r.theta_deg, [{label: "T", y: r.drive_torque_n_m}],
+  plot("c-torque-turn", `drive torque ${at} (N m)`, r.theta_deg, [{label: "T", y: r.drive_torque_n_m}],
     {marks: [{y: 0, color: "#000"}]});
   const stressed = speeds.some((s) => s.max_contact_stress_mpa !== null && s.max_contact_stress_mpa !== undefined);
-  if (r) plot("c-stress-turn", stressed ? `Hertz stress ${at} (MPa)` : "Hertz stress: set follower contact_width_mm",
+  plot("c-stress-turn", stressed ? `Hertz stress ${at} (MPa)` : "Hertz stress: set follower contact_width_mm",
     r.theta_deg, stressed ? [{label: "p", y: r.contact_stress_mpa}] : []);
   plot("c-stress-speed", "peak Hertz stress (MPa) vs speed", rpm,
     stressed ? [{label: "max p", y: speeds.map((s) => s.max_contact_stress_mpa)}] : [], so);
-  if (!stressed) for (const id of r ? ["c-stress-turn", "c-stress-speed"] : ["c-stress-speed"])
+  if (!stressed) for (const id of ["c-stress-turn", "c-stress-speed"])
     $(id).textContent = "Hertz stress: give the follower's contact_width_mm";
   drawHeadline();
   drawJoins();
