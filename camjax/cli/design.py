@@ -236,7 +236,8 @@ def run(args) -> int:
     bar.set_postfix_str("figures")
     plot = plotting()
     title = plot.design_title(objective.label, caps, args.damping)
-    plot.save(plot.law_curves([law], title=title), out / "law.png")
+    # Drawn on the CSV's points: the law's evaluation is then compiled for one size, not two.
+    plot.save(plot.law_curves([law], tau.size, title=title), out / "law.png")
     plot.save(plot.design_comparison(ratios, curves, title=title), out / "curves.png")
     bar.update()
     bar.close()
@@ -290,7 +291,7 @@ def _run_rms(args, out) -> int:
               out / "summary.json")
     plot = import_aside("camjax.plot")()
     title = plot.design_title(objective.label, caps, 0.0)
-    plot.save(plot.law_curves([law], title=title), out / "law.png")
+    plot.save(plot.law_curves([law], tau.size, title=title), out / "law.png")  # the CSV's points
     best = min(rows[1:], key=lambda r: r["Ca_rms"])
     print(f"Ca_rms: designed {value:.5g} ({value / RMS_ACCELERATION_FLOOR:.4f} of the floor "
           f"2 sqrt(3) = {RMS_ACCELERATION_FLOOR:.5g}); best standard {best['law']} "
