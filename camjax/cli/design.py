@@ -132,8 +132,9 @@ def _standard_laws_compared(ratios, damping: float, knots: int, sweep_options: d
 
     Then the designed spline's own programs, compiled here while the design runs on the
     main thread (their values are thrown away; the designed spline has the same shapes, so
-    it finds them compiled): its samples on the sweep's grid, its peak search (the cap
-    checks and the reports read it) and its evaluation on the CSV's points."""
+    it finds them compiled), in the order the design needs them: its peak search (the cap
+    checks read it), its samples on the sweep's grid (the reports) and its evaluation on the
+    CSV's points."""
     from ..laws import BSplineLaw, standard_laws
     from ..sweep import ct_curves, prepare_sweep
 
@@ -141,9 +142,9 @@ def _standard_laws_compared(ratios, damping: float, knots: int, sweep_options: d
     designed_size = BSplineLaw(np.zeros(knots))  # the designed law's pieces, any values
     curves = ct_curves(laws, ratios, damping=damping, like=[designed_size], **sweep_options)
     compared = {name: (law, curves[name], law.peak_coefficients()) for name, law in laws.items()}
+    designed_size.peak_coefficients()
     _, template, options = prepare_sweep(ratios, damping=damping, **sweep_options)
     template.sweep_law(designed_size, options)
-    designed_size.peak_coefficients()
     designed_size.evaluate(csv_tau)
     return compared
 
