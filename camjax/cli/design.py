@@ -154,6 +154,8 @@ def run(args) -> int:
 
     from tqdm import tqdm
 
+    from ..caches import carried
+
     plotting = import_aside("camjax.plot")  # imports while the design compiles
     from .. import law_design as D
     from ..laws import save
@@ -203,7 +205,7 @@ def run(args) -> int:
     # compiles and runs, so the two compiles share the machine's cores).
     tau = np.linspace(0.0, 1.0, 10001)  # the CSV's points
     with ThreadPoolExecutor(1) as pool:
-        standard = pool.submit(_standard_laws_compared, ratios, args.damping, args.knots,
+        standard = pool.submit(carried(_standard_laws_compared), ratios, args.damping, args.knots,
                                sweep_options, tau)
         result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=steps,
                           optimizer=args.optimizer, progress=not args.quiet,
