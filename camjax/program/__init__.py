@@ -29,6 +29,7 @@ from ._analysis import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s
 from ._analysis import max_contact_stress as max_contact_stress
 from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
+from ._arm import Arm as Arm
 from ._chain_steady import ChainModes as ChainModes
 from ._chain_steady import ChainSteadyState as ChainSteadyState
 from ._chain_steady import ChainSummary as ChainSummary

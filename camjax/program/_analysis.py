@@ -233,7 +233,7 @@ def _chain_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed_fl
     chain = program.chain
     section, summary = train_section(program, chain, rpm)
     spring = chain.spring is not None
-    levers = float(np.prod([b.ratio for b in chain.bodies if not b.rides]))
+    levers = chain.kinematic_ratio
     known = {
         "max_payload_acceleration_m_s2": summary.max_acceleration_m_s2[:, -1],
         "max_kinematic_acceleration_m_s2": kinematic_peak_m_s2(program, rpm),

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..metrics import PEAK_TOLERANCE, bernstein_bound, hermite_data, peak_search
 from ..sdof import periodic_propagate
+from ._arm import arm_section
 from ._dynamics import SPEED_BLOCK, PaddedTurn, cycle_grid
 from ._machine import NodeContact
 from ._speeds import Speeds
@@ -275,7 +276,7 @@ class ChainSteadyState:
         self._motion, self._lift = padded.motion, padded.lift
         self._rows = output_rows(len(chain.bodies))
         # the kinematic lift of the last body: the cam's through every lever
-        self.kinematic_ratio = float(np.prod([b.ratio for b in chain.bodies if not b.rides]))
+        self.kinematic_ratio = chain.kinematic_ratio
 
     def cycles(self, rpm) -> ChainCycle:
         """The whole turn at every speed, ``(speeds, outputs, nodes)`` (nodes of the turn's own
@@ -412,4 +413,6 @@ def train_section(program, chain: Chain, rpm: np.ndarray) -> tuple[dict, ChainSu
         "jump_speed_rpm": jump,
         "jump_below_range": below,
     }
+    if chain.arm is not None:  # the arm's bending: its harmonics and fundamental in cam orders
+        section["arm"] = arm_section(steady, rpm)
     return section, summary

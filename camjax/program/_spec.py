@@ -137,6 +137,8 @@ class Program:
                 raise ValueError(f"chain must be a camjax.program.Chain or None, got {self.chain!r}")
             object.__setattr__(self, "follower", dataclasses.replace(self.follower, **self.chain.follower_fields()))
         _check_follower(self.follower)
+        if self.chain is not None:
+            self.chain.check_follower(self.follower)
 
     @property
     def one_body(self) -> bool:
@@ -165,7 +167,7 @@ class Program:
     def from_dict(cls, data: dict, *, base: Path | None = None) -> Program:
         """A program from the TOML structure (``program``, ``segment`` list, ``follower``)."""
         _no_unknown(data, {"program", "segment", "follower", "materials", "drive", "motor", "train", "spring",
-                           "seat"}, "top level")
+                           "seat", "arm"}, "top level")
         chain = chain_from_dict(data)  # refuses a [[train]] beside the classic follower fields
         header = data.get("program", {})
         _no_unknown(header, {"name", *TABLE_KEYS, *DXF_KEYS}, "[program]")
