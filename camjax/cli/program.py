@@ -32,7 +32,7 @@ def register(subparsers) -> None:
             "adds the train's table: natural frequencies, harmonic check, each body's peak "
             "acceleration, the spring's seat force and surge, the chain's jump speed.  "
             "Without FILE, the built-in 'indexer' example; FILE may also name a built-in "
-            "example ('indexer', 'feed', 'valve')."
+            "example ('indexer', 'feed', 'valve', 'swinging_arm')."
         ),
     )
     parser.add_argument("file", nargs="?", metavar="FILE",

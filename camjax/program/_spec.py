@@ -560,7 +560,7 @@ def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -
 
 def example_path(name: str = "indexer") -> Path:
     """Path of a program file shipped with camjax (``camjax/program/examples``, or its
-    ``trains`` folder: 'valve')."""
+    ``trains`` folder: 'valve', 'swinging_arm')."""
     examples = Path(__file__).parent / "examples"
     train = examples / "trains" / f"{name}.toml"
     return train if train.exists() and not (examples / f"{name}.toml").exists() else examples / f"{name}.toml"
@@ -568,7 +568,7 @@ def example_path(name: str = "indexer") -> Path:
 
 def program_path(text: str | None, default: str = "indexer") -> Path:
     """The program file ``text`` names: a path, or a built-in example's name ('indexer',
-    'feed', 'valve') where no such file exists; without ``text``, the example ``default``."""
+    'feed', 'valve', 'swinging_arm') where no such file exists; without ``text``, the example ``default``."""
     if not text:
         return example_path(default)
     path = Path(text)

@@ -1,6 +1,7 @@
 """The paper's flexible swinging rod on a whole cam: its tables through the program file.
 
-    python experiments/examples/swinging_arm_program.py [--sets base,omega640,...] [--elements N]
+    python experiments/examples/swinging_arm_program.py [--sets base,omega640,...] [--laws cycloidal,...]
+        [--elements N] [--csv PATH]
 
 Reads camjax/program/examples/trains/swinging_arm.toml (the paper's cam and rod), varies it
 as the paper's parameter study does (speed, rod length and radius, roller mass, total swing)
@@ -96,14 +97,17 @@ def full_model_table():
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sets", default=",".join(SETS))
+    parser.add_argument("--laws", default=",".join(LAWS), help="of: " + ", ".join(LAWS))
     parser.add_argument("--elements", type=int, default=None)
+    parser.add_argument("--csv", type=Path, default=OUT)
     args = parser.parse_args()
     full = full_model_table()
     rows, histories = [], {}
     for name in args.sets.split(","):
         params = SETS[name]
         omega = params.get("omega", 320.0)
-        for label, law in LAWS.items():
+        for label in args.laws.split(","):
+            law = LAWS[label]
             start = time.perf_counter()
             program = paper_program(law, elements=args.elements, **params)
             report = analyse(program, [rpm_of(omega)], with_flight=False)
@@ -132,12 +136,12 @@ def main():
             )
             if name == "base":
                 histories[label] = bending_history(program, rpm_of(omega))
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    with OUT.open("w", newline="") as f:
+    args.csv.parent.mkdir(parents=True, exist_ok=True)
+    with args.csv.open("w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-    if histories:
+    if len(histories) == len(LAWS):
         figure(histories, [r for r in rows if r["set"] == "base"])
 
 
