@@ -21,6 +21,7 @@ from camjax.program import (
     ChainSteadyState,
     Follower,
     Program,
+    Spring,
     analyse,
     example_path,
 )
@@ -323,3 +324,23 @@ def test_a_missing_place_or_field_and_an_arm_on_another_follower():
         ValueError, match=r"\[arm\] roller_mm = 98 is not the follower's arm_mm = 100"
     ):
         Program("p", program.segments, longer, chain=program.chain)
+
+
+def test_a_return_spring_on_a_stiff_arm_in_flight_is_a_rigid_pendulum():
+    """A stiff arm carrying a payload ``m`` at ``a`` on a return spring ``k``, the cam let go:
+    it swings about its pivot as a rigid body, ``w^2 = k a^2 / (rho A l^3 / 3 + rho I l +
+    m_r l^2 + m a^2)``; the cam's static force is the preload times ``a / l``."""
+    _, mass, rotary = rod()
+    bending = 1e3 * rod()[0]  # stiff (much stiffer leaves the eigenproblem ill-conditioned)
+    a, m, k, roller, preload = 0.07, 0.2, 5e3, 0.025, 40.0
+    arm = Arm(bending, mass, 98.0, rotary_inertia_kg_m=rotary, damping_ratio=0.01)
+    chain = Chain(
+        (Body("roller", roller), Body("payload", m, at_mm=1e3 * a)),
+        Spring(1e-3 * k, preload),
+        arm=arm,
+    )
+    inertia = mass * 0.098**3 / 3 + rotary * 0.098 + roller * 0.098**2 + m * a**2
+    hz = chain.natural_frequencies(contact=False)[0][0]
+    assert hz == pytest.approx(math.sqrt(k * a * a / inertia) / (2 * math.pi), rel=1e-5)
+    assert chain.kinematic_ratio == pytest.approx(a / 0.098)
+    assert chain.cam_preload_n == pytest.approx(preload * a / 0.098)
