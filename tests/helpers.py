@@ -8,6 +8,8 @@ SDOF's numbers (to the tolerance given; ``None``: a model with no damping to com
 """
 
 import contextlib
+import math
+from typing import NamedTuple
 
 import jax
 import numpy as np
@@ -72,6 +74,31 @@ def assert_same_numbers(got, expected, rtol=COMPILED_RTOL, atol=COMPILED_ATOL):
 FOLLOWER = dict(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0, damping_ratio=0.05,
                 spring_rate_n_per_mm=10.0, preload_n=300.0, base_radius_mm=40.0, roller_radius_mm=12.0)
 """The program tests' follower (a ``camjax.program.Follower``'s fields)."""
+
+
+class FollowerConstants(NamedTuple):
+    """A classic follower's constants in SI (k, k_s in N/m; c in N s/m), read from its
+    fields apart from the library's oscillator: the tests' reference."""
+
+    m: float
+    k: float
+    ks: float
+    c: float
+    preload: float
+    omega: float
+    zeta: float
+
+    def omega_per_turn(self, rpm):
+        return self.omega * 60.0 / rpm
+
+
+def follower_constants(program) -> FollowerConstants:
+    f = program.follower
+    m, k, ks = f.mass_kg, 1e3 * f.stiffness_n_per_mm, 1e3 * (f.spring_rate_n_per_mm or 0.0)
+    c = 2 * f.damping_ratio * math.sqrt(k * m)
+    omega = math.sqrt((k + ks) / m)
+    return FollowerConstants(m, k, ks, c, 0.0 if f.spring_rate_n_per_mm is None else f.preload_n, omega,
+                             c / (2 * m * omega))
 
 
 def two_cycloids(**follower):

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from helpers import (
     FOLLOWER,
+    follower_constants,
     program_lift,
     scipy_deflection,
     scipy_periodic_deflection,
@@ -164,7 +165,7 @@ def test_periodic_steady_state_matches_a_scipy_shooting_solve(cam, solver):
     period = 60.0 / rpm
     pick = np.arange(0, solver.grid.nodes.size - 1, 7)
     e_scipy, de_scipy = _shooting(cam, rpm, solver.grid.nodes[pick] * period)
-    tr = solver.train
+    tr = follower_constants(solver.program)
     force = tr.preload + tr.k * e_scipy + tr.c * de_scipy
     assert np.abs(steady.contact_force_n[pick] - force).max() < 1e-7 * np.abs(force).max()
 
@@ -194,7 +195,7 @@ def test_every_flight_of_the_turn_matches_a_scipy_event_solve(cam, solver):
     rpm = 900.0
     result = flights(solver, rpm)
     assert flight(solver, rpm) == result[0]
-    tr = solver.train
+    tr = follower_constants(solver.program)
     period = 60.0 / rpm
     rate = 360.0 / period
 
@@ -552,10 +553,10 @@ def test_groove_clearance_hands_over_to_backlash(tmp_path, capsys):
     # A vanishing clearance: the train force is the contact-held one, k e + c e'.
     solver = SteadyState(groove_cam(None), rpm)
     tight = camjax.program.groove_turns(groove_cam(1e-6), [rpm])[0]
-    lam = solver.lam(rpm)
-    q = solver.mode_at(solver.cycle(rpm).q, rpm, tight.theta_deg / 360.0)
+    lam = solver.lam(rpm)[0]
+    q = solver.mode_at(solver.cycle(rpm).q, rpm, tight.theta_deg / 360.0)[0]
     e = q.imag / lam.imag
-    held = 1e-3 * (solver.train.k * e + solver.train.c * (q.real + lam.real * e) / period)
+    held = 1e-3 * (follower_constants(solver.program).k * e + follower_constants(solver.program).c * (q.real + lam.real * e) / period)
     assert np.abs(tight.force_n - held).max() < 1e-5 * np.abs(held).max()  # measured 1e-6
     report = analyse(program, [rpm]).speeds[0]
     assert [i.angle_deg for i in report.impacts] == pytest.approx([i.angle_deg for i in turns.impacts])

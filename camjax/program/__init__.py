@@ -12,7 +12,8 @@ the profile, the figures); ``analyse_machine`` adds the torques of several cams 
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
 (``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
 preload over a speed range).  ``Chain`` is the follower as a chain of bodies (a valve
-train, a spring that surges) and ``ChainSteadyState`` its exact periodic steady state; a
+train, a spring that surges); ``Oscillator`` is the follower's modes in physical units,
+the classic one-body follower's or a chain's, which ``SteadyState`` takes alike; a
 servo's ``Drive`` and ``Motor`` give the motor's torque over the turn (``duty_cycle``,
 ``size_motor``, ``choose_motor`` from a catalogue, ``program_motor_choice`` at a program's
 speeds), and ``compensate`` the cam lift that
@@ -22,17 +23,8 @@ docs/machine.md, docs/valve-trains.md and docs/servo.md.
 
 from typing import TYPE_CHECKING
 
-from ._analysis import Report as Report
-from ._analysis import SpeedReport as SpeedReport
-from ._analysis import analyse as analyse
-from ._analysis import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s2
-from ._analysis import max_contact_stress as max_contact_stress
-from ._analysis import period_ratios as period_ratios
-from ._analysis import response as response
 from ._arm import Arm as Arm
-from ._chain_steady import ChainModes as ChainModes
-from ._chain_steady import ChainSteadyState as ChainSteadyState
-from ._chain_steady import ChainSummary as ChainSummary
+from ._arm import arm_bending as arm_bending
 from ._compensate import Compensation as Compensation
 from ._compensate import check_smooth as check_smooth
 from ._compensate import compensate as compensate
@@ -53,6 +45,7 @@ from ._dxf_import import read_dxf_profile as read_dxf_profile
 from ._dynamics import Cycle as Cycle
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
+from ._dynamics import TrainPeaks as TrainPeaks
 from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
 from ._export import MAX_PROFILE_POINTS as MAX_PROFILE_POINTS
@@ -108,15 +101,23 @@ from ._motor import choose_motor as choose_motor
 from ._motor import duty_cycle as duty_cycle
 from ._motor import read_motors as read_motors
 from ._motor import size_motor as size_motor
-from ._probes import BUILT_IN as BUILT_IN
-from ._probes import OUTPUTS as OUTPUTS
-from ._probes import Outputs as Outputs
-from ._probes import Probe as Probe
-from ._probes import ProbeContext as ProbeContext
-from ._probes import default_outputs as default_outputs
-from ._probes import probe as probe
-from ._probes import register_probe as register_probe
-from ._probes import unregister_probe as unregister_probe
+from ._oscillator import Oscillator as Oscillator
+from ._outputs import BUILT_IN as BUILT_IN
+from ._outputs import OUTPUTS as OUTPUTS
+from ._outputs import Outputs as Outputs
+from ._outputs import Probe as Probe
+from ._outputs import ProbeContext as ProbeContext
+from ._outputs import default_outputs as default_outputs
+from ._outputs import probe as probe
+from ._outputs import register_probe as register_probe
+from ._outputs import unregister_probe as unregister_probe
+from ._report import Report as Report
+from ._report import SpeedReport as SpeedReport
+from ._report import analyse as analyse
+from ._report import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s2
+from ._report import max_contact_stress as max_contact_stress
+from ._report import period_ratios as period_ratios
+from ._report import response as response
 from ._servo import program_motor_choice as program_motor_choice
 from ._shaft import Machine as Machine
 from ._shaft import MachineReport as MachineReport
@@ -153,13 +154,13 @@ if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
     from ._figures import motor_figure as motor_figure
     from ._figures import save_figures as save_figures
     from ._figures import shaft_figures as shaft_figures
-    from ._preload import AbstractProgramObjective as AbstractProgramObjective
-    from ._preload import MaxPreload as MaxPreload
-    from ._preload import MaxProgramResidual as MaxProgramResidual
+    from ._objectives import AbstractProgramObjective as AbstractProgramObjective
+    from ._objectives import MaxPreload as MaxPreload
+    from ._objectives import MaxProgramResidual as MaxProgramResidual
 
 # Loaded on first use: MaxPreload subclasses camjax.law_design's objective (which imports
 # optax) and the figures import matplotlib.
-_LAZY = {"AbstractProgramObjective": "._preload", "MaxPreload": "._preload", "MaxProgramResidual": "._preload", "save_figures": "._figures", "shaft_figures": "._figures",
+_LAZY = {"AbstractProgramObjective": "._objectives", "MaxPreload": "._objectives", "MaxProgramResidual": "._objectives", "save_figures": "._figures", "shaft_figures": "._figures",
          "motor_figure": "._figures"}
 
 

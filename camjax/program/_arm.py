@@ -290,21 +290,42 @@ def harmonic_amplitudes(turn_nodes, signal, orders=HARMONIC_ORDERS) -> np.ndarra
     return np.stack(out, axis=-1)
 
 
-def arm_section(steady, rpm, summary=None) -> dict:
-    """The report's ``arm`` part of a train's section (``ChainSteadyState`` ``steady`` of a
-    chain with an arm): the last body's bending (its displacement less the rigid swing's,
-    ``x / arm_mm`` times the lift) at each speed, its largest value and the amplitudes of
-    the cam orders ``HARMONIC_ORDERS``; the first bending frequency with the cam held as cam
-    orders at each speed."""
-    chain = steady.chain
+def arm_bending(steady, cycles, rpm) -> np.ndarray:
+    """The last body's bending over the turn, ``(speeds, nodes)`` mm at ``steady.grid``'s
+    nodes: its distance from its rigid swing (``at_mm / arm_mm`` times the lift), the
+    oscillator's ``lift_error_mm`` row of the steady state ``steady`` (a ``SteadyState`` of a
+    program whose chain has an arm) from its ``cycles`` (modes at the nodes) at ``rpm``."""
+    from ._oscillator import output_rows
+
+    grid, oscillator = steady.grid, steady.oscillator
+    row = output_rows(len(steady.program.chain.bodies))["lift_error_mm"]
+    left, right = grid.motion.one_sided(1)
+    y = np.stack(
+        [
+            np.asarray(grid.lift_nodes),
+            np.asarray(grid.velocity_nodes),
+            np.concatenate([np.asarray(left)[:, 0], np.asarray(right)[-1:, 0]]),
+        ]
+    )  # y, y_s, y_ss at the nodes (turn time)
+    gain, direct = np.asarray(oscillator.gain)[row], np.asarray(oscillator.direct)[row]
+    bending = []
+    for i, r in enumerate(np.asarray(rpm, dtype=float)):
+        period = 60.0 / r
+        terms = direct * np.array([1.0, 1.0 / period, 1.0 / period**2])
+        modes = np.real((gain / period) @ np.asarray(cycles.q[i]))  # turn-time modes
+        bending.append(modes + terms @ y + float(oscillator.static[row]))
+    return np.asarray(bending)
+
+
+def arm_section(steady, cycles, rpm) -> dict:
+    """The report's ``arm`` part of a train's section (``arm_bending`` at the speeds
+    ``rpm``): the last body's largest bending and the amplitudes of its cam orders
+    ``HARMONIC_ORDERS``; the first bending frequency with the cam held, also as cam orders
+    at each speed."""
+    chain = steady.program.chain
     rpm = np.asarray(rpm, dtype=float)
-    cycles = steady.cycles(rpm)
-    row = 1 + len(chain.bodies)  # the last body's displacement (``output_rows``' lift_m)
-    bending = 1e3 * cycles.values[:, row, :] - chain.kinematic_ratio * np.asarray(
-        steady.grid.lift_nodes
-    )
-    nodes = np.asarray(steady.grid.motion.nodes)
-    amplitudes = harmonic_amplitudes(nodes, bending)
+    bending = arm_bending(steady, cycles, rpm)
+    amplitudes = harmonic_amplitudes(steady.grid.nodes, bending)
     fundamental = float(chain.natural_frequencies(contact=True)[0][0])
     return {
         "body": chain.names[-1],

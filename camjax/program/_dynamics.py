@@ -1,18 +1,18 @@
 """A cam program at machine speed, through the one SDOF engine: periodic steady state and start-up.
 
-Payload displacement ``x`` from its static position on the base circle, cam lift ``y``:
-
-    m x'' = k (y - x) + c (y' - x') - k_s x,    F_c = F_0 + k (y - x) + c (y' - x').
-
-In the deflection ``e = y - x`` this is ``e'' + (c/m) e' + ((k + k_s)/m) e = y'' + (k_s/m) y``,
-the linear SDOF of ``camjax.sdof`` with forcing ``y'' + (k_s/m) y``.  This module is the
-adapter from physical units to that engine: time runs in turns (``s = t / T``,
-``T = 60 / rpm``), so the forcing is ``y_ss + (k_s/m) T^2 y``, two arrays sampled once per
-program on the engine's grid (``camjax.sdof.piecewise_grid``) and mixed per speed; the
-engine's periodic start (``q(0) = F / (1 - E)``) gives the steady state exactly, and its
-gains and refined extremes give the payload acceleration and contact force in SI units.
-A speed sweep runs in blocks of ``SPEED_BLOCK`` speeds through one compiled program per
-shape of the turn, whose values are its arguments (``PaddedTurn``).
+The follower is an ``Oscillator`` (``_oscillator.py``): its modes in physical units, the
+classic one-body follower's (the deflection ``e = y - x`` of
+``m x'' = k (y - x) + c (y' - x') - k_s x``, one mode with forcing ``y'' + (k_s/m) y``) or a
+chain's.  Time runs in turns (``s = t / T``, ``T = 60 / rpm``), so mode ``j``'s forcing is
+``a_j y_ss + b_j T^2 y``, two arrays sampled once per program on the engine's grid
+(``camjax.sdof.piecewise_grid``) and mixed per speed; the engine's periodic start
+(``q(0) = F / (1 - E)``) gives each mode's steady state exactly, and the oscillator's gains
+give every output (contact force, payload acceleration, drive torque, Hertz stress, residual
+vibration, a train's own figures) in SI units, their extremes refined between nodes.  A
+speed sweep runs in blocks of ``SPEED_BLOCK`` speeds through one compiled program per shape
+of the turn (the number of modes and outputs, the bucketed grid), whose values are its
+arguments (``PaddedTurn``): another follower, one body or a chain of the same shape, or an
+edited one, compiles nothing.
 """
 
 from __future__ import annotations
@@ -30,17 +30,13 @@ from .._shapes import bucket
 from .._traces import exported_jit, register_types
 from .._traces import kept as traces_kept
 from ..errors import RESULTS, raise_if_failed
-from ..metrics import refined_peak
+from ..metrics import PEAK_TOLERANCE, bernstein_bound, hermite_data, peak_search, refined_peak
 from ..sdof import (
     GAUSS_POINTS,
     MAX_GRID_INTERVALS,
     TARGET_PHASE_STEP,
     MotionGrid,
-    deflection_gains,
-    eigenvalue,
-    gain_derivatives,
     mode_between,
-    mode_gain,
     periodic_propagate,
     piecewise_grid,
     propagate,
@@ -49,7 +45,14 @@ from ..sdof import (
 )
 from ..sharding import resolve_devices, shard_batch
 from ._machine import NodeContact, contact_stress_squared, node_contact, torque_figures, torque_jets
-from ._probes import Outputs, Probe
+from ._oscillator import (
+    CONTACT_FORCE,
+    PAYLOAD_ACCELERATION,
+    PAYLOAD_DISPLACEMENT,
+    Oscillator,
+    output_rows,
+)
+from ._outputs import Outputs, Probe
 from ._spec import Program
 from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
 from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
@@ -179,6 +182,13 @@ def _segment_samples(turn, k: int, gauss, left, law=None):
             y[n:], 360.0 * dy[n:])
 
 
+def program_grid(program: Program, rpm_min: float) -> CycleGrid:
+    """``cycle_grid`` for the program's follower: a chain's resolves its highest mode with
+    the cam held (``Chain.highest_frequency_hz``), the classic's its one."""
+    chain = None if program.one_body else program.chain
+    return cycle_grid(program, rpm_min, None if chain is None else chain.highest_frequency_hz())
+
+
 def with_segment_law(grid: CycleGrid, program: Program, index: int, law) -> CycleGrid:
     """``grid`` with segment ``index``'s (0-based) samples recomputed from ``law`` in JAX.
 
@@ -208,40 +218,31 @@ def with_segment_law(grid: CycleGrid, program: Program, index: int, law) -> Cycl
     )
 
 
-class Train(NamedTuple):
-    """The follower's constants in SI (k, k_s in N/m; c in N s/m): the engine's oscillator
-    in physical units.  A pytree of 0-d arrays: the compiled turn takes it as an argument,
-    so another follower reuses the compiled program."""
+class TrainPeaks(NamedTuple):
+    """A train's own figures of one turn (``Oscillator`` built with its rows): each body's
+    peak ``|x''|`` (m/s^2), the spring's least and largest force at its seat (N), its
+    largest surge (dynamic less static force, N), all refined between nodes, and the last
+    body's largest distance from its kinematic lift at the nodes (mm)."""
 
-    m: np.ndarray
-    k: np.ndarray
-    ks: np.ndarray
-    c: np.ndarray
-    preload: np.ndarray
-    omega: np.ndarray  # sqrt((k + k_s)/m), rad/s
-    zeta: np.ndarray  # of the whole oscillator: c / (2 m omega)
-
-    @classmethod
-    def of(cls, program: Program) -> Train:
-        f = program.follower
-        omega = 2 * math.pi * f.natural_frequency_hz
-        values = (f.mass_kg, f.stiffness, f.spring_rate, f.damping, 0.0 if f.form_closed else f.preload_n,
-                  omega, f.damping / (2 * f.mass_kg * omega))
-        return cls(*(np.asarray(float(v)) for v in values))
-
-    def omega_per_turn(self, rpm):
-        """The engine's ``w``: radians of vibration per turn at ``rpm``."""
-        return self.omega * 60.0 / rpm
+    max_acceleration_m_s2: jax.Array
+    min_seat_force_n: jax.Array
+    max_seat_force_n: jax.Array
+    max_surge_n: jax.Array
+    max_lift_error_mm: jax.Array
 
 
 class Cycle(NamedTuple):
     """Node series and refined extrema of one turn at one speed (s-time, mm).
 
-    ``q`` is the complex mode at the nodes (periodic steady state unless built otherwise).
-    Forces in N, accelerations in m/s^2, the drive torque in N m (with its first three
-    derivatives in turn time at both ends of every interval, and its peak, RMS, mean and
-    energy fluctuation over the turn: docs/machine.md), energy in J, the Hertz stress in
-    MPa (zero without a contact width) and the node where it peaks.
+    ``q`` is the complex modes at the nodes, ``(S, K + 1)``, in turn time (``T`` times the
+    ``Oscillator``'s physical modes; periodic steady state unless built otherwise).
+    Forces in N, accelerations in m/s^2 (the payload: the last body), the drive torque in
+    N m (with its first three derivatives in turn time at both ends of every interval, and
+    its peak, RMS, mean and energy fluctuation over the turn: docs/machine.md), energy in
+    J, the Hertz stress in MPa (zero without a contact width) and the node where it peaks;
+    ``residual_vibration_mm`` the last body's free vibration at the start of each dwell and
+    constant-velocity segment (``residual_vibration``); ``train`` a train's own figures
+    (``TrainPeaks``; ``None`` without the train's rows).
     """
 
     q: jax.Array
@@ -262,46 +263,79 @@ class Cycle(NamedTuple):
     max_contact_stress_radius_mm: jax.Array
     drive_torque_left: jax.Array
     drive_torque_right: jax.Array
+    train: TrainPeaks | None = None
     outputs: dict = {}  # the compiled outputs' values (camjax.program.Outputs), filled by the speed batch
 
 
-def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True,
+def mode_forcing(grid: CycleGrid, oscillator: Oscillator, period):
+    """``(S, K, 6)``: each mode's forcing in turn time, ``a_j y_ss + b_j T^2 y``, on the grid."""
+    weights = jnp.asarray(oscillator.forcing)
+    acc, lift = jnp.asarray(grid.motion.forcing), jnp.asarray(grid.lift)
+    return weights[:, 1, None, None] * acc + (weights[:, 0] * period**2)[:, None, None] * lift
+
+
+def _modes(grid: CycleGrid, oscillator: Oscillator, rpm, q_start=None, periodic=True):
+    """The modes at the nodes over one turn at ``rpm`` in turn time, ``(S, K + 1)``: each
+    through the engine's exact propagation with its own eigenvalue and forcing."""
+    period = 60.0 / rpm
+    lam = period * jnp.asarray(oscillator.lam)
+    forcing = mode_forcing(grid, oscillator, period)
+    if periodic:
+        return jax.vmap(lambda l, f: periodic_propagate(grid.with_forcing(f), None, None, lam=l))(lam, forcing)
+    q_start = jnp.broadcast_to(jnp.asarray(q_start, dtype=complex), lam.shape)
+    return jax.vmap(lambda l, f, q0: propagate(grid.with_forcing(f), None, None, q0=q0, lam=l))(
+        lam, forcing, q_start)
+
+
+def _real_product(gain, q):
+    """``Re(gain @ q)`` in real products (XLA's complex ones are slow on CPU)."""
+    return jnp.real(gain) @ jnp.real(q) - jnp.imag(gain) @ jnp.imag(q)
+
+
+def _cycle(grid: CycleGrid, oscillator: Oscillator, rpm, q_start=None, periodic=True,
            contact: NodeContact | None = None) -> Cycle:
     """The response over one turn at ``rpm`` (jittable, vmappable in ``rpm``): the program's
-    forcing at this speed through the engine, and its outputs in SI units."""
+    forcing at this speed through the engine, mode by mode, and the oscillator's outputs in
+    SI units, their extremes refined between nodes."""
     period = 60.0 / rpm
-    w = train.omega_per_turn(rpm)
-    lam = eigenvalue(w, train.zeta)
-    beta = train.ks / train.m * period**2
-    motion = grid.with_forcing(jnp.asarray(grid.motion.forcing) + beta * jnp.asarray(grid.lift))
-    if periodic:
-        q = periodic_propagate(motion, w, train.zeta)
-    else:
-        q = propagate(motion, w, train.zeta, q0=q_start)
-    e_gain, e_rate_gain = deflection_gains(w, train.zeta)
-    force_gain = 1e-3 * train.k * e_gain + 1e-3 * train.c / period * e_rate_gain  # N per mm
-    accel_gain = mode_gain(w, train.zeta)
+    lam = period * jnp.asarray(oscillator.lam)  # per turn
+    weights = jnp.asarray(oscillator.forcing)
+    q = _modes(grid, oscillator, rpm, q_start, periodic)
+    gain = jnp.asarray(oscillator.gain) / period  # of the turn-time modes
+    d = jnp.asarray(oscillator.direct)
+    direct = jnp.stack([d[:, 0], d[:, 1] / period, d[:, 2] / period**2], axis=1)  # per y, y_s, y_ss
     y = jnp.asarray(grid.lift_nodes)
     ys = jnp.asarray(grid.velocity_nodes)
-    left, right = motion.one_sided()
-    lift_left, lift_right = grid.motion.one_sided()
-    widths = motion.widths
+    lift_left, lift_right = grid.motion.one_sided(4)  # y_ss and three derivatives
+    raw_left, raw_right = grid.with_forcing(jnp.asarray(grid.lift)).one_sided(3)  # y, y_s, y_ss
+    widths = grid.motion.widths
+    y_nodes = jnp.stack([y, ys, jnp.concatenate([lift_left[:, 0], lift_right[-1:, 0]])])
+    values = _real_product(gain, q) + direct @ y_nodes + jnp.asarray(oscillator.static)[:, None]
+    gains = jax.lax.optimization_barrier([gain * lam**p for p in range(4)])  # (O, S) each
 
-    def lift_terms(ys_end, one_sided):
-        return jnp.stack([ys_end, one_sided[:, 0], one_sided[:, 1]], axis=1)
+    def jets(q_end, ys_end, acc_end, lift_end):
+        """``(O, K, 3)``: every output's first three derivatives at one end of each interval:
+        ``d^p Re(G q) = Re(G lam^p q) + sum_i Re(G lam^(p-1-i)) F^(i)`` with each mode's
+        forcing ``F = a y_ss + b T^2 y``, and the direct terms' ``y^(p)`` to ``y^(p+2)``."""
+        a_weights = [_real_product(gains[k], weights[:, 1]) for k in range(3)]  # (O,)
+        b_weights = [_real_product(gains[k], weights[:, 0]) * period**2 for k in range(3)]
+        y_jet = jnp.concatenate([ys_end[:, None], acc_end], axis=1)  # y^(1..5)
+        out = []
+        for p in (1, 2, 3):
+            value = _real_product(gains[p], q_end)
+            for i in range(p):
+                value = (value + a_weights[p - 1 - i][:, None] * acc_end[None, :, i]
+                         + b_weights[p - 1 - i][:, None] * lift_end[None, :, i])
+            out.append(value + direct @ y_jet[:, p - 1 : p + 2].T)
+        return jnp.stack(out, axis=-1)
 
-    # The engine's x'' is the deflection's response to the whole forcing; the payload's
-    # acceleration leaves out the spring's share, beta y.
-    to_si = 1e-3 / period**2
-    accel = (jnp.real(accel_gain * q) - beta * y) * to_si
-    accel_left = (gain_derivatives(accel_gain, lam, q[:-1], left) - beta * lift_terms(ys[:-1], lift_left)) * to_si
-    accel_right = (gain_derivatives(accel_gain, lam, q[1:], right) - beta * lift_terms(ys[1:], lift_right)) * to_si
-    max_accel = refined_peak(accel, widths, accel_left, accel_right)
-    force = train.preload + jnp.real(force_gain * q)
-    force_left = gain_derivatives(force_gain, lam, q[:-1], left)
-    force_right = gain_derivatives(force_gain, lam, q[1:], right)
+    left = jets(q[:, :-1], ys[:-1], lift_left, raw_left)
+    right = jets(q[:, 1:], ys[1:], lift_right, raw_right)
+    force, accel = values[CONTACT_FORCE], values[PAYLOAD_ACCELERATION]
+    force_left, force_right = left[CONTACT_FORCE], right[CONTACT_FORCE]
+    max_accel = refined_peak(accel, widths, left[PAYLOAD_ACCELERATION], right[PAYLOAD_ACCELERATION])
     min_force, max_force = refined_extremes(force, widths, force_left, force_right)
-    torque = torque_jets(force, force_left, force_right, ys, lift_left, lift_right)
+    torque = torque_jets(force, force_left, force_right, ys, lift_left[:, :3], lift_right[:, :3])
     figures = torque_figures(torque[0], widths, *torque[1:])
     if contact is None:
         contact = NodeContact(*(jnp.zeros_like(force),) * 4)
@@ -310,21 +344,68 @@ def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True,
     stress = jnp.sqrt(stress_sq)
     node = jnp.argmax(stress_sq)
     radius = jnp.where(force[node] >= 0, contact.radius_inner[node], contact.radius_outer[node])
-    residual = jnp.abs(residual_modes(grid, q, beta, lam))
+    residual = residual_vibration(grid, oscillator, q, rpm)
+    train = None
+    if oscillator.bodies:  # a train's rows: static in the shape
+        train = _train_peaks(values, left, right, widths, oscillator.bodies)
     return Cycle(q, accel, force, max_accel, min_force, max_force, residual, torque[0], *figures, stress,
-                 stress[node], node, radius, torque[1], torque[2])
+                 stress[node], node, radius, torque[1], torque[2], train)
 
 
-def residual_modes(grid: CycleGrid, q, beta, lam):
-    """The free vibration at the start of each dwell and constant-velocity segment, as a
-    complex mode over ``w_d`` (mm; its modulus is the residual vibration): the distance of
-    the mode from the steady motion there.  The forcing there is ``beta (y0 + y_s sigma)``
-    (no ``y_ss``), whose particular solution of ``q_s = lam q + forcing`` is
-    ``-beta (y0 + y_s sigma) / lam - beta y_s / lam^2``.  Affine in the lift's samples."""
+def _train_peaks(values, left, right, widths, bodies: int) -> TrainPeaks:
+    """A train's figures from its rows (``output_rows``): the bounded peak search
+    (``camjax.metrics.peak_search``), which refines only the intervals that can hold the
+    peak (the dense refinement of every row cost a chain ten times its propagation)."""
+    rows = output_rows(bodies)
+    accelerations = np.arange(rows["acceleration_m_s2"].start, rows["acceleration_m_s2"].stop)
+    peaks = np.concatenate([accelerations, [rows["surge_n"]]])
+    peak = jax.vmap(_bounded_peak, in_axes=(0, None, 0, 0))(values[peaks], widths, left[peaks], right[peaks])
+    seat = rows["seat_force_n"]
+    high = _bounded_max(values[seat], widths, left[seat], right[seat])
+    low = -_bounded_max(-values[seat], widths, -left[seat], -right[seat])
+    lift_error = jnp.max(jnp.abs(values[rows["lift_error_mm"]]))
+    return TrainPeaks(peak[:bodies], low, high, peak[bodies], lift_error)
+
+
+def _bounded_peak(values, widths, left, right):
+    """``max |f|`` between the nodes, refining only the intervals whose Bernstein bound can
+    beat the best found (``camjax.metrics.peak_search``)."""
+    bound = bernstein_bound(values, widths, tuple(left.T), tuple(right.T))
+    data = hermite_data(values, widths, left, right)
+    return peak_search(bound, lambda index: data[index], jnp.max(jnp.abs(values)), PEAK_TOLERANCE)
+
+
+def _bounded_max(values, widths, left, right):
+    """``max f`` (signed) between the nodes, by ``_bounded_peak`` of the shifted signal."""
+    low = jnp.min(values)
+    shift = low - (jnp.max(values) - low) - 1.0
+    return _bounded_peak(values - shift, widths, left, right) + shift
+
+
+def residual_modes(grid: CycleGrid, oscillator: Oscillator, q, rpm):
+    """The last body's free vibration at the start of each dwell and constant-velocity
+    segment, mode by mode, ``(S, points)`` complex (mm): ``g_j (q_j - q_j,static)`` with
+    ``g_j`` the payload displacement's gain, whose modulus is that mode's share of the
+    residual vibration.  The forcing there is ``b T^2 (y0 + y_s sigma)`` (no ``y_ss``),
+    whose particular solution of ``q_s = lam q + forcing`` is
+    ``-b T^2 (y0 + y_s / lam) / lam``.  Affine in the lift's samples."""
+    period = 60.0 / rpm
+    lam = (period * jnp.asarray(oscillator.lam))[:, None]
+    beta = (jnp.asarray(oscillator.forcing)[:, 0] * period**2)[:, None]
     starts = jnp.asarray(grid.residual_start)
     y, ys = jnp.asarray(grid.lift_nodes)[starts], jnp.asarray(grid.velocity_nodes)[starts]
     q_static = -beta * (y + ys / lam) / lam
-    return (q[starts] - q_static) / jnp.imag(lam)
+    gain = (jnp.asarray(oscillator.gain)[PAYLOAD_DISPLACEMENT] / period)[:, None]
+    return gain * (q[:, starts] - q_static)
+
+
+def residual_vibration(grid: CycleGrid, oscillator: Oscillator, q, rpm):
+    """The residual vibration (mm) at the start of each dwell and constant-velocity
+    segment: ``sum_j |g_j (q_j - q_j,static)|`` (``residual_modes``), the envelope of the
+    last body's free vibration there, a bound of its amplitude that is exact for one mode
+    (the classic follower: the deflection's free amplitude) and for several modes the
+    largest the free vibration can reach where their phases meet."""
+    return jnp.sum(jnp.abs(residual_modes(grid, oscillator, q, rpm)), axis=0)
 
 
 class SpeedSummary(NamedTuple):
@@ -355,11 +436,11 @@ class PaddedTurn(NamedTuple):
     node arrays repeat the closing node."""
 
     grid: CycleGrid
-    train: Train
+    oscillator: Oscillator
     contact: NodeContact
 
     @classmethod
-    def of(cls, grid: CycleGrid, train: Train, contact: NodeContact) -> PaddedTurn:
+    def of(cls, grid: CycleGrid, oscillator: Oscillator, contact: NodeContact) -> PaddedTurn:
         intervals = grid.intervals
         pieces = int(np.asarray(grid.motion.piece_width).size)
         extra = bucket(intervals, 64) - intervals
@@ -383,7 +464,7 @@ class PaddedTurn(NamedTuple):
                                velocity_nodes=nodes(grid.velocity_nodes),
                                segment_start=np.asarray(grid.segment_start, dtype=np.int32),
                                residual_start=np.asarray(grid.residual_start, dtype=np.int32))
-        return cls(padded, train, NodeContact(*(nodes(x) for x in contact)))
+        return cls(padded, oscillator, NodeContact(*(nodes(x) for x in contact)))
 
 
 SPEED_BLOCK = 32
@@ -411,13 +492,13 @@ def _cycles(rpm, turn: PaddedTurn, outputs: tuple[Probe, ...]) -> Cycle:
     values."""
 
     def one(r):
-        cycle = _cycle(turn.grid, turn.train, r, contact=turn.contact)
+        cycle = _cycle(turn.grid, turn.oscillator, r, contact=turn.contact)
         return cycle._replace(outputs={p.name: jnp.asarray(p.fn(cycle, turn), dtype=float) for p in outputs})
 
     return jax.vmap(one)(rpm)
 
 
-register_types(PaddedTurn, CycleGrid, MotionGrid, Train, NodeContact, Cycle)
+register_types(PaddedTurn, CycleGrid, MotionGrid, Oscillator, NodeContact, Cycle, TrainPeaks)
 
 
 _BUILT_IN_COMPILED = Outputs().compiled
@@ -434,7 +515,7 @@ _kept_cycles = exported_jit(_cycles_built_in, "program-cycles")
 @jax.jit
 def _started_cycle(rpm, turn: PaddedTurn, q_start) -> Cycle:
     """One turn from the mode ``q_start`` at its start (a start-up's turns)."""
-    return _cycle(turn.grid, turn.train, rpm, q_start=q_start, periodic=False, contact=turn.contact)
+    return _cycle(turn.grid, turn.oscillator, rpm, q_start=q_start, periodic=False, contact=turn.contact)
 
 
 class SteadyState:
@@ -448,23 +529,24 @@ class SteadyState:
     program (the whole ``Cycle`` at every speed of a block); each block is split over
     ``devices`` (default: every local device; see ``camjax.sharding.shard_batch``), with
     results equal to one device's.  A response that is not finite is a ``SolverError``
-    (``RESULTS.nonfinite``).
+    (``RESULTS.nonfinite``).  The follower is ``Oscillator.of(program)`` unless
+    ``oscillator`` is given (another realisation of the same follower, or an edit of its
+    values: the same shape compiles nothing).
     """
 
-    def __init__(self, program: Program, rpm_min: float | Speeds, *, devices=None):
-        if not program.one_body:
-            raise ValueError(f"program {program.name!r} drives a chain of bodies ([[train]]): the one-body "
-                             "steady state is not its own (analyse reports it, ChainSteadyState gives its turn)")
-        if not program.follower.damping_ratio > 0:
+    def __init__(self, program: Program, rpm_min: float | Speeds, *, devices=None,
+                 oscillator: Oscillator | None = None):
+        if program.one_body and not program.follower.damping_ratio > 0:
             raise ValueError("the periodic steady state needs follower.damping_ratio > 0 "
                              "(without damping the start-up never settles)")
         self.program = program
-        self.train = Train.of(program)
+        # a chain's refuses an undamped mode
+        self.oscillator = Oscillator.of(program) if oscillator is None else oscillator
         self.rpm_min = Speeds.of(rpm_min, "rpm_min").min()  # an entry point's speeds: their slowest
         self.devices = resolve_devices(devices)
-        self.grid = cycle_grid(program, self.rpm_min)
+        self.grid = program_grid(program, self.rpm_min)
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
-        self.turn = PaddedTurn.of(self.grid, self.train, self.contact)
+        self.turn = PaddedTurn.of(self.grid, self.oscillator, self.contact)
         self._kept: tuple[dict[float, int], Cycle | None] = ({}, None)
         """The last batch of ``cycles``: its row of each speed, and the stacked ``Cycle``."""
 
@@ -550,15 +632,20 @@ class SteadyState:
         out = _started_cycle(jnp.asarray(rpm), self.turn, jnp.asarray(q_start, dtype=complex))
         return _node_arrays_cut(jax.tree.map(np.asarray, out), self.grid.intervals)
 
-    def lam(self, rpm: float) -> complex:
-        """Eigenvalue of the train in turn time (``lambda T``) at ``rpm``."""
-        return complex(eigenvalue(float(self.train.omega_per_turn(rpm)), float(self.train.zeta)))
+    def lam(self, rpm: float) -> np.ndarray:
+        """The oscillator's eigenvalues in turn time (``lambda T``) at ``rpm``, ``(S,)``."""
+        return 60.0 / float(rpm) * np.asarray(self.oscillator.lam)
 
     def mode_at(self, q_nodes, rpm: float, s) -> np.ndarray:
-        """The complex mode at turn times ``s`` (anywhere, exactly) from its node values."""
-        beta = float(self.train.ks / self.train.m) * (60.0 / rpm) ** 2
-        motion = self.grid.with_forcing(np.asarray(self.grid.motion.forcing) + beta * np.asarray(self.grid.lift))
-        return mode_between(motion, q_nodes, self.lam(rpm), np.mod(np.atleast_1d(np.asarray(s, dtype=float)), 1.0))
+        """The complex modes at turn times ``s`` (anywhere, exactly) from their node values
+        (``(S, K + 1)``, ``Cycle.q``): ``(S, times)``."""
+        period = 60.0 / float(rpm)
+        weights = np.asarray(self.oscillator.forcing)
+        acc, lift = np.asarray(self.grid.motion.forcing), np.asarray(self.grid.lift)
+        s = np.mod(np.atleast_1d(np.asarray(s, dtype=float)), 1.0)
+        return np.stack([
+            mode_between(self.grid.with_forcing(w[1] * acc + w[0] * period**2 * lift), q, lam, s)
+            for w, q, lam in zip(weights, np.atleast_2d(q_nodes), self.lam(rpm))])
 
 
 def startup(program: Program, rpm: float, cycles: int, *, steady: SteadyState | None = None):
@@ -570,13 +657,13 @@ def startup(program: Program, rpm: float, cycles: int, *, steady: SteadyState | 
     rpm = Speeds.of(rpm)[:1]
     steady = steady or SteadyState(program, rpm)
     s, accel, force = [], [], []
-    q_start = 0j
+    q_start = np.zeros(steady.oscillator.modes_count, complex)
     for c in range(int(cycles)):
         run = steady.cycle(rpm, q_start=q_start)
         s.append(c + steady.grid.nodes[:-1])
         accel.append(run.payload_acceleration_m_s2[:-1])
         force.append(run.contact_force_n[:-1])
-        q_start = complex(run.q[-1])
+        q_start = run.q[:, -1]
     return np.concatenate(s), np.concatenate(accel), np.concatenate(force)
 
 
@@ -604,8 +691,8 @@ def node_contact_force(program: Program, rpm, laws: dict | None = None, *, rpm_m
             raise ValueError("rpm must be one speed or a 1-D list of speeds")
         rpm = checks.ensure(rpm, lambda v: (v > 0) & (v < np.inf), "rpm must be positive and finite")
     with jax.ensure_compile_time_eval():
-        grid = cycle_grid(program, rpm_min)
+        grid = program_grid(program, rpm_min)
     for segment, law in (laws or {}).items():
         grid = with_segment_law(grid, program, segment - 1, law)
-    train = Train.of(program)
-    return jax.vmap(lambda r: _cycle(grid, train, r).contact_force_n)(rpm)
+    oscillator = Oscillator.of(program)
+    return jax.vmap(lambda r: _cycle(grid, oscillator, r).contact_force_n)(rpm)

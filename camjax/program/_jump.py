@@ -20,9 +20,10 @@ import math
 
 import numpy as np
 
-from ..sdof import eigenvalue, psi_host, step_within_host
+from ..sdof import psi_host, step_within_host
 from ._dynamics import SPEED_BLOCK, SteadyState
-from ._probes import min_preload_n as min_preload_n
+from ._oscillator import CONTACT_FORCE
+from ._outputs import min_preload_n as min_preload_n
 from ._speeds import Speeds
 
 _BISECTIONS = 3  # rounds of 64-way subdivision before the secant: a bracket shrinks by 65^3
@@ -126,20 +127,21 @@ class ContactForceBound:
     the program's forcing alone (no propagation): what rules out whole speed ranges of the
     jump's scan.
 
-    The mode obeys ``q' = lam q + f`` in turn time (``f = y_ss + beta y`` on each interval);
-    its periodic solution is ``q(s) = int_0^inf exp(lam u) f(s - u) du``.  Integrating by
-    parts three times, ``q = -f/lam - f'/lam^2 - f''/lam^3 + R`` with
-    ``|R| <= (J_f/|lam| + J_f'/|lam|^2 + V_f''/|lam|^3) / (1 - exp(Re lam))``, where
-    ``J_g`` sums the jumps of ``g`` over a turn and ``V_f''`` is the total variation of
-    ``f''`` (its jumps included).  The contact force is ``F_0 + Re(G q)`` (``G`` the force
-    gain), so it is at least ``F_0 + min_s Re(G (-f/lam - f'/lam^2 - f''/lam^3)) - |G| |R|``:
-    the quasi-static force less a remainder that grows with the speed.  At low speeds,
-    where the scan is densest (it is even in the period), the bound holds contact and
-    those speeds need no steady state.
+    Each mode obeys ``q_j' = lam_j q_j + f_j`` in turn time (``f_j = a_j y_ss + b_j T^2 y``
+    on each interval, ``Oscillator``); its periodic solution is
+    ``q_j(s) = int_0^inf exp(lam_j u) f_j(s - u) du``.  Integrating by parts three times,
+    ``q_j = -f_j/lam_j - f_j'/lam_j^2 - f_j''/lam_j^3 + R_j`` with
+    ``|R_j| <= (J_f/|lam_j| + J_f'/|lam_j|^2 + V_f''/|lam_j|^3) / (1 - exp(Re lam_j))``, where
+    ``J_g`` sums the jumps of ``g`` over a turn (at most ``|a_j| J_(y_ss) + |b_j| T^2 J_y``)
+    and ``V_f''`` is the total variation of ``f''`` (its jumps included).  The contact force
+    is ``F_0 + Re(sum_j G_j q_j) + d0 y + d1 y_s + d2 y_ss`` (``G_j`` its gains, the direct
+    terms exact), so it is at least the quasi-static force less ``sum_j |G_j| |R_j|``, a
+    remainder that grows with the speed.  At low speeds, where the scan is densest (it is
+    even in the period), the bound holds contact and those speeds need no steady state.
     """
 
     def __init__(self, steady: SteadyState):
-        grid, train = steady.grid, steady.train
+        grid = steady.grid
         widths = np.asarray(grid.piece_width)[np.asarray(grid.motion.piece)][:, None]
 
         def sampled(coefficients, count):
@@ -163,30 +165,33 @@ class ContactForceBound:
         self.jumps = [[jumps(v[n]) for v in fine] for n in range(_BOUND_ORDER - 1)]
         self.variation = [variation(v[-1]) for v in fine]
         coarse = sampled(grid.motion.forcing, _BOUND_SAMPLES), sampled(grid.lift, _BOUND_SAMPLES)
-        self.samples = np.stack([v[n].ravel() for n in range(_BOUND_ORDER) for v in coarse])
-        self.train = train
-        self.preload = float(train.preload)
+        # rows: (y_ss, y) and their first two derivatives, then y_s for the direct term
+        self.samples = np.stack([v[n].ravel() for n in range(_BOUND_ORDER) for v in coarse] + [coarse[1][1].ravel()])
+        self.oscillator = steady.oscillator
+        self.preload = float(steady.oscillator.static[CONTACT_FORCE])
 
     def __call__(self, rpm) -> np.ndarray:
         """The bound (N) at each speed of ``rpm``."""
-        train = self.train
+        osc = self.oscillator
         rpm = np.asarray(rpm, dtype=float)
-        period = 60.0 / rpm
-        w = np.asarray(train.omega_per_turn(rpm), dtype=float)
-        lam = eigenvalue(w, float(train.zeta))
-        # deflection_gains, on the host (an eager JAX op would compile for each size)
-        e_gain, e_rate_gain = -1j / lam.imag, 1.0 - 1j * lam.real / lam.imag
-        gain = 1e-3 * float(train.k) * e_gain + 1e-3 * float(train.c) / period * e_rate_gain  # N/mm
-        beta = float(train.ks / train.m) * period**2
+        period = (60.0 / rpm)[:, None]
+        lam = period * np.asarray(osc.lam)[None, :]  # (speeds, S), per turn
+        gain = np.asarray(osc.gain)[CONTACT_FORCE][None, :] / period  # of the turn-time modes
+        a, b = np.asarray(osc.forcing)[:, 1], np.asarray(osc.forcing)[:, 0] * period**2
         terms = [(-gain / lam ** (n + 1)).real for n in range(_BOUND_ORDER)]
-        weights = np.stack([x for t in terms for x in (t, t * beta)], axis=1)
-        quasi_static = (weights @ self.samples).min(axis=1)
+        e0, e1, e2 = np.asarray(osc.direct)[CONTACT_FORCE]
+        columns = []
+        for n, t in enumerate(terms):
+            columns += [(t * a).sum(axis=1) + (e2 / period[:, 0] ** 2 if n == 0 else 0.0),
+                        (t * b).sum(axis=1) + (e0 if n == 0 else 0.0)]
+        columns.append(np.full(rpm.size, e1) / period[:, 0])
+        quasi_static = (np.stack(columns, axis=1) @ self.samples).min(axis=1)
         rest = sum(
-            (acc + beta * lift) / np.abs(lam) ** (n + 1) for n, (acc, lift) in enumerate(self.jumps)
+            (np.abs(a) * acc + np.abs(b) * lift) / np.abs(lam) ** (n + 1)
+            for n, (acc, lift) in enumerate(self.jumps)
         )
-        rest = rest + (self.variation[0] + beta * self.variation[1]) / np.abs(lam) ** _BOUND_ORDER
-        return self.preload + quasi_static - np.abs(gain) * rest / -np.expm1(lam.real)
-
+        rest = rest + (np.abs(a) * self.variation[0] + np.abs(b) * self.variation[1]) / np.abs(lam) ** _BOUND_ORDER
+        return self.preload + quasi_static - (np.abs(gain) * rest / -np.expm1(lam.real)).sum(axis=1)
 
     def first_unheld(self, rpm) -> int:
         """Index of the first speed of ``rpm`` (ascending) where the bound, less
@@ -227,25 +232,31 @@ class _Turns:
     in SI, on the host (NumPy): every method takes the rows and the times (seconds) as
     arrays that broadcast, so the event searches of every speed run at once.
 
-    The lift is read from the turn's grid (its degree-5 interpolant of ``y`` per interval,
-    the one the steady state was computed from: within 1e-12 of the laws); the deflection
-    is the engine's exact step from the node before (``camjax.sdof.step_within_host``).
+    The lift is read from the turn's grid (its degree-5 interpolants of ``y`` and ``y''``
+    per interval, the ones the steady state was computed from: within 1e-12 of the laws);
+    the modes are the engine's exact step from the node before
+    (``camjax.sdof.step_within_host``), the outputs the ``Oscillator``'s.  The flight's
+    own constants (``k``, ``c``, ``k_s``, ``m``, the preload) are the classic follower's.
     """
 
     def __init__(self, steady: SteadyState, rpm: Speeds):
-        grid, tr = steady.grid, steady.train
+        grid, osc = steady.grid, steady.oscillator
+        self.oscillator = osc
         self.period = 60.0 / np.asarray(rpm, dtype=float)
-        self.lam = np.asarray(eigenvalue(tr.omega_per_turn(np.asarray(rpm, dtype=float)), tr.zeta))  # per turn
-        self.q = steady.cycles_at(rpm).q
+        self.lam = self.period[:, None] * np.asarray(osc.lam)[None, :]  # (rows, S), per turn
+        self.q = steady.cycles_at(rpm).q  # (rows, S, K + 1)
         self.nodes = np.asarray(grid.nodes)
         self.piece = np.asarray(grid.motion.piece)
         self.piece_width = np.asarray(grid.piece_width)
         self.widths = self.piece_width[self.piece]
         self.lift_coefficients = np.asarray(grid.lift)
         self.acceleration = np.asarray(grid.motion.forcing)
-        self.beta = float(tr.ks / tr.m) * self.period**2
-        self.preload, self.k, self.c = float(tr.preload), float(tr.k), float(tr.c)
-        self.ks, self.m = float(tr.ks), float(tr.m)
+        weights = np.asarray(osc.forcing)
+        self.a = weights[:, 1]
+        self.beta = weights[None, :, 0] * self.period[:, None] ** 2  # (rows, S)
+        f = steady.program.follower
+        self.preload = float(osc.static[CONTACT_FORCE])
+        self.k, self.c, self.ks, self.m = float(f.stiffness), float(f.damping), float(f.spring_rate), float(f.mass_kg)
 
     def _locate(self, rows, t):
         s = np.mod(t / self.period[rows], 1.0)
@@ -254,6 +265,11 @@ class _Turns:
 
     def lift(self, rows, t):
         """Cam lift (m) and its rate (m/s)."""
+        y, dy, _ = self._lift_jet(rows, t)
+        return 1e-3 * y, 1e-3 * dy
+
+    def _lift_jet(self, rows, t):
+        """``y`` (mm), ``y'`` (mm/s) and ``y''`` (mm/s^2) from the grid's interpolants."""
         k, delta = self._locate(rows, t)
         c = self.lift_coefficients[k]
         sigma = delta / self.widths[k]
@@ -262,20 +278,36 @@ class _Turns:
             y = y * sigma + c[..., m]
             if m:
                 dy = dy * sigma + m * c[..., m]
-        return 1e-3 * y, 1e-3 * dy / self.widths[k] / self.period[rows]
+        a = self.acceleration[k]
+        ddy = a[..., 5]
+        for m in range(4, -1, -1):
+            ddy = ddy * sigma + a[..., m]
+        period = self.period[rows]
+        return y, dy / self.widths[k] / period, ddy / period**2
+
+    def modes(self, rows, t):
+        """The physical modes (``Oscillator``) of the steady state, ``(S, ...)``."""
+        k, delta = self._locate(rows, t)
+        out = []
+        for j in range(self.lam.shape[1]):
+            forcing = self.a[j] * self.acceleration[k] + self.beta[rows, j][..., None] * self.lift_coefficients[k]
+            out.append(step_within_host(self.q[rows, j, k], forcing, self.widths[k], delta, self.lam[rows, j])
+                       / self.period[rows])
+        return np.stack(out)
 
     def deflection(self, rows, t):
-        """``e`` (m) and ``e'`` (m/s) of the steady state."""
-        k, delta = self._locate(rows, t)
-        lam = self.lam[rows]
-        forcing = self.acceleration[k] + self.beta[rows][..., None] * self.lift_coefficients[k]
-        q = step_within_host(self.q[rows, k], forcing, self.widths[k], delta, lam)
-        e = q.imag / lam.imag
-        return 1e-3 * e, 1e-3 * (q.real + lam.real * e) / self.period[rows]
+        """``e`` (m) and ``e'`` (m/s) of the classic follower's steady state."""
+        e, e_rate = self.oscillator.state(self.modes(rows, t))
+        return 1e-3 * e, 1e-3 * e_rate
 
     def contact_force(self, rows, t):
-        e, e_rate = self.deflection(rows, t)
-        return self.preload + self.k * e + self.c * e_rate
+        """The contact force (N) of the steady state, the ``Oscillator``'s row."""
+        osc = self.oscillator
+        y, dy, ddy = self._lift_jet(rows, t)
+        e0, e1, e2 = np.asarray(osc.direct)[CONTACT_FORCE]
+        gain = np.asarray(osc.gain)[CONTACT_FORCE]
+        modes = np.real(np.tensordot(gain, self.modes(rows, t), axes=(0, 0)))
+        return self.preload + modes + e0 * y + e1 * dy + e2 * ddy
 
     def sampled_force(self):
         """The contact force at ``_SAMPLES_PER_INTERVAL`` fixed fractions of every interval:
@@ -286,14 +318,20 @@ class _Turns:
         times = (self.nodes[:-1, None] + delta).ravel()
         powers = fractions[:, None] ** np.arange(6)
         out = np.empty((self.period.size, times.size))
-        for r, lam in enumerate(self.lam):  # one speed at a time: (K, samples, 6) at most
-            weights = psi_host(lam * self.piece_width[:, None] * fractions)[self.piece]
-            forcing = self.acceleration + self.beta[r] * self.lift_coefficients
-            q = (np.exp(lam * delta) * self.q[r, :-1, None]
-                 + delta * np.einsum("kc,jc,kjc->kj", forcing, powers, weights))
-            e = q.imag / lam.imag
-            e_rate = (q.real + lam.real * e) / self.period[r]
-            out[r] = (self.preload + self.k * 1e-3 * e + self.c * 1e-3 * e_rate).ravel()
+        osc = self.oscillator
+        gain = np.asarray(osc.gain)[CONTACT_FORCE]
+        e0, e1, e2 = np.asarray(osc.direct)[CONTACT_FORCE]
+        rows = np.arange(self.period.size)
+        y, dy, ddy = self._lift_jet(rows[:, None], times[None, :] * self.period[:, None])
+        for r in rows:  # one speed at a time: (K, samples, 6) at most
+            force = self.preload + e0 * y[r] + e1 * dy[r] + e2 * ddy[r]
+            for j, lam in enumerate(self.lam[r]):
+                weights = psi_host(lam * self.piece_width[:, None] * fractions)[self.piece]
+                forcing = self.a[j] * self.acceleration + self.beta[r, j] * self.lift_coefficients
+                q = (np.exp(lam * delta) * self.q[r, j, :-1, None]
+                     + delta * np.einsum("kc,jc,kjc->kj", forcing, powers, weights))
+                force = force + np.real(gain[j] * q / self.period[r]).ravel()
+            out[r] = force
         return times, out
 
 
@@ -330,6 +368,9 @@ def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
     speeds' events are searched together, flight by flight.
     """
     rpm = Speeds.of(rpm)
+    if not steady.program.one_body:
+        raise ValueError(f"program {steady.program.name!r} drives a chain of bodies: its flights are not "
+                         "simulated (the chain's free flight is not modelled)")
     out = [[] for _ in rpm]
     if steady.program.follower.form_closed:
         return out
@@ -451,21 +492,21 @@ def _fly(turns: _Turns, rows, t_sep, x0, v0, e0):
 
 class _Contact:
     """Contact after each row's impact: the steady state plus the free vibration of the
-    difference, ``tau`` seconds after the impact at ``t_i``."""
+    difference, ``tau`` seconds after the impact at ``t_i`` (the classic follower: one
+    mode, converted to and from the deflection by the ``Oscillator``)."""
 
     def __init__(self, turns: _Turns, rows, t_i, x_i, v_i):
         self.turns, self.rows, self.t_i = turns, rows, t_i
         y_i, dy_i = turns.lift(rows, t_i)
         es, des = turns.deflection(rows, t_i)
         u0, du0 = (y_i - x_i) - es, (dy_i - v_i) - des
-        self.lam = turns.lam[rows] / turns.period[rows]
-        self.q = du0 - np.conj(self.lam) * u0
+        self.lam = turns.lam[rows, 0] / turns.period[rows]
+        self.q = turns.oscillator.modes(np.stack([1e3 * u0, 1e3 * du0]))[0]
 
     def _difference(self, i, tau):
-        lam = self.lam[i]
-        z = self.q[i] * np.exp(lam * tau)
-        u = z.imag / lam.imag
-        return u, z.real + lam.real * u
+        z = self.q[i] * np.exp(self.lam[i] * tau)
+        u, du = self.turns.oscillator.state(z[None])
+        return 1e-3 * u, 1e-3 * du
 
     def force(self, i, tau):
         """Contact force (N) of rows ``i`` at ``tau``."""

@@ -22,7 +22,6 @@ import numpy as np
 from .._plain import json_ready
 from ..checks import read_toml
 from ..metrics import septic_coefficients
-from ._analysis import Report, analyse
 from ._dynamics import SteadyState
 from ._machine import (
     DEFAULT_SPEED_FLUCTUATION,
@@ -30,7 +29,8 @@ from ._machine import (
     flywheel_inertia_kg_m2,
     torque_figures,
 )
-from ._probes import BUILT_IN
+from ._outputs import BUILT_IN
+from ._report import Report, analyse
 from ._spec import Program, _no_unknown
 from ._speeds import Speeds
 

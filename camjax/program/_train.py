@@ -11,8 +11,8 @@ need 28), and its internal damping is strain-rate (Kelvin-Voigt, ``tau = 2 zeta_
 
 Every coordinate is a displacement from the preloaded rest; the cam's lift drives the
 coordinate it holds.  This module holds the chain as a value (read, checked, written back,
-its natural frequencies); its periodic steady state over a program's turn is
-``_chain_steady.py``.
+its natural frequencies); its modes are ``_oscillator.py``'s ``Oscillator.of_chain``, and its
+periodic steady state over a program's turn the program's own (``SteadyState``).
 """
 
 from __future__ import annotations
@@ -317,11 +317,11 @@ class Chain:
         return Assembly(M, C, K, beam.body_index, seat)
 
     @property
-    def kinematic_ratio(self) -> float:
-        """How far the last body moves per unit of the cam's lift with the elements rigid:
-        the product of the levers, or on an arm its place over the roller's (``at_mm /
-        arm_mm``, the rigid swing).  By virtual work it is also the ratio of the static force
-        at the cam to the spring's."""
+    def lever_ratio(self) -> float:
+        """The last body's travel per unit of the cam's lift with the elements rigid (its
+        kinematic lift's scale), and by virtual work the factor of the spring's preload at
+        the cam: the product of the levers, or on an arm the last body's place over the
+        roller's (``at_mm / arm_mm``, the rigid swing)."""
         if self.arm is not None:
             last = self.bodies[-1]  # the first rides at the roller; the others sit at at_mm
             return 1.0 if len(self.bodies) == 1 else float(last.at_mm) / self.arm.roller_mm
@@ -332,7 +332,7 @@ class Chain:
         """The static force at the cam: the spring's preload through every lever."""
         if self.spring is None:
             return 0.0
-        return self.spring.preload_n * self.kinematic_ratio
+        return self.spring.preload_n * self.lever_ratio
 
     def check_follower(self, follower: Follower) -> None:
         """A chain with an arm needs the swinging roller follower whose ``arm_mm`` is the

@@ -146,15 +146,11 @@ def main():
 
 
 def bending_history(program, rpm):
-    """Mid-rod bending over the turn (cam angle in degrees, mm) from the chain's steady state."""
-    from camjax.program import ChainSteadyState
+    """Mid-rod bending over the turn (cam angle in degrees, mm) from the steady state."""
+    from camjax.program import SteadyState, arm_bending
 
-    steady = ChainSteadyState(program, program.chain, rpm)
-    values = steady.cycles([rpm]).values[0]
-    bending = 1e3 * values[
-        1 + len(program.chain.bodies)
-    ] - program.chain.kinematic_ratio * np.asarray(steady.grid.lift_nodes)
-    return 360.0 * steady.grid.nodes, bending
+    steady = SteadyState(program, rpm)
+    return 360.0 * steady.grid.nodes, arm_bending(steady, steady.cycles([rpm]), [rpm])[0]
 
 
 def figure(histories, rows):
