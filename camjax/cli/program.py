@@ -204,10 +204,10 @@ def _arm_lines(arm: dict) -> list[str]:
              f"arm bending at {arm['body']} (its displacement less the rigid swing's), amplitude of each "
              "cam order in mm:"]
     titles = ["fund. orders", "max mm", *(f"order {k}" for k in arm["orders"])]
-    lines.append(f"{'rpm':>16}" + "".join(f"{t:>12}" for t in titles))
+    lines.append(f"{'rpm':>16}" + "".join(f"{t:>14}" for t in titles))
     for s in arm["speeds"]:
         cells = [s["fundamental_orders"], s["max_bending_mm"], *s["bending_harmonics_mm"]]
-        lines.append(f"{s['rpm']:>16.6g}" + "".join(f"{v:>12.4g}" for v in cells))
+        lines.append(f"{s['rpm']:>16.6g}" + "".join(f"{v:>14.4g}" for v in cells))
     return lines
 
 

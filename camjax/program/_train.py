@@ -301,20 +301,22 @@ class Chain:
 
         arm = self.arm
         beam = ArmAssembly(arm, [arm.roller_mm, *(b.at_mm for b in self.bodies[1:])])
+        beam_K, beam_M, body_index = beam.reduced(arm.modes)
+        n_beam = beam_K.shape[0]
         n_spring = self.spring.element_count() if self.spring is not None else 1
-        size = beam.size + n_spring
+        size = n_beam + n_spring
         seat = size - 1
         M, C, K = (np.zeros((size, size)) for _ in range(3))
-        M[: beam.size, : beam.size] += beam.M
-        K[: beam.size, : beam.size] += beam.K
-        for body, i in zip(self.bodies, beam.body_index):
+        M[:n_beam, :n_beam] += beam_M
+        K[:n_beam, :n_beam] += beam_K
+        for body, i in zip(self.bodies, body_index):
             M[i, i] += body.mass_kg
-        self._add_spring(M, C, K, [beam.body_index[-1], *range(beam.size, seat), seat])
+        self._add_spring(M, C, K, [body_index[-1], *range(n_beam, seat), seat])
         free = np.arange(1, seat)
         w2 = scipy.linalg.eigh(K[np.ix_(free, free)], M[np.ix_(free, free)], eigvals_only=True)
         tau = 2 * arm.damping_ratio / math.sqrt(w2[0])
-        C[: beam.size, : beam.size] += tau * beam.K
-        return Assembly(M, C, K, beam.body_index, seat)
+        C[:n_beam, :n_beam] += tau * beam_K
+        return Assembly(M, C, K, body_index, seat)
 
     @property
     def lever_ratio(self) -> float:
