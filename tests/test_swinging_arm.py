@@ -90,7 +90,7 @@ def test_free_arm_against_the_pinned_free_closed_form():
     pivot (a zero frequency) and bends as a pinned-free Euler-Bernoulli beam,
     ``tan(b l) = tanh(b l)``, ``w = (b l)^2 sqrt(EI / (rho A l^4))``."""
     bending, mass, _ = rod()
-    arm = Arm(bending, mass, 98.0, elements=16)
+    arm = Arm(bending, mass, 98.0, elements=16, modes=100)  # every mode: the beam itself
     hz = Chain((Body("roller", 1e-12),), arm=arm).natural_frequencies(contact=False)[0]
     roots = [
         scipy.optimize.brentq(
@@ -133,6 +133,25 @@ def test_a_mass_clamped_at_mid_span_against_the_continuous_beam():
     exact = b * b * math.sqrt(bending / mass) / (2 * math.pi)
     assert exact < Arm(bending, mass, 98.0).pinned_frequencies_hz()[0]
     assert abs(hz / exact - 1) < 1e-5
+
+
+def test_the_arm_reduced_to_its_bodies_and_first_modes():
+    """Craig-Bampton: the paper's rod with its mid-rod point kept and its first four modes
+    with the bodies held (the default) gives the first two frequencies within 1e-4 of the
+    closed form and the third within 0.3%; keeping every mode gives the elements' own
+    frequencies (the full beam, whose coordinates are all kept), and fewer modes a higher
+    first frequency (a reduction only stiffens)."""
+    chain = Program.load(example_path("swinging_arm")).chain
+    exact = chain.arm.pinned_frequencies_hz(3)
+    hz = chain.natural_frequencies()[0]
+    error = hz[:3] / exact - 1
+    assert np.all(error > 0) and np.all(error[:2] < 1e-4) and error[2] < 3e-3, error
+    everything = dataclasses.replace(chain, arm=dataclasses.replace(chain.arm, modes=100))
+    full = everything.natural_frequencies()[0]
+    only = Chain((chain.bodies[0],), arm=everything.arm).natural_frequencies()[0]
+    np.testing.assert_allclose(full[:3], only[:3], rtol=1e-10)  # a massless point changes nothing
+    fewer = dataclasses.replace(chain, arm=dataclasses.replace(chain.arm, modes=1))
+    assert fewer.natural_frequencies()[0][0] > hz[0] > full[0]
 
 
 def exact_bending_harmonics(program, chain, rpm, orders=(1, 3, 5), at=0.5):
@@ -192,9 +211,8 @@ def test_steady_state_against_the_exact_continuous_beam():
 
 @pytest.mark.slow
 def test_the_papers_tables_through_the_program_file(capsys):
-    """Slow (about a minute a law on two loaded cores: the default six elements resolve modes
-    to 2.8e5 Hz, a grid of 68,000 intervals a turn): ``camjax program swinging_arm`` at the
-    paper's 320 rad/s gives the fundamental within 1% of the paper's 13,280 rad/s and the
+    """Slow (two compiled turns of 12,500 intervals and the command's own start: over a
+    minute on two loaded cores): ``camjax program swinging_arm`` at the paper's 320 rad/s gives the fundamental within 1% of the paper's 13,280 rad/s and the
     mid-rod bending at 1, 3 and 5 Omega within 10% of the full model's spectral peaks
     (measured: 0.3-0.9%), modified sine below cycloidal at each (the paper's finding)."""
     assert main(["program", "swinging_arm", "--rpm", f"{PAPER_RPM!r}", "--format", "json"]) == 0
@@ -258,6 +276,7 @@ def _edit(path, value):
         (_edit("arm.damping_ratio", 1.0), r"\[arm\] damping_ratio must be below 1"),
         (_edit("arm.elements", 1), r"\[arm\] elements must be a whole number from 2"),
         (_edit("arm.elements", 2.5), r"\[arm\] elements must be a whole number"),
+        (_edit("arm.modes", 0), r"\[arm\] modes must be a whole number from 1"),
         (
             _edit("arm.length_mm", 50.0),
             r"\[arm\] length_mm = 50 is shorter than the roller's place",
