@@ -15,6 +15,7 @@ from helpers import FOLLOWER, compiled_programs, two_cycloids
 from camjax.program import (
     Body,
     Chain,
+    ContactForceBound,
     Follower,
     Oscillator,
     Spring,
@@ -544,3 +545,16 @@ def test_a_stiffening_chain_tends_to_the_one_body_follower_in_every_output():
     gaps = [np.abs(outputs(three_body_chain(s), t["ratio"]) - reference) for s in (10.0, 1000.0)]
     assert np.all(gaps[1] < 0.05 * gaps[0]), gaps
     assert np.all(gaps[1] < 2e-3 * reference), (gaps, reference)
+
+
+@pytest.mark.parametrize("chain, slowest", [("three", 200.0), ("surging", 1000.0)])
+def test_the_contact_force_bound_holds_for_a_chain(chain, slowest):
+    """``ContactForceBound`` summed over a chain's modes stays below its least contact
+    force, and still rules out the low speeds (where the jump's scan is densest)."""
+    built = three_body_chain() if chain == "three" else surging_chain(damping_ratio=0.05)
+    steady = chain_steady(two_cycloids(), built, slowest)
+    rpm = np.geomspace(slowest, 3000.0, 32)
+    force = steady.min_contact_force_n(rpm)
+    bound = ContactForceBound(steady)(rpm)
+    assert np.all(bound <= force), (rpm[bound > force], bound[bound > force], force[bound > force])
+    assert bound[0] > 0.5 * force[0]

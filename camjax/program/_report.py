@@ -11,23 +11,17 @@ import numpy as np
 
 from .._plain import json_ready, plot_speed
 from ._arm import arm_section
+from ._contact import Geometry, RefinedStress, cam_geometry, refined_contact_stress
 from ._dynamics import SteadyState
 from ._groove import Impact, groove_turns
 from ._jump import Flight, _Turns, flights_at, jump_speed_rpm
-from ._machine import (
-    DEFAULT_SPEED_FLUCTUATION,
-    Geometry,
-    RefinedStress,
-    cam_geometry,
-    check_speed_fluctuation,
-    design_warnings,
-    refined_contact_stress,
-)
 from ._motion import Join, segment_kinematics
 from ._oscillator import PAYLOAD_DISPLACEMENT
 from ._outputs import Outputs, Probe, ProbeContext, kinematic_peak_m_s2
 from ._spec import Program
 from ._speeds import Speeds
+from ._torque import DEFAULT_SPEED_FLUCTUATION, check_speed_fluctuation
+from ._warnings import design_warnings
 
 
 def kinematic_acceleration_m_s2(program: Program, rpm) -> np.ndarray:

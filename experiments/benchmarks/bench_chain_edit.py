@@ -55,7 +55,9 @@ def main() -> None:
     args = parser.parse_args()
     cam = program()
     rpm = np.linspace(300.0, 1500.0, 101)
-    SteadyState(dataclasses.replace(cam, chain=chain(1.05)), 300.0).summary(rpm)  # compile and warm up
+    SteadyState(dataclasses.replace(cam, chain=chain(1.05)), 300.0).summary(
+        rpm
+    )  # compile and warm up
     compiled = []
 
     def listener(event, duration, **kwargs):
