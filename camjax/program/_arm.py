@@ -28,6 +28,9 @@ import math
 
 import numpy as np
 
+from ..geometry import SwingingRollerFollower
+from ._follower import Follower, follower_kind
+
 DEFAULT_ELEMENTS = 12
 """Elements over the arm's length by default (``bending_frequency_ratios(12)``: 3e-6, 5e-5
 and 2.6e-4 for the first three modes of a uniform pinned arm)."""
@@ -140,12 +143,14 @@ def arm_from_dict(table, follower: dict | None) -> Arm:
     follower, whose ``arm_mm`` places the roller.  Errors are one line naming the field."""
     if not isinstance(table, dict):
         raise ValueError("[arm] must be a table")
-    kind = (follower or {}).get("kind", "translating-roller")
-    if kind != "swinging-roller":
+    follower = follower or {}
+    default = {f.name: f.default for f in dataclasses.fields(Follower)}["kind"]
+    kind = follower.get("kind", default)
+    if follower_kind(kind) is not SwingingRollerFollower:
         raise ValueError(
-            f"[arm]: a flexible arm belongs to a swinging roller follower ([follower] kind = "
-            f'"swinging-roller"), not {kind!r}: a translating follower\'s train is [[train]] '
-            "bodies on elements"
+            "[arm]: a flexible arm belongs to a swinging roller follower ([follower] kind = "
+            f"{SwingingRollerFollower.name!r}), not {kind!r}: a translating follower's train "
+            "is [[train]] bodies on elements"
         )
     unknown = sorted(set(table) - ARM_FIELDS)
     if unknown:

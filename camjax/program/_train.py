@@ -24,6 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..geometry import SwingingRollerFollower
 from ._arm import Arm, ArmAssembly, arm_from_dict
 from ._follower import Follower
 
@@ -341,7 +342,7 @@ class Chain:
         arm's roller place (one line naming the field otherwise)."""
         if self.arm is None:
             return
-        if follower.kind != "swinging-roller":
+        if not isinstance(follower.geometry, SwingingRollerFollower):
             raise ValueError(
                 f"[arm]: a flexible arm belongs to a swinging roller follower, not {follower.kind!r}"
             )
