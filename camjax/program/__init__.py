@@ -136,6 +136,7 @@ from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
 from ._speeds import Speeds as Speeds
 from ._speeds import warn_implausible as warn_implausible
 from ._torque import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
+from ._train import CLASSIC_FIELDS as CLASSIC_FIELDS
 from ._train import Body as Body
 from ._train import Chain as Chain
 from ._train import Seat as Seat
