@@ -142,6 +142,7 @@ def test_a_chain_posted_as_json_is_its_file(running, tmp_path):
         "ratio",
         "lever_mass_kg",
         "lash_mm",
+        "at_mm",  # a body's place on a swinging follower's flexible [arm]
     ]
     spring = {f["name"]: (f["required"], f["default"]) for f in fields["spring"]}
     assert spring["rate_n_per_mm"] == (True, None) and spring["elements"] == (False, None)

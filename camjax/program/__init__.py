@@ -12,7 +12,7 @@ the profile, the figures); ``analyse_machine`` adds the torques of several cams 
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
 (``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
 preload over a speed range).  ``Chain`` is the follower as a chain of bodies (a valve
-train, a spring that surges); ``Oscillator`` is the follower's modes in physical units,
+train, a spring that surges, or bodies on a swinging follower's flexible ``Arm``); ``Oscillator`` is the follower's modes in physical units,
 the classic one-body follower's or a chain's, which ``SteadyState`` takes alike; a
 servo's ``Drive`` and ``Motor`` give the motor's torque over the turn (``duty_cycle``,
 ``size_motor``, ``choose_motor`` from a catalogue, ``program_motor_choice`` at a program's
@@ -23,6 +23,8 @@ docs/machine.md, docs/valve-trains.md and docs/servo.md.
 
 from typing import TYPE_CHECKING
 
+from ._arm import Arm as Arm
+from ._arm import arm_bending as arm_bending
 from ._compensate import Compensation as Compensation
 from ._compensate import check_smooth as check_smooth
 from ._compensate import compensate as compensate
