@@ -30,6 +30,7 @@ import numpy as np
 
 from ..geometry import SwingingRollerFollower
 from ._follower import Follower, follower_kind
+from ._follower import field_number as _number
 
 DEFAULT_ELEMENTS = 12
 """Elements over the arm's length by default (``bending_frequency_ratios(12)``: 3e-6, 5e-5
@@ -37,16 +38,6 @@ and 2.6e-4 for the first three modes of a uniform pinned arm)."""
 MAX_ELEMENTS = 64
 DEFAULT_MODES = 4
 """The arm's modes kept, with its bodies held (Craig-Bampton; ``ArmAssembly.reduced``)."""
-
-
-def _number(value, where: str, *, positive: bool = False, non_negative: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"{where} must be a finite number, got {value!r}")
-    if positive and not value > 0:
-        raise ValueError(f"{where} must be positive, got {value:g}")
-    if non_negative and value < 0:
-        raise ValueError(f"{where} must be non-negative, got {value:g}")
-    return float(value)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -149,6 +149,18 @@ def _as_floats(record) -> None:
             object.__setattr__(record, field.name, float(value))
 
 
+def field_number(value, where: str, *, positive: bool = False, non_negative: bool = False) -> float:
+    """A program file's number ``value`` as a float, finite (and positive or non-negative if
+    asked), else a ``ValueError`` naming ``where`` (the table, body and field)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{where} must be a finite number, got {value!r}")
+    if positive and not value > 0:
+        raise ValueError(f"{where} must be positive, got {value:g}")
+    if non_negative and value < 0:
+        raise ValueError(f"{where} must be non-negative, got {value:g}")
+    return float(value)
+
+
 def _positive(value, what: str) -> float:
     value = _finite(value, what)
     if value <= 0:

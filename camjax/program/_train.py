@@ -27,21 +27,12 @@ import numpy as np
 from ..geometry import SwingingRollerFollower
 from ._arm import Arm, ArmAssembly, arm_from_dict
 from ._follower import Follower
+from ._follower import field_number as _number
 
 SURGE_TOLERANCE = 0.005
 """Default spring discretisation: the fewest elements whose first three surge frequencies
 (both ends held) are within this share of the continuous spring's."""
 MAX_SPRING_ELEMENTS = 64
-
-
-def _number(value, where: str, *, positive: bool = False, non_negative: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"{where} must be a finite number, got {value!r}")
-    if positive and not value > 0:
-        raise ValueError(f"{where} must be positive, got {value:g}")
-    if non_negative and value < 0:
-        raise ValueError(f"{where} must be non-negative, got {value:g}")
-    return float(value)
 
 
 @dataclasses.dataclass(frozen=True)
