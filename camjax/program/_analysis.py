@@ -234,14 +234,17 @@ def _chain_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed_fl
     section, summary = train_section(program, chain, rpm)
     spring = chain.spring is not None
     levers = float(np.prod([b.ratio for b in chain.bodies if not b.rides]))
+    contacts = section.get("contacts")  # lash or a seat: simulated, the cam's separation says jump
+    jump = (summary.min_contact_force_n < 0 if contacts is None
+            else np.array([s["separates"].get("cam", False) for s in contacts["speeds"]]))
     known = {
         "max_payload_acceleration_m_s2": summary.max_acceleration_m_s2[:, -1],
         "max_kinematic_acceleration_m_s2": kinematic_peak_m_s2(program, rpm),
         "min_contact_force_n": summary.min_contact_force_n,
         "max_contact_force_n": summary.max_contact_force_n,
         "min_preload_n": min_preload_n(summary.min_contact_force_n / levers, chain.spring.preload_n)
-        if spring else None,
-        "jump": summary.min_contact_force_n < 0 if spring else np.zeros(rpm.size, bool),
+        if spring and contacts is None else None,
+        "jump": jump if spring else np.zeros(rpm.size, bool),
     }
     rows = tuple(SpeedReport(rpm=float(r), values={
         name: None if known.get(name) is None else np.asarray(known[name])[i].item() for name in outputs})

@@ -589,3 +589,28 @@ def contact_section(chain: Chain, turns: list[ContactTurn]) -> dict:
         hit = [t.rpm for t in turns if t.separates.get(name)]
         lowest[name] = min(hit) if hit else None
     return {"speeds": per_speed, "lowest_separation_rpm": lowest}
+
+
+CONTACTS_NOTE = (
+    "lash or a seat: the chain's periodic steady state is simulated (diffrax) with its one-sided "
+    "contacts; the rest state has the valve on its seat carrying the spring's preload, the lash open; "
+    "extremes are over the samples of the settled turn; a contact separates where it opens while the "
+    "valve is off its seat (anywhere without a seat), the seat where the valve bounces; jump speed: the "
+    "lowest speed given at which the cam separates"
+)
+
+
+def simulated_train(program, chain: Chain, rpm: np.ndarray, options: ContactOptions | None = None):
+    """``train_section``'s figures for a chain with contacts: the ``ChainSummary``, the
+    ``contacts`` part of the section (``contact_section``), the jump speed (the lowest speed of
+    ``rpm`` at which the cam separates; ``None`` where it holds at every one, or at the lowest
+    already: then ``below`` is true)."""
+    rpm = np.asarray(rpm, dtype=float)
+    summary, turns = ChainContacts(program, chain, float(rpm.min()), options).summary(rpm)
+    contacts = {"note": CONTACTS_NOTE, **contact_section(chain, turns)}
+    cam = np.array([t.separates.get("cam", False) for t in turns])
+    below = bool(cam[np.argmin(rpm)])
+    jump = None
+    if not below and cam.any():
+        jump = float(rpm[cam].min())
+    return summary, contacts, jump, below

@@ -373,12 +373,18 @@ def train_section(program, chain: Chain, rpm: np.ndarray) -> tuple[dict, ChainSu
     the range, only one speed is given, or it is lost at the lowest already:
     ``jump_below_range``); with the summary itself for the report's rows."""
     rpm = np.asarray(rpm, dtype=float)
-    steady = ChainSteadyState(program, chain, float(rpm.min()))
-    summary = steady.summary(rpm)
-    spring = chain.spring is not None  # without one the cam is form-closed: no jump
-    jump, below = None, spring and bool(summary.min_contact_force_n[np.argmin(rpm)] <= 0)
-    if spring and not below and rpm.size > 1 and rpm.max() > rpm.min():
-        jump = steady.jump_speed(float(rpm.max()))
+    contacts = None
+    if chain.has_contacts:  # lash or a seat: not linear, simulated (_chain_contacts.py)
+        from ._chain_contacts import simulated_train
+
+        summary, contacts, jump, below = simulated_train(program, chain, rpm)
+    else:
+        steady = ChainSteadyState(program, chain, float(rpm.min()))
+        summary = steady.summary(rpm)
+        spring = chain.spring is not None  # without one the cam is form-closed: no jump
+        jump, below = None, spring and bool(summary.min_contact_force_n[np.argmin(rpm)] <= 0)
+        if spring and not below and rpm.size > 1 and rpm.max() > rpm.min():
+            jump = steady.jump_speed(float(rpm.max()))
     frequencies = {}
     for key, contact in (("held", True), ("free", False)):
         hz, shapes = chain.natural_frequencies(contact=contact)
@@ -411,5 +417,6 @@ def train_section(program, chain: Chain, rpm: np.ndarray) -> tuple[dict, ChainSu
         "speeds": speeds,
         "jump_speed_rpm": jump,
         "jump_below_range": below,
+        **({} if contacts is None else {"contacts": contacts}),
     }
     return section, summary
