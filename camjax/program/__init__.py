@@ -12,7 +12,8 @@ the profile, the figures); ``analyse_machine`` adds the torques of several cams 
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
 (``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
 preload over a speed range).  ``Chain`` is the follower as a chain of bodies (a valve
-train, a spring that surges) and ``ChainSteadyState`` its exact periodic steady state; a
+train, a spring that surges) and ``ChainSteadyState`` its exact periodic steady state
+(``ChainContacts`` simulates one with lash or a seat); a
 servo's ``Drive`` and ``Motor`` give the motor's torque over the turn (``duty_cycle``,
 ``size_motor``, ``choose_motor`` from a catalogue, ``program_motor_choice`` at a program's
 speeds), and ``compensate`` the cam lift that
@@ -29,6 +30,9 @@ from ._analysis import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s
 from ._analysis import max_contact_stress as max_contact_stress
 from ._analysis import period_ratios as period_ratios
 from ._analysis import response as response
+from ._chain_contacts import ChainContacts as ChainContacts
+from ._chain_contacts import ContactOptions as ContactOptions
+from ._chain_contacts import ContactTurn as ContactTurn
 from ._chain_steady import ChainModes as ChainModes
 from ._chain_steady import ChainSteadyState as ChainSteadyState
 from ._chain_steady import ChainSummary as ChainSummary

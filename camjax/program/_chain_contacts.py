@@ -158,7 +158,7 @@ class ContactSystem(NamedTuple):
             before = 0 if j == 0 else a.body_index[j - 1]
             elements.append((j, before, a.body_index[j], body))
         forces = {}
-        for j, before, after, body in reversed(elements):
+        for j, _, _, body in reversed(elements):
             forces[j] = carried
             carried *= body.ratio
         for j, before, after, body in elements:
@@ -192,7 +192,6 @@ class ContactSystem(NamedTuple):
             seat_k = 1e3 * chain.seat.stiffness_n_per_mm
             seat_c = chain.seat.damping_n_s_per_m
             seat_s0 = preload / seat_k
-        m1 = chain.bodies[0].mass_kg
         top = max(chain.highest_frequency_hz(), 1.0)
         w_p = 2 * math.pi * RIDER_CONTACT_HZ * top
         if seated:
@@ -232,8 +231,11 @@ class ContactSystem(NamedTuple):
         m_last = 1.0 / self.Minv[self.body_rows[-1], self.body_rows[-1]]
         seat = math.sqrt(float(self.seat_k) / m_last) if float(self.seat_k) else 0.0
         rider = math.sqrt(float(self.rider_k)) if float(self.rider) else 0.0
-        return max(seat, rider, float(np.sqrt(np.max(self.k) * np.max(np.diag(self.Minv))))
-                   if self.k.size else 0.0) / (2 * math.pi)
+        return max(
+            seat,
+            rider,
+            float(np.sqrt(np.max(self.k) * np.max(np.diag(self.Minv)))) if self.k.size else 0.0,
+        ) / (2 * math.pi)
 
 
 def _lift_at(nodes, lift, acceleration, s):
@@ -305,24 +307,65 @@ def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: Co
         acc, f, signal, f_seat, seat_signal, lam, w = _state_forces(system, y, yd, ydd, u, v)
         last = system.body_rows[-1]
         cam = lam + system.g_cam @ f
-        spring = (system.preload - system.spring_K @ u - system.spring_C @ v - system.spring_M @ acc)
-        return jnp.concatenate([
-            jnp.stack([cam, f_seat, seat_signal, w, 1e3 * u[last], v[last], acc[last], spring,
-                       spring - system.preload - system.rate * u[last], 1e3 * y]),
-            f, signal, acc[system.body_rows]])
+        spring = system.preload - system.spring_K @ u - system.spring_C @ v - system.spring_M @ acc
+        return jnp.concatenate(
+            [
+                jnp.stack(
+                    [
+                        cam,
+                        f_seat,
+                        seat_signal,
+                        w,
+                        1e3 * u[last],
+                        v[last],
+                        acc[last],
+                        spring,
+                        spring - system.preload - system.rate * u[last],
+                        1e3 * y,
+                    ]
+                ),
+                f,
+                signal,
+                acc[system.body_rows],
+            ]
+        )
 
     controller = diffrax.ClipStepSizeController(
-        diffrax.PIDController(rtol=options.rtol, atol=options.atol), jump_ts=grid.jumps)
+        diffrax.PIDController(rtol=options.rtol, atol=options.atol), jump_ts=grid.jumps
+    )
     solution = diffrax.diffeqsolve(
-        diffrax.ODETerm(field), diffrax.Tsit5(), 0.0, 1.0, None, z0,
-        saveat=diffrax.SaveAt(subs=[diffrax.SubSaveAt(t1=True),
-                                    diffrax.SubSaveAt(ts=jnp.linspace(0.0, 1.0, samples + 1), fn=sample)]),
-        stepsize_controller=controller, max_steps=options.max_steps, throw=False)
+        diffrax.ODETerm(field),
+        diffrax.Tsit5(),
+        0.0,
+        1.0,
+        None,
+        z0,
+        saveat=diffrax.SaveAt(
+            subs=[
+                diffrax.SubSaveAt(t1=True),
+                diffrax.SubSaveAt(ts=jnp.linspace(0.0, 1.0, samples + 1), fn=sample),
+            ]
+        ),
+        stepsize_controller=controller,
+        max_steps=options.max_steps,
+        throw=False,
+    )
     end, samples_out = solution.ys
     return end[-1], samples_out, solution.result == diffrax.RESULTS.successful
 
 
-_COLUMNS = ("cam", "seat", "seat_signal", "gap", "last_mm", "last_v", "last_a", "spring", "surge", "lift_mm")
+_COLUMNS = (
+    "cam",
+    "seat",
+    "seat_signal",
+    "gap",
+    "last_mm",
+    "last_v",
+    "last_a",
+    "spring",
+    "surge",
+    "lift_mm",
+)
 
 
 def _turns_compiled():
@@ -398,7 +441,9 @@ class ChainContacts:
     any speeds from ``rpm_min`` up (``ContactOptions``), in blocks of ``SPEED_BLOCK`` speeds
     through one compiled turn per shape (coordinates, elements, grid and samples)."""
 
-    def __init__(self, program, chain: Chain, rpm_min: float, options: ContactOptions | None = None):
+    def __init__(
+        self, program, chain: Chain, rpm_min: float, options: ContactOptions | None = None
+    ):
         self.program, self.chain = program, chain
         self.options = options or ContactOptions()
         self.rpm_min = Speeds.of(rpm_min, "rpm_min").min()
@@ -410,15 +455,21 @@ class ChainContacts:
         jumps = program.turn.breakpoints_deg() / 360.0
         jumps = jumps[(jumps > 0) & (jumps < 1)]
         jumps = np.concatenate([jumps, np.full(bucket(jumps.size + 1, 8) - jumps.size, 0.5)])
-        self._grid = _Grid(nodes, np.concatenate([np.asarray(grid.lift), pad]),
-                           np.concatenate([np.asarray(grid.motion.forcing), pad]), np.sort(jumps))
+        self._grid = _Grid(
+            nodes,
+            np.concatenate([np.asarray(grid.lift), pad]),
+            np.concatenate([np.asarray(grid.motion.forcing), pad]),
+            np.sort(jumps),
+        )
         self.kinematic_ratio = float(np.prod([b.ratio for b in chain.bodies if not b.rides]))
         period = 60.0 / self.rpm_min
         wanted = SAMPLES_PER_CONTACT * period * 2 * self.system.stiffest_hz
         self.samples = int(self.options.samples or bucket(max(4096, math.ceil(wanted)), 1024))
         lift = np.asarray(grid.lift_nodes)
-        self._scale = (max(float(np.ptp(lift)), 1e-3) * max(self.kinematic_ratio, 1.0),
-                       max(float(np.max(np.abs(grid.velocity_nodes))), 1e-3) * max(self.kinematic_ratio, 1.0))
+        self._scale = (
+            max(float(np.ptp(lift)), 1e-3) * max(self.kinematic_ratio, 1.0),
+            max(float(np.max(np.abs(grid.velocity_nodes))), 1e-3) * max(self.kinematic_ratio, 1.0),
+        )
 
     def _block(self, rpm: np.ndarray):
         """Turns from rest at the speeds ``rpm`` (one block) until settled: the last
@@ -436,17 +487,22 @@ class ChainContacts:
                 raise ValueError(
                     f"[[train]]: the chain's contacts at {bad:g} rpm could not be followed within "
                     f"{o.max_steps:,} steps a turn (ContactOptions.max_steps): a stiffer seat or "
-                    "lash element than the integration can resolve")
+                    "lash element than the integration can resolve"
+                )
             d = np.asarray(end - z)
-            change = np.maximum(np.max(np.abs(d[:, :n]), axis=1) / self._scale[0],
-                                np.max(np.abs(d[:, n:]), axis=1) / self._scale[1])
+            change = np.maximum(
+                np.max(np.abs(d[:, :n]), axis=1) / self._scale[0],
+                np.max(np.abs(d[:, n:]), axis=1) / self._scale[1],
+            )
             z = end
             if turn >= 2 and np.all(change <= o.settle_tolerance):
                 return np.asarray(samples), turn, change
         worst = float(rpm[np.argmax(change)])
-        raise ValueError(f"{self._damp_hint()}: the chain at {worst:g} rpm does not settle within "
-                         f"{o.max_turns} turns (its state still moves by {np.max(change):.2g} of the lift "
-                         f"a turn, against {o.settle_tolerance:g}): give it damping")
+        raise ValueError(
+            f"{self._damp_hint()}: the chain at {worst:g} rpm does not settle within "
+            f"{o.max_turns} turns (its state still moves by {np.max(change):.2g} of the lift "
+            f"a turn, against {o.settle_tolerance:g}): give it damping"
+        )
 
     def _damp_hint(self) -> str:
         seat = self.chain.seat
@@ -461,13 +517,18 @@ class ChainContacts:
         """The settled turn at every speed of ``rpm``."""
         rpm = np.asarray(Speeds.of(rpm), dtype=float)
         if rpm.min() < self.rpm_min * (1 - 1e-12):
-            raise ValueError(f"rpm {rpm.min():g} below the simulation's slowest speed {self.rpm_min:g}")
+            raise ValueError(
+                f"rpm {rpm.min():g} below the simulation's slowest speed {self.rpm_min:g}"
+            )
         out = []
         for start in range(0, rpm.size, SPEED_BLOCK):
-            block = rpm[start:start + SPEED_BLOCK]
+            block = rpm[start : start + SPEED_BLOCK]
             padded = np.pad(block, (0, SPEED_BLOCK - block.size), mode="edge")
             samples, turns, change = self._block(padded)
-            out += [self._read(float(r), samples[i], turns, float(change[i])) for i, r in enumerate(block)]
+            out += [
+                self._read(float(r), samples[i], turns, float(change[i]))
+                for i, r in enumerate(block)
+            ]
         return out
 
     def _read(self, rpm: float, x: np.ndarray, turns: int, change: float) -> ContactTurn:
@@ -477,9 +538,9 @@ class ChainContacts:
         chain, s = self.chain, self.system
         col = {name: x[:, i] for i, name in enumerate(_COLUMNS)}
         E = s.k.size
-        forces = x[:, len(_COLUMNS):len(_COLUMNS) + E].T
-        signals = x[:, len(_COLUMNS) + E:len(_COLUMNS) + 2 * E].T
-        acc = x[:, len(_COLUMNS) + 2 * E:].T
+        forces = x[:, len(_COLUMNS) : len(_COLUMNS) + E].T
+        signals = x[:, len(_COLUMNS) + E : len(_COLUMNS) + 2 * E].T
+        acc = x[:, len(_COLUMNS) + 2 * E :].T
         theta = np.linspace(0.0, 360.0, x.shape[0])
         step = theta[1] - theta[0]
         period = 60.0 / rpm
@@ -523,17 +584,31 @@ class ChainContacts:
                     gap0 = s.seat_s0 - 1e-3 * col["last_mm"][i]  # the seat's approach (m)
                     rate, accel = -col["last_v"][i], -col["last_a"][i]
                     tau = _first_root(gap0, rate, accel, dt)
-                    impacts.append(Impact(float(theta[i] + 360.0 * tau / period),
-                                          float(rate + accel * tau)))
+                    impacts.append(
+                        Impact(float(theta[i] + 360.0 * tau / period), float(rate + accel * tau))
+                    )
                 seating = impacts[0].velocity_m_s
                 bounces = tuple(impacts[1:])
             separates["seat"] = bool(bounces)
         return ContactTurn(
-            rpm=rpm, theta_deg=theta, lift_mm=col["lift_mm"], last_mm=col["last_mm"],
-            last_velocity_m_s=col["last_v"], cam_force_n=col["cam"], seat_contact_force_n=col["seat"],
-            element_force_n=forces, acceleration_m_s2=acc, spring_seat_force_n=col["spring"],
-            surge_n=col["surge"], seating_velocity_m_s=seating, bounces=bounces,
-            lash_openings_deg=lash_openings, separates=separates, turns=turns, change=change)
+            rpm=rpm,
+            theta_deg=theta,
+            lift_mm=col["lift_mm"],
+            last_mm=col["last_mm"],
+            last_velocity_m_s=col["last_v"],
+            cam_force_n=col["cam"],
+            seat_contact_force_n=col["seat"],
+            element_force_n=forces,
+            acceleration_m_s2=acc,
+            spring_seat_force_n=col["spring"],
+            surge_n=col["surge"],
+            seating_velocity_m_s=seating,
+            bounces=bounces,
+            lash_openings_deg=lash_openings,
+            separates=separates,
+            turns=turns,
+            change=change,
+        )
 
     def summary(self, rpm) -> tuple[ChainSummary, list[ContactTurn]]:
         """The ``ChainSummary`` of the simulated turns (extremes over the samples) and the
@@ -574,15 +649,20 @@ def contact_section(chain: Chain, turns: list[ContactTurn]) -> dict:
     separations; per contact the lowest speed at which it separates."""
     per_speed = []
     for t in turns:
-        per_speed.append({
-            "seating_velocity_m_s": t.seating_velocity_m_s,
-            "bounce_count": len(t.bounces),
-            "bounces": [b.as_dict() for b in t.bounces],
-            "lash_openings": {name: {"count": len(a), "angles_deg": a} for name, a in t.lash_openings_deg.items()},
-            "separates": dict(t.separates),
-            "turns": t.turns,
-            "change": t.change,
-        })
+        per_speed.append(
+            {
+                "seating_velocity_m_s": t.seating_velocity_m_s,
+                "bounce_count": len(t.bounces),
+                "bounces": [b.as_dict() for b in t.bounces],
+                "lash_openings": {
+                    name: {"count": len(a), "angles_deg": a}
+                    for name, a in t.lash_openings_deg.items()
+                },
+                "separates": dict(t.separates),
+                "turns": t.turns,
+                "change": t.change,
+            }
+        )
     contacts = list(turns[0].separates) if turns else []
     lowest = {}
     for name in contacts:

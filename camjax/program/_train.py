@@ -487,9 +487,7 @@ def chain_from_dict(data: dict) -> Chain | None:
             or "stiffness_n_per_mm" not in seat
             or not set(seat) <= {"stiffness_n_per_mm", "damping_n_s_per_m"}
         ):
-            raise ValueError(
-                "[seat] takes stiffness_n_per_mm and optionally damping_n_s_per_m"
-            )
+            raise ValueError("[seat] takes stiffness_n_per_mm and optionally damping_n_s_per_m")
         seat_obj = Seat(**seat)
     return Chain(tuple(bodies), spring_obj, seat_obj)
 
