@@ -85,16 +85,22 @@ def _event_driven(program, chain: Chain, rpm: float, turns: int = 3):
         fs = kseat * s + cseat * sd if mode[1] else 0.0
         return [z[1], (f + fs - preload - ks * z[0]) / m]
 
-    def lash_event(t, z, mode):
-        a, ad, _, _ = parts(t, z)
-        return k * a + c * ad if mode[0] else a
+    def events(mode):
+        """Each contact's event: ``min(k a, k a + c a')`` (positive while it is closed)
+        crossing zero downwards where it is closed, upwards where it is open."""
 
-    def seat_event(t, z, mode):
-        _, _, s, sd = parts(t, z)
-        return kseat * s + cseat * sd if mode[1] else s
+        def lash_event(t, z, *_):
+            a, ad, _, _ = parts(t, z)
+            return min(k * a, k * a + c * ad)
 
-    for event in (lash_event, seat_event):
-        event.terminal = True
+        def seat_event(t, z, *_):
+            _, _, s, sd = parts(t, z)
+            return min(kseat * s, kseat * s + cseat * sd)
+
+        for event, closed in ((lash_event, mode[0]), (seat_event, mode[1])):
+            event.terminal, event.direction = True, -1.0 if closed else 1.0
+        return lash_event, seat_event
+
     t, z, mode = 0.0, np.zeros(2), [False, True]  # at rest: the lash open, the valve seated
     landings = []
     end = turns * period
@@ -106,7 +112,7 @@ def _event_driven(program, chain: Chain, rpm: float, turns: int = 3):
             method="DOP853",
             rtol=1e-11,
             atol=1e-14,
-            events=(lash_event, seat_event),
+            events=events(mode),
             args=(mode,),
             max_step=period / 200,
         )

@@ -580,8 +580,11 @@ class ChainContacts:
                 first = int(np.argmax(lengths))
                 order = [closes[(first + k) % closes.size] for k in range(closes.size)]
                 impacts = []
+                approach = s.seat_s0 - 1e-3 * col["last_mm"]  # the seat's (m)
                 for i in order:
-                    gap0 = s.seat_s0 - 1e-3 * col["last_mm"][i]  # the seat's approach (m)
+                    while approach[i] > 0:  # touching already, below the threshold of closed:
+                        i -= 1  # read the landing from the last sample in flight
+                    gap0 = approach[i]
                     rate, accel = -col["last_v"][i], -col["last_a"][i]
                     tau = _first_root(gap0, rate, accel, dt)
                     impacts.append(

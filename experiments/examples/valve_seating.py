@@ -28,7 +28,10 @@ def main() -> None:
     rpm = [float(r) for r in args.rpm.split(",")]
     turns = ChainContacts(program, chain, min(rpm)).turns(rpm)
     ratio = float(np.prod([b.ratio for b in chain.bodies if not b.rides]))
-    lash = chain.bodies[-1].lash_mm
+    valve = chain.bodies[-1]
+    # the valve's quasi-static lift: the cam's through the rocker, less the lash and the
+    # rocker's compression under the spring's preload
+    offset = valve.lash_mm + chain.spring.preload_n / (1e3 * valve.stiffness_n_per_mm)
     fig, axes = plt.subplots(
         len(turns), 1, figsize=(8, 3.2 * len(turns)), layout="constrained", sharex=True
     )
@@ -43,7 +46,11 @@ def main() -> None:
             label="cam's kinematic lift x ratio",
         )
         ax.plot(
-            theta, ratio * turn.lift_mm[window] - lash, ":", color="0.5", label="... less the lash"
+            theta,
+            ratio * turn.lift_mm[window] - offset,
+            ":",
+            color="0.5",
+            label="... less the lash and the rocker's compression by the preload",
         )
         ax.plot(theta, turn.last_mm[window], color="C0", label="valve")
         landing = [(b.angle_deg, b.velocity_m_s) for b in turn.bounces]
