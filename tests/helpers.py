@@ -8,6 +8,12 @@ SDOF's numbers (to the tolerance given; ``None``: a model with no damping to com
 """
 
 import contextlib
+import json
+import math
+import urllib.error
+import urllib.parse
+import urllib.request
+from typing import NamedTuple
 
 import jax
 import numpy as np
@@ -72,6 +78,31 @@ def assert_same_numbers(got, expected, rtol=COMPILED_RTOL, atol=COMPILED_ATOL):
 FOLLOWER = dict(kind="translating-roller", mass_kg=1.5, stiffness_n_per_mm=2000.0, damping_ratio=0.05,
                 spring_rate_n_per_mm=10.0, preload_n=300.0, base_radius_mm=40.0, roller_radius_mm=12.0)
 """The program tests' follower (a ``camjax.program.Follower``'s fields)."""
+
+
+class FollowerConstants(NamedTuple):
+    """A classic follower's constants in SI (k, k_s in N/m; c in N s/m), read from its
+    fields apart from the library's oscillator: the tests' reference."""
+
+    m: float
+    k: float
+    ks: float
+    c: float
+    preload: float
+    omega: float
+    zeta: float
+
+    def omega_per_turn(self, rpm):
+        return self.omega * 60.0 / rpm
+
+
+def follower_constants(program) -> FollowerConstants:
+    f = program.follower
+    m, k, ks = f.mass_kg, 1e3 * f.stiffness_n_per_mm, 1e3 * (f.spring_rate_n_per_mm or 0.0)
+    c = 2 * f.damping_ratio * math.sqrt(k * m)
+    omega = math.sqrt((k + ks) / m)
+    return FollowerConstants(m, k, ks, c, 0.0 if f.spring_rate_n_per_mm is None else f.preload_n, omega,
+                             c / (2 * m * omega))
 
 
 def two_cycloids(**follower):
@@ -176,3 +207,18 @@ def program_lift(program):
         return tuple(float(v[0]) for v in program.lift(np.array([theta])))
 
     return lift
+
+
+def call(url: str, data: str | None = None):
+    """(status, decoded JSON) of a GET of the studio's ``url``, or of a POST of ``data`` (a
+    TOML text) as the page sends it: from the studio's own origin.  An error status comes
+    back with its JSON body, not raised."""
+    parts = urllib.parse.urlsplit(url)
+    headers = {} if data is None else {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/toml"}
+    request = urllib.request.Request(url, data=None if data is None else data.encode(), headers=headers,
+                                     method="GET" if data is None else "POST")
+    try:
+        with urllib.request.urlopen(request, timeout=600) as response:
+            return response.status, json.load(response)
+    except urllib.error.HTTPError as error:
+        return error.code, json.load(error)

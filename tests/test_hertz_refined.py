@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import FOLLOWER
+from helpers import FOLLOWER, follower_constants
 from scipy.optimize import minimize_scalar
 
 from camjax import laws
@@ -50,7 +50,7 @@ KINDS = {
 
 def hertz(program: Program, steady: SteadyState, rpm: float):
     """``theta_deg -> (p_max, R')`` from the mission's formula, the force exact anywhere."""
-    train, f = steady.train, program.follower
+    train, f = follower_constants(steady.program), program.follower
     q_nodes = steady.cycle(rpm).q
     ge, gr = (complex(g) for g in deflection_gains(train.omega_per_turn(rpm), train.zeta))
     gain = 1e-3 * train.k * ge + 1e-3 * train.c / (60.0 / rpm) * gr
@@ -58,7 +58,7 @@ def hertz(program: Program, steady: SteadyState, rpm: float):
 
     def at(theta_deg):
         theta_deg = np.atleast_1d(np.asarray(theta_deg, dtype=float))
-        force = train.preload + np.real(gain * steady.mode_at(q_nodes, rpm, theta_deg / 360.0))
+        force = train.preload + np.real(gain * steady.mode_at(q_nodes, rpm, theta_deg / 360.0)[0])
         g = contact_geometry(program, theta_deg)
         rho = g.cam_radius_mm[1]  # inside an interval both sides agree
         curvature = 1.0 / rho + (0.0 if f.flat_face else 1.0 / f.roller_radius_mm)

@@ -9,7 +9,7 @@ import tomllib
 
 import numpy as np
 import pytest
-from helpers import FOLLOWER
+from helpers import FOLLOWER, follower_constants
 from scipy.integrate import quad
 
 from camjax import laws
@@ -41,14 +41,14 @@ def indexer():
 def exact_torque(steady: SteadyState, rpm: float):
     """``T(theta_deg) = F_c dy/dtheta`` (N m) from the exact mode anywhere (``mode_at``)
     and the program's own lift derivative: no grid, no interpolant."""
-    cycle, train, program = steady.cycle(rpm), steady.train, steady.program
+    cycle, train, program = steady.cycle(rpm), follower_constants(steady.program), steady.program
     period = 60.0 / rpm
     ge, gr = (complex(g) for g in deflection_gains(train.omega_per_turn(rpm), train.zeta))
     gain = 1e-3 * train.k * ge + 1e-3 * train.c / period * gr
 
     def torque(theta_deg):
         theta_deg = np.atleast_1d(np.asarray(theta_deg, dtype=float))
-        force = train.preload + np.real(gain * steady.mode_at(cycle.q, rpm, theta_deg / 360.0))
+        force = train.preload + np.real(gain * steady.mode_at(cycle.q, rpm, theta_deg / 360.0)[0])
         return force * program.lift(theta_deg)[1] * (180.0 / math.pi) * 1e-3
 
     return torque
@@ -112,10 +112,10 @@ def test_hertz_stress_against_a_hand_computed_case(indexer):
     # 1/R' = 1/r_r + 1/rho, p = sqrt(F_n E* / (pi L R')) and the half-width b = 2 R' p / E*,
     # with the exact contact force there (the steady state's mode between the nodes).
     theta = float(report.max_contact_stress_deg)
-    train = steady.train
+    train = follower_constants(steady.program)
     ge, gr = (complex(g) for g in deflection_gains(train.omega_per_turn(600.0), train.zeta))
     gain = 1e-3 * train.k * ge + 1e-3 * train.c / 0.1 * gr
-    force = float(train.preload + np.real(gain * steady.mode_at(steady.cycle(600.0).q, 600.0, theta / 360.0))[0])
+    force = float(train.preload + np.real(gain * steady.mode_at(steady.cycle(600.0).q, 600.0, theta / 360.0)[0])[0])
     assert min(abs(theta - j) for j in (0.0, 100.0, 180.0, 280.0, 360.0)) > 1e-6  # not at a join
     y, dy, ddy = (float(v[0]) for v in indexer.lift(np.array([theta])))
     r, dr, ddr = 40.0 + 12.0 + y, dy * 180 / math.pi, ddy * (180 / math.pi) ** 2

@@ -10,7 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from helpers import FOLLOWER, scipy_periodic_deflection
+from helpers import FOLLOWER, follower_constants, scipy_periodic_deflection
 
 from camjax import laws
 from camjax.cli import main
@@ -284,7 +284,7 @@ def test_feed_steady_state_and_constant_velocity_residual_match_scipy(feed):
     period = 60.0 / rpm
     pick = np.arange(0, steady.grid.nodes.size - 1, 11)
     e, de = scipy_periodic(feed, rpm, steady.grid.nodes[pick] * period)
-    tr = steady.train
+    tr = follower_constants(steady.program)
     force = tr.preload + tr.k * e + tr.c * de
     assert np.abs(cycle.contact_force_n[pick] - force).max() < 1e-7 * np.abs(force).max()
     # Residual vibration where the working stroke starts (80 deg): the free vibration

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from helpers import (
     FOLLOWER,
+    follower_constants,
     program_lift,
     scipy_deflection,
     scipy_periodic_deflection,
@@ -164,7 +165,7 @@ def test_periodic_steady_state_matches_a_scipy_shooting_solve(cam, solver):
     period = 60.0 / rpm
     pick = np.arange(0, solver.grid.nodes.size - 1, 7)
     e_scipy, de_scipy = _shooting(cam, rpm, solver.grid.nodes[pick] * period)
-    tr = solver.train
+    tr = follower_constants(solver.program)
     force = tr.preload + tr.k * e_scipy + tr.c * de_scipy
     assert np.abs(steady.contact_force_n[pick] - force).max() < 1e-7 * np.abs(force).max()
 
@@ -194,7 +195,7 @@ def test_every_flight_of_the_turn_matches_a_scipy_event_solve(cam, solver):
     rpm = 900.0
     result = flights(solver, rpm)
     assert flight(solver, rpm) == result[0]
-    tr = solver.train
+    tr = follower_constants(solver.program)
     period = 60.0 / rpm
     rate = 360.0 / period
 
@@ -411,6 +412,44 @@ def test_swinging_roller_program_geometry():
         Program("swing", program.segments, Follower(**{**FOLLOWER, "kind": "swinging-roller"}))
 
 
+KIND_SAMPLES = {  # a follower of each kind whose cam is smooth and convex enough for a face
+    "translating-roller": dict(offset_mm=4.0),
+    "swinging-roller": dict(arm_mm=98.0, pivot_mm=110.0),
+    "translating-flat": dict(base_radius_mm=60.0),
+    "swinging-flat": dict(base_radius_mm=100.0, arm_mm=150.0, pivot_mm=250.0),
+}
+
+
+@pytest.mark.parametrize("kind", list(KIND_SAMPLES))
+def test_a_kinds_keys_are_the_fields_that_shape_its_cam(kind):
+    """``follower_kinds`` (what the studio offers for a kind) lists exactly the follower
+    fields that move its cam's profile: each geometric field nudged by 2%, the profile
+    moves where it is listed and stays to the last bit where it is not."""
+    from camjax.program import FOLLOWER_KINDS, follower_kinds
+
+    assert [k["name"] for k in follower_kinds()] == list(FOLLOWER_KINDS)
+    listed = next(k for k in follower_kinds() if k["name"] == kind)
+    follower = {**FOLLOWER, "kind": kind, "roller_radius_mm": 12.0, "offset_mm": 0.0, "arm_mm": 98.0,
+                "pivot_mm": 110.0, **KIND_SAMPLES[kind]}
+    base = profile(two_cycloids(**follower), 72).profile
+    moved = set()
+    for key in ("base_radius_mm", "roller_radius_mm", "offset_mm", "arm_mm", "pivot_mm"):
+        nudged = {**follower, key: 1.02 * follower[key] + (0.5 if key == "offset_mm" else 0.0)}
+        if key == "base_radius_mm" and not listed["roller"]:
+            nudged["base_radius_mm"] = follower[key] + 0.5
+        try:
+            shape = profile(two_cycloids(**nudged), 72).profile
+        except ValueError:  # a field the kind does not take, refused (a translating face's offset)
+            continue
+        if np.abs(shape - base).max() > 1e-3:
+            moved.add(key)
+        else:
+            assert np.array_equal(shape, base), key
+    assert moved == set(listed["keys"])
+    assert listed["roller"] == ("roller_radius_mm" in moved)
+    assert listed["swinging"] == ("pivot_mm" in moved)
+
+
 def test_preload_objective_is_the_program_steady_state_and_its_gradient(cam, solver):
     """The objective's training value is the steady state's required preload (the program's
     own SteadyState path, refined between nodes), and its gradient matches finite differences."""
@@ -552,10 +591,10 @@ def test_groove_clearance_hands_over_to_backlash(tmp_path, capsys):
     # A vanishing clearance: the train force is the contact-held one, k e + c e'.
     solver = SteadyState(groove_cam(None), rpm)
     tight = camjax.program.groove_turns(groove_cam(1e-6), [rpm])[0]
-    lam = solver.lam(rpm)
-    q = solver.mode_at(solver.cycle(rpm).q, rpm, tight.theta_deg / 360.0)
+    lam = solver.lam(rpm)[0]
+    q = solver.mode_at(solver.cycle(rpm).q, rpm, tight.theta_deg / 360.0)[0]
     e = q.imag / lam.imag
-    held = 1e-3 * (solver.train.k * e + solver.train.c * (q.real + lam.real * e) / period)
+    held = 1e-3 * (follower_constants(solver.program).k * e + follower_constants(solver.program).c * (q.real + lam.real * e) / period)
     assert np.abs(tight.force_n - held).max() < 1e-5 * np.abs(held).max()  # measured 1e-6
     report = analyse(program, [rpm]).speeds[0]
     assert [i.angle_deg for i in report.impacts] == pytest.approx([i.angle_deg for i in turns.impacts])

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import call
 
 from camjax import program as cp
 from camjax.cli import dump_json, main
@@ -53,20 +54,6 @@ def cli_json(*args) -> dict:
     with contextlib.redirect_stdout(out):
         assert main(["program", *args, "--format", "json"]) == 0
     return json.loads(out.getvalue())
-
-
-def call(url, data: str | None = None):
-    """(status, decoded JSON) of a GET, or of a POST of ``data`` (a TOML text) as the page sends
-    it: from the studio's own origin."""
-    parts = urllib.parse.urlsplit(url)
-    headers = {} if data is None else {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/toml"}
-    request = urllib.request.Request(url, data=None if data is None else data.encode(), headers=headers,
-                                     method="GET" if data is None else "POST")
-    try:
-        with urllib.request.urlopen(request, timeout=600) as response:
-            return response.status, json.load(response)
-    except urllib.error.HTTPError as error:
-        return error.code, json.load(error)
 
 
 @pytest.fixture(scope="module")

@@ -2,10 +2,12 @@
 continuous spring, the exact periodic steady state against an independent frequency-domain
 solution written here (Fourier series of the lift times the chain's exact response)."""
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
+import scipy.integrate
 import scipy.linalg
 import scipy.optimize
 from helpers import FOLLOWER, compiled_programs, two_cycloids
@@ -13,12 +15,14 @@ from helpers import FOLLOWER, compiled_programs, two_cycloids
 from camjax.program import (
     Body,
     Chain,
-    ChainModes,
-    ChainSteadyState,
+    ContactForceBound,
     Follower,
+    Oscillator,
     Spring,
     SteadyState,
+    analyse,
     chain_from_dict,
+    jump_speed_rpm,
 )
 
 LB = 0.45359237  # kg
@@ -165,6 +169,30 @@ def test_bad_train_input_is_one_line(edit, message):
 # -- the steady state -------------------------------------------------------------------
 
 
+def chain_steady(program, chain, rpm_min):
+    """The steady state of ``program`` driving ``chain``."""
+    return SteadyState(dataclasses.replace(program, chain=chain), rpm_min)
+
+
+class Summary:
+    """A chain's figures per speed (``SteadyState.summary`` and its ``TrainPeaks``)."""
+
+    def __init__(self, steady, rpm):
+        out = steady.summary(np.asarray(rpm, dtype=float))
+        peaks = out.cycles.train
+        self.min_contact_force_n, self.max_contact_force_n = (
+            out.min_contact_force_n,
+            out.max_contact_force_n,
+        )
+        self.max_acceleration_m_s2 = np.asarray(peaks.max_acceleration_m_s2)
+        self.min_seat_force_n, self.max_seat_force_n = (
+            peaks.min_seat_force_n,
+            peaks.max_seat_force_n,
+        )
+        self.max_surge_n = peaks.max_surge_n
+        self.cycles = out.cycles
+
+
 def test_one_body_spellings_and_the_classic_follower():
     """The classic fields and a one-body ``[[train]]`` are one chain (same numbers); its
     steady state is the classic follower's (the two paths interpolate the lift's second
@@ -185,17 +213,26 @@ def test_one_body_spellings_and_the_classic_follower():
     }
     assert chain_from_dict(tables) == Chain.of_follower(f)
     rpm = np.array([400.0, 700.0, 1000.0])
-    chain = ChainSteadyState(program, Chain.of_follower(f), 300.0)
     classic = SteadyState(program, 300.0)
-    cycles = chain.cycles(rpm)
-    for i, r in enumerate(rpm):
-        c = classic.cycle(r)
-        force, accel = cycles.values[i, 0], cycles.values[i, 1]
-        assert np.max(np.abs(force - c.contact_force_n)) < 1e-10 * np.max(np.abs(c.contact_force_n))
-        peak = c.max_payload_acceleration_m_s2
-        assert np.max(np.abs(accel - c.payload_acceleration_m_s2)) < 1e-10 * peak
-        assert abs(cycles.low[i, 0] - c.min_contact_force_n) < 1e-10 * c.max_contact_force_n
-        assert abs(cycles.peak[i, 0] - peak) < 1e-10 * peak
+    # the chain's own realisation (forced by the lift alone) through the same steady state
+    chain = SteadyState(program, 300.0, oscillator=Oscillator.of_chain(Chain.of_follower(f)))
+    a, b = classic.cycles(rpm), chain.cycles(rpm)
+    for i in range(rpm.size):
+        peak_force, peak = a.max_contact_force_n[i], a.max_payload_acceleration_m_s2[i]
+        assert np.max(np.abs(b.contact_force_n[i] - a.contact_force_n[i])) < 1e-10 * peak_force
+        assert (
+            np.max(np.abs(b.payload_acceleration_m_s2[i] - a.payload_acceleration_m_s2[i]))
+            < 1e-10 * peak
+        )
+        assert abs(b.min_contact_force_n[i] - a.min_contact_force_n[i]) < 1e-10 * peak_force
+        assert abs(b.max_payload_acceleration_m_s2[i] - peak) < 1e-10 * peak
+        assert (
+            abs(b.max_drive_torque_n_m[i] - a.max_drive_torque_n_m[i])
+            < 1e-10 * a.max_drive_torque_n_m[i]
+        )
+        np.testing.assert_allclose(
+            b.residual_vibration_mm[i], a.residual_vibration_mm[i], rtol=1e-8
+        )
 
 
 def cycloid_lift(s):
@@ -258,9 +295,9 @@ def frequency_domain(rpm, samples=2**17):
 
 
 def test_three_body_chain_against_the_frequency_domain():
-    steady = ChainSteadyState(two_cycloids(), three_body_chain(), 400.0)
+    steady = chain_steady(two_cycloids(), three_body_chain(), 400.0)
     rpm = np.array([600.0, 1100.0])
-    summary = steady.summary(rpm)
+    summary = Summary(steady, rpm)
     for i, r in enumerate(rpm):
         force, accel = frequency_domain(r)
         scale = np.max(np.abs(force))
@@ -271,8 +308,8 @@ def test_three_body_chain_against_the_frequency_domain():
 
 
 def test_three_body_jump_speed_against_the_frequency_domain():
-    steady = ChainSteadyState(two_cycloids(), three_body_chain(), 400.0)
-    jump = steady.jump_speed(3000.0, tolerance_rpm=1e-3)
+    steady = chain_steady(two_cycloids(), three_body_chain(), 400.0)
+    jump = jump_speed_rpm(steady, 400.0, 3000.0, tolerance_rpm=1e-3)
     assert jump is not None
 
     def low(r):
@@ -296,12 +333,12 @@ def test_stiff_elements_tend_to_one_body_of_the_summed_mass():
         (Body("one", total, 1e-3 * t["k"][0], t["c"][0]),),
         Spring(1e-3 * ks, t["ratio"] * t["preload"]),
     )
-    reference = ChainSteadyState(program, one, 500.0).summary([800.0]).max_contact_force_n[0]
+    reference = Summary(chain_steady(program, one, 500.0), [800.0]).max_contact_force_n[0]
     gaps = [
         abs(
-            ChainSteadyState(program, three_body_chain(s), 500.0)
-            .summary([800.0])
-            .max_contact_force_n[0]
+            Summary(chain_steady(program, three_body_chain(s), 500.0), [800.0]).max_contact_force_n[
+                0
+            ]
             - reference
         )
         for s in (10.0, 1000.0)
@@ -316,8 +353,8 @@ def test_seat_force_of_a_surging_spring_against_the_continuous_spring():
     chain = surging_chain(damping_ratio=0.05)
     s = SURGING
     rpm = 60 * chain.natural_frequencies()[0][0] / 7.5
-    steady = ChainSteadyState(program, chain, rpm)
-    summary = steady.summary([rpm])
+    steady = chain_steady(program, chain, rpm)
+    summary = Summary(steady, [rpm])
     samples = 2**14
     Y = np.fft.rfft(1e-3 * cycloid_lift(np.arange(samples) / samples)) / samples
     w = 2 * np.pi * np.arange(Y.size) * rpm / 60.0
@@ -339,7 +376,7 @@ def test_seat_force_of_a_surging_spring_against_the_continuous_spring():
 
 def test_an_edit_of_values_compiles_nothing():
     program = two_cycloids()
-    ChainSteadyState(program, three_body_chain(), 500.0).summary([600.0, 900.0])
+    chain_steady(program, three_body_chain(), 500.0).summary(np.array([600.0, 900.0]))
     edited = Chain(
         tuple(
             b.__class__(**{**b.__dict__, "mass_kg": 1.1 * b.mass_kg})
@@ -347,14 +384,14 @@ def test_an_edit_of_values_compiles_nothing():
         ),
         Spring(25.0, 800.0),
     )
-    steady = ChainSteadyState(program, edited, 500.0)
+    steady = chain_steady(program, edited, 500.0)
     assert (
-        steady._motion.nodes.shape
-        == ChainSteadyState(program, three_body_chain(), 500.0)._motion.nodes.shape
+        steady.turn.grid.motion.nodes.shape
+        == chain_steady(program, three_body_chain(), 500.0).turn.grid.motion.nodes.shape
     )
     with compiled_programs() as names:
-        steady.summary([600.0, 700.0, 900.0])
-    assert "_chain_cycles" not in names, names
+        steady.summary(np.array([600.0, 700.0, 900.0]))
+    assert "_cycles" not in names, names
 
 
 def test_the_classic_fields_build_the_one_body_chain():
@@ -362,11 +399,14 @@ def test_the_classic_fields_build_the_one_body_chain():
     chain = Chain.of_follower(follower)
     hz = chain.natural_frequencies()[0]
     np.testing.assert_allclose(hz, follower.natural_frequency_hz, rtol=1e-12)
-    modes = ChainModes.of(chain)
+    modes = Oscillator.of_chain(chain)
     np.testing.assert_allclose(
         np.sort(np.abs(modes.lam)), 2 * math.pi * follower.natural_frequency_hz, rtol=1e-12
     )
-    assert scipy.linalg.norm(modes.static - [follower.preload_n, 0, 0, follower.preload_n, 0]) == 0
+    # contact, payload acceleration and displacement, the body's acceleration, seat force,
+    # surge and lift error: the preload at the cam and at the seat
+    preload = follower.preload_n
+    assert scipy.linalg.norm(modes.static - [preload, 0, 0, 0, preload, 0, 0]) == 0
 
 
 def test_the_steady_state_refuses_what_it_does_not_model():
@@ -374,7 +414,147 @@ def test_the_steady_state_refuses_what_it_does_not_model():
         (Body("tappet", 0.03), Body("valve", 0.05, 200.0, 5.0, lash_mm=0.2)), Spring(52.0, 250.0)
     )
     with pytest.raises(ValueError, match=r"body 2 \(valve\) lash_mm: .* simulated \(ChainContacts\)"):
-        ChainModes.of(lash)
+        Oscillator.of_chain(lash)
     alone = Chain((Body("tappet", 0.03),), Spring(52.0, 250.0))
     with pytest.raises(ValueError, match="nothing to vibrate"):
-        ChainModes.of(alone)
+        Oscillator.of_chain(alone)
+
+
+# -- every output of the one-body follower, for a chain ---------------------------------
+
+
+def cycloid_slope(deg):
+    """The two-cycloids program's ``dy/dtheta`` (mm/deg), by hand."""
+    deg = np.mod(deg, 360.0)
+    rise = 0.2 * (1 - np.cos(2 * np.pi * deg / 100))
+    fall = -0.2 * (1 - np.cos(2 * np.pi * (deg - 180) / 100))
+    return np.select([deg < 100, deg < 180, deg < 280], [rise, 0.0, fall], 0.0)
+
+
+def test_a_chains_drive_torque_is_its_contact_force_times_the_velocity_ratio():
+    """``T = F_c dy/dtheta``: the three-body chain's peak drive torque against the
+    frequency-domain contact force times the cam's own slope, written here."""
+    program = dataclasses.replace(two_cycloids(), chain=three_body_chain())
+    rpm = np.array([600.0, 1100.0])
+    rows = SteadyState(program, 400.0).summary(rpm)
+    samples = 2**17
+    slope = cycloid_slope(360.0 * np.arange(samples) / samples) * 180 / math.pi * 1e-3  # m per rad
+    for i, r in enumerate(rpm):
+        torque = frequency_domain(r, samples)[0] * slope
+        peak = np.max(np.abs(torque))
+        assert abs(rows.max_drive_torque_n_m[i] - peak) < 1e-6 * peak
+        assert abs(rows.mean_drive_torque_n_m[i] - torque.mean()) < 1e-6 * peak
+
+
+TWO_FREE = dict(m=(0.4, 0.5), k=(2.0e6, 1.0e6), c=(60.0, 50.0), ks=2.0e4, preload=900.0)
+
+
+def two_free_bodies():
+    t = TWO_FREE
+    return Chain(
+        (
+            Body("a", t["m"][0], 1e-3 * t["k"][0], t["c"][0]),
+            Body("b", t["m"][1], 1e-3 * t["k"][1], t["c"][1]),
+        ),
+        Spring(1e-3 * t["ks"], t["preload"]),
+    )
+
+
+def test_a_chains_residual_vibration_against_scipy_over_the_dwell():
+    """Two bodies on elements (two modes): the periodic state at the dwell's start by a
+    scipy shooting solve, the last body's free vibration over the dwell by solve_ivp, and
+    its envelope ``sum_j |c_j|`` from scipy's own eigenvectors: the report's residual is
+    that envelope, and the vibration over the dwell stays under it."""
+    t = TWO_FREE
+    (m1, m2), (k1, k2), (c1, c2), ks = t["m"], t["k"], t["c"], t["ks"]
+    rpm = 900.0
+    period = 60.0 / rpm
+    rate = 360.0 / period
+    program = dataclasses.replace(two_cycloids(), chain=two_free_bodies())
+    residual = SteadyState(program, rpm).summary(np.array([rpm])).residual_vibration_mm[0]
+
+    def field(time, z, hold=None):
+        y = 1e-3 * (cycloid_lift(time / period) if hold is None else hold)
+        dy = 0.0 if hold is not None else 1e-3 * cycloid_slope(rate * time) * rate
+        x1, x2, v1, v2 = z
+        f1 = k1 * (y - x1) + c1 * (dy - v1) - k2 * (x1 - x2) - c2 * (v1 - v2)
+        f2 = k2 * (x1 - x2) + c2 * (v1 - v2) - ks * x2
+        return [v1, v2, f1 / m1, f2 / m2]
+
+    options = dict(method="DOP853", rtol=1e-12, atol=1e-15)
+    edges = np.array([0.0, 100.0, 180.0, 280.0, 360.0]) / rate
+
+    def turn(z0, stop=360.0):
+        z = np.asarray(z0, dtype=float)
+        for a, b in zip(edges[:-1], edges[1:]):
+            b = min(b, stop / rate)
+            if b > a:
+                z = scipy.integrate.solve_ivp(field, (a, b), z, **options).y[:, -1]
+        return z
+
+    c = turn(np.zeros(4))
+    phi = np.stack([turn(e) - c for e in np.eye(4)], axis=1)
+    start = np.linalg.solve(np.eye(4) - phi, c)  # the periodic state at 0 deg
+    at_dwell = turn(start, stop=100.0)
+    h = cycloid_lift(100.0 / 360.0)
+    static = np.linalg.solve([[k1 + k2, -k2], [-k2, k2 + ks]], [k1 * 1e-3 * h, 0.0])
+    free = at_dwell - np.concatenate([static, [0.0, 0.0]])
+    A = np.array(
+        [
+            [0, 0, 1, 0],
+            [0, 0, 0, 1],
+            [-(k1 + k2) / m1, k2 / m1, -(c1 + c2) / m1, c2 / m1],
+            [k2 / m2, -(k2 + ks) / m2, c2 / m2, -(c2) / m2],
+        ]
+    )
+    lam, V = scipy.linalg.eig(A)
+    amplitudes = V[1] * np.linalg.solve(V, free)  # x2's free vibration: sum_j a_j exp(lam_j t)
+    envelope = 1e3 * np.sum(np.abs(amplitudes))
+    assert abs(residual[0] - envelope) < 1e-6 * envelope
+    dwell = scipy.integrate.solve_ivp(
+        lambda s, z: field(s, z, hold=h), (0.0, 80.0 / rate), at_dwell, dense_output=True, **options
+    )
+    tau = np.linspace(0.0, 80.0 / rate, 20001)
+    vibration = 1e3 * (dwell.sol(tau)[1] - static[1])
+    modal = 1e3 * np.real(np.exp(np.outer(tau, lam)) @ amplitudes)
+    assert np.max(np.abs(vibration - modal)) < 1e-7 * envelope  # the modes are the dwell's motion
+    assert np.max(np.abs(vibration)) <= envelope * (1 + 1e-9)
+    assert np.max(np.abs(vibration)) > 0.3 * envelope
+
+
+def test_a_stiffening_chain_tends_to_the_one_body_follower_in_every_output():
+    """The three-body chain's drive torque, Hertz stress and residual vibration (the last
+    body's, through the lever) tend to the one body's of the lever-reduced mass."""
+    program = two_cycloids(contact_width_mm=12.0)
+    t = THREE
+    total = t["m"][0] + t["ratio"] ** 2 * (t["m"][1] + t["m"][2])
+    one = Chain(
+        (Body("one", total, 1e-3 * t["k"][0], t["c"][0]),),
+        Spring(1e-3 * t["ratio"] ** 2 * t["ks"], t["ratio"] * t["preload"]),
+    )
+    rpm = [800.0]
+
+    def outputs(chain, scale=1.0):
+        report = analyse(dataclasses.replace(program, chain=chain), rpm, with_flight=False)
+        row = report.speeds[0]
+        return np.array(
+            [row.max_drive_torque_n_m, row.max_contact_stress_mpa, *row.residual_vibration_mm]
+        ) / np.array([1.0, 1.0, scale, scale])
+
+    reference = outputs(one)
+    gaps = [np.abs(outputs(three_body_chain(s), t["ratio"]) - reference) for s in (10.0, 1000.0)]
+    assert np.all(gaps[1] < 0.05 * gaps[0]), gaps
+    assert np.all(gaps[1] < 2e-3 * reference), (gaps, reference)
+
+
+@pytest.mark.parametrize("chain, slowest", [("three", 200.0), ("surging", 1000.0)])
+def test_the_contact_force_bound_holds_for_a_chain(chain, slowest):
+    """``ContactForceBound`` summed over a chain's modes stays below its least contact
+    force, and still rules out the low speeds (where the jump's scan is densest)."""
+    built = three_body_chain() if chain == "three" else surging_chain(damping_ratio=0.05)
+    steady = chain_steady(two_cycloids(), built, slowest)
+    rpm = np.geomspace(slowest, 3000.0, 32)
+    force = steady.min_contact_force_n(rpm)
+    bound = ContactForceBound(steady)(rpm)
+    assert np.all(bound <= force), (rpm[bound > force], bound[bound > force], force[bound > force])
+    assert bound[0] > 0.5 * force[0]

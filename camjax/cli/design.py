@@ -142,6 +142,8 @@ def run(args) -> int:
 
     from tqdm import tqdm
 
+    from ..caches import carried
+
     plotting = import_aside("camjax.plot")  # imports while the design compiles
     from .. import law_design as D
     from ..laws import save
@@ -190,7 +192,7 @@ def run(args) -> int:
     # traced, compiled and run on a thread beside the design (XLA releases the GIL while it
     # compiles and runs, so the two compiles share the machine's cores).
     with ThreadPoolExecutor(1) as pool:
-        standard = pool.submit(_standard_laws_compared, ratios, args.damping, args.knots,
+        standard = pool.submit(carried(_standard_laws_compared), ratios, args.damping, args.knots,
                                sweep_options)
         result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=steps,
                           optimizer=args.optimizer, progress=not args.quiet,

@@ -130,23 +130,15 @@ def _table(typed, grooved: bool = False) -> str:
     report = typed.as_dict()
     lines = [f"program {typed.program}"]
     columns = _block(typed, "speed")
-    chain = typed.train is not None and not typed.train["one_body"]
-    if chain:  # a chain's rows: only what its steady state gives (Report.train's note)
-        lines += _rows(typed.speeds, columns)
-        lines.append("Fc: contact force at the cam of the chain's periodic steady state with contact held "
-                     "(linear); max|x''|: the last body's")
-    else:
-        lines.append(_header(columns) + "  period ratios   residual mm")
-        for s in typed.speeds:
-            lines.append(_row(s, columns) + f"  {_numbers(s.period_ratios, '{:.3f}'):<15} "
-                         f"{_numbers(s.residual_vibration_mm)}")
-        lines.append("Fc: contact force of the periodic steady state with contact held (linear); period "
-                     "ratios per moving segment; residual: vibration amplitude at the start of each dwell "
-                     "and constant-velocity stroke")
+    lines.append(_header(columns) + "  period ratios   residual mm")
+    for s in typed.speeds:
+        lines.append(_row(s, columns) + f"  {_numbers(s.period_ratios, '{:.3f}'):<15} "
+                     f"{_numbers(s.residual_vibration_mm)}")
+    lines.append("Fc: contact force of the periodic steady state with contact held (linear); period "
+                 "ratios per moving segment; residual: vibration amplitude at the start of each dwell "
+                 "and constant-velocity stroke")
     for table in dict.fromkeys(p.table for p in typed.columns() if p.table != "speed"):
         columns = _block(typed, table)
-        if chain:
-            columns = tuple(p for p in columns if any(getattr(s, p.name) is not None for s in typed.speeds))
         if columns:
             lines += _rows(typed.speeds, columns)
     if grooved:
@@ -325,7 +317,7 @@ def run(args) -> int:
                            "follower's; a train's are not written yet: use --format json")
         motors = _motors(args, program)  # before the analysis: a bad motor file fails at once
         out = output_dir(args.out)
-        steady = SteadyState(program, rpm) if program.one_body else None
+        steady = SteadyState(program, rpm)
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
                          speed_fluctuation=args.speed_fluctuation)
         if out is not None:

@@ -15,6 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..laws import AbstractMotionLaw
+from ..sdof import eigenvalue
 
 _GAUSS_ORDER = 12
 _MAX_PHASE_PER_PANEL = 2.0  # radians of exp(lambda u) across one quadrature panel
@@ -51,7 +52,7 @@ def residual_kernel(period_ratios: np.ndarray, damping: float, nodes, weights):
     """``K[k, q]`` with ``R_k Ca = |K[k] @ a(nodes)|`` (complex, NumPy): the residual is
     linear in the acceleration at the quadrature ``nodes`` (``quadrature``)."""
     omega = 2 * np.pi * np.asarray(period_ratios, dtype=float)[:, None]
-    lam = -damping * omega + 1j * omega * np.sqrt(1.0 - damping**2)
+    lam = eigenvalue(omega, damping)  # the engine's (NumPy for concrete values)
     return omega / np.sqrt(1.0 - damping**2) * weights * np.exp(lam * (1.0 - nodes))
 
 

@@ -2,7 +2,7 @@
 
 A chain with a lash or a seat (``Chain.has_contacts``) is not linear, so its periodic steady
 state is found by time integration (diffrax, Tsit5 with error control, vmapped over the
-speeds) rather than by the exact propagation of ``_chain_steady.py``.  The contacts:
+speeds) rather than by the exact propagation of the closed chain (``SteadyState``).  The contacts:
 
 - **The cam.**  A first body that rides on the cam is held on it by a unilateral
   constraint: while its gap ``w = x_1 - y`` is zero the contact force ``lambda`` is what
@@ -27,7 +27,7 @@ are measured from, and it decides which elements carry the spring's preload ``P`
   other elements just touch (the cam's contact force on the base circle is zero).  The
   cam's opening ramp must first close the lash and compress the chain by ``P`` over its
   stiffness before the valve leaves its seat;
-- *without a seat*: the chain is the closed chain of ``_chain_steady.py`` (every element
+- *without a seat*: the chain is the closed chain of ``SteadyState`` (every element
   carries ``P`` through the levers, a lash is closed); a lash opens only where the dynamic
   force would pull, so its size does not matter.
 
@@ -56,8 +56,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._shapes import bucket
-from ._chain_steady import SPEED_BLOCK, ChainSummary
-from ._dynamics import cycle_grid
+from ._cycle_grid import cycle_grid
+from ._dynamics import SPEED_BLOCK
 from ._speeds import Speeds
 from ._train import Chain
 
@@ -436,6 +436,20 @@ def _interval_lengths(closed: np.ndarray, closings: np.ndarray, openings: np.nda
     return np.asarray(out)
 
 
+class ContactSummary(NamedTuple):
+    """The simulated chain's figures at every speed (``ChainContacts.summary``): extremes
+    over the settled turn's samples, as the closed chain's train section gives them."""
+
+    rpm: np.ndarray
+    min_contact_force_n: np.ndarray
+    max_contact_force_n: np.ndarray
+    max_acceleration_m_s2: np.ndarray  # (speeds, bodies): each body's peak |x''|
+    max_lift_error_mm: np.ndarray  # the last body's largest distance from its kinematic lift
+    min_seat_force_n: np.ndarray  # the spring's force at its seat
+    max_seat_force_n: np.ndarray
+    max_surge_n: np.ndarray  # the seat force's largest distance from the spring's static force
+
+
 class ChainContacts:
     """A program driving a chain with contacts: its periodic steady state by simulation at
     any speeds from ``rpm_min`` up (``ContactOptions``), in blocks of ``SPEED_BLOCK`` speeds
@@ -613,15 +627,15 @@ class ChainContacts:
             change=change,
         )
 
-    def summary(self, rpm) -> tuple[ChainSummary, list[ContactTurn]]:
-        """The ``ChainSummary`` of the simulated turns (extremes over the samples) and the
+    def summary(self, rpm) -> tuple[ContactSummary, list[ContactTurn]]:
+        """The ``ContactSummary`` of the simulated turns (extremes over the samples) and the
         turns themselves."""
         turns = self.turns(rpm)
 
         def each(f):
             return np.asarray([f(t) for t in turns])
 
-        return ChainSummary(
+        return ContactSummary(
             np.asarray([t.rpm for t in turns]),
             each(lambda t: t.cam_force_n.min()),
             each(lambda t: t.cam_force_n.max()),
@@ -684,7 +698,7 @@ CONTACTS_NOTE = (
 
 
 def simulated_train(program, chain: Chain, rpm: np.ndarray, options: ContactOptions | None = None):
-    """``train_section``'s figures for a chain with contacts: the ``ChainSummary``, the
+    """``train_section``'s figures for a chain with contacts: the ``ContactSummary``, the
     ``contacts`` part of the section (``contact_section``), the jump speed (the lowest speed of
     ``rpm`` at which the cam separates; ``None`` where it holds at every one, or at the lowest
     already: then ``below`` is true)."""

@@ -312,7 +312,7 @@ def deviation_from_law(program, driven, rpm: float) -> tuple[float, float]:
     train, is not vibration).  With ``driven`` the compensated program, the residual of the
     compensation at a speed other than its design speed (zero at it); with ``driven =
     program``, the uncompensated cam's, for comparison."""
-    from ._analysis import response
+    from ._report import response
 
     history = response(driven, rpm)
     theta = history["theta_deg"]

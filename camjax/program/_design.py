@@ -29,6 +29,9 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     (largest Ca*Ct), both for the segment alone at the oscillator's damping, or
     ``"preload"`` (largest preload the whole program needs over the speed range,
     ``MaxPreload``); ``design_options`` go to ``camjax.design`` (``knots``, ``steps``, ``progress``, ...).
+    For a chain of bodies (``Program.chain``) both are the whole chain's: ``"residual"`` the
+    last body's residual vibration (``MaxProgramResidual``), ``"preload"`` the spring's
+    preload that keeps the cam's contact (through the levers); ``"ca-ct"`` is refused.
 
     A segment that starts or ends in motion (a polynomial, constant velocity, any law whose
     end velocity is not zero) is designed as a ``CorrectedPolynomial``
@@ -45,12 +48,17 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     result's ``law`` the segment's, ``kept_initial`` true) with a ``DesignNotImproved`` warning.
     """
     from .. import law_design
-    from ._preload import MaxPreload, MaxProgramResidual  # import optax: only when designing
+    from ._objectives import MaxPreload, MaxProgramResidual  # import optax: only when designing
 
     n1, n2 = segment_band(program, segment, rpm_lo, rpm_hi)
     f = program.follower
     zeta = f.damping_ratio * (f.stiffness / (f.stiffness + f.spring_rate)) ** 0.5
-    if objective == "residual":
+    if not program.one_body and objective not in ("residual", "preload"):
+        raise ValueError(f"objective {objective!r}: a chain of bodies ([[train]]) is designed at its last body "
+                         "through the whole chain: residual or preload")
+    if not program.one_body and objective == "residual":  # the last body's, through the chain
+        goal = MaxProgramResidual(program, segment, float(rpm_lo), float(rpm_hi))
+    elif objective == "residual":
         goal = law_design.MaxResidual(n1, n2, damping=zeta)
     elif objective == "ca-ct":
         goal = law_design.MaxCaCt(n1, n2, damping=zeta)
@@ -68,7 +76,7 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
         if objective == "ca-ct":
             raise ValueError(f"segment {segment} starts or ends in motion: the ca-ct objective "
                              "measures a rise from rest to rest; use preload or residual")
-        if objective == "residual":
+        if objective == "residual" and program.one_body:
             goal = MaxProgramResidual(program, segment, float(rpm_lo), float(rpm_hi), damping=zeta)
     if isinstance(initial, laws.BoundaryPolynomial | laws.CorrectedPolynomial):
         base = initial if isinstance(initial, laws.BoundaryPolynomial) else initial.base

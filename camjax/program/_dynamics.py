@@ -1,24 +1,21 @@
-"""A cam program at machine speed, through the one SDOF engine: periodic steady state and start-up.
+"""A cam program at machine speed, through the one SDOF engine: the periodic steady state over
+speeds, and start-up.
 
-Payload displacement ``x`` from its static position on the base circle, cam lift ``y``:
-
-    m x'' = k (y - x) + c (y' - x') - k_s x,    F_c = F_0 + k (y - x) + c (y' - x').
-
-In the deflection ``e = y - x`` this is ``e'' + (c/m) e' + ((k + k_s)/m) e = y'' + (k_s/m) y``,
-the linear SDOF of ``camjax.sdof`` with forcing ``y'' + (k_s/m) y``.  This module is the
-adapter from physical units to that engine: time runs in turns (``s = t / T``,
-``T = 60 / rpm``), so the forcing is ``y_ss + (k_s/m) T^2 y``, two arrays sampled once per
-program on the engine's grid (``camjax.sdof.piecewise_grid``) and mixed per speed; the
-engine's periodic start (``q(0) = F / (1 - E)``) gives the steady state exactly, and its
-gains and refined extremes give the payload acceleration and contact force in SI units.
-A speed sweep runs in blocks of ``SPEED_BLOCK`` speeds through one compiled program per
-shape of the turn, whose values are its arguments (``PaddedTurn``).
+The follower is an ``Oscillator`` (``_oscillator.py``): its modes in physical units, the
+classic one-body follower's (the deflection ``e = y - x`` of
+``m x'' = k (y - x) + c (y' - x') - k_s x``, one mode with forcing ``y'' + (k_s/m) y``) or a
+chain's.  The turn is sampled once per program on the engine's grid (``_cycle_grid.py``);
+one turn at one speed is ``_cycle.py``'s ``_cycle`` (every mode's exact periodic steady
+state and every output in SI units, refined between nodes).  This module runs it over the
+speeds: in blocks of ``SPEED_BLOCK`` through one compiled program per shape of the turn (the
+number of modes and outputs, the bucketed grid), whose values are its arguments
+(``PaddedTurn``): another follower, one body or a chain of the same shape, or an edited one,
+compiles nothing.
 """
 
 from __future__ import annotations
 
 import functools
-import math
 from typing import NamedTuple
 
 import jax
@@ -30,301 +27,20 @@ from .._shapes import bucket
 from .._traces import exported_jit, register_types
 from .._traces import kept as traces_kept
 from ..errors import RESULTS, raise_if_failed
-from ..metrics import refined_peak
 from ..sdof import (
-    GAUSS_POINTS,
-    MAX_GRID_INTERVALS,
-    TARGET_PHASE_STEP,
     MotionGrid,
-    deflection_gains,
-    eigenvalue,
-    gain_derivatives,
     mode_between,
-    mode_gain,
-    periodic_propagate,
-    piecewise_grid,
-    propagate,
-    refined_extremes,
-    to_monomial,
 )
 from ..sharding import resolve_devices, shard_batch
-from ._machine import NodeContact, contact_stress_squared, node_contact, torque_figures, torque_jets
-from ._probes import Outputs, Probe
+from ._contact import NodeContact, node_contact
+from ._cycle import Cycle, TrainPeaks, _cycle
+from ._cycle_grid import CycleGrid, program_grid, with_segment_law
+from ._oscillator import (
+    Oscillator,
+)
+from ._outputs import Outputs, Probe
 from ._spec import Program
-from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
-from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
 from ._speeds import Speeds
-from ._speeds import warn_implausible as warn_implausible
-
-_MIN_PER_SEGMENT = 64
-_MIN_PER_PIECE = 4
-
-
-class CycleGrid(NamedTuple):
-    """The engine's grid over one turn (``s`` in [0, 1]), with the law breakpoints and
-    segment ends as nodes, and the program's samples on it.
-
-    ``motion.forcing`` and ``lift`` are ``(K, 6)`` monomial coefficients (in the local
-    ``sigma``) of ``y_ss`` and ``y`` on each interval (mm, time in turns); ``lift_nodes``
-    and ``velocity_nodes`` are ``y`` and ``y_s`` at the nodes; ``segment_start`` the
-    interval index where each segment starts (``residual_start``: each dwell and
-    constant-velocity segment, where the residual vibration is measured).
-    """
-
-    motion: MotionGrid
-    lift: np.ndarray
-    lift_nodes: np.ndarray
-    velocity_nodes: np.ndarray
-    segment_start: np.ndarray
-    residual_start: np.ndarray
-
-    @property
-    def nodes(self) -> np.ndarray:
-        return np.asarray(self.motion.nodes)
-
-    @property
-    def piece_width(self) -> np.ndarray:
-        return np.asarray(self.motion.piece_width)
-
-    @property
-    def intervals(self) -> int:
-        return int(self.motion.piece.size)
-
-    def with_forcing(self, forcing) -> MotionGrid:
-        """The engine's grid of this turn with another forcing on it."""
-        return self.motion._replace(forcing=forcing)
-
-
-def resolution(program: Program, rpm_min: float, vibration_hz: float | None = None) -> int:
-    """Intervals per turn the slowest speed asks for: ``w h <= 0.5`` at ``rpm_min``, 64 per
-    moving segment at least (``cycle_grid`` adds what each law piece needs); ``w`` is the
-    follower's, or ``2 pi vibration_hz`` where given (a chain's highest mode)."""
-    cycles = (program.follower.vibrations_per_turn(rpm_min) if vibration_hz is None
-              else vibration_hz * 60.0 / rpm_min)
-    needed = 2 * math.pi * cycles / TARGET_PHASE_STEP
-    shortest = min((program.segments[i].angle_deg / 360 for i in program.moving_segments()), default=1.0)
-    return 64 * math.ceil(max(needed, _MIN_PER_SEGMENT / shortest, 256) / 64)
-
-
-def check_grid_size(program: Program, rpm_min: float, intervals: int) -> None:
-    """The one refusal of a turn whose grid would pass ``MAX_GRID_INTERVALS``, before any
-    work, with what to change: the speed or the stiffness where the follower's vibration
-    asks for the intervals, the shortest segments where the laws' pieces do."""
-    if intervals <= MAX_GRID_INTERVALS:
-        return
-    cycles = program.follower.vibrations_per_turn(rpm_min)
-    by_speed = 2 * math.pi * cycles / TARGET_PHASE_STEP > MAX_GRID_INTERVALS / 2
-    slowest = 2 * math.pi * program.follower.vibrations_per_turn(TARGET_PHASE_STEP * MAX_GRID_INTERVALS)
-    shortest = min(s.angle_deg for s in program.segments)
-    remedies = ([f"run at {slowest:.3g} rpm or faster, or lower follower.stiffness_n_per_mm"] if by_speed else [])
-    remedies.append(f"widen or merge the shortest segments ({len(program.segments)} segments, the shortest "
-                    f"{shortest:g} degrees)")
-    raise ValueError(f"a turn at {rpm_min:g} rpm needs {intervals:,} grid intervals (the limit is "
-                     f"{MAX_GRID_INTERVALS:,}): the follower vibrates {cycles:,.0f} times per turn; "
-                     + "; or ".join(remedies))
-
-
-def cycle_grid(program: Program, rpm_min: float, vibration_hz: float | None = None) -> CycleGrid:
-    """Sample the program's lift and acceleration on the engine's grid for speeds from
-    ``rpm_min`` up (``resolution``; every law piece gets at least four intervals); a grid
-    past the limit is refused before it is built (``check_grid_size``)."""
-    intervals = resolution(program, rpm_min, vibration_hz)
-    edges, counts, first_piece = [0.0], [], []
-    for seg, start_deg in zip(program.segments, program.start_deg):
-        s0, f = start_deg / 360.0, seg.angle_deg / 360.0
-        local = [0.0, *seg.law.breakpoints(), 1.0] if seg.moving else [0.0, 1.0]
-        first_piece.append(len(counts))
-        for a, b in zip(local[:-1], local[1:]):
-            edges.append(s0 + f * b)
-            counts.append(max(_MIN_PER_PIECE, math.ceil(intervals * f * (b - a))))
-    edges[-1] = 1.0
-    counts = np.asarray(counts)
-    total = int(counts.sum())
-    check_grid_size(program, rpm_min, total)
-    motion, times = piecewise_grid(np.asarray(edges), counts)
-    piece_start = np.concatenate([[0], np.cumsum(counts)])
-    starts = piece_start[first_piece]
-    stops = [*starts[1:], total]
-    left = np.asarray(motion.nodes)[:-1]
-    acc, lift = np.zeros_like(times), np.zeros_like(times)
-    lift_nodes, velocity_nodes = np.zeros(total + 1), np.zeros(total + 1)
-    for k, (a, b) in enumerate(zip(starts, stops)):
-        lift_g, acc_g, lift_nodes[a:b], velocity_nodes[a:b] = _segment_samples(
-            program.turn, k, times[a:b], left[a:b])
-        lift[a:b], acc[a:b] = lift_g, acc_g
-    velocity_nodes[-1] = velocity_nodes[0]  # the turn closes on its start
-    return CycleGrid(
-        motion=motion._replace(forcing=to_monomial(acc)),
-        lift=to_monomial(lift),
-        lift_nodes=lift_nodes,
-        velocity_nodes=velocity_nodes,
-        segment_start=np.asarray(starts),
-        residual_start=np.asarray([starts[i] for i in program.residual_segments()], dtype=int),
-    )
-
-
-def _segment_samples(turn, k: int, gauss, left, law=None):
-    """Segment ``k``'s lift and acceleration at its Gauss points ``gauss`` and its lift and
-    velocity at the left nodes ``left`` of its intervals (times in turns; mm and per
-    turn).  The nodes belong to the segment by index: their local time is clipped to
-    ``[0, 1]``, so a node that rounds a hair before the segment's start reads the segment's
-    own start (not the dwell before it).  One evaluation of the law per segment."""
-    s0, f = turn.start_deg[k] / 360.0, turn.angle_deg[k] / 360.0
-    tau_gauss = (gauss - s0) / f
-    tau_left = np.clip((left - s0) / f, 0.0, 1.0)
-    xp = np if law is None else jnp
-    y, dy, ddy, _ = turn.segment_jet(k, xp.concatenate([xp.ravel(tau_gauss), tau_left]), law)
-    n = tau_gauss.size
-    return (y[:n].reshape(tau_gauss.shape), 360.0**2 * ddy[:n].reshape(tau_gauss.shape),
-            y[n:], 360.0 * dy[n:])
-
-
-def with_segment_law(grid: CycleGrid, program: Program, index: int, law) -> CycleGrid:
-    """``grid`` with segment ``index``'s (0-based) samples recomputed from ``law`` in JAX.
-
-    The law may be traced (a design differentiates through it); it must have the same
-    breakpoints as the segment's law the grid was built for, so the nodes stay valid.
-    Every sample is linear in the law's displacement, so the response is affine in it.
-    """
-    seg = program.segments[index]
-    if not seg.moving:
-        raise ValueError(f"segment {index + 1} is a dwell: it has no law to replace")
-    if tuple(law.breakpoints()) != tuple(seg.law.breakpoints()):
-        raise ValueError(f"segment {index + 1}: the new law's breakpoints differ from the grid's")
-    stop = grid.segment_start[index + 1] if index + 1 < len(program.segments) else grid.intervals
-    rows = slice(int(grid.segment_start[index]), int(stop))
-    left = grid.nodes[rows]
-    h = grid.piece_width[np.asarray(grid.motion.piece)[rows]]
-    gauss = left[:, None] + h[:, None] * GAUSS_POINTS
-    lift_samples, acceleration, lift_nodes, velocity = _segment_samples(program.turn, index, gauss, left, law)
-    velocity_nodes = jnp.asarray(grid.velocity_nodes).at[rows].set(velocity)
-    if index == 0:  # the closing node repeats the first one's velocity (periodic)
-        velocity_nodes = velocity_nodes.at[-1].set(velocity_nodes[0])
-    return grid._replace(
-        motion=grid.with_forcing(jnp.asarray(grid.motion.forcing).at[rows].set(to_monomial(acceleration))),
-        lift=jnp.asarray(grid.lift).at[rows].set(to_monomial(lift_samples)),
-        lift_nodes=jnp.asarray(grid.lift_nodes).at[rows].set(lift_nodes),
-        velocity_nodes=velocity_nodes,
-    )
-
-
-class Train(NamedTuple):
-    """The follower's constants in SI (k, k_s in N/m; c in N s/m): the engine's oscillator
-    in physical units.  A pytree of 0-d arrays: the compiled turn takes it as an argument,
-    so another follower reuses the compiled program."""
-
-    m: np.ndarray
-    k: np.ndarray
-    ks: np.ndarray
-    c: np.ndarray
-    preload: np.ndarray
-    omega: np.ndarray  # sqrt((k + k_s)/m), rad/s
-    zeta: np.ndarray  # of the whole oscillator: c / (2 m omega)
-
-    @classmethod
-    def of(cls, program: Program) -> Train:
-        f = program.follower
-        omega = 2 * math.pi * f.natural_frequency_hz
-        values = (f.mass_kg, f.stiffness, f.spring_rate, f.damping, 0.0 if f.form_closed else f.preload_n,
-                  omega, f.damping / (2 * f.mass_kg * omega))
-        return cls(*(np.asarray(float(v)) for v in values))
-
-    def omega_per_turn(self, rpm):
-        """The engine's ``w``: radians of vibration per turn at ``rpm``."""
-        return self.omega * 60.0 / rpm
-
-
-class Cycle(NamedTuple):
-    """Node series and refined extrema of one turn at one speed (s-time, mm).
-
-    ``q`` is the complex mode at the nodes (periodic steady state unless built otherwise).
-    Forces in N, accelerations in m/s^2, the drive torque in N m (with its first three
-    derivatives in turn time at both ends of every interval, and its peak, RMS, mean and
-    energy fluctuation over the turn: docs/machine.md), energy in J, the Hertz stress in
-    MPa (zero without a contact width) and the node where it peaks.
-    """
-
-    q: jax.Array
-    payload_acceleration_m_s2: jax.Array
-    contact_force_n: jax.Array
-    max_payload_acceleration_m_s2: jax.Array
-    min_contact_force_n: jax.Array
-    max_contact_force_n: jax.Array
-    residual_vibration_mm: jax.Array
-    drive_torque_n_m: jax.Array
-    max_drive_torque_n_m: jax.Array
-    rms_drive_torque_n_m: jax.Array
-    mean_drive_torque_n_m: jax.Array
-    energy_fluctuation_j: jax.Array
-    contact_stress_mpa: jax.Array
-    max_contact_stress_mpa: jax.Array
-    max_contact_stress_node: jax.Array
-    max_contact_stress_radius_mm: jax.Array
-    drive_torque_left: jax.Array
-    drive_torque_right: jax.Array
-    outputs: dict = {}  # the compiled outputs' values (camjax.program.Outputs), filled by the speed batch
-
-
-def _cycle(grid: CycleGrid, train: Train, rpm, q_start=None, periodic=True,
-           contact: NodeContact | None = None) -> Cycle:
-    """The response over one turn at ``rpm`` (jittable, vmappable in ``rpm``): the program's
-    forcing at this speed through the engine, and its outputs in SI units."""
-    period = 60.0 / rpm
-    w = train.omega_per_turn(rpm)
-    lam = eigenvalue(w, train.zeta)
-    beta = train.ks / train.m * period**2
-    motion = grid.with_forcing(jnp.asarray(grid.motion.forcing) + beta * jnp.asarray(grid.lift))
-    if periodic:
-        q = periodic_propagate(motion, w, train.zeta)
-    else:
-        q = propagate(motion, w, train.zeta, q0=q_start)
-    e_gain, e_rate_gain = deflection_gains(w, train.zeta)
-    force_gain = 1e-3 * train.k * e_gain + 1e-3 * train.c / period * e_rate_gain  # N per mm
-    accel_gain = mode_gain(w, train.zeta)
-    y = jnp.asarray(grid.lift_nodes)
-    ys = jnp.asarray(grid.velocity_nodes)
-    left, right = motion.one_sided()
-    lift_left, lift_right = grid.motion.one_sided()
-    widths = motion.widths
-
-    def lift_terms(ys_end, one_sided):
-        return jnp.stack([ys_end, one_sided[:, 0], one_sided[:, 1]], axis=1)
-
-    # The engine's x'' is the deflection's response to the whole forcing; the payload's
-    # acceleration leaves out the spring's share, beta y.
-    to_si = 1e-3 / period**2
-    accel = (jnp.real(accel_gain * q) - beta * y) * to_si
-    accel_left = (gain_derivatives(accel_gain, lam, q[:-1], left) - beta * lift_terms(ys[:-1], lift_left)) * to_si
-    accel_right = (gain_derivatives(accel_gain, lam, q[1:], right) - beta * lift_terms(ys[1:], lift_right)) * to_si
-    max_accel = refined_peak(accel, widths, accel_left, accel_right)
-    force = train.preload + jnp.real(force_gain * q)
-    force_left = gain_derivatives(force_gain, lam, q[:-1], left)
-    force_right = gain_derivatives(force_gain, lam, q[1:], right)
-    min_force, max_force = refined_extremes(force, widths, force_left, force_right)
-    torque = torque_jets(force, force_left, force_right, ys, lift_left, lift_right)
-    figures = torque_figures(torque[0], widths, *torque[1:])
-    if contact is None:
-        contact = NodeContact(*(jnp.zeros_like(force),) * 4)
-    contact = jax.tree.map(jnp.asarray, contact)
-    stress_sq = contact_stress_squared(force, contact)
-    stress = jnp.sqrt(stress_sq)
-    node = jnp.argmax(stress_sq)
-    radius = jnp.where(force[node] >= 0, contact.radius_inner[node], contact.radius_outer[node])
-    residual = jnp.abs(residual_modes(grid, q, beta, lam))
-    return Cycle(q, accel, force, max_accel, min_force, max_force, residual, torque[0], *figures, stress,
-                 stress[node], node, radius, torque[1], torque[2])
-
-
-def residual_modes(grid: CycleGrid, q, beta, lam):
-    """The free vibration at the start of each dwell and constant-velocity segment, as a
-    complex mode over ``w_d`` (mm; its modulus is the residual vibration): the distance of
-    the mode from the steady motion there.  The forcing there is ``beta (y0 + y_s sigma)``
-    (no ``y_ss``), whose particular solution of ``q_s = lam q + forcing`` is
-    ``-beta (y0 + y_s sigma) / lam - beta y_s / lam^2``.  Affine in the lift's samples."""
-    starts = jnp.asarray(grid.residual_start)
-    y, ys = jnp.asarray(grid.lift_nodes)[starts], jnp.asarray(grid.velocity_nodes)[starts]
-    q_static = -beta * (y + ys / lam) / lam
-    return (q[starts] - q_static) / jnp.imag(lam)
 
 
 class SpeedSummary(NamedTuple):
@@ -355,11 +71,11 @@ class PaddedTurn(NamedTuple):
     node arrays repeat the closing node."""
 
     grid: CycleGrid
-    train: Train
+    oscillator: Oscillator
     contact: NodeContact
 
     @classmethod
-    def of(cls, grid: CycleGrid, train: Train, contact: NodeContact) -> PaddedTurn:
+    def of(cls, grid: CycleGrid, oscillator: Oscillator, contact: NodeContact) -> PaddedTurn:
         intervals = grid.intervals
         pieces = int(np.asarray(grid.motion.piece_width).size)
         extra = bucket(intervals, 64) - intervals
@@ -383,7 +99,7 @@ class PaddedTurn(NamedTuple):
                                velocity_nodes=nodes(grid.velocity_nodes),
                                segment_start=np.asarray(grid.segment_start, dtype=np.int32),
                                residual_start=np.asarray(grid.residual_start, dtype=np.int32))
-        return cls(padded, train, NodeContact(*(nodes(x) for x in contact)))
+        return cls(padded, oscillator, NodeContact(*(nodes(x) for x in contact)))
 
 
 SPEED_BLOCK = 32
@@ -411,13 +127,13 @@ def _cycles(rpm, turn: PaddedTurn, outputs: tuple[Probe, ...]) -> Cycle:
     values."""
 
     def one(r):
-        cycle = _cycle(turn.grid, turn.train, r, contact=turn.contact)
+        cycle = _cycle(turn.grid, turn.oscillator, r, contact=turn.contact)
         return cycle._replace(outputs={p.name: jnp.asarray(p.fn(cycle, turn), dtype=float) for p in outputs})
 
     return jax.vmap(one)(rpm)
 
 
-register_types(PaddedTurn, CycleGrid, MotionGrid, Train, NodeContact, Cycle)
+register_types(PaddedTurn, CycleGrid, MotionGrid, Oscillator, NodeContact, Cycle, TrainPeaks)
 
 
 _BUILT_IN_COMPILED = Outputs().compiled
@@ -434,7 +150,7 @@ _kept_cycles = exported_jit(_cycles_built_in, "program-cycles")
 @jax.jit
 def _started_cycle(rpm, turn: PaddedTurn, q_start) -> Cycle:
     """One turn from the mode ``q_start`` at its start (a start-up's turns)."""
-    return _cycle(turn.grid, turn.train, rpm, q_start=q_start, periodic=False, contact=turn.contact)
+    return _cycle(turn.grid, turn.oscillator, rpm, q_start=q_start, periodic=False, contact=turn.contact)
 
 
 class SteadyState:
@@ -448,23 +164,24 @@ class SteadyState:
     program (the whole ``Cycle`` at every speed of a block); each block is split over
     ``devices`` (default: every local device; see ``camjax.sharding.shard_batch``), with
     results equal to one device's.  A response that is not finite is a ``SolverError``
-    (``RESULTS.nonfinite``).
+    (``RESULTS.nonfinite``).  The follower is ``Oscillator.of(program)`` unless
+    ``oscillator`` is given (another realisation of the same follower, or an edit of its
+    values: the same shape compiles nothing).
     """
 
-    def __init__(self, program: Program, rpm_min: float | Speeds, *, devices=None):
-        if not program.one_body:
-            raise ValueError(f"program {program.name!r} drives a chain of bodies ([[train]]): the one-body "
-                             "steady state is not its own (analyse reports it, ChainSteadyState gives its turn)")
-        if not program.follower.damping_ratio > 0:
+    def __init__(self, program: Program, rpm_min: float | Speeds, *, devices=None,
+                 oscillator: Oscillator | None = None):
+        if program.one_body and not program.follower.damping_ratio > 0:
             raise ValueError("the periodic steady state needs follower.damping_ratio > 0 "
                              "(without damping the start-up never settles)")
         self.program = program
-        self.train = Train.of(program)
+        # a chain's refuses an undamped mode
+        self.oscillator = Oscillator.of(program) if oscillator is None else oscillator
         self.rpm_min = Speeds.of(rpm_min, "rpm_min").min()  # an entry point's speeds: their slowest
         self.devices = resolve_devices(devices)
-        self.grid = cycle_grid(program, self.rpm_min)
+        self.grid = program_grid(program, self.rpm_min)
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
-        self.turn = PaddedTurn.of(self.grid, self.train, self.contact)
+        self.turn = PaddedTurn.of(self.grid, self.oscillator, self.contact)
         self._kept: tuple[dict[float, int], Cycle | None] = ({}, None)
         """The last batch of ``cycles``: its row of each speed, and the stacked ``Cycle``."""
 
@@ -550,15 +267,20 @@ class SteadyState:
         out = _started_cycle(jnp.asarray(rpm), self.turn, jnp.asarray(q_start, dtype=complex))
         return _node_arrays_cut(jax.tree.map(np.asarray, out), self.grid.intervals)
 
-    def lam(self, rpm: float) -> complex:
-        """Eigenvalue of the train in turn time (``lambda T``) at ``rpm``."""
-        return complex(eigenvalue(float(self.train.omega_per_turn(rpm)), float(self.train.zeta)))
+    def lam(self, rpm: float) -> np.ndarray:
+        """The oscillator's eigenvalues in turn time (``lambda T``) at ``rpm``, ``(S,)``."""
+        return 60.0 / float(rpm) * np.asarray(self.oscillator.lam)
 
     def mode_at(self, q_nodes, rpm: float, s) -> np.ndarray:
-        """The complex mode at turn times ``s`` (anywhere, exactly) from its node values."""
-        beta = float(self.train.ks / self.train.m) * (60.0 / rpm) ** 2
-        motion = self.grid.with_forcing(np.asarray(self.grid.motion.forcing) + beta * np.asarray(self.grid.lift))
-        return mode_between(motion, q_nodes, self.lam(rpm), np.mod(np.atleast_1d(np.asarray(s, dtype=float)), 1.0))
+        """The complex modes at turn times ``s`` (anywhere, exactly) from their node values
+        (``(S, K + 1)``, ``Cycle.q``): ``(S, times)``."""
+        period = 60.0 / float(rpm)
+        weights = np.asarray(self.oscillator.forcing)
+        acc, lift = np.asarray(self.grid.motion.forcing), np.asarray(self.grid.lift)
+        s = np.mod(np.atleast_1d(np.asarray(s, dtype=float)), 1.0)
+        return np.stack([
+            mode_between(self.grid.with_forcing(w[1] * acc + w[0] * period**2 * lift), q, lam, s)
+            for w, q, lam in zip(weights, np.atleast_2d(q_nodes), self.lam(rpm))])
 
 
 def startup(program: Program, rpm: float, cycles: int, *, steady: SteadyState | None = None):
@@ -570,13 +292,13 @@ def startup(program: Program, rpm: float, cycles: int, *, steady: SteadyState | 
     rpm = Speeds.of(rpm)[:1]
     steady = steady or SteadyState(program, rpm)
     s, accel, force = [], [], []
-    q_start = 0j
+    q_start = np.zeros(steady.oscillator.modes_count, complex)
     for c in range(int(cycles)):
         run = steady.cycle(rpm, q_start=q_start)
         s.append(c + steady.grid.nodes[:-1])
         accel.append(run.payload_acceleration_m_s2[:-1])
         force.append(run.contact_force_n[:-1])
-        q_start = complex(run.q[-1])
+        q_start = run.q[:, -1]
     return np.concatenate(s), np.concatenate(accel), np.concatenate(force)
 
 
@@ -604,8 +326,8 @@ def node_contact_force(program: Program, rpm, laws: dict | None = None, *, rpm_m
             raise ValueError("rpm must be one speed or a 1-D list of speeds")
         rpm = checks.ensure(rpm, lambda v: (v > 0) & (v < np.inf), "rpm must be positive and finite")
     with jax.ensure_compile_time_eval():
-        grid = cycle_grid(program, rpm_min)
+        grid = program_grid(program, rpm_min)
     for segment, law in (laws or {}).items():
         grid = with_segment_law(grid, program, segment - 1, law)
-    train = Train.of(program)
-    return jax.vmap(lambda r: _cycle(grid, train, r).contact_force_n)(rpm)
+    oscillator = Oscillator.of(program)
+    return jax.vmap(lambda r: _cycle(grid, oscillator, r).contact_force_n)(rpm)

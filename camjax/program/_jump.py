@@ -20,12 +20,12 @@ import math
 
 import numpy as np
 
-from ..sdof import eigenvalue, psi_host, step_within_host
+from ..sdof import first_roots, narrowed_crossing, polished_maxima, psi_host, step_within_host
 from ._dynamics import SPEED_BLOCK, SteadyState
-from ._probes import min_preload_n as min_preload_n
+from ._oscillator import CONTACT_FORCE
+from ._outputs import min_preload_n as min_preload_n
 from ._speeds import Speeds
 
-_BISECTIONS = 3  # rounds of 64-way subdivision before the secant: a bracket shrinks by 65^3
 _SAMPLES_PER_INTERVAL = 8
 
 
@@ -84,17 +84,12 @@ def _jump_speed(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm
         return None
     if i == 0:
         return float(rpm_lo)
-    lo, hi = rpm[i - 1], rpm[i]
-    while hi - lo > tolerance_rpm:
-        trial = np.linspace(lo, hi, 18)[1:-1]
-        f = steady.min_contact_force_n(trial)
-        below = np.flatnonzero(f < 0)
-        if below.size:
-            hi = trial[below[0]]
-            lo = trial[below[0] - 1] if below[0] > 0 else lo
-        else:
-            lo = trial[-1]
-    return float(0.5 * (lo + hi))
+    return float(narrowed_crossing(lambda trial: steady.min_contact_force_n(trial) < 0, rpm[i - 1], rpm[i],
+                                   tolerance_rpm, _ROUND_SPEEDS))
+
+
+_ROUND_SPEEDS = 16
+"""Speeds of each round of the jump speed's bisection (one block): the bracket shrinks 17-fold."""
 
 
 _BOUND_MARGIN = 0.01
@@ -126,20 +121,21 @@ class ContactForceBound:
     the program's forcing alone (no propagation): what rules out whole speed ranges of the
     jump's scan.
 
-    The mode obeys ``q' = lam q + f`` in turn time (``f = y_ss + beta y`` on each interval);
-    its periodic solution is ``q(s) = int_0^inf exp(lam u) f(s - u) du``.  Integrating by
-    parts three times, ``q = -f/lam - f'/lam^2 - f''/lam^3 + R`` with
-    ``|R| <= (J_f/|lam| + J_f'/|lam|^2 + V_f''/|lam|^3) / (1 - exp(Re lam))``, where
-    ``J_g`` sums the jumps of ``g`` over a turn and ``V_f''`` is the total variation of
-    ``f''`` (its jumps included).  The contact force is ``F_0 + Re(G q)`` (``G`` the force
-    gain), so it is at least ``F_0 + min_s Re(G (-f/lam - f'/lam^2 - f''/lam^3)) - |G| |R|``:
-    the quasi-static force less a remainder that grows with the speed.  At low speeds,
-    where the scan is densest (it is even in the period), the bound holds contact and
-    those speeds need no steady state.
+    Each mode obeys ``q_j' = lam_j q_j + f_j`` in turn time (``f_j = a_j y_ss + b_j T^2 y``
+    on each interval, ``Oscillator``); its periodic solution is
+    ``q_j(s) = int_0^inf exp(lam_j u) f_j(s - u) du``.  Integrating by parts three times,
+    ``q_j = -f_j/lam_j - f_j'/lam_j^2 - f_j''/lam_j^3 + R_j`` with
+    ``|R_j| <= (J_f/|lam_j| + J_f'/|lam_j|^2 + V_f''/|lam_j|^3) / (1 - exp(Re lam_j))``, where
+    ``J_g`` sums the jumps of ``g`` over a turn (at most ``|a_j| J_(y_ss) + |b_j| T^2 J_y``)
+    and ``V_f''`` is the total variation of ``f''`` (its jumps included).  The contact force
+    is ``F_0 + Re(sum_j G_j q_j) + d0 y + d1 y_s + d2 y_ss`` (``G_j`` its gains, the direct
+    terms exact), so it is at least the quasi-static force less ``sum_j |G_j| |R_j|``, a
+    remainder that grows with the speed.  At low speeds, where the scan is densest (it is
+    even in the period), the bound holds contact and those speeds need no steady state.
     """
 
     def __init__(self, steady: SteadyState):
-        grid, train = steady.grid, steady.train
+        grid = steady.grid
         widths = np.asarray(grid.piece_width)[np.asarray(grid.motion.piece)][:, None]
 
         def sampled(coefficients, count):
@@ -163,30 +159,33 @@ class ContactForceBound:
         self.jumps = [[jumps(v[n]) for v in fine] for n in range(_BOUND_ORDER - 1)]
         self.variation = [variation(v[-1]) for v in fine]
         coarse = sampled(grid.motion.forcing, _BOUND_SAMPLES), sampled(grid.lift, _BOUND_SAMPLES)
-        self.samples = np.stack([v[n].ravel() for n in range(_BOUND_ORDER) for v in coarse])
-        self.train = train
-        self.preload = float(train.preload)
+        # rows: (y_ss, y) and their first two derivatives, then y_s for the direct term
+        self.samples = np.stack([v[n].ravel() for n in range(_BOUND_ORDER) for v in coarse] + [coarse[1][1].ravel()])
+        self.oscillator = steady.oscillator
+        self.preload = float(steady.oscillator.static[CONTACT_FORCE])
 
     def __call__(self, rpm) -> np.ndarray:
         """The bound (N) at each speed of ``rpm``."""
-        train = self.train
+        osc = self.oscillator
         rpm = np.asarray(rpm, dtype=float)
-        period = 60.0 / rpm
-        w = np.asarray(train.omega_per_turn(rpm), dtype=float)
-        lam = eigenvalue(w, float(train.zeta))
-        # deflection_gains, on the host (an eager JAX op would compile for each size)
-        e_gain, e_rate_gain = -1j / lam.imag, 1.0 - 1j * lam.real / lam.imag
-        gain = 1e-3 * float(train.k) * e_gain + 1e-3 * float(train.c) / period * e_rate_gain  # N/mm
-        beta = float(train.ks / train.m) * period**2
+        period = (60.0 / rpm)[:, None]
+        lam = period * np.asarray(osc.lam)[None, :]  # (speeds, S), per turn
+        gain = np.asarray(osc.gain)[CONTACT_FORCE][None, :] / period  # of the turn-time modes
+        a, b = np.asarray(osc.forcing)[:, 1], np.asarray(osc.forcing)[:, 0] * period**2
         terms = [(-gain / lam ** (n + 1)).real for n in range(_BOUND_ORDER)]
-        weights = np.stack([x for t in terms for x in (t, t * beta)], axis=1)
-        quasi_static = (weights @ self.samples).min(axis=1)
+        e0, e1, e2 = np.asarray(osc.direct)[CONTACT_FORCE]
+        columns = []
+        for n, t in enumerate(terms):
+            columns += [(t * a).sum(axis=1) + (e2 / period[:, 0] ** 2 if n == 0 else 0.0),
+                        (t * b).sum(axis=1) + (e0 if n == 0 else 0.0)]
+        columns.append(np.full(rpm.size, e1) / period[:, 0])
+        quasi_static = (np.stack(columns, axis=1) @ self.samples).min(axis=1)
         rest = sum(
-            (acc + beta * lift) / np.abs(lam) ** (n + 1) for n, (acc, lift) in enumerate(self.jumps)
+            (np.abs(a) * acc + np.abs(b) * lift) / np.abs(lam) ** (n + 1)
+            for n, (acc, lift) in enumerate(self.jumps)
         )
-        rest = rest + (self.variation[0] + beta * self.variation[1]) / np.abs(lam) ** _BOUND_ORDER
-        return self.preload + quasi_static - np.abs(gain) * rest / -np.expm1(lam.real)
-
+        rest = rest + (np.abs(a) * self.variation[0] + np.abs(b) * self.variation[1]) / np.abs(lam) ** _BOUND_ORDER
+        return self.preload + quasi_static - (np.abs(gain) * rest / -np.expm1(lam.real)).sum(axis=1)
 
     def first_unheld(self, rpm) -> int:
         """Index of the first speed of ``rpm`` (ascending) where the bound, less
@@ -227,25 +226,31 @@ class _Turns:
     in SI, on the host (NumPy): every method takes the rows and the times (seconds) as
     arrays that broadcast, so the event searches of every speed run at once.
 
-    The lift is read from the turn's grid (its degree-5 interpolant of ``y`` per interval,
-    the one the steady state was computed from: within 1e-12 of the laws); the deflection
-    is the engine's exact step from the node before (``camjax.sdof.step_within_host``).
+    The lift is read from the turn's grid (its degree-5 interpolants of ``y`` and ``y''``
+    per interval, the ones the steady state was computed from: within 1e-12 of the laws);
+    the modes are the engine's exact step from the node before
+    (``camjax.sdof.step_within_host``), the outputs the ``Oscillator``'s.  The flight's
+    own constants (``k``, ``c``, ``k_s``, ``m``, the preload) are the classic follower's.
     """
 
     def __init__(self, steady: SteadyState, rpm: Speeds):
-        grid, tr = steady.grid, steady.train
+        grid, osc = steady.grid, steady.oscillator
+        self.oscillator = osc
         self.period = 60.0 / np.asarray(rpm, dtype=float)
-        self.lam = np.asarray(eigenvalue(tr.omega_per_turn(np.asarray(rpm, dtype=float)), tr.zeta))  # per turn
-        self.q = steady.cycles_at(rpm).q
+        self.lam = self.period[:, None] * np.asarray(osc.lam)[None, :]  # (rows, S), per turn
+        self.q = steady.cycles_at(rpm).q  # (rows, S, K + 1)
         self.nodes = np.asarray(grid.nodes)
         self.piece = np.asarray(grid.motion.piece)
         self.piece_width = np.asarray(grid.piece_width)
         self.widths = self.piece_width[self.piece]
         self.lift_coefficients = np.asarray(grid.lift)
         self.acceleration = np.asarray(grid.motion.forcing)
-        self.beta = float(tr.ks / tr.m) * self.period**2
-        self.preload, self.k, self.c = float(tr.preload), float(tr.k), float(tr.c)
-        self.ks, self.m = float(tr.ks), float(tr.m)
+        weights = np.asarray(osc.forcing)
+        self.a = weights[:, 1]
+        self.beta = weights[None, :, 0] * self.period[:, None] ** 2  # (rows, S)
+        f = steady.program.follower
+        self.preload = float(osc.static[CONTACT_FORCE])
+        self.k, self.c, self.ks, self.m = float(f.stiffness), float(f.damping), float(f.spring_rate), float(f.mass_kg)
 
     def _locate(self, rows, t):
         s = np.mod(t / self.period[rows], 1.0)
@@ -254,6 +259,11 @@ class _Turns:
 
     def lift(self, rows, t):
         """Cam lift (m) and its rate (m/s)."""
+        y, dy, _ = self._lift_jet(rows, t)
+        return 1e-3 * y, 1e-3 * dy
+
+    def _lift_jet(self, rows, t):
+        """``y`` (mm), ``y'`` (mm/s) and ``y''`` (mm/s^2) from the grid's interpolants."""
         k, delta = self._locate(rows, t)
         c = self.lift_coefficients[k]
         sigma = delta / self.widths[k]
@@ -262,20 +272,36 @@ class _Turns:
             y = y * sigma + c[..., m]
             if m:
                 dy = dy * sigma + m * c[..., m]
-        return 1e-3 * y, 1e-3 * dy / self.widths[k] / self.period[rows]
+        a = self.acceleration[k]
+        ddy = a[..., 5]
+        for m in range(4, -1, -1):
+            ddy = ddy * sigma + a[..., m]
+        period = self.period[rows]
+        return y, dy / self.widths[k] / period, ddy / period**2
+
+    def modes(self, rows, t):
+        """The physical modes (``Oscillator``) of the steady state, ``(S, ...)``."""
+        k, delta = self._locate(rows, t)
+        out = []
+        for j in range(self.lam.shape[1]):
+            forcing = self.a[j] * self.acceleration[k] + self.beta[rows, j][..., None] * self.lift_coefficients[k]
+            out.append(step_within_host(self.q[rows, j, k], forcing, self.widths[k], delta, self.lam[rows, j])
+                       / self.period[rows])
+        return np.stack(out)
 
     def deflection(self, rows, t):
-        """``e`` (m) and ``e'`` (m/s) of the steady state."""
-        k, delta = self._locate(rows, t)
-        lam = self.lam[rows]
-        forcing = self.acceleration[k] + self.beta[rows][..., None] * self.lift_coefficients[k]
-        q = step_within_host(self.q[rows, k], forcing, self.widths[k], delta, lam)
-        e = q.imag / lam.imag
-        return 1e-3 * e, 1e-3 * (q.real + lam.real * e) / self.period[rows]
+        """``e`` (m) and ``e'`` (m/s) of the classic follower's steady state."""
+        e, e_rate = self.oscillator.state(self.modes(rows, t))
+        return 1e-3 * e, 1e-3 * e_rate
 
     def contact_force(self, rows, t):
-        e, e_rate = self.deflection(rows, t)
-        return self.preload + self.k * e + self.c * e_rate
+        """The contact force (N) of the steady state, the ``Oscillator``'s row."""
+        osc = self.oscillator
+        y, dy, ddy = self._lift_jet(rows, t)
+        e0, e1, e2 = np.asarray(osc.direct)[CONTACT_FORCE]
+        gain = np.asarray(osc.gain)[CONTACT_FORCE]
+        modes = np.real(np.tensordot(gain, self.modes(rows, t), axes=(0, 0)))
+        return self.preload + modes + e0 * y + e1 * dy + e2 * ddy
 
     def sampled_force(self):
         """The contact force at ``_SAMPLES_PER_INTERVAL`` fixed fractions of every interval:
@@ -286,33 +312,21 @@ class _Turns:
         times = (self.nodes[:-1, None] + delta).ravel()
         powers = fractions[:, None] ** np.arange(6)
         out = np.empty((self.period.size, times.size))
-        for r, lam in enumerate(self.lam):  # one speed at a time: (K, samples, 6) at most
-            weights = psi_host(lam * self.piece_width[:, None] * fractions)[self.piece]
-            forcing = self.acceleration + self.beta[r] * self.lift_coefficients
-            q = (np.exp(lam * delta) * self.q[r, :-1, None]
-                 + delta * np.einsum("kc,jc,kjc->kj", forcing, powers, weights))
-            e = q.imag / lam.imag
-            e_rate = (q.real + lam.real * e) / self.period[r]
-            out[r] = (self.preload + self.k * 1e-3 * e + self.c * 1e-3 * e_rate).ravel()
+        osc = self.oscillator
+        gain = np.asarray(osc.gain)[CONTACT_FORCE]
+        e0, e1, e2 = np.asarray(osc.direct)[CONTACT_FORCE]
+        rows = np.arange(self.period.size)
+        y, dy, ddy = self._lift_jet(rows[:, None], times[None, :] * self.period[:, None])
+        for r in rows:  # one speed at a time: (K, samples, 6) at most
+            force = self.preload + e0 * y[r] + e1 * dy[r] + e2 * ddy[r]
+            for j, lam in enumerate(self.lam[r]):
+                weights = psi_host(lam * self.piece_width[:, None] * fractions)[self.piece]
+                forcing = self.a[j] * self.acceleration + self.beta[r, j] * self.lift_coefficients
+                q = (np.exp(lam * delta) * self.q[r, j, :-1, None]
+                     + delta * np.einsum("kc,jc,kjc->kj", forcing, powers, weights))
+                force = force + np.real(gain[j] * q / self.period[r]).ravel()
+            out[r] = force
         return times, out
-
-
-def _first_roots(f, lo, hi) -> np.ndarray:
-    """The first root of ``f`` in each row's ``[lo, hi]`` (``f(lo) > 0 >= f(hi)``); ``f`` maps
-    times ``(rows, points)`` to values.  Three rounds of 64-way subdivision shrink each
-    bracket 274,625-fold around its first sign change; the root is then the secant's through
-    the bracket's ends (the force is smooth there: the error is of the bracket's square)."""
-    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    rows = np.arange(lo.size)
-    f_lo = f_hi = np.zeros_like(lo)
-    for _ in range(_BISECTIONS):
-        t = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, 66)
-        values = f(t)
-        hit = values[:, 1:] <= 0
-        i = np.where(hit.any(axis=1), hit.argmax(axis=1) + 1, 65)
-        lo, hi, f_lo, f_hi = t[rows, i - 1], t[rows, i], values[rows, i - 1], values[rows, i]
-    secant = (f_lo > 0) & (f_hi <= 0) & (f_lo != f_hi)
-    return np.where(secant, lo + (hi - lo) * f_lo / np.where(secant, f_lo - f_hi, 1.0), 0.5 * (lo + hi))
 
 
 def flights(steady: SteadyState, rpm: float) -> list[Flight]:
@@ -330,6 +344,9 @@ def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
     speeds' events are searched together, flight by flight.
     """
     rpm = Speeds.of(rpm)
+    if not steady.program.one_body:
+        raise ValueError(f"program {steady.program.name!r} drives a chain of bodies: its flights are not "
+                         "simulated (the chain's free flight is not modelled)")
     out = [[] for _ in rpm]
     if steady.program.follower.form_closed:
         return out
@@ -366,7 +383,7 @@ def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
         if not sub.size:
             break
         here = np.arange(sub.size)
-        tau = _first_roots(lambda t, c=contact, rows_=sub[here, None]: c.force(rows_, t),
+        tau = first_roots(lambda t, c=contact, rows_=sub[here, None]: c.force(rows_, t),
                            samples[sub, stop[sub] - 1], samples[sub, stop[sub]])
         rows = rows[sub]
         t_sep[rows] = t_i[sub] + tau
@@ -404,7 +421,7 @@ def _first_separations(turns: _Turns, times: np.ndarray, table: np.ndarray) -> n
             i = int(np.clip(turns.contact_force(r, t * turns.period[r]).argmin(), 1, 31))
             lo[r], hi[r] = t[i - 1], t[i]
     period = turns.period
-    return _first_roots(lambda t: turns.contact_force(rows[:, None], t), lo * period, hi * period)
+    return first_roots(lambda t: turns.contact_force(rows[:, None], t), lo * period, hi * period)
 
 
 def _fly(turns: _Turns, rows, t_sep, x0, v0, e0):
@@ -439,7 +456,7 @@ def _fly(turns: _Turns, rows, t_sep, x0, v0, e0):
     first = hits[back].argmax(axis=1)
     lo = np.where(first > 0, tau[back, first - 1], 0.5 * step[back])
     here = np.arange(back.size)
-    tau_i = _first_roots(lambda t: gap(back[here, None], t), lo, tau[back, first])
+    tau_i = first_roots(lambda t: gap(back[here, None], t), lo, tau[back, first])
     x, v = payload(back, tau_i)
     _, e_rate = train(back, tau_i)
     t_i[back] = t_sep[back] + tau_i
@@ -451,21 +468,21 @@ def _fly(turns: _Turns, rows, t_sep, x0, v0, e0):
 
 class _Contact:
     """Contact after each row's impact: the steady state plus the free vibration of the
-    difference, ``tau`` seconds after the impact at ``t_i``."""
+    difference, ``tau`` seconds after the impact at ``t_i`` (the classic follower: one
+    mode, converted to and from the deflection by the ``Oscillator``)."""
 
     def __init__(self, turns: _Turns, rows, t_i, x_i, v_i):
         self.turns, self.rows, self.t_i = turns, rows, t_i
         y_i, dy_i = turns.lift(rows, t_i)
         es, des = turns.deflection(rows, t_i)
         u0, du0 = (y_i - x_i) - es, (dy_i - v_i) - des
-        self.lam = turns.lam[rows] / turns.period[rows]
-        self.q = du0 - np.conj(self.lam) * u0
+        self.lam = turns.lam[rows, 0] / turns.period[rows]
+        self.q = turns.oscillator.modes(np.stack([1e3 * u0, 1e3 * du0]))[0]
 
     def _difference(self, i, tau):
-        lam = self.lam[i]
-        z = self.q[i] * np.exp(lam * tau)
-        u = z.imag / lam.imag
-        return u, z.real + lam.real * u
+        z = self.q[i] * np.exp(self.lam[i] * tau)
+        u, du = self.turns.oscillator.state(z[None])
+        return 1e-3 * u, 1e-3 * du
 
     def force(self, i, tau):
         """Contact force (N) of rows ``i`` at ``tau``."""
@@ -498,29 +515,13 @@ class _Contact:
 
 
 def _peaks(contact: _Contact, samples, values, stop) -> np.ndarray:
-    """Largest contact force of each row from the impact to ``samples[stop]``, polished by
-    zooming: three rounds of 32 samples around the best one (the bracket shrinks 16-fold
-    each), then the vertex of the parabola through the best three (the force is smooth)."""
+    """Largest contact force of each row from the impact to ``samples[stop]``: the largest
+    sample, polished between its neighbours (``polished_maxima``; the force is smooth)."""
     masked = np.where(np.arange(values.shape[1]) < stop[:, None], values, -np.inf)
     k = masked.argmax(axis=1)
     peak = masked[np.arange(k.size), k]
     sub = np.flatnonzero((k > 0) & (k < stop - 1))
-    if not sub.size:
-        return peak
-    here = np.arange(sub.size)
-    lo, hi = samples[sub, k[sub] - 1], samples[sub, k[sub] + 1]
-    best = peak[sub]
-    for _ in range(3):
-        t = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, 33)
-        f = contact.force(sub[:, None], t)
-        j = np.clip(f.argmax(axis=1), 1, 31)
-        best = np.maximum(best, f[here, j])
-        lo, hi = t[here, j - 1], t[here, j + 1]
-    mid = 0.5 * (lo + hi)
-    fa, fb, fc = (contact.force(sub, x) for x in (lo, mid, hi))
-    curvature = fa - 2 * fb + fc
-    ok = curvature < 0
-    vertex = mid + 0.25 * (hi - lo) * (fa - fc) / np.where(ok, curvature, -1.0)
-    best = np.where(ok, np.maximum(best, contact.force(sub, np.where(ok, vertex, mid))), best)
-    peak[sub] = best
+    if sub.size:
+        peak[sub] = polished_maxima(lambda t: contact.force(sub[:, None], t), samples[sub, k[sub] - 1],
+                                    samples[sub, k[sub] + 1], peak[sub])
     return peak

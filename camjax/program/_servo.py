@@ -5,8 +5,8 @@ motor types it sizes with stay under the program's reader (``_motor.py``)."""
 
 from __future__ import annotations
 
-from ._analysis import response
 from ._motor import MotorChoice, choose_motor, duty_cycle
+from ._report import response
 
 
 def program_motor_choice(program, speeds, *, steady=None, motors=None) -> MotorChoice:

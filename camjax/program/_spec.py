@@ -18,8 +18,16 @@ import numpy as np
 from .. import laws
 from ..checks import is_concrete, read_toml, speeds
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity, TableLaw
-from ._follower import FOLLOWER_KINDS as FOLLOWER_KINDS
-from ._follower import Follower, Materials, _as_floats, _check_follower, _finite, _positive
+from ._follower import (
+    FOLLOWER_KINDS,
+    Follower,
+    Materials,
+    _as_floats,
+    _check_follower,
+    _finite,
+    _positive,
+    follower_keys,
+)
 from ._motion import (
     END_STATE_KEYS,
     MATCH,
@@ -197,7 +205,9 @@ class Program:
         for required in ("mass_kg", "stiffness_n_per_mm"):
             if required not in follower_data:
                 raise ValueError(f"[follower] needs {required}")
-        if str(follower_data.get("kind", "")).endswith("-flat") and "roller_radius_mm" in follower_data:
+        kind = follower_data.get("kind", Follower.kind)
+        if ("roller_radius_mm" in follower_data and isinstance(kind, str) and kind in FOLLOWER_KINDS
+                and "roller_radius_mm" not in follower_keys(FOLLOWER_KINDS[kind])):
             raise ValueError("[follower] roller_radius_mm: a flat-faced follower has no roller")
         materials = data.get("materials", {})
         _no_unknown(materials, {f.name for f in dataclasses.fields(Materials)}, "[materials]")
@@ -329,7 +339,7 @@ class Program:
 
     def lift_curve(self) -> LiftCurve:
         """The lift as a pytree (laws as leaves) for ``camjax.geometry`` and other JAX code."""
-        return LiftCurve(self.turn, 1.0 / self.follower.arm_mm if self.follower.swinging else 1.0)
+        return LiftCurve(self.turn, 1.0 / self.follower.geometry.lift_per_displacement)
 
     def displacement(self, theta):
         """Follower displacement at cam angle ``theta`` (radians), jittable: see ``LiftCurve``."""

@@ -11,8 +11,8 @@ need 28), and its internal damping is strain-rate (Kelvin-Voigt, ``tau = 2 zeta_
 
 Every coordinate is a displacement from the preloaded rest; the cam's lift drives the
 coordinate it holds.  This module holds the chain as a value (read, checked, written back,
-its natural frequencies); its periodic steady state over a program's turn is
-``_chain_steady.py``.
+its natural frequencies); its modes are ``_oscillator.py``'s ``Oscillator.of_chain``, and its
+periodic steady state over a program's turn the program's own (``SteadyState``).
 """
 
 from __future__ import annotations
@@ -279,12 +279,17 @@ class Chain:
         return Assembly(M, C, K, np.asarray(body_index), size - 1)
 
     @property
+    def lever_ratio(self) -> float:
+        """The last body's travel per unit of the cam's lift (its kinematic lift's scale),
+        and the factor of the spring's preload at the cam: the product of the levers."""
+        return float(np.prod([b.ratio for b in self.bodies if not b.rides]))
+
+    @property
     def cam_preload_n(self) -> float:
         """The static force at the cam: the spring's preload through every lever."""
         if self.spring is None:
             return 0.0
-        levers = [b.ratio for b in self.bodies if not b.rides]
-        return self.spring.preload_n * float(np.prod(levers))
+        return self.spring.preload_n * self.lever_ratio
 
     # -- natural frequencies -----------------------------------------------------------
 

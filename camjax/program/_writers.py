@@ -11,10 +11,10 @@ import json
 from pathlib import Path
 
 from .._plain import json_ready
-from ._analysis import Report, response
 from ._dynamics import SteadyState
 from ._export import profile, write_csv, write_dxf
 from ._groove import groove_turns
+from ._report import Report, response
 from ._spec import Program
 
 RESPONSE_SPEEDS = 10

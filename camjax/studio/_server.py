@@ -13,6 +13,7 @@ the studio's folder only.
 
 from __future__ import annotations
 
+import contextvars
 import io
 import ipaddress
 import json
@@ -29,6 +30,7 @@ from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 
+from ..caches import carried
 from ._workbench import (
     DEFAULT_RPM,
     Busy,
@@ -88,6 +90,7 @@ class Studio:
         self.token, self.timeout_s = token, timeout_s
         self.httpd = _Server((host, port), _Handler)
         self.httpd.studio = self
+        self.httpd.context = contextvars.copy_context()
         self.hosts = self._hosts(host)
         self.thread: threading.Thread | None = None
 
@@ -159,7 +162,7 @@ class Studio:
             except Exception:
                 pass
 
-        threads = [threading.Thread(target=t, name=f"camjax-studio-warm-{i}", daemon=True)
+        threads = [threading.Thread(target=carried(t), name=f"camjax-studio-warm-{i}", daemon=True)
                    for i, t in enumerate((first_look, geometry))]
 
         def wait():
@@ -219,6 +222,14 @@ class Refused(Exception):
 
 class _Server(ThreadingHTTPServer):
     daemon_threads = True
+    context: contextvars.Context | None = None
+    """The context of the ``Studio`` that made the server (the command's cache setting,
+    ``camjax._cache_dir``): each request's thread runs in a copy of it."""
+
+    def process_request_thread(self, request, client_address):
+        if self.context is None:
+            return super().process_request_thread(request, client_address)
+        return self.context.copy().run(super().process_request_thread, request, client_address)
 
     def handle_error(self, request, client_address):
         """One line for a request the handler could not answer (a dropped connection, a

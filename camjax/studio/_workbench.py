@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, plot_speed
+from ..caches import carried
 from ..checks import MAX_SPEEDS as MAX_SPEEDS
 
 DEFAULT_RPM = "200:1400:101"
@@ -303,15 +304,17 @@ class Workbench:
 
     def state(self) -> dict:
         """The program as its TOML structure (for the page's tables), its text and the speeds,
-        what an empty follower or ``[materials]`` field stands for; ``bundle``: whether it
-        holds a designed law (saved as a zip with its law files)."""
+        what an empty follower or ``[materials]`` field stands for, the follower's fields and
+        kinds (``camjax.program.follower_kinds``: the page keeps no list of its own);
+        ``bundle``: whether it holds a designed law (saved as a zip with its law files)."""
         from .. import laws
-        from ..program import Follower, Materials
+        from ..program import Follower, Materials, follower_kinds
 
         defaults = {f.name: f.default for f in dataclasses.fields(Follower) if f.default is not dataclasses.MISSING}
         materials = {f.name: f.default for f in dataclasses.fields(Materials)}
         return {"toml": self.toml, "program": tomllib.loads(self.toml), "rpm": self.rpm_text,
                 "laws": [*laws.names(), "constant-velocity", "polynomial"], "follower_defaults": defaults,
+                "follower_fields": [f.name for f in dataclasses.fields(Follower)], "follower_kinds": follower_kinds(),
                 "materials_defaults": materials,
                 "bundle": self.law_dir is not None and self.law_dir.as_posix() in self.toml,
                 "design": {"steps": DESIGN_STEPS, "knots": DESIGN_KNOTS, "objectives": list(DESIGN_OBJECTIVES)}}
@@ -337,7 +340,7 @@ class Workbench:
         segment_band(self.program, segment, rpm_lo, rpm_hi)  # its one-line error names what is wrong
         job = self.job = DesignJob(segment, objective, float(rpm_lo), float(rpm_hi), steps, knots,
                                    toml=self.toml, rpm=self.rpm, before=self.report)
-        threading.Thread(target=self._design, args=(job, self.program), name="camjax-studio-design",
+        threading.Thread(target=carried(self._design), args=(job, self.program), name="camjax-studio-design",
                          daemon=True).start()
         return job.as_dict()
 

@@ -6,16 +6,14 @@
 
 const SESSION = (crypto.randomUUID ? crypto.randomUUID() : String(Math.random()).slice(2));
 const END_KEYS = ["velocity_mm_per_deg", "acceleration_mm_per_deg2", "jerk_mm_per_deg3"];
-const FOLLOWER_KINDS = ["translating-roller", "swinging-roller", "translating-flat", "swinging-flat"];
-const FOLLOWER_FIELDS = ["kind", "mass_kg", "stiffness_n_per_mm", "damping_ratio", "spring_rate_n_per_mm",
-  "preload_n", "base_radius_mm", "roller_radius_mm", "offset_mm", "arm_mm", "pivot_mm",
-  "groove_clearance_mm", "contact_width_mm"];
 const NUMBER = /^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/;
 
 let model = null;        // {program: {name}, segment: [...], follower: {...}, materials?: {...}}
 let bundle = false;      // the program holds a designed law: saved as a zip with its law files
 let designDefaults = {steps: 60};   // the server's (GET /api/program)
 let followerDefaults = {};          // what an empty follower field stands for (GET /api/program)
+let followerFields = [];            // the follower's fields, kind first (GET /api/program)
+let followerKinds = [];             // each kind: {name, keys, roller, swinging} (GET /api/program)
 const dwellLift = new WeakMap();    // a segment's lift while it is a dwell, restored with a law
 let rollerCleared = false;
 let errorFrom = null;               // what the standing error came from: "program" or "chosen" (the speed)          // the switch to a flat face has just cleared the roller's radius
@@ -31,6 +29,10 @@ let timer = null, inFlight = false, dirty = false;
 const charts = {};
 
 const $ = (id) => document.getElementById(id);
+// A follower kind's record from the server's list (camjax.program.follower_kinds); the
+// default kind's where none is named.
+const kindOf = (name) => followerKinds.find((k) => k.name === (name || followerDefaults.kind)) ||
+  {name, keys: [], roller: true, swinging: false};
 const api = (path, params = {}) =>
   `/api/${path}?` + new URLSearchParams({session: SESSION, ...params}).toString();
 
@@ -149,7 +151,7 @@ function lawInput(seg, n) {
 
 // Beside each follower field, what it makes of the machine when empty (or does not do).
 function renderFollowerNotes() {
-  const f = model.follower || {}, flat = (f.kind || "").endsWith("-flat");
+  const f = model.follower || {}, flat = !kindOf(f.kind).roller;
   document.querySelectorAll("#follower .fnote").forEach((note) => {
     const key = note.dataset.note;
     note.textContent =
@@ -233,14 +235,14 @@ function renderEditor() {
   const box = $("follower");
   box.innerHTML = "";
   const f = model.follower = model.follower || {};
-  for (const key of FOLLOWER_FIELDS) {
+  for (const key of followerFields) {
     const label = document.createElement("label");
     label.textContent = key + " ";
     if (key === "kind") {
       // a flat face has no roller: its radius goes with the switch (said beside the field)
-      label.appendChild(select(FOLLOWER_KINDS, f.kind || "translating-roller", (v) => {
+      label.appendChild(select(followerKinds.map((k) => k.name), f.kind || followerDefaults.kind, (v) => {
         f.kind = v;
-        if (v.endsWith("-flat") && f.roller_radius_mm !== undefined) { delete f.roller_radius_mm; rollerCleared = true; }
+        if (!kindOf(v).roller && f.roller_radius_mm !== undefined) { delete f.roller_radius_mm; rollerCleared = true; }
       }, {key}));
     } else {
       label.appendChild(input(f[key], (t) => {
@@ -361,6 +363,8 @@ function load(state) {
   bundle = !!state.bundle;
   designDefaults = state.design || designDefaults;
   followerDefaults = state.follower_defaults || followerDefaults;
+  if (state.follower_fields) followerFields = ["kind", ...state.follower_fields.filter((k) => k !== "kind")];
+  followerKinds = state.follower_kinds || followerKinds;
   materialDefaults = state.materials_defaults || materialDefaults;
   renderLawNames();
   $("range").value = rpmText;
@@ -613,13 +617,13 @@ function renderNotes() {
 
 function drawProfile() {
   const canvas = $("profile"), ctx = canvas.getContext("2d");
-  const p = curves.profile, f = curves.follower;
+  const p = curves.profile, f = curves.follower, kind = kindOf(f.kind);
   const deg = Number($("angle").value);
   $("angle-text").textContent = `${deg} deg`;
   ctx.clearRect(0, 0, canvas.width, canvas.height);
   const pts = [...p.pitch, ...p.profile, ...(p.outer || [])];
   const reach = Math.max(Math.max(...pts.map(([x, y]) => Math.hypot(x, y))) + (f.roller_radius_mm || 0) * 2 + 5,
-    f.kind.startsWith("swinging") ? f.pivot_mm + 8 : 0);
+    kind.swinging ? f.pivot_mm + 8 : 0);
   const scale = canvas.width / 2 / reach, cx = canvas.width / 2, cy = canvas.height / 2;
   const t = deg * Math.PI / 180, c = Math.cos(t), s = Math.sin(t);
   // the cam turns by the cam angle; the follower stays on its axis (camjax.geometry's frame)
@@ -635,7 +639,7 @@ function drawProfile() {
   ctx.setLineDash([]);
   const i = Math.round(deg / 360 * p.theta_deg.length) % p.theta_deg.length;
   ctx.strokeStyle = "#d62728"; ctx.lineWidth = 2;
-  if (p.flat_face && f.kind === "swinging-flat") {
+  if (p.flat_face && kind.swinging) {
     drawSwingingArm(ctx, at(p.profile[i]), cx + scale * f.pivot_mm, cy, true);
   } else if (p.flat_face) {
     const [u, v] = at(p.profile[i]);
@@ -643,8 +647,8 @@ function drawProfile() {
   } else {
     const [u, v] = at(p.pitch[i]);
     ctx.beginPath(); ctx.arc(u, v, scale * f.roller_radius_mm, 0, 2 * Math.PI); ctx.stroke();
-    if (f.kind === "translating-roller") { ctx.beginPath(); ctx.moveTo(u, v); ctx.lineTo(u, 0); ctx.stroke(); }
-    if (f.kind === "swinging-roller") drawSwingingArm(ctx, [u, v], cx + scale * f.pivot_mm, cy, false);
+    if (!kind.swinging) { ctx.beginPath(); ctx.moveTo(u, v); ctx.lineTo(u, 0); ctx.stroke(); }
+    else drawSwingingArm(ctx, [u, v], cx + scale * f.pivot_mm, cy, false);
   }
   drawRotation(ctx, cx, cy, Math.min(40, scale * f.base_radius_mm * 0.5));
   ctx.lineWidth = 1;

@@ -28,7 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._machine import flywheel_inertia_kg_m2
+from ._torque import flywheel_inertia_kg_m2
 
 
 class ProbeContext(NamedTuple):
@@ -92,9 +92,15 @@ class Probe:
                 "table": self.table, "optional": self.optional, "built_in": self.built_in}
 
 
-def min_preload_n(min_contact_force_n, preload_n):
-    """Preload that just keeps contact: ``max(0, max over the cycle of -(k e + c e'))``."""
-    return np.maximum(0.0, preload_n - np.asarray(min_contact_force_n))
+def min_preload_n(min_contact_force_n, preload_n, levers: float = 1.0):
+    """Preload that just keeps contact: ``max(0, max over the cycle of -(k e + c e'))``; a
+    chain's spring preload acts at the cam through its ``levers`` (their product)."""
+    return np.maximum(0.0, preload_n - np.asarray(min_contact_force_n) / levers)
+
+
+def cam_levers(program) -> float:
+    """The product of a chain's lever ratios from the cam to its spring (1 without a chain)."""
+    return 1.0 if program.chain is None else program.chain.lever_ratio
 
 
 def kinematic_peak_m_s2(program, rpm: np.ndarray) -> np.ndarray:
@@ -130,7 +136,8 @@ BUILT_IN = (
           "greatest contact force over the turn, contact held", "N", table="speed"),
     Probe("min_preload_n", None, "min preload N",
           "the preload that just keeps contact (none for a form-closed cam)", "N", table="speed",
-          host=_spring_loaded(lambda v, c: min_preload_n(v["min_contact_force_n"], c.program.follower.preload_n))),
+          host=_spring_loaded(lambda v, c: min_preload_n(v["min_contact_force_n"], c.program.follower.preload_n,
+                                                       cam_levers(c.program)))),
     Probe("jump", None, "jump", "whether the contact force goes negative (a spring-loaded cam)", "",
           "{}", table="speed",
           host=lambda v, c: np.zeros(c.rpm.size, bool) if c.program.follower.form_closed

@@ -15,16 +15,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
-from ..sdof import eigenvalue
-from ._dynamics import (
-    SteadyState,
-    Train,
-    _cycle,
-    cycle_grid,
-    residual_modes,
-    with_segment_law,
-)
-from ._jump import even_periods, min_preload_n, scan_speeds
+from ._cycle import _cycle, residual_modes
+from ._cycle_grid import program_grid, with_segment_law
+from ._dynamics import SteadyState
+from ._jump import even_periods, scan_speeds
+from ._oscillator import CONTACT_FORCE, Oscillator
+from ._outputs import cam_levers, min_preload_n
 from ._spec import Program, segment_band, with_law
 
 _SPEEDS_PER_CYCLE = 8  # training speeds per natural-frequency cycle the turn gains across the range
@@ -44,14 +40,14 @@ def _smooth_max(values, p):
 
 def _segment_grid(objective, law):
     """The program with the objective's segment set to ``law`` (traced leaves allowed), its
-    grid and train: the layout comes from a copy of the law with its traced leaves zeroed
+    grid and oscillator: the layout comes from a copy of the law with its traced leaves zeroed
     (concrete, so built eagerly even under a trace), the segment's samples from the law."""
     # Concrete leaves (a corrected polynomial's base) stay: the program must keep its joins.
     placeholder = jax.tree.map(lambda x: np.zeros(np.shape(x)) if isinstance(x, jax.core.Tracer) else x, law)
     program = with_law(objective.program, objective.segment, placeholder)
     with jax.ensure_compile_time_eval():
-        grid = _same_points(cycle_grid(program, objective.rpm_lo), objective.program)
-    return program, with_segment_law(grid, program, objective.segment - 1, law), Train.of(program)
+        grid = _same_points(program_grid(program, objective.rpm_lo), objective.program)
+    return program, with_segment_law(grid, program, objective.segment - 1, law), Oscillator.of(program)
 
 
 def _same_points(grid, original: Program):
@@ -77,7 +73,7 @@ class AbstractProgramObjective(AbstractObjective):
 
     def __check_init__(self):
         segment_band(self.program, self.segment, self.rpm_lo, self.rpm_hi)
-        if not self.program.follower.damping_ratio > 0:
+        if self.program.one_body and not self.program.follower.damping_ratio > 0:
             raise ValueError(f"the {self.what} objective needs follower.damping_ratio > 0 (a periodic steady state)")
 
     what: ClassVar[str] = "program"
@@ -114,9 +110,9 @@ class MaxPreload(AbstractProgramObjective):
 
     def features(self, law):
         """``k e + c e'`` (N) at every grid node and training speed: affine in the law."""
-        _, grid, train = _segment_grid(self, law)
-        force = jax.vmap(lambda rpm: _cycle(grid, train, rpm).contact_force_n)(jnp.asarray(self.speeds()))
-        return force - train.preload
+        _, grid, oscillator = _segment_grid(self, law)
+        force = jax.vmap(lambda rpm: _cycle(grid, oscillator, rpm).contact_force_n)(jnp.asarray(self.speeds()))
+        return (force - oscillator.static[CONTACT_FORCE]) / cam_levers(self.program)
 
     def value(self, features, ca, sharpness):
         return _smooth_max(-features.ravel(), sharpness)
@@ -125,7 +121,7 @@ class MaxPreload(AbstractProgramObjective):
         """Required preload (N) at every evaluation speed, by ``SteadyState`` on the program with ``law``."""
         program = with_law(self.program, self.segment, law)
         force = SteadyState(program, self.rpm_lo).min_contact_force_n(self.evaluation_speeds())
-        return min_preload_n(force, program.follower.preload_n)
+        return min_preload_n(force, program.follower.preload_n, cam_levers(program))
 
     def report(self, law, **sweep_options) -> float:  # the program's engine: no sweep options
         return float(np.max(self.required_preload(law)))
@@ -153,20 +149,18 @@ class MaxProgramResidual(AbstractProgramObjective):
             raise ValueError("the program has no dwell or constant-velocity segment: no residual vibration to design for")
 
     def features(self, law):
-        """Real and imaginary parts of the residual modes (mm), ``(2, speeds, points)``."""
-        _, grid, train = _segment_grid(self, law)
+        """Real and imaginary parts of the last body's residual modes (mm), ``(2, speeds,
+        modes, points)`` (``residual_modes``: the residual is the sum of their moduli)."""
+        _, grid, oscillator = _segment_grid(self, law)
 
         def modes(rpm):
-            period = 60.0 / rpm
-            lam = eigenvalue(train.omega_per_turn(rpm), train.zeta)
-            q = _cycle(grid, train, rpm).q
-            return residual_modes(grid, q, train.ks / train.m * period**2, lam)
+            return residual_modes(grid, oscillator, _cycle(grid, oscillator, rpm).q, rpm)
 
         z = jax.vmap(modes)(jnp.asarray(self.speeds()))
         return jnp.stack([jnp.real(z), jnp.imag(z)])
 
     def value(self, features, ca, sharpness):
-        return _smooth_max(jnp.hypot(features[0], features[1]).ravel(), sharpness)
+        return _smooth_max(jnp.sum(jnp.hypot(features[0], features[1]), axis=-2).ravel(), sharpness)
 
     def residual_mm(self, law) -> np.ndarray:
         """Largest residual vibration (mm) at every evaluation speed, by ``SteadyState``."""

@@ -10,23 +10,18 @@ import json
 import numpy as np
 
 from .._plain import json_ready, plot_speed
-from ._chain_steady import train_section
+from ._chain_contacts import simulated_train
+from ._contact import Geometry, RefinedStress, cam_geometry, refined_contact_stress
 from ._dynamics import SteadyState
 from ._groove import Impact, groove_turns
 from ._jump import Flight, _Turns, flights_at, jump_speed_rpm
-from ._machine import (
-    DEFAULT_SPEED_FLUCTUATION,
-    Geometry,
-    RefinedStress,
-    cam_geometry,
-    check_speed_fluctuation,
-    design_warnings,
-    refined_contact_stress,
-)
 from ._motion import Join, segment_kinematics
-from ._probes import Outputs, Probe, ProbeContext, kinematic_peak_m_s2, min_preload_n
+from ._oscillator import PAYLOAD_DISPLACEMENT
+from ._outputs import Outputs, Probe, ProbeContext, kinematic_peak_m_s2
 from ._spec import Program
 from ._speeds import Speeds
+from ._torque import DEFAULT_SPEED_FLUCTUATION, check_speed_fluctuation
+from ._warnings import design_warnings
 
 
 def kinematic_acceleration_m_s2(program: Program, rpm) -> np.ndarray:
@@ -187,8 +182,8 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     rpm = speeds.rpm
     outputs = Outputs.of(outputs)
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
-    if not program.one_body:
-        return _chain_analysis(program, speeds, outputs, speed_fluctuation)
+    if program.chain is not None and program.chain.has_contacts:  # lash or a seat: simulated
+        return _contacts_analysis(program, speeds, outputs, speed_fluctuation)
     steady = steady or SteadyState(program, speeds, devices=devices)
     out = steady.summary(speeds, outputs)
     closed = program.follower.form_closed
@@ -200,7 +195,8 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     ratios = _period_ratios(program, rpm)
     grooved = closed and bool(program.follower.groove_clearance_mm) and with_flight
     turns = groove_turns(program, speeds) if grooved else [None] * rpm.size
-    lost = np.flatnonzero(values["jump"]) if with_flight and not closed else np.zeros(0, int)
+    simulated = with_flight and not closed and program.one_body  # a chain's flight is not modelled
+    lost = np.flatnonzero(values["jump"]) if simulated else np.zeros(0, int)
     found = dict(zip(lost.tolist(), flights_at(steady, speeds[lost]) if lost.size else []))
     rows = []
     for i, r in enumerate(rpm):
@@ -218,41 +214,114 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     if not closed and not below and rpm.size > 1 and rpm.max() > rpm.min():
         jump_speed = jump_speed_rpm(steady, speeds.min(), speeds.max())
     geometry = cam_geometry(program, np.union1d(theta_nodes[:-1], np.arange(3600) * 0.1))
+    train = None if program.chain is None else train_section(program, out, rpm, jump_speed, below)
     report = Report(program.name, tuple(rows), jump_speed, below, tuple(segment_kinematics(program)),
-                    tuple(program.joins()), geometry, speed_fluctuation, outputs=outputs,
-                    train=None if program.chain is None else train_section(program, program.chain, rpm)[0])
+                    tuple(program.joins()), geometry, speed_fluctuation, outputs=outputs, train=train)
     return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))
 
 
-def _chain_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed_fluctuation: float) -> Report:
-    """``analyse`` of a program whose follower is a chain of bodies: the rows hold what the
-    chain's steady state gives (the contact force at the cam, the preload that keeps it,
-    jump, the last body's peak acceleration as the payload's, the cam's own acceleration)
-    and no other output (``None``): the one-body ones would be wrong numbers for a chain."""
+CHAIN_NOTE = (
+    "a train: the rows are the chain's, through the same steady state as the one-body follower's "
+    "(contact force, drive torque and Hertz stress at the cam; payload acceleration and residual "
+    "vibration the last body's, the residual the envelope sum_j |g_j (xi_j - xi_j,static)| of its "
+    "modes; period ratios at the first mode with the cam held); flights are not simulated for a "
+    "chain (its free flight is not modelled)"
+)
+ONE_BODY_NOTE = "a one-body train: the classic follower's rows are this chain's (the same numbers)"
+
+
+def train_section(program: Program, summary, rpm: np.ndarray, jump: float | None, below: bool) -> dict:
+    """The report's ``train`` section over the speeds ``rpm``: the natural frequencies held
+    and free with their mode shapes, the harmonic check over the speed range, and per
+    speed the train's own figures of the steady state (``TrainPeaks``), with the report's
+    jump speed."""
+    chain = program.chain
+    peaks = summary.cycles.train
+    speeds = [
+        {
+            "rpm": float(r),
+            "min_contact_force_n": float(summary.cycles.min_contact_force_n[i]),
+            "max_contact_force_n": float(summary.cycles.max_contact_force_n[i]),
+            "max_acceleration_m_s2": dict(zip(chain.names, np.asarray(peaks.max_acceleration_m_s2[i]).tolist())),
+            "max_lift_error_mm": float(peaks.max_lift_error_mm[i]),
+            "min_seat_force_n": float(peaks.min_seat_force_n[i]),
+            "max_seat_force_n": float(peaks.max_seat_force_n[i]),
+            "max_surge_n": float(peaks.max_surge_n[i]),
+        }
+        for i, r in enumerate(rpm)
+    ]
+    return {
+        "one_body": chain.spells_follower,
+        "note": ONE_BODY_NOTE if chain.spells_follower else CHAIN_NOTE,
+        **_train_modes(chain, rpm),
+        "speeds": speeds,
+        "jump_speed_rpm": jump,
+        "jump_below_range": below,
+    }
+
+
+def _train_modes(chain, rpm: np.ndarray) -> dict:
+    """The train section's bodies, natural frequencies held and free with their mode shapes,
+    and the harmonic check over the speed range."""
+    frequencies = {}
+    for key, contact in (("held", True), ("free", False)):
+        hz, shapes = chain.natural_frequencies(contact=contact)
+        frequencies[f"natural_frequencies_{key}_hz"] = hz.tolist()
+        frequencies[f"mode_shapes_{key}"] = shapes.T.tolist()  # one row per mode, over the bodies
+    return {
+        "bodies": list(chain.names),
+        **frequencies,
+        "harmonic_check": [
+            {"frequency_hz": f, "orders": orders}
+            for f, orders in chain.harmonic_check(float(rpm.min()), float(rpm.max()))
+        ],
+    }
+
+
+def _contacts_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed_fluctuation: float) -> Report:
+    """``analyse`` of a chain with lash or a seat (``Chain.has_contacts``), simulated
+    (``simulated_train``): the rows hold the contact force at the cam, jump (the cam
+    separates), the last body's peak acceleration and the cam's own; no other output
+    (``None``: the least preload is not given, the seated chain's base-circle force being
+    zero by design); the train section adds the ``contacts``."""
     rpm = speeds.rpm
     chain = program.chain
-    section, summary = train_section(program, chain, rpm)
-    spring = chain.spring is not None
-    levers = float(np.prod([b.ratio for b in chain.bodies if not b.rides]))
-    contacts = section.get("contacts")  # lash or a seat: simulated, the cam's separation says jump
-    jump = (summary.min_contact_force_n < 0 if contacts is None
-            else np.array([s["separates"].get("cam", False) for s in contacts["speeds"]]))
+    summary, contacts, jump, below = simulated_train(program, chain, rpm)
+    cam = np.array([s["separates"].get("cam", False) for s in contacts["speeds"]])
     known = {
         "max_payload_acceleration_m_s2": summary.max_acceleration_m_s2[:, -1],
         "max_kinematic_acceleration_m_s2": kinematic_peak_m_s2(program, rpm),
         "min_contact_force_n": summary.min_contact_force_n,
         "max_contact_force_n": summary.max_contact_force_n,
-        "min_preload_n": min_preload_n(summary.min_contact_force_n / levers, chain.spring.preload_n)
-        if spring and contacts is None else None,
-        "jump": jump if spring else np.zeros(rpm.size, bool),
+        "jump": cam,
     }
     rows = tuple(SpeedReport(rpm=float(r), values={
         name: None if known.get(name) is None else np.asarray(known[name])[i].item() for name in outputs})
         for i, r in enumerate(rpm))
+    section = {
+        "one_body": False,
+        "note": contacts["note"],
+        **_train_modes(chain, rpm),
+        "speeds": [
+            {
+                "rpm": float(r),
+                "min_contact_force_n": float(summary.min_contact_force_n[i]),
+                "max_contact_force_n": float(summary.max_contact_force_n[i]),
+                "max_acceleration_m_s2": dict(zip(chain.names, summary.max_acceleration_m_s2[i].tolist())),
+                "max_lift_error_mm": float(summary.max_lift_error_mm[i]),
+                "min_seat_force_n": float(summary.min_seat_force_n[i]),
+                "max_seat_force_n": float(summary.max_seat_force_n[i]),
+                "max_surge_n": float(summary.max_surge_n[i]),
+            }
+            for i, r in enumerate(rpm)
+        ],
+        "jump_speed_rpm": jump,
+        "jump_below_range": below,
+        "contacts": contacts,
+    }
     geometry = cam_geometry(program, np.union1d(program.start_deg, np.arange(3600) * 0.1))
-    report = Report(program.name, rows, section["jump_speed_rpm"], section["jump_below_range"],
-                    tuple(segment_kinematics(program)), tuple(program.joins()), geometry, speed_fluctuation,
-                    outputs=outputs, train=section)
+    report = Report(program.name, rows, jump, below, tuple(segment_kinematics(program)), tuple(program.joins()),
+                    geometry, speed_fluctuation, outputs=outputs, train=section)
     return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))
 
 
@@ -281,11 +350,14 @@ def response(program: Program, rpm: float, *, steady: SteadyState | None = None)
     g = steady.grid
     theta = 360.0 * g.nodes
     y, _, ddy = program.lift(theta)
-    deflection = np.imag(cycle.q) / float(np.imag(steady.lam(rpm)))
+    osc = steady.oscillator
+    period = 60.0 / rpm
+    displacement = (np.real(np.asarray(osc.gain)[PAYLOAD_DISPLACEMENT] / period @ cycle.q)
+                    + np.asarray(osc.direct)[PAYLOAD_DISPLACEMENT, 0] * np.asarray(g.lift_nodes))
     return {
         "theta_deg": theta,
         "lift_mm": y,
-        "payload_displacement_mm": y - deflection,
+        "payload_displacement_mm": displacement,
         "kinematic_acceleration_m_s2": 1e-3 * ddy * (360.0 * rpm / 60.0) ** 2,
         "payload_acceleration_m_s2": cycle.payload_acceleration_m_s2,
         "contact_force_n": cycle.contact_force_n,
