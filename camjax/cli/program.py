@@ -317,7 +317,11 @@ def run(args) -> int:
                            "follower's; a train's are not written yet: use --format json")
         motors = _motors(args, program)  # before the analysis: a bad motor file fails at once
         out = output_dir(args.out)
-        steady = SteadyState(program, rpm)
+        simulated = program.chain is not None and program.chain.has_contacts  # lash or a seat
+        if simulated and (motors or args.compensate is not None):
+            raise CliError("--motor and --compensate: a chain with lash or a seat is simulated, and its "
+                           "drive torque and compensation are not computed yet")
+        steady = None if simulated else SteadyState(program, rpm)
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
                          speed_fluctuation=args.speed_fluctuation)
         if out is not None:

@@ -300,7 +300,9 @@ def _contacts_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed
         for i, r in enumerate(rpm))
     section = {
         "one_body": False,
-        "note": contacts["note"],
+        "note": "a train with lash or a seat, simulated: the rows give the chain's contact force at the "
+                "cam, jump (the cam separates) and the last body's peak acceleration; the other outputs "
+                "are not computed and left empty",
         **_train_modes(chain, rpm),
         "speeds": [
             {
