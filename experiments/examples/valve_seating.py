@@ -31,7 +31,7 @@ def main() -> None:
     valve = chain.bodies[-1]
     # the valve's quasi-static lift: the cam's through the rocker, less the lash and the
     # rocker's compression under the spring's preload
-    offset = valve.lash_mm + chain.spring.preload_n / (1e3 * valve.stiffness_n_per_mm)
+    offset = valve.lash_mm + chain.spring.preload_n / valve.stiffness_n_per_mm  # mm
     fig, axes = plt.subplots(
         len(turns), 1, figsize=(8, 3.2 * len(turns)), layout="constrained", sharex=True
     )
