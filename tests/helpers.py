@@ -10,6 +10,7 @@ SDOF's numbers (to the tolerance given; ``None``: a model with no damping to com
 import contextlib
 import json
 import math
+import tomllib
 import urllib.error
 import urllib.parse
 import urllib.request
@@ -211,12 +212,12 @@ def program_lift(program):
 
 def call(url: str, data: str | None = None):
     """(status, decoded JSON) of a GET of the studio's ``url``, or of a POST of ``data`` (a
-    TOML text) as the page sends it: from the studio's own origin.  An error status comes
-    back with its JSON body, not raised."""
+    program's TOML text) as the page sends it: its structure as JSON, from the studio's own
+    origin.  An error status comes back with its JSON body, not raised."""
     parts = urllib.parse.urlsplit(url)
-    headers = {} if data is None else {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/toml"}
-    request = urllib.request.Request(url, data=None if data is None else data.encode(), headers=headers,
-                                     method="GET" if data is None else "POST")
+    headers = {} if data is None else {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/json"}
+    body = None if data is None else (json.dumps(tomllib.loads(data)) if data else "").encode()
+    request = urllib.request.Request(url, data=body, headers=headers, method="GET" if data is None else "POST")
     try:
         with urllib.request.urlopen(request, timeout=600) as response:
             return response.status, json.load(response)

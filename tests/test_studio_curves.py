@@ -90,8 +90,9 @@ def test_toml_export_is_the_program(server, feed):
     text = fetch(server.url + "api/program.toml").decode()
     assert cp.Program.from_dict(tomllib.loads(text), base=cp.example_path("feed").parent) == feed
     # an edit is what the export then holds
-    edited = text.replace("lift_mm = 8\n", "lift_mm = 7\n").replace(
-        "lift_mm = -23\n", "lift_mm = -22\n"
+    assert text == feed.to_toml()  # the one writer of a program file
+    edited = text.replace("lift_mm = 8.0\n", "lift_mm = 7.0\n").replace(
+        "lift_mm = -23.0\n", "lift_mm = -22.0\n"
     )
     assert edited != text
     assert call(server.url + "api/program?session=edit", edited)[0] == 200

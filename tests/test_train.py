@@ -557,4 +557,4 @@ def test_the_contact_force_bound_holds_for_a_chain(chain, slowest):
     force = steady.min_contact_force_n(rpm)
     bound = ContactForceBound(steady)(rpm)
     assert np.all(bound <= force), (rpm[bound > force], bound[bound > force], force[bound > force])
-    assert bound[0] > 0.5 * force[0]
+    assert ContactForceBound(steady).first_unheld(rpm) > 0  # the lowest speeds need no steady state

@@ -12,7 +12,7 @@ the profile, the figures); ``analyse_machine`` adds the torques of several cams 
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
 (``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
 preload over a speed range).  ``Chain`` is the follower as a chain of bodies (a valve
-train, a spring that surges); ``Oscillator`` is the follower's modes in physical units,
+train, a spring that surges, or bodies on a swinging follower's flexible ``Arm``); ``Oscillator`` is the follower's modes in physical units,
 the classic one-body follower's or a chain's, which ``SteadyState`` takes alike; a
 servo's ``Drive`` and ``Motor`` give the motor's torque over the turn (``duty_cycle``,
 ``size_motor``, ``choose_motor`` from a catalogue, ``program_motor_choice`` at a program's
@@ -23,6 +23,8 @@ docs/machine.md, docs/valve-trains.md and docs/servo.md.
 
 from typing import TYPE_CHECKING
 
+from ._arm import Arm as Arm
+from ._arm import arm_bending as arm_bending
 from ._chain_contacts import ChainContacts as ChainContacts
 from ._chain_contacts import ContactOptions as ContactOptions
 from ._chain_contacts import ContactSummary as ContactSummary
@@ -138,6 +140,7 @@ from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
 from ._speeds import Speeds as Speeds
 from ._speeds import warn_implausible as warn_implausible
 from ._torque import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
+from ._train import CLASSIC_FIELDS as CLASSIC_FIELDS
 from ._train import Body as Body
 from ._train import Chain as Chain
 from ._train import Seat as Seat

@@ -134,6 +134,10 @@ class ContactSystem(NamedTuple):
 
     @classmethod
     def of(cls, chain: Chain) -> ContactSystem:
+        if getattr(chain, "arm", None) is not None:
+            raise ValueError(
+                "[arm]: a flexible arm with lash is not simulated (give its lash_mm 0)"
+            )
         if chain.bodies[0].lever_mass_kg and not chain.bodies[0].rides:
             raise ValueError(
                 f"[[train]] body 1 ({chain.bodies[0].name}) lever_mass_kg: a lever's inertia on "

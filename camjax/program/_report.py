@@ -10,6 +10,7 @@ import json
 import numpy as np
 
 from .._plain import json_ready, plot_speed
+from ._arm import arm_section
 from ._chain_contacts import simulated_train
 from ._contact import Geometry, RefinedStress, cam_geometry, refined_contact_stress
 from ._dynamics import SteadyState
@@ -215,6 +216,8 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
         jump_speed = jump_speed_rpm(steady, speeds.min(), speeds.max())
     geometry = cam_geometry(program, np.union1d(theta_nodes[:-1], np.arange(3600) * 0.1))
     train = None if program.chain is None else train_section(program, out, rpm, jump_speed, below)
+    if train is not None and program.chain.arm is not None:  # its bending's cam orders
+        train["arm"] = arm_section(steady, out.cycles, rpm)
     report = Report(program.name, tuple(rows), jump_speed, below, tuple(segment_kinematics(program)),
                     tuple(program.joins()), geometry, speed_fluctuation, outputs=outputs, train=train)
     return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))

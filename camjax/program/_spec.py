@@ -145,6 +145,8 @@ class Program:
                 raise ValueError(f"chain must be a camjax.program.Chain or None, got {self.chain!r}")
             object.__setattr__(self, "follower", dataclasses.replace(self.follower, **self.chain.follower_fields()))
         _check_follower(self.follower)
+        if self.chain is not None:
+            self.chain.check_follower(self.follower)
 
     @property
     def one_body(self) -> bool:
@@ -173,7 +175,7 @@ class Program:
     def from_dict(cls, data: dict, *, base: Path | None = None) -> Program:
         """A program from the TOML structure (``program``, ``segment`` list, ``follower``)."""
         _no_unknown(data, {"program", "segment", "follower", "materials", "drive", "motor", "train", "spring",
-                           "seat"}, "top level")
+                           "seat", "arm"}, "top level")
         chain = chain_from_dict(data)  # refuses a [[train]] beside the classic follower fields
         header = data.get("program", {})
         _no_unknown(header, {"name", *TABLE_KEYS, *DXF_KEYS}, "[program]")
@@ -568,7 +570,7 @@ def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -
 
 def example_path(name: str = "indexer") -> Path:
     """Path of a program file shipped with camjax (``camjax/program/examples``, or its
-    ``trains`` folder: 'valve')."""
+    ``trains`` folder: 'valve', 'swinging_arm')."""
     examples = Path(__file__).parent / "examples"
     train = examples / "trains" / f"{name}.toml"
     return train if train.exists() and not (examples / f"{name}.toml").exists() else examples / f"{name}.toml"
@@ -576,7 +578,7 @@ def example_path(name: str = "indexer") -> Path:
 
 def program_path(text: str | None, default: str = "indexer") -> Path:
     """The program file ``text`` names: a path, or a built-in example's name ('indexer',
-    'feed', 'valve') where no such file exists; without ``text``, the example ``default``."""
+    'feed', 'valve', 'swinging_arm') where no such file exists; without ``text``, the example ``default``."""
     if not text:
         return example_path(default)
     path = Path(text)

@@ -22,12 +22,16 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parents[2]
 TRANSFER = Path(__file__).resolve().parent / "transfer.toml"
+KINDS = Path(__file__).resolve().parent / "follower_kinds"
+"""One program file of each follower kind and set-up no built-in cam uses."""
 
 CASES = (
     ("program", "indexer", "--rpm", "200:1400:7"),
     ("program", "feed", "--rpm", "300:900:4"),
     ("program", "valve", "--rpm", "1000:4000:4"),
     ("program", str(TRANSFER), "--rpm", "200:1400:7"),
+    ("program", "servo"),
+    *(("program", str(path), "--rpm", "300:900:3") for path in sorted(KINDS.glob("*.toml"))),
     ("ct", "--n", "1:30:60"),
     ("ct", "--law", "scca:0.1,0.5,0.3", "--n", "1:20:40", "--damping", "0.1"),
 )
