@@ -192,8 +192,35 @@ def _train_lines(train: dict) -> list[str]:
     lines.append("max|a|: each body's peak acceleration (m/s2); lift err: the last body's largest distance "
                  "from its kinematic lift; seat: the spring's force at its seat; surge: that force's largest "
                  "distance from the static spring force")
+    contacts = train.get("contacts")
+    if contacts is not None:
+        lines += _contact_lines(train, contacts)
     if train.get("arm") is not None:
         lines += _arm_lines(train["arm"])
+    return lines
+
+
+def _contact_lines(train: dict, contacts: dict) -> list[str]:
+    """The contacts' lines of a train with lash or a seat (``Report.train["contacts"]``)."""
+    lines = [f"contacts: {contacts['note']}"]
+    for s, c in zip(train["speeds"], contacts["speeds"]):
+        seating = c["seating_velocity_m_s"]
+        parts = [f"at {s['rpm']:g} rpm"]
+        if seating is not None:
+            parts.append(f"seating {seating:.4g} m/s")
+            bounces = c["bounces"]
+            parts.append(f"{c['bounce_count']} bounce(s)" + (
+                " (" + ", ".join(f"{b['velocity_m_s']:.3g} m/s at {b['angle_deg']:.2f} deg" for b in bounces[:3])
+                + (", ..." if len(bounces) > 3 else "") + ")" if bounces else ""))
+        for name, o in c["lash_openings"].items():
+            parts.append(f"lash at {name} opens {o['count']}x" + (
+                " at " + ", ".join(f"{a:.2f}" for a in o["angles_deg"][:4]) + " deg" if o["angles_deg"] else ""))
+        apart = [name for name, yes in c["separates"].items() if yes]
+        parts.append("separates: " + (", ".join(apart) if apart else "none"))
+        lines.append("; ".join(parts))
+    lowest = contacts["lowest_separation_rpm"]
+    lines.append("lowest speed of separation: " + ", ".join(
+        f"{name} {'none' if r is None else f'{r:g} rpm'}" for name, r in lowest.items()))
     return lines
 
 
@@ -306,7 +333,11 @@ def run(args) -> int:
                            "follower's; a train's are not written yet: use --format json")
         motors = _motors(args, program)  # before the analysis: a bad motor file fails at once
         out = output_dir(args.out)
-        steady = SteadyState(program, rpm)
+        simulated = program.chain is not None and program.chain.has_contacts  # lash or a seat
+        if simulated and (motors or args.compensate is not None):
+            raise CliError("--motor and --compensate: a chain with lash or a seat is simulated, and its "
+                           "drive torque and compensation are not computed yet")
+        steady = None if simulated else SteadyState(program, rpm)
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
                          speed_fluctuation=args.speed_fluctuation)
         if out is not None:

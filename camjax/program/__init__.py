@@ -25,6 +25,10 @@ from typing import TYPE_CHECKING
 
 from ._arm import Arm as Arm
 from ._arm import arm_bending as arm_bending
+from ._chain_contacts import ChainContacts as ChainContacts
+from ._chain_contacts import ContactOptions as ContactOptions
+from ._chain_contacts import ContactSummary as ContactSummary
+from ._chain_contacts import ContactTurn as ContactTurn
 from ._compensate import Compensation as Compensation
 from ._compensate import check_smooth as check_smooth
 from ._compensate import compensate as compensate

@@ -166,13 +166,13 @@ class Oscillator(NamedTuple):
         for j, body in enumerate(chain.bodies, start=1):
             if body.lash_mm:
                 raise ValueError(
-                    f"[[train]] body {j} ({body.name}) lash_mm: the steady state is of the "
-                    "closed chain; lash (a clearance that opens) is not modelled yet"
+                    f"[[train]] body {j} ({body.name}) lash_mm: the exact steady state is of the "
+                    "closed chain; a chain with lash is simulated (ChainContacts)"
                 )
         if chain.seat is not None:
             raise ValueError(
-                "[seat]: the steady state is of the closed chain; the seat's contact is not "
-                "modelled yet"
+                "[seat]: the exact steady state is of the closed chain; a chain with a seat is "
+                "simulated (ChainContacts)"
             )
         a = chain.matrices()
         free = np.arange(1, a.seat)

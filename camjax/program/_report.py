@@ -11,6 +11,7 @@ import numpy as np
 
 from .._plain import json_ready, plot_speed
 from ._arm import arm_section
+from ._chain_contacts import simulated_train
 from ._contact import Geometry, RefinedStress, cam_geometry, refined_contact_stress
 from ._dynamics import SteadyState
 from ._groove import Impact, groove_turns
@@ -182,6 +183,8 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     rpm = speeds.rpm
     outputs = Outputs.of(outputs)
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
+    if program.chain is not None and program.chain.has_contacts:  # lash or a seat: simulated
+        return _contacts_analysis(program, speeds, outputs, speed_fluctuation)
     steady = steady or SteadyState(program, speeds, devices=devices)
     out = steady.summary(speeds, outputs)
     closed = program.follower.form_closed
@@ -237,11 +240,6 @@ def train_section(program: Program, summary, rpm: np.ndarray, jump: float | None
     jump speed."""
     chain = program.chain
     peaks = summary.cycles.train
-    frequencies = {}
-    for key, contact in (("held", True), ("free", False)):
-        hz, shapes = chain.natural_frequencies(contact=contact)
-        frequencies[f"natural_frequencies_{key}_hz"] = hz.tolist()
-        frequencies[f"mode_shapes_{key}"] = shapes.T.tolist()  # one row per mode, over the bodies
     speeds = [
         {
             "rpm": float(r),
@@ -258,16 +256,78 @@ def train_section(program: Program, summary, rpm: np.ndarray, jump: float | None
     return {
         "one_body": chain.spells_follower,
         "note": ONE_BODY_NOTE if chain.spells_follower else CHAIN_NOTE,
+        **_train_modes(chain, rpm),
+        "speeds": speeds,
+        "jump_speed_rpm": jump,
+        "jump_below_range": below,
+    }
+
+
+def _train_modes(chain, rpm: np.ndarray) -> dict:
+    """The train section's bodies, natural frequencies held and free with their mode shapes,
+    and the harmonic check over the speed range."""
+    frequencies = {}
+    for key, contact in (("held", True), ("free", False)):
+        hz, shapes = chain.natural_frequencies(contact=contact)
+        frequencies[f"natural_frequencies_{key}_hz"] = hz.tolist()
+        frequencies[f"mode_shapes_{key}"] = shapes.T.tolist()  # one row per mode, over the bodies
+    return {
         "bodies": list(chain.names),
         **frequencies,
         "harmonic_check": [
             {"frequency_hz": f, "orders": orders}
             for f, orders in chain.harmonic_check(float(rpm.min()), float(rpm.max()))
         ],
-        "speeds": speeds,
+    }
+
+
+def _contacts_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed_fluctuation: float) -> Report:
+    """``analyse`` of a chain with lash or a seat (``Chain.has_contacts``), simulated
+    (``simulated_train``): the rows hold the contact force at the cam, jump (the cam
+    separates), the last body's peak acceleration and the cam's own; no other output
+    (``None``: the least preload is not given, the seated chain's base-circle force being
+    zero by design); the train section adds the ``contacts``."""
+    rpm = speeds.rpm
+    chain = program.chain
+    summary, contacts, jump, below = simulated_train(program, chain, rpm)
+    cam = np.array([s["separates"].get("cam", False) for s in contacts["speeds"]])
+    known = {
+        "max_payload_acceleration_m_s2": summary.max_acceleration_m_s2[:, -1],
+        "max_kinematic_acceleration_m_s2": kinematic_peak_m_s2(program, rpm),
+        "min_contact_force_n": summary.min_contact_force_n,
+        "max_contact_force_n": summary.max_contact_force_n,
+        "jump": cam,
+    }
+    rows = tuple(SpeedReport(rpm=float(r), values={
+        name: None if known.get(name) is None else np.asarray(known[name])[i].item() for name in outputs})
+        for i, r in enumerate(rpm))
+    section = {
+        "one_body": False,
+        "note": "a train with lash or a seat, simulated: the rows give the chain's contact force at the "
+                "cam, jump (the cam separates) and the last body's peak acceleration; the other outputs "
+                "are not computed and left empty",
+        **_train_modes(chain, rpm),
+        "speeds": [
+            {
+                "rpm": float(r),
+                "min_contact_force_n": float(summary.min_contact_force_n[i]),
+                "max_contact_force_n": float(summary.max_contact_force_n[i]),
+                "max_acceleration_m_s2": dict(zip(chain.names, summary.max_acceleration_m_s2[i].tolist())),
+                "max_lift_error_mm": float(summary.max_lift_error_mm[i]),
+                "min_seat_force_n": float(summary.min_seat_force_n[i]),
+                "max_seat_force_n": float(summary.max_seat_force_n[i]),
+                "max_surge_n": float(summary.max_surge_n[i]),
+            }
+            for i, r in enumerate(rpm)
+        ],
         "jump_speed_rpm": jump,
         "jump_below_range": below,
+        "contacts": contacts,
     }
+    geometry = cam_geometry(program, np.union1d(program.start_deg, np.arange(3600) * 0.1))
+    report = Report(program.name, rows, jump, below, tuple(segment_kinematics(program)), tuple(program.joins()),
+                    geometry, speed_fluctuation, outputs=outputs, train=section)
+    return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))
 
 
 def max_contact_stress(steady: SteadyState, rpm) -> RefinedStress:

@@ -95,9 +95,12 @@ class Spring:
 
 @dataclasses.dataclass(frozen=True)
 class Seat:
-    """A stiff one-sided contact under the last body (the valve's seat)."""
+    """A stiff one-sided contact under the last body (the valve's seat): a spring of
+    ``stiffness_n_per_mm`` with a dashpot of ``damping_n_s_per_m`` beside it, pushing only
+    (docs/valve-trains.md, "Lash and the seat")."""
 
     stiffness_n_per_mm: float
+    damping_n_s_per_m: float = 0.0
 
 
 def _bar_mass(n: int, mass: float) -> np.ndarray:
@@ -172,6 +175,12 @@ class Chain:
             and (s is None or not s.surges)
             and body.damping_n_s_per_m < 2 * math.sqrt(1e3 * body.stiffness_n_per_mm * body.mass_kg)
         )
+
+    @property
+    def has_contacts(self) -> bool:
+        """Whether the chain has a one-sided contact besides the cam's (a lash or a seat):
+        then it is not linear, and its steady state is simulated (``_chain_contacts.py``)."""
+        return self.seat is not None or any(b.lash_mm for b in self.bodies)
 
     def follower_fields(self) -> dict:
         """The classic ``[follower]`` fields this chain stands for: ``of_follower``'s inverse
@@ -458,6 +467,7 @@ def _check_chain(chain: Chain) -> None:
         if chain.arm is not None:
             raise ValueError("[seat]: a valve seat belongs to a valve train, not to a swinging arm")
         _number(chain.seat.stiffness_n_per_mm, "[seat] stiffness_n_per_mm", positive=True)
+        _number(chain.seat.damping_n_s_per_m, "[seat] damping_n_s_per_m", non_negative=True)
         if s is None or s.preload_n <= 0:
             raise ValueError(
                 "[seat]: a seat needs a [spring] with preload_n > 0 to close the valve onto it"
@@ -601,9 +611,13 @@ def chain_from_dict(data: dict) -> Chain | None:
         spring_obj = Spring(**spring)
     seat_obj = None
     if seat is not None:
-        if not isinstance(seat, dict) or set(seat) != {"stiffness_n_per_mm"}:
-            raise ValueError("[seat] takes one field, stiffness_n_per_mm")
-        seat_obj = Seat(seat["stiffness_n_per_mm"])
+        if (
+            not isinstance(seat, dict)
+            or "stiffness_n_per_mm" not in seat
+            or not set(seat) <= {"stiffness_n_per_mm", "damping_n_s_per_m"}
+        ):
+            raise ValueError("[seat] takes stiffness_n_per_mm and optionally damping_n_s_per_m")
+        seat_obj = Seat(**seat)
     arm_obj = None if arm is None else arm_from_dict(arm, data.get("follower"))
     return Chain(tuple(bodies), spring_obj, seat_obj, arm_obj)
 

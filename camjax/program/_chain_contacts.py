@@ -1,0 +1,717 @@
+"""A chain with its one-sided contacts (the cam, lash, the valve's seat), simulated to its periodic steady state.
+
+A chain with a lash or a seat (``Chain.has_contacts``) is not linear, so its periodic steady
+state is found by time integration (diffrax, Tsit5 with error control, vmapped over the
+speeds) rather than by the exact propagation of the closed chain (``SteadyState``).  The contacts:
+
+- **The cam.**  A first body that rides on the cam is held on it by a unilateral
+  constraint: while its gap ``w = x_1 - y`` is zero the contact force ``lambda`` is what
+  keeps ``x_1'' = y''`` (exact: no contact stiffness), and it leaves the cam where that
+  force would pull.  Where it lands again the force brings the gap to zero critically
+  damped (``w'' = -W^2 w - 2 W w'``, ``W`` from ``RIDER_CONTACT_HZ``): a nearly plastic
+  landing, without the chatter of a bouncing switch.  A first body on an element: that
+  element is the contact and is one-sided like a lash (below).
+- **Lash.**  An element with ``lash_mm > 0`` carries force only once its compression has
+  closed the clearance, and is open where it would pull: its force is
+  ``max(0, k a + c a')`` while its approach ``a`` (compression past closing) is positive,
+  zero otherwise (a Kelvin-Voigt contact whose force is clipped at zero).  Elements without
+  lash are linear and carry tension as well.
+- **The seat.**  A spring of ``Seat.stiffness_n_per_mm`` with its dashpot
+  (``damping_n_s_per_m``) under the last body, pushing only, as a lash element.
+
+**The rest state** (the cam on its base circle, everything still) is where the coordinates
+are measured from, and it decides which elements carry the spring's preload ``P``:
+
+- *with a seat*: the valve sits on its seat, which carries ``P`` (compressed by ``P / k_seat``);
+  every element of the chain carries nothing: each lash is open by its ``lash_mm`` and the
+  other elements just touch (the cam's contact force on the base circle is zero).  The
+  cam's opening ramp must first close the lash and compress the chain by ``P`` over its
+  stiffness before the valve leaves its seat;
+- *without a seat*: the chain is the closed chain of ``SteadyState`` (every element
+  carries ``P`` through the levers, a lash is closed); a lash opens only where the dynamic
+  force would pull, so its size does not matter.
+
+**Integration.**  State: every moving coordinate in mm and its rate in mm per turn, time in
+turns; the cam's lift, velocity and acceleration are the program's turn on the engine's grid
+(``cycle_grid``'s piecewise quintics of ``y`` and ``y_ss``), and the step control is told
+where the motion's acceleration jumps (segment ends and law breakpoints).  Turns run from the
+rest state until the state at the turn's start moves by less than ``settle_tolerance`` times
+the lift (positions) and the lift's largest rate (velocities) from one turn to the next (at
+most ``max_turns``; a chain that does not settle is a ``ValueError`` naming what to damp).
+The last turn is sampled at ``samples`` points, dense enough for a seat contact
+(``SAMPLES_PER_CONTACT``), and read on the host: the seating velocity (the last body's speed
+at its first seat contact of the closing, extrapolated from the sample before with its
+acceleration), the bounces (every later re-impact, with its velocity), each lash's openings
+and the separations.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._shapes import bucket
+from ._cycle_grid import cycle_grid
+from ._dynamics import SPEED_BLOCK
+from ._speeds import Speeds
+from ._train import Chain
+
+RIDER_CONTACT_HZ = 8.0
+"""A body riding on the cam that lands on it is brought to the cam's motion critically
+damped at this many times the chain's highest natural frequency (or the seat's where that
+is higher): a nearly plastic landing; in lasting contact the constraint holds exactly."""
+SAMPLES_PER_CONTACT = 12
+"""Samples of the reported turn per half period of the stiffest contact (the seat's or the
+landing's): the seat's impacts are read between samples."""
+CLOSED_MM = 1e-5
+"""An element, seat or cam contact is closed when its approach is past this (mm) and its
+force positive; a riding body has left the cam when its gap passes it."""
+
+
+_HELD_M = 1e-9
+"""A riding body within this gap (m) of the cam is held on it: a band above the integration's
+error in the body's position (the cam's lift and its acceleration are two fits that differ by
+about 1e-12 m), so that no error lets a held body fly (a chattering switch costs the step
+control millions of steps)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactOptions:
+    """How a chain with contacts is simulated (``ChainContacts``).
+
+    ``rtol``/``atol``: diffrax's error control on the state (mm and mm per turn);
+    ``settle_tolerance``: the largest turn-to-turn change of the state at the turn's start,
+    relative to the lift and to its largest rate, of a settled run; ``max_turns`` turns
+    at most; ``samples``: points of the reported turn (default: ``SAMPLES_PER_CONTACT``
+    per half period of the stiffest contact at the slowest speed, at least 4096);
+    ``max_steps``: integrator steps per turn at most."""
+
+    rtol: float = 1e-8
+    atol: float = 1e-8
+    settle_tolerance: float = 1e-6
+    max_turns: int = 40
+    samples: int | None = None
+    max_steps: int = 200_000
+
+
+class ContactSystem(NamedTuple):
+    """The chain's equations over its moving coordinates (SI), as arrays: the compiled
+    turn's argument, so an edit of values compiles nothing.
+
+    ``M a = -G^T f - K_s u - C_s u' + load + seat_row f_seat + e_0 lambda``: ``f`` the
+    chain's element forces (element ``j`` approaches by ``d0_j + G_j u + g_cam_j y``,
+    one-sided where ``one_sided_j``), ``K_s``/``C_s`` the return spring, ``load`` its
+    preload on the last body, ``lambda`` the riding body's contact force (``rider``)."""
+
+    Minv: np.ndarray
+    Ks: np.ndarray
+    Cs: np.ndarray
+    load: np.ndarray
+    G: np.ndarray
+    g_cam: np.ndarray
+    d0: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    one_sided: np.ndarray
+    seat_row: np.ndarray
+    seat_k: np.ndarray
+    seat_c: np.ndarray
+    seat_s0: np.ndarray
+    rider: np.ndarray
+    rider_k: np.ndarray
+    rider_c: np.ndarray
+    body_rows: np.ndarray
+    spring_K: np.ndarray
+    spring_C: np.ndarray
+    spring_M: np.ndarray
+    preload: np.ndarray
+    rate: np.ndarray
+
+    @classmethod
+    def of(cls, chain: Chain) -> ContactSystem:
+        if getattr(chain, "arm", None) is not None:
+            raise ValueError(
+                "[arm]: a flexible arm with lash is not simulated (give its lash_mm 0)"
+            )
+        if chain.bodies[0].lever_mass_kg and not chain.bodies[0].rides:
+            raise ValueError(
+                f"[[train]] body 1 ({chain.bodies[0].name}) lever_mass_kg: a lever's inertia on "
+                "the cam's side of the first element is not simulated with contacts (give it to "
+                "the first body)"
+            )
+        a = chain.matrices()
+        rider = chain.bodies[0].rides
+        start = 0 if rider else 1
+        moving = np.arange(start, a.seat)
+        n = moving.size
+        size = a.seat + 1
+        preload = chain.spring.preload_n if chain.spring is not None else 0.0
+        seated = chain.seat is not None
+        K_el, C_el = np.zeros((size, size)), np.zeros((size, size))
+        G, g_cam, d0, k, c, one_sided = [], [], [], [], [], []
+        carried = preload  # the static force each element carries without a seat
+        elements = []
+        for j, body in enumerate(chain.bodies):
+            if body.rides:
+                continue
+            before = 0 if j == 0 else a.body_index[j - 1]
+            elements.append((j, before, a.body_index[j], body))
+        forces = {}
+        for j, _, _, body in reversed(elements):
+            forces[j] = carried
+            carried *= body.ratio
+        for j, before, after, body in elements:
+            kj, cj, r = 1e3 * body.stiffness_n_per_mm, body.damping_n_s_per_m, body.ratio
+            g = np.array([r, -1.0])
+            idx = np.ix_([before, after], [before, after])
+            K_el[idx] += kj * np.outer(g, g)
+            C_el[idx] += cj * np.outer(g, g)
+            row = np.zeros(size)
+            row[after] -= 1.0
+            cam = 0.0
+            if before == 0 and not rider:
+                cam = r
+            else:
+                row[before] += r
+            G.append(row[moving])
+            g_cam.append(cam)
+            k.append(kj)
+            c.append(cj)
+            one_sided.append(float(body.lash_mm > 0 or (before == 0 and not rider)))
+            d0.append(-1e-3 * body.lash_mm if seated else forces[j] / kj)
+        spring_K = (a.K - K_el)[np.ix_(moving, moving)]
+        spring_C = (a.C - C_el)[np.ix_(moving, moving)]
+        last = int(a.body_index[-1]) - start
+        load = np.zeros(n)
+        load[last] = -preload
+        seat_row = np.zeros(n)
+        seat_k = seat_c = seat_s0 = 0.0
+        if seated:
+            seat_row[last] = 1.0
+            seat_k = 1e3 * chain.seat.stiffness_n_per_mm
+            seat_c = chain.seat.damping_n_s_per_m
+            seat_s0 = preload / seat_k
+        top = max(chain.highest_frequency_hz(), 1.0)
+        w_p = 2 * math.pi * RIDER_CONTACT_HZ * top
+        if seated:
+            w_p = max(w_p, math.sqrt(seat_k / chain.bodies[-1].mass_kg))
+        M = a.M[np.ix_(moving, moving)]
+        rate = 1e3 * chain.spring.rate_n_per_mm if chain.spring is not None else 0.0
+        E = len(elements)
+        return cls(
+            Minv=np.linalg.inv(M),
+            Ks=spring_K,
+            Cs=spring_C,
+            load=load,
+            G=np.asarray(G).reshape(E, n),
+            g_cam=np.asarray(g_cam, dtype=float),
+            d0=np.asarray(d0, dtype=float),
+            k=np.asarray(k, dtype=float),
+            c=np.asarray(c, dtype=float),
+            one_sided=np.asarray(one_sided, dtype=float),
+            seat_row=seat_row,
+            seat_k=np.asarray(seat_k),
+            seat_c=np.asarray(seat_c),
+            seat_s0=np.asarray(seat_s0),
+            rider=np.asarray(float(rider)),
+            rider_k=np.asarray(w_p**2),
+            rider_c=np.asarray(2 * w_p),
+            body_rows=np.asarray(a.body_index) - start,
+            spring_K=a.K[a.seat, moving],
+            spring_C=a.C[a.seat, moving],
+            spring_M=a.M[a.seat, moving],
+            preload=np.asarray(preload),
+            rate=np.asarray(rate),
+        )
+
+    @property
+    def stiffest_hz(self) -> float:
+        """The frequency of the stiffest contact on its body (the seat's or a landing's)."""
+        m_last = 1.0 / self.Minv[self.body_rows[-1], self.body_rows[-1]]
+        seat = math.sqrt(float(self.seat_k) / m_last) if float(self.seat_k) else 0.0
+        rider = math.sqrt(float(self.rider_k)) if float(self.rider) else 0.0
+        return max(
+            seat,
+            rider,
+            float(np.sqrt(np.max(self.k) * np.max(np.diag(self.Minv)))) if self.k.size else 0.0,
+        ) / (2 * math.pi)
+
+
+def _lift_at(nodes, lift, acceleration, s):
+    """``y``, ``y_s`` and ``y_ss`` (mm, per turn) at turn time ``s`` (periodic) from the
+    grid's quintics (``CycleGrid.lift`` and ``motion.forcing``)."""
+    s = s - jnp.floor(s)
+    i = jnp.clip(jnp.searchsorted(nodes, s, side="right") - 1, 0, nodes.size - 2)
+    h = nodes[i + 1] - nodes[i]
+    sigma = (s - nodes[i]) / jnp.where(h > 0, h, 1.0)
+    powers = sigma ** jnp.arange(6)
+    y = lift[i] @ powers
+    dy = (lift[i, 1:] * jnp.arange(1, 6)) @ powers[:5] / h
+    return y, dy, acceleration[i] @ powers
+
+
+def _state_forces(system: ContactSystem, y, yd, ydd, u, v):
+    """Accelerations (m/s^2) and the contact forces of the chain at one instant (SI)."""
+    s = system
+    approach = s.d0 + s.G @ u + s.g_cam * y
+    rate = s.G @ v + s.g_cam * yd
+    raw = s.k * approach + s.c * rate
+    closed = approach > 0
+    f = jnp.where(s.one_sided > 0, jnp.where(closed, jnp.maximum(raw, 0.0), 0.0), raw)
+    signal = jnp.minimum(s.k * approach, raw)  # positive while an element is closed
+    seat_gap = s.seat_s0 - s.seat_row @ u  # the seat's approach
+    seat_raw = s.seat_k * seat_gap - s.seat_c * (s.seat_row @ v)
+    f_seat = jnp.where(seat_gap > 0, jnp.maximum(seat_raw, 0.0), 0.0)
+    F = -s.G.T @ f - s.Ks @ u - s.Cs @ v + s.load + s.seat_row * f_seat
+    a_free = s.Minv @ F
+    w, wd = u[0] - y, v[0] - yd
+    # held: the force that gives the gap w'' = -W^2 w - 2 W w' (critically damped onto the cam:
+    # in lasting contact exactly the constraint's, and a landing never rebounds nor chatters)
+    wanted = ydd - s.rider_k * w - s.rider_c * wd
+    held = jnp.where(w <= _HELD_M, jnp.maximum(0.0, (wanted - a_free[0]) / s.Minv[0, 0]), 0.0)
+    lam = s.rider * held
+    acc = a_free + s.Minv[:, 0] * lam
+    return acc, f, signal, f_seat, jnp.minimum(s.seat_k * seat_gap, seat_raw), lam, w
+
+
+class _Grid(NamedTuple):
+    nodes: jax.Array
+    lift: jax.Array
+    acceleration: jax.Array
+    jumps: jax.Array
+
+
+def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: ContactOptions):
+    """One turn from state ``z0`` (mm, mm per turn) at ``rpm``: the end state, the samples
+    ``(samples + 1, outputs)`` and whether the integration succeeded (jittable, vmappable)."""
+    import diffrax
+
+    system, grid = jax.tree.map(jnp.asarray, (system, grid))
+    period = 60.0 / rpm
+    n = z0.size // 2
+
+    def jet(s):
+        y, ys, yss = _lift_at(grid.nodes, grid.lift, grid.acceleration, s)
+        return 1e-3 * y, 1e-3 * ys / period, 1e-3 * yss / period**2
+
+    def field(s, z, args):
+        y, yd, ydd = jet(s)
+        u, v = 1e-3 * z[:n], 1e-3 * z[n:] / period
+        acc = _state_forces(system, y, yd, ydd, u, v)[0]
+        return jnp.concatenate([z[n:], 1e3 * period**2 * acc])
+
+    def sample(s, z, args):
+        y, yd, ydd = jet(s)
+        u, v = 1e-3 * z[:n], 1e-3 * z[n:] / period
+        acc, f, signal, f_seat, seat_signal, lam, w = _state_forces(system, y, yd, ydd, u, v)
+        last = system.body_rows[-1]
+        cam = lam + system.g_cam @ f
+        spring = system.preload - system.spring_K @ u - system.spring_C @ v - system.spring_M @ acc
+        return jnp.concatenate(
+            [
+                jnp.stack(
+                    [
+                        cam,
+                        f_seat,
+                        seat_signal,
+                        w,
+                        1e3 * u[last],
+                        v[last],
+                        acc[last],
+                        spring,
+                        spring - system.preload - system.rate * u[last],
+                        1e3 * y,
+                    ]
+                ),
+                f,
+                signal,
+                acc[system.body_rows],
+            ]
+        )
+
+    controller = diffrax.ClipStepSizeController(
+        diffrax.PIDController(rtol=options.rtol, atol=options.atol), jump_ts=grid.jumps
+    )
+    solution = diffrax.diffeqsolve(
+        diffrax.ODETerm(field),
+        diffrax.Tsit5(),
+        0.0,
+        1.0,
+        None,
+        z0,
+        saveat=diffrax.SaveAt(
+            subs=[
+                diffrax.SubSaveAt(t1=True),
+                diffrax.SubSaveAt(ts=jnp.linspace(0.0, 1.0, samples + 1), fn=sample),
+            ]
+        ),
+        stepsize_controller=controller,
+        max_steps=options.max_steps,
+        throw=False,
+    )
+    end, samples_out = solution.ys
+    return end[-1], samples_out, solution.result == diffrax.RESULTS.successful
+
+
+_COLUMNS = (
+    "cam",
+    "seat",
+    "seat_signal",
+    "gap",
+    "last_mm",
+    "last_v",
+    "last_a",
+    "spring",
+    "surge",
+    "lift_mm",
+)
+
+
+def _turns_compiled():
+    return jax.jit(jax.vmap(_turn, in_axes=(0, 0, None, None, None, None)), static_argnums=(4, 5))
+
+
+_turns = _turns_compiled()
+
+
+@dataclasses.dataclass(frozen=True)
+class Impact:
+    """A landing of the last body on its seat: the cam angle (deg) and its speed (m/s, down)."""
+
+    angle_deg: float
+    velocity_m_s: float
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactTurn:
+    """The settled turn at one speed: samples over the cam angle and what a valve-train
+    engineer reads from them.
+
+    ``seating_velocity_m_s``: the last body's speed at its first seat contact of the closing
+    (the end of its longest time off the seat; ``None`` without a seat or a lift off it);
+    ``bounces``: every later landing in the turn; ``lash_openings_deg``: per lash element
+    (by body name) the angles at which it opens; ``separates``: per contact (``cam``, each
+    lash element's body, ``seat``) whether it separates: the cam or a lash opening while
+    the valve is off its seat (anywhere without a seat), the seat bouncing; ``turns`` run and
+    the ``change`` that remained (relative, ``ContactOptions.settle_tolerance``)."""
+
+    rpm: float
+    theta_deg: np.ndarray
+    lift_mm: np.ndarray  # the cam's lift
+    last_mm: np.ndarray  # the last body's displacement from rest
+    last_velocity_m_s: np.ndarray
+    cam_force_n: np.ndarray
+    seat_contact_force_n: np.ndarray
+    element_force_n: np.ndarray  # (elements, samples)
+    acceleration_m_s2: np.ndarray  # (bodies, samples)
+    spring_seat_force_n: np.ndarray
+    surge_n: np.ndarray
+    seating_velocity_m_s: float | None
+    bounces: tuple[Impact, ...]
+    lash_openings_deg: dict
+    separates: dict
+    turns: int
+    change: float
+
+
+def _crossings(closed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sample indices ``i`` where a periodic contact closes (open at ``i``, closed at
+    ``i + 1``) and where it opens (closed at ``i``, open at ``i + 1``)."""
+    nxt = np.roll(closed, -1)
+    return np.flatnonzero(~closed & nxt), np.flatnonzero(closed & ~nxt)
+
+
+def _interval_lengths(closed: np.ndarray, closings: np.ndarray, openings: np.ndarray) -> np.ndarray:
+    """For each closing, the samples the contact was open before it (periodic)."""
+    m = closed.size
+    out = []
+    for i in closings:
+        before = openings[openings < i]
+        start = before[-1] if before.size else (openings[-1] - m if openings.size else i - m)
+        out.append(i - start)
+    return np.asarray(out)
+
+
+class ContactSummary(NamedTuple):
+    """The simulated chain's figures at every speed (``ChainContacts.summary``): extremes
+    over the settled turn's samples, as the closed chain's train section gives them."""
+
+    rpm: np.ndarray
+    min_contact_force_n: np.ndarray
+    max_contact_force_n: np.ndarray
+    max_acceleration_m_s2: np.ndarray  # (speeds, bodies): each body's peak |x''|
+    max_lift_error_mm: np.ndarray  # the last body's largest distance from its kinematic lift
+    min_seat_force_n: np.ndarray  # the spring's force at its seat
+    max_seat_force_n: np.ndarray
+    max_surge_n: np.ndarray  # the seat force's largest distance from the spring's static force
+
+
+class ChainContacts:
+    """A program driving a chain with contacts: its periodic steady state by simulation at
+    any speeds from ``rpm_min`` up (``ContactOptions``), in blocks of ``SPEED_BLOCK`` speeds
+    through one compiled turn per shape (coordinates, elements, grid and samples)."""
+
+    def __init__(
+        self, program, chain: Chain, rpm_min: float, options: ContactOptions | None = None
+    ):
+        self.program, self.chain = program, chain
+        self.options = options or ContactOptions()
+        self.rpm_min = Speeds.of(rpm_min, "rpm_min").min()
+        self.system = ContactSystem.of(chain)
+        grid = cycle_grid(program, self.rpm_min, chain.highest_frequency_hz())
+        size = bucket(grid.intervals, 64)
+        nodes = np.concatenate([np.asarray(grid.nodes), np.ones(size - grid.intervals)])
+        pad = np.zeros((size - grid.intervals, 6))
+        jumps = program.turn.breakpoints_deg() / 360.0
+        jumps = jumps[(jumps > 0) & (jumps < 1)]
+        jumps = np.concatenate([jumps, np.full(bucket(jumps.size + 1, 8) - jumps.size, 0.5)])
+        self._grid = _Grid(
+            nodes,
+            np.concatenate([np.asarray(grid.lift), pad]),
+            np.concatenate([np.asarray(grid.motion.forcing), pad]),
+            np.sort(jumps),
+        )
+        self.kinematic_ratio = float(np.prod([b.ratio for b in chain.bodies if not b.rides]))
+        period = 60.0 / self.rpm_min
+        wanted = SAMPLES_PER_CONTACT * period * 2 * self.system.stiffest_hz
+        self.samples = int(self.options.samples or bucket(max(4096, math.ceil(wanted)), 1024))
+        lift = np.asarray(grid.lift_nodes)
+        self._scale = (
+            max(float(np.ptp(lift)), 1e-3) * max(self.kinematic_ratio, 1.0),
+            max(float(np.max(np.abs(grid.velocity_nodes))), 1e-3) * max(self.kinematic_ratio, 1.0),
+        )
+
+    def _block(self, rpm: np.ndarray):
+        """Turns from rest at the speeds ``rpm`` (one block) until settled: the last
+        turn's samples, the turns run and the change that remained per speed."""
+        o = self.options
+        n = self.system.Minv.shape[0]
+        z = jnp.zeros((rpm.size, 2 * n))
+        speeds = jnp.asarray(rpm)
+        change = np.full(rpm.size, np.inf)
+        for turn in range(1, o.max_turns + 1):
+            end, samples, ok = _turns(z, speeds, self.system, self._grid, self.samples, o)
+            ok = np.asarray(ok)
+            if not ok.all():
+                bad = float(rpm[np.argmin(ok)])
+                raise ValueError(
+                    f"[[train]]: the chain's contacts at {bad:g} rpm could not be followed within "
+                    f"{o.max_steps:,} steps a turn (ContactOptions.max_steps): a stiffer seat or "
+                    "lash element than the integration can resolve"
+                )
+            d = np.asarray(end - z)
+            change = np.maximum(
+                np.max(np.abs(d[:, :n]), axis=1) / self._scale[0],
+                np.max(np.abs(d[:, n:]), axis=1) / self._scale[1],
+            )
+            z = end
+            if turn >= 2 and np.all(change <= o.settle_tolerance):
+                return np.asarray(samples), turn, change
+        worst = float(rpm[np.argmax(change)])
+        raise ValueError(
+            f"{self._damp_hint()}: the chain at {worst:g} rpm does not settle within "
+            f"{o.max_turns} turns (its state still moves by {np.max(change):.2g} of the lift "
+            f"a turn, against {o.settle_tolerance:g}): give it damping"
+        )
+
+    def _damp_hint(self) -> str:
+        seat = self.chain.seat
+        if seat is not None and not seat.damping_n_s_per_m:
+            return "[seat] damping_n_s_per_m"
+        for j, body in enumerate(self.chain.bodies, start=1):
+            if not body.rides and not body.damping_n_s_per_m:
+                return f"[[train]] body {j} ({body.name}) damping_n_s_per_m"
+        return "[[train]] damping_n_s_per_m"
+
+    def turns(self, rpm) -> list[ContactTurn]:
+        """The settled turn at every speed of ``rpm``."""
+        rpm = np.asarray(Speeds.of(rpm), dtype=float)
+        if rpm.min() < self.rpm_min * (1 - 1e-12):
+            raise ValueError(
+                f"rpm {rpm.min():g} below the simulation's slowest speed {self.rpm_min:g}"
+            )
+        out = []
+        for start in range(0, rpm.size, SPEED_BLOCK):
+            block = rpm[start : start + SPEED_BLOCK]
+            padded = np.pad(block, (0, SPEED_BLOCK - block.size), mode="edge")
+            samples, turns, change = self._block(padded)
+            out += [
+                self._read(float(r), samples[i], turns, float(change[i]))
+                for i, r in enumerate(block)
+            ]
+        return out
+
+    def _read(self, rpm: float, x: np.ndarray, turns: int, change: float) -> ContactTurn:
+        """What the samples ``x`` (samples + 1, outputs) of one settled turn say."""
+        if not np.all(np.isfinite(x)):
+            raise ValueError(f"[[train]]: the chain's simulation at {rpm:g} rpm is not finite")
+        chain, s = self.chain, self.system
+        col = {name: x[:, i] for i, name in enumerate(_COLUMNS)}
+        E = s.k.size
+        forces = x[:, len(_COLUMNS) : len(_COLUMNS) + E].T
+        signals = x[:, len(_COLUMNS) + E : len(_COLUMNS) + 2 * E].T
+        acc = x[:, len(_COLUMNS) + 2 * E :].T
+        theta = np.linspace(0.0, 360.0, x.shape[0])
+        step = theta[1] - theta[0]
+        period = 60.0 / rpm
+        dt = period / (x.shape[0] - 1)
+        turn = slice(0, -1)  # the last sample is the first one's turn later
+        seated = chain.seat is not None
+        seat_closed = (col["seat_signal"][turn] > s.seat_k * 1e-3 * CLOSED_MM) if seated else None
+        off_seat = ~seat_closed if seated else np.ones(x.shape[0] - 1, bool)
+        elements = [b for b in chain.bodies if not b.rides]
+
+        def angle(i, a, b):  # the zero of a signal between samples i and i + 1 (linear)
+            return float(theta[i] + step * a / (a - b) if a != b else theta[i])
+
+        lash_openings, separates = {}, {}
+        for e, body in enumerate(elements):
+            if not (s.one_sided[e] > 0):
+                continue
+            sig = signals[e][turn]
+            closed = sig > s.k[e] * 1e-3 * CLOSED_MM
+            _, opens = _crossings(closed)
+            nxt = (opens + 1) % sig.size
+            angles = [angle(i, sig[i], sig[j]) for i, j in zip(opens, nxt)]
+            separated = bool(np.any(~closed & off_seat))
+            if body.lash_mm:
+                lash_openings[body.name] = angles
+                separates[body.name] = separated
+            else:  # the first element: the cam's contact
+                separates["cam"] = separated
+        if chain.bodies[0].rides:
+            gap = col["gap"][turn]
+            separates["cam"] = bool(np.any((gap > 1e-3 * CLOSED_MM) & off_seat))
+        seating, bounces = None, ()
+        if seated:
+            closes, opens = _crossings(seat_closed)
+            if closes.size:
+                lengths = _interval_lengths(seat_closed, closes, opens)
+                first = int(np.argmax(lengths))
+                order = [closes[(first + k) % closes.size] for k in range(closes.size)]
+                impacts = []
+                approach = s.seat_s0 - 1e-3 * col["last_mm"]  # the seat's (m)
+                for i in order:
+                    while approach[i] > 0:  # touching already, below the threshold of closed:
+                        i -= 1  # read the landing from the last sample in flight
+                    gap0 = approach[i]
+                    rate, accel = -col["last_v"][i], -col["last_a"][i]
+                    tau = _first_root(gap0, rate, accel, dt)
+                    impacts.append(
+                        Impact(float(theta[i] + 360.0 * tau / period), float(rate + accel * tau))
+                    )
+                seating = impacts[0].velocity_m_s
+                bounces = tuple(impacts[1:])
+            separates["seat"] = bool(bounces)
+        return ContactTurn(
+            rpm=rpm,
+            theta_deg=theta,
+            lift_mm=col["lift_mm"],
+            last_mm=col["last_mm"],
+            last_velocity_m_s=col["last_v"],
+            cam_force_n=col["cam"],
+            seat_contact_force_n=col["seat"],
+            element_force_n=forces,
+            acceleration_m_s2=acc,
+            spring_seat_force_n=col["spring"],
+            surge_n=col["surge"],
+            seating_velocity_m_s=seating,
+            bounces=bounces,
+            lash_openings_deg=lash_openings,
+            separates=separates,
+            turns=turns,
+            change=change,
+        )
+
+    def summary(self, rpm) -> tuple[ContactSummary, list[ContactTurn]]:
+        """The ``ContactSummary`` of the simulated turns (extremes over the samples) and the
+        turns themselves."""
+        turns = self.turns(rpm)
+
+        def each(f):
+            return np.asarray([f(t) for t in turns])
+
+        return ContactSummary(
+            np.asarray([t.rpm for t in turns]),
+            each(lambda t: t.cam_force_n.min()),
+            each(lambda t: t.cam_force_n.max()),
+            each(lambda t: np.max(np.abs(t.acceleration_m_s2), axis=1)),
+            each(lambda t: np.max(np.abs(t.last_mm - self.kinematic_ratio * t.lift_mm))),
+            each(lambda t: t.spring_seat_force_n.min()),
+            each(lambda t: t.spring_seat_force_n.max()),
+            each(lambda t: np.max(np.abs(t.surge_n))),
+        ), turns
+
+
+def _first_root(gap0: float, rate: float, accel: float, dt: float) -> float:
+    """The first time in ``[0, dt]`` at which ``gap0 + rate t + accel t^2 / 2`` reaches zero
+    (``gap0 <= 0`` at the sample before a contact; ``dt`` where it does not)."""
+    if accel == 0.0:
+        return float(np.clip(-gap0 / rate, 0.0, dt)) if rate else dt
+    disc = rate * rate - 2.0 * accel * gap0
+    if disc < 0:
+        return dt
+    roots = [(-rate + sign * math.sqrt(disc)) / accel for sign in (-1.0, 1.0)]
+    inside = [t for t in roots if -1e-15 <= t <= dt * (1 + 1e-9)]
+    return float(max(min(inside), 0.0)) if inside else dt
+
+
+def contact_section(chain: Chain, turns: list[ContactTurn]) -> dict:
+    """The contacts' part of the report's ``train`` section: per speed (same order as the
+    section's ``speeds``) the seating velocity, the bounces, the lash's openings and the
+    separations; per contact the lowest speed at which it separates."""
+    per_speed = []
+    for t in turns:
+        per_speed.append(
+            {
+                "seating_velocity_m_s": t.seating_velocity_m_s,
+                "bounce_count": len(t.bounces),
+                "bounces": [b.as_dict() for b in t.bounces],
+                "lash_openings": {
+                    name: {"count": len(a), "angles_deg": a}
+                    for name, a in t.lash_openings_deg.items()
+                },
+                "separates": dict(t.separates),
+                "turns": t.turns,
+                "change": t.change,
+            }
+        )
+    contacts = list(turns[0].separates) if turns else []
+    lowest = {}
+    for name in contacts:
+        hit = [t.rpm for t in turns if t.separates.get(name)]
+        lowest[name] = min(hit) if hit else None
+    return {"speeds": per_speed, "lowest_separation_rpm": lowest}
+
+
+CONTACTS_NOTE = (
+    "lash or a seat: the chain's periodic steady state is simulated (diffrax) with its one-sided "
+    "contacts; the rest state has the valve on its seat carrying the spring's preload, the lash open; "
+    "extremes are over the samples of the settled turn; a contact separates where it opens while the "
+    "valve is off its seat (anywhere without a seat), the seat where the valve bounces; jump speed: the "
+    "lowest speed given at which the cam separates"
+)
+
+
+def simulated_train(program, chain: Chain, rpm: np.ndarray, options: ContactOptions | None = None):
+    """``train_section``'s figures for a chain with contacts: the ``ContactSummary``, the
+    ``contacts`` part of the section (``contact_section``), the jump speed (the lowest speed of
+    ``rpm`` at which the cam separates; ``None`` where it holds at every one, or at the lowest
+    already: then ``below`` is true)."""
+    rpm = np.asarray(rpm, dtype=float)
+    summary, turns = ChainContacts(program, chain, float(rpm.min()), options).summary(rpm)
+    contacts = {"note": CONTACTS_NOTE, **contact_section(chain, turns)}
+    cam = np.array([t.separates.get("cam", False) for t in turns])
+    below = bool(cam[np.argmin(rpm)])
+    jump = None
+    if not below and cam.any():
+        jump = float(rpm[cam].min())
+    return summary, contacts, jump, below

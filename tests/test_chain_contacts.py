@@ -1,0 +1,220 @@
+"""A chain with lash and a seat: its simulated periodic steady state against independent
+references (the ramp's velocity, an event-driven scipy integration written here, the closed
+chain's exact steady state) and its refusals."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+import scipy.integrate
+
+from camjax.program import (
+    Body,
+    Chain,
+    ChainContacts,
+    ContactOptions,
+    Program,
+    Seat,
+    Spring,
+    SteadyState,
+    analyse,
+)
+
+EXAMPLE = "camjax/program/examples/trains/valve_lash.toml"
+RAMP_MM_PER_DEG = 0.01  # the example's ramps
+
+
+@pytest.fixture(scope="module")
+def example():
+    return Program.load(EXAMPLE)
+
+
+@pytest.fixture(scope="module")
+def example_turns(example):
+    return ChainContacts(example, example.chain, 1000.0).turns([1000.0, 3000.0])
+
+
+def test_lash_closing_on_a_ramp_seats_at_the_ramp_velocity(example, example_turns):
+    """At low speed the valve lands at the closing ramp's velocity through the rocker."""
+    slow = example_turns[0]
+    ratio = example.chain.bodies[1].ratio
+    ramp = 1e-3 * RAMP_MM_PER_DEG * 360.0 * slow.rpm / 60.0 * ratio  # m/s at the valve
+    assert slow.seating_velocity_m_s == pytest.approx(ramp, rel=0.03)
+    # the valve seats on the closing ramp, the lash opens after it, and once a turn
+    closing_ramp = (9 + 20 + 75 + 75, 9 + 20 + 75 + 75 + 20)
+    assert list(slow.lash_openings_deg) == ["valve"]
+    (opening,) = slow.lash_openings_deg["valve"]
+    assert closing_ramp[0] < opening < closing_ramp[1] + 9
+    assert not slow.separates["cam"] and not slow.separates["valve"]
+
+
+def _event_driven(program, chain: Chain, rpm: float, turns: int = 3):
+    """The valve of a tappet held on the cam, with lash and a seat, integrated with scipy
+    from event to event (each contact open or closed, switched where its approach or force
+    crosses zero), from rest for ``turns`` turns: the seat's landings of the last turn as
+    ``(angle_deg, velocity_m_s)``."""
+    _, valve = chain.bodies
+    k, c, r, lash = (
+        1e3 * valve.stiffness_n_per_mm,
+        valve.damping_n_s_per_m,
+        valve.ratio,
+        1e-3 * valve.lash_mm,
+    )
+    ks, preload = 1e3 * chain.spring.rate_n_per_mm, chain.spring.preload_n
+    kseat, cseat = 1e3 * chain.seat.stiffness_n_per_mm, chain.seat.damping_n_s_per_m
+    m = valve.mass_kg
+    period = 60.0 / rpm
+    w = 360.0 / period  # deg/s
+
+    def cam(t):
+        y, dy, ddy, _ = program.turn.jet(np.atleast_1d(w * t % 360.0))
+        return 1e-3 * y[0], 1e-3 * dy[0] * w
+
+    def parts(t, z):
+        y, yd = cam(t)
+        a, ad = -lash + r * y - z[0], r * yd - z[1]
+        s, sd = preload / kseat - z[0], -z[1]
+        return a, ad, s, sd
+
+    def rhs(t, z, mode):
+        a, ad, s, sd = parts(t, z)
+        f = k * a + c * ad if mode[0] else 0.0
+        fs = kseat * s + cseat * sd if mode[1] else 0.0
+        return [z[1], (f + fs - preload - ks * z[0]) / m]
+
+    def events(mode):
+        """Each contact's event: ``min(k a, k a + c a')`` (positive while it is closed)
+        crossing zero downwards where it is closed, upwards where it is open."""
+
+        def lash_event(t, z, *_):
+            a, ad, _, _ = parts(t, z)
+            return min(k * a, k * a + c * ad)
+
+        def seat_event(t, z, *_):
+            _, _, s, sd = parts(t, z)
+            return min(kseat * s, kseat * s + cseat * sd)
+
+        for event, closed in ((lash_event, mode[0]), (seat_event, mode[1])):
+            event.terminal, event.direction = True, -1.0 if closed else 1.0
+        return lash_event, seat_event
+
+    t, z, mode = 0.0, np.zeros(2), [False, True]  # at rest: the lash open, the valve seated
+    landings = []
+    end = turns * period
+    while t < end:
+        sol = scipy.integrate.solve_ivp(
+            rhs,
+            (t, end),
+            z,
+            method="DOP853",
+            rtol=1e-11,
+            atol=1e-14,
+            events=events(mode),
+            args=(mode,),
+            max_step=period / 200,
+        )
+        t, z = sol.t[-1], sol.y[:, -1]
+        if sol.status != 1:
+            break
+        which = 0 if sol.t_events[0].size else 1
+        if which == 1 and not mode[1] and t > (turns - 1) * period:
+            landings.append((w * t % 360.0, -z[1]))
+        mode = list(mode)
+        mode[which] = not mode[which]
+        t = t + 1e-12 * period  # step off the switching point
+    return landings
+
+
+def test_seating_and_bounce_against_an_event_driven_integration(example, example_turns):
+    """The seating velocity, the number of bounces and the first bounce's velocity within 1%
+    of scipy's event-driven integration of the same valve (the tappet held on the cam)."""
+    for turn in example_turns:
+        assert not turn.separates["cam"]
+        landings = _event_driven(example, example.chain, turn.rpm)
+        angles = np.array([a for a, _ in landings])
+        lift = example.turn.jet(angles)[0]
+        assert len(landings) == 1 + len(turn.bounces)
+        seating_angle, seating = landings[0]
+        assert turn.seating_velocity_m_s == pytest.approx(seating, rel=0.01)
+        assert turn.bounces[0].velocity_m_s == pytest.approx(landings[1][1], rel=0.01)
+        assert turn.bounces[0].angle_deg == pytest.approx(landings[1][0], abs=0.05)
+        assert np.all(lift >= 0)
+
+
+def test_a_closed_chain_simulated_equals_its_exact_steady_state():
+    """Without lash and seat the simulation is the closed chain: its contact force and the
+    bodies' peak accelerations equal the exact periodic steady state's within 1e-4 of their
+    peaks (samples against refined extremes; the integration's tolerance is 1e-8)."""
+    program = Program.load("camjax/program/examples/trains/valve.toml")
+    chain = Chain((Body("tappet", 0.03), Body("valve", 0.05, 200.0, 20.0)), Spring(52.0, 250.0))
+    rpm = [1200.0]
+    exact = SteadyState(dataclasses.replace(program, chain=chain), rpm).summary(rpm).cycles
+    summary, (turn,) = ChainContacts(program, chain, rpm[0]).summary(rpm)
+    peak = float(exact.max_contact_force_n[0])
+    assert abs(summary.min_contact_force_n[0] - float(exact.min_contact_force_n[0])) < 1e-4 * peak
+    assert abs(summary.max_contact_force_n[0] - peak) < 1e-4 * peak
+    a = np.asarray(exact.train.max_acceleration_m_s2[0])
+    assert np.all(np.abs(summary.max_acceleration_m_s2[0] - a) < 1e-4 * a.max())
+    assert turn.seating_velocity_m_s is None and turn.separates == {"cam": False}
+
+
+def test_bad_input_is_one_line(example):
+    with pytest.raises(ValueError, match=r"\[seat\]: a seat needs a \[spring\] with preload_n > 0"):
+        Chain((Body("tappet", 0.03), Body("valve", 0.05, 200.0, 5.0)), Spring(52.0, 0.0), Seat(5e4))
+    with pytest.raises(ValueError, match=r"body 2 \(valve\) lash_mm must be non-negative"):
+        Body("valve", 0.05, 200.0, 5.0, lash_mm=-0.1) and Chain(
+            (Body("tappet", 0.03), Body("valve", 0.05, 200.0, 5.0, lash_mm=-0.1)),
+            Spring(52.0, 250.0),
+        )
+    with pytest.raises(ValueError, match=r"\[seat\] damping_n_s_per_m must be non-negative"):
+        Chain(
+            (Body("tappet", 0.03), Body("valve", 0.05, 200.0, 5.0)),
+            Spring(52.0, 250.0),
+            Seat(5e4, -1.0),
+        )
+    with pytest.raises(
+        ValueError, match=r"body 1 \(rocker\) lever_mass_kg: .* not simulated with contacts"
+    ):
+        ChainContacts(
+            example,
+            Chain(
+                (Body("rocker", 0.03, 500.0, 5.0, lever_mass_kg=0.01),),
+                Spring(52.0, 250.0),
+                Seat(5e4, 100.0),
+            ),
+            1000.0,
+        )
+    undamped = Chain(
+        (Body("tappet", 0.04), Body("valve", 0.05, 2000.0, 0.0, ratio=1.5, lash_mm=0.15)),
+        Spring(40.0, 250.0),
+        Seat(5e4),
+    )
+    with pytest.raises(ValueError) as error:
+        ChainContacts(example, undamped, 3000.0, ContactOptions(max_turns=3)).turns([3000.0])
+    message = str(error.value)
+    assert "\n" not in message
+    assert message.startswith(
+        "[seat] damping_n_s_per_m: the chain at 3000 rpm does not settle within 3 turns"
+    )
+
+
+def test_the_report_carries_the_contacts(example, example_turns):
+    """``analyse`` routes a chain with lash and a seat to the simulation: the train section's
+    contacts equal the simulation's turns, and the JSON carries them."""
+    report = analyse(example, [1000.0, 3000.0])
+    contacts = report.train["contacts"]
+    for turn, row in zip(example_turns, contacts["speeds"]):
+        assert row["seating_velocity_m_s"] == pytest.approx(turn.seating_velocity_m_s, rel=1e-9)
+        assert row["bounce_count"] == len(turn.bounces)
+        assert row["lash_openings"]["valve"]["count"] == len(turn.lash_openings_deg["valve"])
+    assert set(contacts["lowest_separation_rpm"]) == {"cam", "valve", "seat"}
+    assert report.jump_speed_rpm is None and not report.jump_below_range
+    assert json.loads(report.to_json())["train"]["contacts"]["speeds"][0]["bounce_count"] == len(
+        example_turns[0].bounces
+    )
+    assert all(s.values["min_preload_n"] is None for s in report.speeds)
+    assert math.isfinite(report.train["speeds"][0]["max_contact_force_n"])
