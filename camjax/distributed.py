@@ -55,7 +55,13 @@ import numpy as np
 
 from .checks import period_ratio_count, read_toml
 from .laws import SCCA, AbstractMotionLaw, rest_to_rest
-from .sdof import MAX_GRID_INTERVALS, MAX_PHASE_STEP, default_resolution
+from .sdof import (
+    MAX_GRID_INTERVALS,
+    MAX_PHASE_STEP,
+    check_grid_size,
+    default_resolution,
+    period_ratio_reach,
+)
 
 METRICS = ("ct", "residual", "peak_in_motion")
 SPEC_KEYS = {"output", "method", "damping", "laws_per_chunk", "dwell", "period_ratio", "laws",
@@ -208,19 +214,18 @@ def spec_from_dict(raw: dict, base=".") -> SweepSpec:
     if not 0.0 < phase_step <= MAX_PHASE_STEP:
         raise ValueError(f"phase_step must be in (0, {MAX_PHASE_STEP:g}] (radians per grid "
                          f"interval), got {phase_step}")
-    if method == "exact" and default_resolution(n.max(), phase_step) > MAX_GRID_INTERVALS:
+    if method == "exact":
         # The grid's size depends on the largest ratio and phase_step alone (not on the
         # chunks): a coarser step helps up to MAX_PHASE_STEP, past that only a smaller stop.
-        needed = 2 * np.pi * n.max() / MAX_GRID_INTERVALS
-        reach = MAX_GRID_INTERVALS * MAX_PHASE_STEP / (2 * np.pi)
-        advice = (f"phase_step at least {_up(needed):g}, at most "
-                  f"{MAX_PHASE_STEP:g}" if needed <= MAX_PHASE_STEP else
-                  f"period ratios up to {math.floor(reach):,} at phase_step {MAX_PHASE_STEP:g}: "
-                  "lower period_ratio.stop (or the largest of values)")
-        raise ValueError(
-            f"phase_step {phase_step:g} at period ratio {n.max():g} needs a grid of "
-            f"{default_resolution(n.max(), phase_step):,} intervals per rise; the limit is "
-            f"{MAX_GRID_INTERVALS:,} ({advice})")
+        def advice() -> str:
+            needed = 2 * np.pi * n.max() / MAX_GRID_INTERVALS
+            if needed <= MAX_PHASE_STEP:
+                return f"phase_step at least {_up(needed):g}, at most {MAX_PHASE_STEP:g}"
+            return (f"period ratios up to {math.floor(period_ratio_reach(MAX_PHASE_STEP)):,} at phase_step "
+                    f"{MAX_PHASE_STEP:g}: lower period_ratio.stop (or the largest of values)")
+
+        check_grid_size(default_resolution(n.max(), phase_step),
+                        f"a rise at period ratio {n.max():g} and phase_step {phase_step:g}", advice)
     what = json.dumps([names, n.tolist(), damping, method, dwell, per_chunk]
                       + ([phase_step] if phase_step != MAX_PHASE_STEP else []))
     return SweepSpec(

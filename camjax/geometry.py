@@ -1,4 +1,5 @@
-"""Disk-cam geometry for roller followers: pitch curve, profile by envelopes, pressure angle.
+"""Disk-cam geometry for roller and flat-faced followers: pitch curve, profile by envelopes,
+pressure angle, the contact's terms, and the inverse (a drawn profile back to the lift).
 
 Conventions: the cam centre is the origin, the cam turns counter-clockwise by ``theta``
 (radians), and points on the cam are given in the cam-fixed frame, ``P = Rot(-theta) E``
@@ -6,17 +7,23 @@ where ``E`` is the roller centre in the fixed frame.  The pitch curve is the pat
 roller centre on the cam; the profile (both flanks of a groove) is the envelope of the
 roller circles along it, ``C = P -/+ r_r n`` with ``n`` the outward unit normal.  Every
 function is elementwise in ``theta``, jittable and differentiable in the follower's and
-the program's leaves.
+the program's leaves, except the inverse (``lift_from_polygon``), which is numpy.
+
+Each follower kind is one class here (``name`` is its kind in a program file,
+``camjax.program.Follower``): its geometry and its rules are its methods, so a new kind is
+a new class (and its name in the program's reader, ``camjax.program.FOLLOWER_KINDS``).
 """
 
 from __future__ import annotations
 
 import abc
-from typing import NamedTuple
+import math
+from typing import ClassVar, NamedTuple
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from ._custom_types import ArrayLike
 from .checks import is_concrete, require
@@ -28,7 +35,69 @@ def _rot(angle, vector):
     return jnp.stack([c * vector[0] - s * vector[1], s * vector[0] + c * vector[1]])
 
 
-class AbstractRollerFollower(eqx.Module):
+class AbstractFollower(eqx.Module):
+    """A follower's geometry: what every kind answers.
+
+    The displacement ``y`` is a length for a translating follower and the swing (radians)
+    for a swinging one, whose lift is the arc at ``arm_length``: ``lift = y *
+    lift_per_displacement``.
+    """
+
+    name: ClassVar[str]
+    """The kind's name in a program file (``[follower] kind``)."""
+    swinging: ClassVar[bool]
+    """Whether ``y`` is a swing about a pivot (radians) rather than a length."""
+    max_pressure_angle_deg: ClassVar[float | None] = None
+    """The pressure angle above which the follower is taken to jam or wear (the design rule
+    of thumb), ``None`` where the pressure angle is no limit (a flat face)."""
+
+    @property
+    def lift_per_displacement(self):
+        """Lift per unit of displacement: 1, or the arm for a swinging follower."""
+        return self.arm_length if self.swinging else 1.0
+
+    @abc.abstractmethod
+    def profile_from_jet(self, theta, y, dy, ddy):
+        """The cam's shape from the displacement's jet at each angle: a ``CamProfile`` for a
+        roller, a ``FlatProfile`` for a flat face."""
+
+    @abc.abstractmethod
+    def contact_terms(self, shape, clearance=0.0) -> ContactTerms:
+        """The contact's terms at each angle of ``profile_from_jet``'s ``shape``;
+        ``clearance``: how much wider than the roller a groove is."""
+
+    @abc.abstractmethod
+    def contact_curvature(self, cam_radius):
+        """``1/R'`` of the Hertz line contact on a cam surface of radius ``cam_radius``."""
+
+    @abc.abstractmethod
+    def lift_from_polygon(self, polygon: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """The inverse of the profile: the displacement ``y`` at each cam angle ``theta``
+        (radians) of the cam whose profile is the closed ``polygon`` (``(m, 2)`` vertices,
+        counter-clockwise, in the cam frame), measured from the base circle, with the roller
+        centres in the cam frame (``(n, 2)``; ``None`` for a flat face).  Numpy; ``inf`` or
+        ``nan`` where the follower does not reach the polygon."""
+
+
+class ContactTerms(NamedTuple):
+    """The contact between cam and follower at each angle of a shape.
+
+    ``cam_radius``: the signed radius of curvature of the cam surface the follower rides
+    (negative where concave); ``other_wall_radius``: a groove's other wall as the roller sees
+    it (``inf`` under a flat face); ``normal_per_contact``: ``F_n / F_c``, the normal force
+    per unit of the force along the follower's path (``1 / cos(pressure angle)``; under a
+    swinging face ``arm / distance of the contact from the pivot``); ``face_position``: the
+    contact along a flat face (zeros for a roller).
+    """
+
+    pressure_angle: np.ndarray
+    cam_radius: np.ndarray
+    other_wall_radius: np.ndarray
+    normal_per_contact: np.ndarray
+    face_position: np.ndarray
+
+
+class AbstractRollerFollower(AbstractFollower):
     """A roller follower: where its roller centre is for a follower displacement ``y``."""
 
     roller_radius: jax.Array | float
@@ -48,12 +117,28 @@ class AbstractRollerFollower(eqx.Module):
             require(self.roller_radius > 0, f"roller_radius must be positive, got {self.roller_radius}")
             require(self.base_radius > 0, f"base_radius must be positive, got {self.base_radius}")
 
+    def profile_from_jet(self, theta, y, dy, ddy) -> CamProfile:
+        return cam_profile_from_jet(self, theta, y, dy, ddy)
+
+    def contact_terms(self, shape, clearance=0.0) -> ContactTerms:
+        pitch = np.asarray(shape.pitch_radius_of_curvature)
+        pressure = np.asarray(shape.pressure_angle)
+        return ContactTerms(pressure, pitch - self.roller_radius, -(pitch + (self.roller_radius + clearance)),
+                            1.0 / np.cos(pressure), np.zeros_like(pitch))
+
+    def contact_curvature(self, cam_radius):
+        return 1.0 / cam_radius + 1.0 / self.roller_radius
+
 
 class SwingingRollerFollower(AbstractRollerFollower):
     """Arm of length ``arm_length`` pivoted at ``(pivot_distance, 0)``; ``y`` is the swing (rad).
 
     At ``y = 0`` the roller touches the base circle; a positive swing moves it outward.
     """
+
+    name: ClassVar[str] = "swinging-roller"
+    swinging: ClassVar[bool] = True
+    max_pressure_angle_deg: ClassVar[float | None] = 45.0
 
     pivot_distance: jax.Array | float = 0.110
     arm_length: jax.Array | float = 0.098
@@ -65,7 +150,10 @@ class SwingingRollerFollower(AbstractRollerFollower):
         if is_concrete(self.pivot_distance, self.arm_length, self.roller_radius, self.base_radius):
             d, l, rp = self.pivot_distance, self.arm_length, self.pitch_radius
             require(d > 0 and l > 0, "pivot_distance and arm_length must be positive")
-            require(abs(d - l) < rp < d + l, f"no triangle: |d - l| < r_b + r_r < d + l fails ({d}, {l}, {rp})")
+            require(abs(d - l) < rp < d + l,
+                    "arm_length, pivot_distance: the arm cannot reach the base circle (no triangle: "
+                    "|pivot_distance - arm_length| < base_radius + roller_radius < pivot_distance + arm_length "
+                    f"fails: {d:g}, {l:g}, {rp:g})")
 
     @property
     def initial_angle(self):
@@ -81,9 +169,54 @@ class SwingingRollerFollower(AbstractRollerFollower):
         psi = self.arm_angle(y)
         return jnp.stack([self.pivot_distance + self.arm_length * jnp.cos(psi), self.arm_length * jnp.sin(psi)])
 
+    def lift_from_polygon(self, polygon, theta):
+        """The arm swung as far out as the polygon pushes the roller, at each angle: the
+        least arm direction (about the pivot, above the pivot-centre line) whose roller
+        touches it (an endpoint circle or an edge's offset line, exactly)."""
+        d, l, r = self.pivot_distance, self.arm_length, self.roller_radius
+        rp = self.base_radius + r
+        gamma0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
+        pivot = np.array([d, 0.0])
+
+        def direction(z):
+            return np.where(z[..., 1] > 0, np.arctan2(z[..., 1], z[..., 0]), np.inf)  # (0, pi) only
+
+        def one(x):
+            w = x - pivot
+            rho = np.hypot(w[..., 0], w[..., 1])
+            c = (l * l + rho * rho - r * r) / (2 * l * rho)
+            phi = np.arctan2(w[..., 1], w[..., 0])
+            half = np.arccos(np.clip(c, -1.0, 1.0))
+            best = np.full(x.shape[0], np.inf)
+            for sign in (-1.0, 1.0):
+                psi = phi + sign * half
+                z = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
+                best = np.minimum(best, np.min(np.where(np.abs(c) <= 1, direction(z), np.inf), axis=1))
+            a, t, length = polygon_edges(x)
+            nu = np.stack([t[..., 1], -t[..., 0]], axis=-1)
+            for side in (-1.0, 1.0):
+                start = a + side * r * nu - pivot
+                b = np.sum(t * start, axis=-1)
+                disc = b * b - (np.sum(start * start, axis=-1) - l * l)
+                root = np.sqrt(np.maximum(disc, 0.0))
+                for u in (-b - root, -b + root):
+                    ok = (disc >= 0) & (u >= 0) & (u <= length)
+                    best = np.minimum(best, np.min(np.where(ok, direction(start + u[..., None] * t), np.inf), axis=1))
+            return best
+
+        psi = _per_angle(polygon, theta, one)
+        centre = np.stack([d + l * np.cos(psi), l * np.sin(psi)], axis=1)
+        c, s = np.cos(theta), np.sin(theta)
+        centres = np.stack([c * centre[:, 0] + s * centre[:, 1], -s * centre[:, 0] + c * centre[:, 1]], axis=1)
+        return (math.pi - gamma0) - psi, centres
+
 
 class TranslatingRollerFollower(AbstractRollerFollower):
     """Follower sliding along the line ``x = offset``; ``y`` is the lift (length)."""
+
+    name: ClassVar[str] = "translating-roller"
+    swinging: ClassVar[bool] = False
+    max_pressure_angle_deg: ClassVar[float | None] = 30.0
 
     offset: jax.Array | float = 0.0
     roller_radius: jax.Array | float = 0.010
@@ -92,11 +225,34 @@ class TranslatingRollerFollower(AbstractRollerFollower):
     def __check_init__(self):
         self._check_radii()
         if is_concrete(self.offset, self.roller_radius, self.base_radius):
-            require(abs(self.offset) < self.pitch_radius, "|offset| must be below r_b + r_r")
+            require(abs(self.offset) < self.pitch_radius, "offset: |offset| must be below base_radius + roller_radius")
 
     def roller_centre(self, y) -> jax.Array:
         rise0 = jnp.sqrt(self.pitch_radius**2 - self.offset**2)
         return jnp.stack([self.offset + 0.0 * y, rise0 + y])
+
+    def lift_from_polygon(self, polygon, theta):
+        """The highest roller centre on ``x = offset`` whose roller touches the polygon, at
+        each angle: the upper end of the polygon's roller-radius neighbourhood on the line
+        (an endpoint circle or an edge's offset line, exactly)."""
+        e, r = self.offset, self.roller_radius
+
+        def one(x):
+            dx = x[..., 0] - e
+            cap = np.where(np.abs(dx) <= r, x[..., 1] + np.sqrt(np.maximum(r * r - dx * dx, 0.0)), -np.inf)
+            a, t, length = polygon_edges(x)
+            nu = np.stack([t[..., 1], -t[..., 0]], axis=-1)
+            nu = np.where(nu[..., 1:2] < 0, -nu, nu)  # the offset line above the edge
+            with np.errstate(divide="ignore", invalid="ignore"):
+                u = (e - a[..., 0] - r * nu[..., 0]) / t[..., 0]
+            side = np.where((u >= 0) & (u <= length), a[..., 1] + r * nu[..., 1] + u * t[..., 1], -np.inf)
+            return np.max(np.maximum(cap, side), axis=1)
+
+        height = _per_angle(polygon, theta, one)
+        lift = height - math.sqrt((self.base_radius + r) ** 2 - e * e)
+        centres = np.stack([e * np.cos(theta) + height * np.sin(theta),
+                            -e * np.sin(theta) + height * np.cos(theta)], axis=1)
+        return lift, centres
 
 
 class CamProfile(NamedTuple):
@@ -210,12 +366,32 @@ def _cam_profile_from_jet(follower, theta, y, dy, ddy) -> CamProfile:
     return CamProfile(theta, *parts)
 
 
-class AbstractFlatFollower(eqx.Module):
+class AbstractFlatFollower(AbstractFollower):
     """A flat-faced follower: the line of its face in the fixed frame for a displacement ``y``,
     as the angle ``beta`` of its normal (pointing away from the cam) and its distance from
     the cam centre."""
 
     base_radius: jax.Array | float
+
+    def profile_from_jet(self, theta, y, dy, ddy) -> FlatProfile:
+        return flat_profile_from_jet(self, theta, y, dy, ddy)
+
+    def contact_terms(self, shape, clearance=0.0) -> ContactTerms:
+        radius, position = np.asarray(shape.radius_of_curvature), np.asarray(shape.face_position)
+        return ContactTerms(np.zeros_like(radius), radius, np.full_like(radius, np.inf),
+                            self.normal_per_contact(position), position)
+
+    def contact_curvature(self, cam_radius):
+        return 1.0 / cam_radius + 0.0
+
+    def normal_per_contact(self, face_position):
+        """``F_n / F_c`` with the contact at ``face_position``: 1 for a translating face."""
+        return np.ones_like(face_position)
+
+    def on_face(self, face_position):
+        """Whether a contact at ``face_position`` lies on the face (every one but past a
+        swinging face's pivot)."""
+        return np.ones(np.shape(face_position), bool)
 
     @abc.abstractmethod
     def face(self, y) -> tuple[jax.Array, jax.Array]:
@@ -230,6 +406,9 @@ class TranslatingFlatFollower(AbstractFlatFollower):
     """Face perpendicular to the follower's line ``x = 0``; ``y`` is the lift (length).
     The face position is the contact point's ``x``: ``dy/dtheta``."""
 
+    name: ClassVar[str] = "translating-flat"
+    swinging: ClassVar[bool] = False
+
     base_radius: jax.Array | float = 0.040
 
     def face(self, y):
@@ -238,6 +417,10 @@ class TranslatingFlatFollower(AbstractFlatFollower):
     def face_position(self, contact, beta):
         return contact[0]
 
+    def lift_from_polygon(self, polygon, theta):
+        """The polygon's support function in the follower's direction, less the base circle."""
+        return _per_angle(polygon, theta, lambda x: np.max(x[..., 1], axis=1)) - self.base_radius, None
+
 
 class SwingingFlatFollower(AbstractFlatFollower):
     """Face on a plane through the pivot at ``(pivot_distance, 0)``; ``y`` is the swing (rad).
@@ -245,10 +428,23 @@ class SwingingFlatFollower(AbstractFlatFollower):
     At ``y = 0`` the face touches the base circle (``cos beta0 = r_b / d``) on the same side
     as ``SwingingRollerFollower``'s roller; a positive swing turns it away from the cam.  The
     face position is the contact point's distance from the pivot along the face.
+    ``arm_length`` is the radius at which the swing is measured as a lift (its arc): it does
+    not shape the cam.
     """
+
+    name: ClassVar[str] = "swinging-flat"
+    swinging: ClassVar[bool] = True
 
     pivot_distance: jax.Array | float = 0.110
     base_radius: jax.Array | float = 0.040
+    arm_length: jax.Array | float = 0.098
+
+    def __check_init__(self):
+        if is_concrete(self.pivot_distance, self.base_radius, self.arm_length):
+            require(self.arm_length > 0, f"arm_length must be positive, got {self.arm_length}")
+            require(self.pivot_distance > self.base_radius,
+                    "pivot_distance: the pivot must lie outside the base circle (pivot_distance > "
+                    "base_radius) for its face to touch it")
 
     def face(self, y):
         beta = jnp.arccos(self.base_radius / self.pivot_distance) - y
@@ -257,6 +453,24 @@ class SwingingFlatFollower(AbstractFlatFollower):
     def face_position(self, contact, beta):
         along = jnp.stack([-jnp.sin(beta), jnp.cos(beta)])
         return (contact - jnp.stack([self.pivot_distance, 0.0 * beta])) @ along
+
+    def normal_per_contact(self, face_position):
+        """The arm's moment over the contact's: ``arm / distance of the contact from the pivot``."""
+        return self.arm_length / face_position
+
+    def on_face(self, face_position):
+        return np.asarray(face_position) > 0
+
+    def lift_from_polygon(self, polygon, theta):
+        """The face through the pivot tangent to the polygon: its normal's angle is the
+        least direction of a vertex seen from the pivot, less 90 degrees."""
+        d = self.pivot_distance
+
+        def one(x):
+            return np.min(np.mod(np.arctan2(x[..., 1], x[..., 0] - d), 2 * np.pi), axis=1)
+
+        beta = _per_angle(polygon, theta, one) - math.pi / 2
+        return math.acos(self.base_radius / d) - beta, None
 
 
 class FlatProfile(NamedTuple):
@@ -300,3 +514,27 @@ def _flat_profile(follower, theta, y, dy, ddy) -> FlatProfile:
         return point, radius, follower.face_position(_rot(t, point), alpha + t)
 
     return FlatProfile(theta, *jax.vmap(one)(theta, y, dy, ddy))
+
+
+# -- closed polygons (a drawn profile) ---------------------------------------------------------
+
+_ANGLES_PER_BLOCK = 128  # cam angles turned at once in ``lift_from_polygon`` (memory: angles x vertices)
+
+
+def polygon_edges(points: np.ndarray):
+    """Start points, unit directions and lengths of the closed polygon's edges (the last
+    vertex joined to the first), over the last two axes of ``points`` (``(..., m, 2)``)."""
+    step = np.roll(points, -1, axis=-2) - points
+    length = np.hypot(step[..., 0], step[..., 1])
+    return points, step / length[..., None], length
+
+
+def _per_angle(polygon: np.ndarray, theta: np.ndarray, one) -> np.ndarray:
+    """``one`` of the polygon turned into the fixed frame at each cam angle (``(n, m, 2)``
+    blocks of angles), concatenated."""
+    def turned(t):
+        c, s = np.cos(t)[:, None], np.sin(t)[:, None]
+        return np.stack([c * polygon[:, 0] - s * polygon[:, 1], s * polygon[:, 0] + c * polygon[:, 1]], axis=-1)
+
+    return np.concatenate([one(turned(theta[i:i + _ANGLES_PER_BLOCK]))
+                           for i in range(0, theta.size, _ANGLES_PER_BLOCK)])

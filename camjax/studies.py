@@ -8,6 +8,7 @@ charts, is ``experiments/benchmarks/work_precision.py``; ``camjax bench`` runs t
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import math
 import time
@@ -20,7 +21,13 @@ import numpy as np
 from .errors import RESULTS
 from .laws import rest_to_rest
 from .models import SpringMassOptions, batch_metrics
-from .sdof import default_resolution
+from .sdof import (
+    TARGET_PHASE_STEP,
+    check_grid_size,
+    default_resolution,
+    law_value_key,
+    period_ratio_reach,
+)
 from .solvers import FIXED_STEP_SOLVERS
 
 ACCURACY_GOAL = 1e-6
@@ -69,16 +76,25 @@ def timed(fn, repeats: int = 5, *, clock=time.perf_counter) -> Timing:
     return Timing(value, first, min(warm, default=math.inf), float(np.median(warm)) if warm else math.inf)
 
 
-_COMPILED = {}
+COMPILED_ACCELERATIONS_KEPT = 16
+"""Laws whose compiled acceleration ``scipy_reference`` keeps (least recently used dropped
+first), keyed by the law's values (``camjax.sdof.law_value_key``)."""
+_COMPILED: collections.OrderedDict = collections.OrderedDict()
 
 
-def _compiled_acceleration(law):
-    """The law's acceleration as a compiled scalar function (what a scipy user would call)."""
-    if law.name not in _COMPILED:
-        # A closure, not ``jax.jit(law.a)``: jit would hash the law as a static ``self``,
-        # and a law holding its parameters in arrays is not hashable.
-        _COMPILED[law.name] = jax.jit(lambda t: law.a(t))
-    return _COMPILED[law.name]
+def compiled_acceleration(law):
+    """The law's acceleration as a compiled scalar function (what a scipy user would call),
+    kept for the next reference of the same law (``COMPILED_ACCELERATIONS_KEPT``)."""
+    key = law_value_key(law)
+    if key in _COMPILED:
+        _COMPILED.move_to_end(key)
+        return _COMPILED[key]
+    # A closure, not ``jax.jit(law.a)``: jit would hash the law as a static ``self``,
+    # and a law holding its parameters in arrays is not hashable.
+    _COMPILED[key] = compiled = jax.jit(lambda t: law.a(t))
+    if len(_COMPILED) > COMPILED_ACCELERATIONS_KEPT:
+        _COMPILED.popitem(last=False)
+    return compiled
 
 
 def scipy_reference(law, n: float, method: str, rtol: float):
@@ -93,7 +109,7 @@ def scipy_reference(law, n: float, method: str, rtol: float):
     from scipy.integrate import solve_ivp
     from scipy.optimize import minimize_scalar
 
-    accel = _compiled_acceleration(law)
+    accel = compiled_acceleration(law)
     omega = 2 * np.pi * n
     jumps = [float(t) for t in np.asarray(law.breakpoints())]
     edges = [0.0, *jumps, 1.0]
@@ -205,8 +221,14 @@ def _level_cases(level: str) -> list[Case]:
 
 
 def reference_resolution(max_period_ratio: float) -> int:
-    """Grid of the exact reference: four times the default one, and at least 8192."""
-    return max(8192, 4 * default_resolution(max_period_ratio))
+    """Grid of the exact reference: four times the default one, and at least 8192; refused
+    (``check_grid_size``) past ``MAX_GRID_INTERVALS``."""
+    resolution = max(8192, 4 * default_resolution(max_period_ratio))
+    largest = period_ratio_reach(TARGET_PHASE_STEP / 4)
+    check_grid_size(resolution, f"the reference (the exact path on a grid four times finer than w h = "
+                    f"{TARGET_PHASE_STEP:g}) at period ratio {max_period_ratio:g}",
+                    f"period ratios up to {math.floor(largest):,}")
+    return resolution
 
 
 def reference_metrics(law, period_ratios, max_period_ratio: float | None = None):

@@ -8,7 +8,12 @@ SDOF's numbers (to the tolerance given; ``None``: a model with no damping to com
 """
 
 import contextlib
+import json
 import math
+import tomllib
+import urllib.error
+import urllib.parse
+import urllib.request
 from typing import NamedTuple
 
 import jax
@@ -203,3 +208,18 @@ def program_lift(program):
         return tuple(float(v[0]) for v in program.lift(np.array([theta])))
 
     return lift
+
+
+def call(url: str, data: str | None = None):
+    """(status, decoded JSON) of a GET of the studio's ``url``, or of a POST of ``data`` (a
+    program's TOML text) as the page sends it: its structure as JSON, from the studio's own
+    origin.  An error status comes back with its JSON body, not raised."""
+    parts = urllib.parse.urlsplit(url)
+    headers = {} if data is None else {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/json"}
+    body = None if data is None else (json.dumps(tomllib.loads(data)) if data else "").encode()
+    request = urllib.request.Request(url, data=body, headers=headers, method="GET" if data is None else "POST")
+    try:
+        with urllib.request.urlopen(request, timeout=600) as response:
+            return response.status, json.load(response)
+    except urllib.error.HTTPError as error:
+        return error.code, json.load(error)

@@ -266,3 +266,27 @@ def test_an_optax_transformation_in_place_of_a_name():
     np.testing.assert_allclose(lbfgs.law.coefficients, named.law.coefficients, rtol=1e-9, atol=1e-12)
     with pytest.raises(ValueError, match="optimizer must be"):
         D.design(D.Residual(7.3), optimizer="sgd", **kwargs)
+
+
+def test_cap_checks_and_ct_curves_share_the_splines_peak_search():
+    """The cap checks read the law's own ``peak_coefficients``, the compiled program its Ct
+    curves read: after a check, another spline of the shape compiles nothing for its peaks.
+    The caps' excess is the refined Ca and Cj against the caps, and those peaks bound a
+    dense NumPy sampling of the spline from above, within 1e-7."""
+    from helpers import compiled_programs
+
+    caps = D.Caps(max_ca=7.0, max_jerk=60.0)
+    violations = caps.violations(START)
+    other = BSplineLaw(jnp.asarray(np.asarray(START.coefficients) * 1.03))
+    with compiled_programs() as names:
+        peaks = other.peak_coefficients()
+    assert names == []
+    own = START.peak_coefficients()
+    assert violations["Ca"] == own["Ca"] / 7.0 - 1
+    assert violations["Cj"] == own["Cj"] / 60.0 - 1
+    tau = np.linspace(0.0, 1.0, 400_001)
+    for law, found in ((START, own), (other, peaks)):
+        _, v, a, j = (np.abs(np.asarray(x)) for x in law.evaluate(tau))
+        for key, sampled in (("Cv", v.max()), ("Ca", a.max()), ("Cj", j.max())):
+            assert sampled <= found[key] * (1 + 1e-12)
+            assert found[key] == pytest.approx(sampled, rel=1e-7)

@@ -80,8 +80,8 @@ def test_scca_grid_counts_and_fractions():
     ('output = "o"\nphase_step = 1.6\n[period_ratio]\nvalues = [1.0]\n[laws]\n'
      'names = ["cycloidal"]\n', r"phase_step must be in \(0, 1\.5\]"),
     ('output = "o"\nphase_step = 1e-9\n[period_ratio]\nvalues = [1.0, 30.0]\n[laws]\n'
-     'names = ["cycloidal"]\n', r": phase_step 1e-09 at period ratio 30 needs a grid of "
-     r"188,495,559,232 intervals per rise; the limit is 1,048,576 \(phase_step at least 0.00018"),
+     'names = ["cycloidal"]\n', r": a rise at period ratio 30 and phase_step 1e-09 needs 188,495,559,232 grid intervals "
+     r"\(the limit is 1,048,576\): phase_step at least 0.00018"),
     ('output = "o"\ndamping = []\n[period_ratio]\nvalues = [1.0]\n[laws]\n'
      'names = ["cycloidal"]\n', r": damping must name at least one damping ratio, got \[\]$"),
     ('output = "o"\n[period_ratio]\nstart = 40\nstop = 30\ncount = 5\n[laws]\n'

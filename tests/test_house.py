@@ -8,8 +8,11 @@ then, or, worse, keeps testing a helper the library no longer uses.
 
 import ast
 import pathlib
+import re
 
 import pytest
+
+from camjax.program import FOLLOWER_KINDS
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 SCANNED = ("tests", "experiments", "notebooks")
@@ -206,3 +209,38 @@ def test_every_name_of_a_package_all_is_defined(path):
     module = importlib.import_module(_module_name(path))
     missing = [name for name in getattr(module, "__all__", ()) if not hasattr(module, name)]
     assert not missing, f"{_module_name(path)}.__all__ names what it does not define: {missing}"
+
+
+# --- the follower's kind is read in one place -------------------------------------------------
+
+KIND_TEST = re.compile(r"""(endswith|startswith)\(\s*["'](-?flat|-?roller|swinging|translating)""", re.IGNORECASE)
+
+
+def _library_sources():
+    return [p for p in sorted(LIBRARY.rglob("*")) if p.suffix in (".py", ".js", ".html")]
+
+
+@pytest.mark.parametrize("kind", list(FOLLOWER_KINDS))
+def test_a_follower_kind_is_named_only_by_its_class(kind):
+    """Each kind's name is written once in the library, as its ``camjax.geometry`` class's
+    ``name``; the program's reader maps it to the class (``FOLLOWER_KINDS``), and every
+    other place asks the class (its methods, ``swinging``, ``max_pressure_angle_deg``), so
+    a new kind is one class and its entry in the reader."""
+    quoted = re.compile(rf"""["']{re.escape(kind)}["']""")
+    hits = [f"{path.relative_to(ROOT)}:{i}: {line.strip()}" for path in _library_sources()
+            for i, line in enumerate(path.read_text().splitlines(), 1) if quoted.search(line)]
+    cls = FOLLOWER_KINDS[kind]
+    assert len(hits) == 1 and hits[0].startswith("camjax/geometry.py:") and f'name: ClassVar[str] = "{kind}"' in hits[0], (
+        f"the kind {kind!r} is written outside its class ({cls.__name__}): {hits}")
+
+
+def test_no_follower_kind_is_told_by_its_spelling():
+    hits = [f"{path.relative_to(ROOT)}:{i}: {line.strip()}" for path in _library_sources()
+            for i, line in enumerate(path.read_text().splitlines(), 1) if KIND_TEST.search(line)]
+    assert not hits, f"a follower kind told by its name's spelling, not its class: {hits}"
+
+
+def test_the_kind_scanner_finds_each_form():
+    lines = ['f.kind.endswith("-flat")', "kind.startswith('swinging')", 'name.endswith(".toml")',
+             '(f.kind || "").endsWith("-flat")', 'x.startswith("translating")']
+    assert [bool(KIND_TEST.search(line)) for line in lines] == [True, True, False, True, True]

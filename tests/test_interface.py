@@ -106,7 +106,7 @@ def test_solve_refuses_what_is_not_a_model_or_a_law():
 
 
 def test_a_period_ratio_too_large_for_memory_is_refused_before_any_work():
-    with pytest.raises(ValueError, match=r"needs a grid of 4,188,800 intervals.*limit is 1,048,576"):
+    with pytest.raises(ValueError, match=r"^a rise at period ratio 1e\+06 needs 4,188,800 grid intervals \(the limit is 1,048,576\)"):
         camjax.ct_curve(LAW, [1e6])
 
 
@@ -198,7 +198,7 @@ def test_cli_refuses_a_huge_period_ratio_and_a_bad_model_before_any_work(capsys)
     from camjax.cli import main
 
     assert main(["ct", "--n", "1e6"]) == 2
-    assert "needs a grid of 4,188,800 intervals" in capsys.readouterr().err
+    assert "needs 4,188,800 grid intervals" in capsys.readouterr().err
     assert main(["ct", "--n", "5", "--model", "bogus:1"]) == 2
     assert "unknown model" in capsys.readouterr().err
     assert main(["ct", "--n", "5", "--model", "backlash:0.1"]) == 2

@@ -412,6 +412,44 @@ def test_swinging_roller_program_geometry():
         Program("swing", program.segments, Follower(**{**FOLLOWER, "kind": "swinging-roller"}))
 
 
+KIND_SAMPLES = {  # a follower of each kind whose cam is smooth and convex enough for a face
+    "translating-roller": dict(offset_mm=4.0),
+    "swinging-roller": dict(arm_mm=98.0, pivot_mm=110.0),
+    "translating-flat": dict(base_radius_mm=60.0),
+    "swinging-flat": dict(base_radius_mm=100.0, arm_mm=150.0, pivot_mm=250.0),
+}
+
+
+@pytest.mark.parametrize("kind", list(KIND_SAMPLES))
+def test_a_kinds_keys_are_the_fields_that_shape_its_cam(kind):
+    """``follower_kinds`` (what the studio offers for a kind) lists exactly the follower
+    fields that move its cam's profile: each geometric field nudged by 2%, the profile
+    moves where it is listed and stays to the last bit where it is not."""
+    from camjax.program import FOLLOWER_KINDS, follower_kinds
+
+    assert [k["name"] for k in follower_kinds()] == list(FOLLOWER_KINDS)
+    listed = next(k for k in follower_kinds() if k["name"] == kind)
+    follower = {**FOLLOWER, "kind": kind, "roller_radius_mm": 12.0, "offset_mm": 0.0, "arm_mm": 98.0,
+                "pivot_mm": 110.0, **KIND_SAMPLES[kind]}
+    base = profile(two_cycloids(**follower), 72).profile
+    moved = set()
+    for key in ("base_radius_mm", "roller_radius_mm", "offset_mm", "arm_mm", "pivot_mm"):
+        nudged = {**follower, key: 1.02 * follower[key] + (0.5 if key == "offset_mm" else 0.0)}
+        if key == "base_radius_mm" and not listed["roller"]:
+            nudged["base_radius_mm"] = follower[key] + 0.5
+        try:
+            shape = profile(two_cycloids(**nudged), 72).profile
+        except ValueError:  # a field the kind does not take, refused (a translating face's offset)
+            continue
+        if np.abs(shape - base).max() > 1e-3:
+            moved.add(key)
+        else:
+            assert np.array_equal(shape, base), key
+    assert moved == set(listed["keys"])
+    assert listed["roller"] == ("roller_radius_mm" in moved)
+    assert listed["swinging"] == ("pivot_mm" in moved)
+
+
 def test_preload_objective_is_the_program_steady_state_and_its_gradient(cam, solver):
     """The objective's training value is the steady state's required preload (the program's
     own SteadyState path, refined between nodes), and its gradient matches finite differences."""

@@ -1,28 +1,15 @@
 """Work too large to fit is refused before it starts, with what to change (a one-line
 ``ValueError`` at the API, exit 2 at the command line), never an out-of-memory traceback."""
 
+import math
+import re
+
 import pytest
 from helpers import FOLLOWER, compiled_programs, two_cycloids
 
 from camjax import laws
 from camjax.cli import main
 from camjax.program import Follower, Program, Segment, SteadyState, analyse
-
-
-def test_a_very_stiff_train_is_refused_with_the_speed_that_would_fit():
-    """1e12 N/mm ran 105 s and ended out of memory; now refused at once."""
-    program = two_cycloids(stiffness_n_per_mm=1e12)  # its laws' evaluation compiles here
-    with compiled_programs() as compiled, pytest.raises(
-            ValueError, match=r"a turn at 600 rpm needs [\d,]+ grid intervals \(the limit is "
-                              r"1,048,576\).*run at .* rpm or faster, or lower follower.stiffness_n_per_mm"):
-        SteadyState(program, 600.0)
-    assert compiled == []  # refused before any work (its time: experiments/benchmarks/refusal_speed.py)
-
-
-def test_a_very_low_speed_is_refused_before_any_work():
-    """--rpm 1e-6 asked for 287 GiB."""
-    with pytest.raises(ValueError, match=r"a turn at 1e-06 rpm needs .* grid intervals"):
-        analyse(two_cycloids(), [1e-6, 600.0])
 
 
 def test_the_command_line_refuses_with_exit_2_and_one_line(tmp_path, capsys):
@@ -83,3 +70,96 @@ def test_a_sweep_of_too_many_period_ratios_is_refused_before_any_work(tmp_path, 
     assert "period_ratio.count: 100,000,000 period ratios is more than" in err and "\n" not in err
     with pytest.raises(ValueError, match="10,000,001 period ratios is more than"):
         camjax.ct_curve("cycloidal", np.linspace(1.0, 2.0, MAX_PERIOD_RATIOS + 1))
+
+
+# --- one grid-size check, one message shape, from every entry point that sizes a grid ----
+
+GRID_REFUSAL = r"needs [\d,]+ grid intervals \(the limit is 1,048,576\): \S.*$"
+"""``camjax.sdof.check_grid_size``'s message after the caller's ``what``: the remedy follows."""
+
+
+def _spec_at_a_fine_step(tmp_path):
+    from camjax import distributed
+
+    path = tmp_path / "spec.toml"
+    path.write_text('output = "o"\nphase_step = 1e-9\n[period_ratio]\nvalues = [1.0, 30.0]\n'
+                    '[laws]\nnames = ["cycloidal"]\n')
+    distributed.load_spec(path)
+
+
+def _entry_points(tmp_path):
+    """``{case: (call, what, remedy)}``; the programs are built here, outside the calls
+    (a program's laws compile their evaluation when it is built)."""
+    import camjax
+    from camjax import law_design, studies
+    from camjax.program import example_path
+
+    stiff, plain = two_cycloids(stiffness_n_per_mm=1e12), two_cycloids()
+    valve = Program.load(example_path("valve"))
+    return {
+        "a stiff train": (lambda: SteadyState(stiff, 600.0), r"^a turn at 600 rpm ",
+                          "lower follower.stiffness_n_per_mm"),
+        "a crawling speed": (lambda: analyse(plain, [1e-6, 600.0]), r"^a turn at 1e-06 rpm ", "run at "),
+        "a chain at a crawl": (lambda: analyse(valve, [1e-6]), r"^a turn at 1e-06 rpm ", "run at "),
+        "a rise of huge period ratio": (lambda: camjax.torsion_factor("cycloidal", 1e6),
+                                        r"^a rise at period ratio 1e\+06 ", "period ratios up to about 250,329"),
+        "a rise of huge resolution": (lambda: camjax.ct_curve("cycloidal", [2.0], resolution=2**21),
+                                      r"^a rise at resolution 2,097,152 ", "pass resolution at most 1,048,576"),
+        "a sweep spec's phase step": (lambda: _spec_at_a_fine_step(tmp_path),
+                                      r"spec\.toml: a rise at period ratio 30 and phase_step 1e-09 ",
+                                      "phase_step at least"),
+        "a design's training grid": (lambda: law_design.MaxCaCt(1.0, 30000.0),
+                                     r"^MaxCaCt: the training grid at period ratio 30000 ",
+                                     "period ratios up to about 20,861"),
+        "the study's reference": (lambda: studies.reference_resolution(1e5),
+                                  r"^the reference \(.*\) at period ratio 100000 ", "period ratios up to 20,860"),
+    }
+
+
+@pytest.mark.parametrize("case", ["a stiff train", "a crawling speed", "a chain at a crawl",
+                                  "a rise of huge period ratio", "a rise of huge resolution",
+                                  "a sweep spec's phase step", "a design's training grid",
+                                  "the study's reference"])
+def test_every_entry_point_refuses_a_grid_past_the_limit_with_one_message_before_any_work(case, tmp_path):
+    """Each caller names its request and what to change; the check is the engine's one
+    (``camjax.sdof.check_grid_size``) and nothing is compiled before it refuses."""
+    call, what, remedy = _entry_points(tmp_path)[case]
+    with compiled_programs() as compiled, pytest.raises(ValueError) as error:
+        call()
+    message = str(error.value)
+    assert re.search(what + GRID_REFUSAL, message), message
+    assert remedy in message and "\n" not in message
+    assert compiled == []
+
+
+def test_the_grid_check_passes_at_the_limit_and_asks_for_the_remedy_only_past_it():
+    from camjax.sdof import MAX_GRID_INTERVALS, check_grid_size
+
+    def remedy():
+        raise AssertionError("the remedy is worded only for a refusal")
+
+    check_grid_size(MAX_GRID_INTERVALS, "a grid at the limit", remedy)
+    with pytest.raises(ValueError, match=r"^a grid needs 1,048,577 grid intervals \(the limit is "
+                                         r"1,048,576\): use fewer$"):
+        check_grid_size(MAX_GRID_INTERVALS + 1, "a grid", lambda: "use fewer")
+
+
+def test_a_segmented_layout_meets_the_phase_step_and_each_minimum():
+    """Counts by hand: 8 vibrations over a turn at w h <= 0.5 ask for 2 pi 8 / 0.5 = 100.5,
+    so the floor of 256 per turn holds; a 90-degree rise with a breakpoint at 0.25 gets
+    256 / 4 = 64 split 16 and 48, a 10-degree rise (the shortest) raises the turn to
+    64 / (10/360) = 2304 intervals per turn (64 for it), a dwell gets its share."""
+    import numpy as np
+
+    from camjax.sdof import GridSegment, segment_layout
+
+    few = segment_layout([GridSegment(0.0, 0.25, (0.25,)), GridSegment(0.25, 0.75, None)], 8.0)
+    np.testing.assert_array_equal(few.counts, [16, 48, 192])
+    np.testing.assert_allclose(few.edges, [0.0, 0.0625, 0.25, 1.0])
+    np.testing.assert_array_equal(few.segment_start, [0, 64])
+    short = segment_layout([GridSegment(0.0, 10 / 360, ()), GridSegment(10 / 360, 350 / 360, None)], 8.0)
+    np.testing.assert_array_equal(short.counts, [64, 2240])
+    fast = segment_layout([GridSegment(0.0, 1.0, ())], 1000.0)  # 2 pi 1000 / 0.5 = 12,566.4
+    assert fast.intervals == 64 * math.ceil(2 * math.pi * 1000 / 0.5 / 64) == 12_608
+    tiny = segment_layout([GridSegment(0.0, 0.5, (1e-6,)), GridSegment(0.5, 0.5, None)], 1.0)
+    assert tiny.counts[0] == 4  # every piece gets four at least

@@ -5,13 +5,13 @@ the ``Program``).  No browser: the JSON interface as the page calls it."""
 
 import csv
 import io
-import json
 import tomllib
 import urllib.parse
 import urllib.request
 
 import numpy as np
 import pytest
+from helpers import call
 
 from camjax import program as cp
 from camjax.studio import studio
@@ -25,24 +25,6 @@ def fetch(url: str) -> bytes:
     with urllib.request.urlopen(url, timeout=600) as response:
         assert response.status == 200
         return response.read()
-
-
-def call(url: str, data: str | None = None):
-    """(status, decoded JSON) of a GET, or of a POST of a TOML text from the studio's own origin."""
-    parts = urllib.parse.urlsplit(url)
-    headers = (
-        {}
-        if data is None
-        else {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/toml"}
-    )
-    request = urllib.request.Request(
-        url,
-        data=None if data is None else data.encode(),
-        headers=headers,
-        method="GET" if data is None else "POST",
-    )
-    with urllib.request.urlopen(request, timeout=600) as response:
-        return response.status, json.load(response)
 
 
 @pytest.fixture(scope="module")
@@ -108,8 +90,9 @@ def test_toml_export_is_the_program(server, feed):
     text = fetch(server.url + "api/program.toml").decode()
     assert cp.Program.from_dict(tomllib.loads(text), base=cp.example_path("feed").parent) == feed
     # an edit is what the export then holds
-    edited = text.replace("lift_mm = 8\n", "lift_mm = 7\n").replace(
-        "lift_mm = -23\n", "lift_mm = -22\n"
+    assert text == feed.to_toml()  # the one writer of a program file
+    edited = text.replace("lift_mm = 8.0\n", "lift_mm = 7.0\n").replace(
+        "lift_mm = -23.0\n", "lift_mm = -22.0\n"
     )
     assert edited != text
     assert call(server.url + "api/program?session=edit", edited)[0] == 200

@@ -66,9 +66,16 @@ def request(studio, method, path, body=None, headers=None, host=None):
     return response.status, text
 
 
+def as_json(text: str) -> str:
+    """A program's TOML text as the page posts it: its structure as JSON."""
+    return json.dumps(tomllib.loads(text)) if text else text
+
+
 def post(studio, path, body, **headers):
-    """A POST as the page sends it (its own origin, a TOML body), ``headers`` replacing those."""
-    sent = {"Origin": studio.origin, "Content-Type": "application/toml"}
+    """A POST as the page sends it (its own origin, the program's structure as a JSON body:
+    ``body`` is its TOML text), ``headers`` replacing those."""
+    body = as_json(body)
+    sent = {"Origin": studio.origin, "Content-Type": "application/json"}
     sent.update({k.replace("_", "-"): v for k, v in headers.items() if v is not None})
     for k in [k for k, v in headers.items() if v is None]:
         sent.pop(k.replace("_", "-"))
@@ -116,6 +123,11 @@ def test_a_file_inside_the_folder_is_read_and_its_error_names_the_line(running):
 
 def test_an_opened_program_cannot_name_a_file_beside_itself(running, folders):
     root, _ = folders
+    for name in ("inside.csv", "../outside/secret.csv"):  # a file opened in the page: read by the server
+        status, text = request(running, "POST", "/api/open", json.dumps({"toml": TABLE.replace("{file}", name)}),
+                               {"Origin": running.origin, "Content-Type": "application/json"})
+        assert status == 403 and error(text).startswith(f"[program] file: {name!r} is relative to the opened file's")
+        assert SECRET not in text
     status, text = post(running, "/api/program?opened=1", TABLE.replace("{file}", "inside.csv"))
     assert status == 403 and error(text).startswith(
         "[program] file: 'inside.csv' is relative to the opened file's"
@@ -163,15 +175,19 @@ def test_a_referer_from_the_page_stands_for_the_origin(running):
 
 
 @pytest.mark.parametrize(
-    "kind", ["text/plain", "application/x-www-form-urlencoded", "multipart/form-data", None]
+    "kind", ["text/plain", "application/x-www-form-urlencoded", "multipart/form-data", None, "application/toml"]
 )
-def test_a_simple_cross_site_body_is_refused(running, kind):
-    """A body a page elsewhere could send without the browser asking first: refused, from
-    any origin."""
+@pytest.mark.parametrize("path", ["/api/program", "/api/open"])
+def test_a_simple_cross_site_body_is_refused(running, kind, path):
+    """A body a page elsewhere could send without the browser asking first (and any other
+    than the page's JSON): refused, from any origin, before any work; the program unchanged."""
+    before = running.workbench("default").data
     for origin in ("http://evil.example", running.origin):
-        status, text = post(running, "/api/program", FEED, Origin=origin, Content_Type=kind)
-        assert status in (403, 415), text
-    assert error(text) == f"Content-Type: a body must be application/toml, got {kind or 'none'!r}"
+        status, text = post(running, path, FEED.replace("lift_mm = 8\n", "lift_mm = 7\n"), Origin=origin,
+                            Content_Type=kind)
+        assert status == (403 if origin != running.origin else 415), text
+    assert error(text) == f"Content-Type: a body must be application/json, got {kind or 'none'!r}"
+    assert running.workbench("default").data is before and running.workbench("default").report is None
 
 
 def test_beyond_loopback_a_token_is_required(folders):
@@ -216,7 +232,7 @@ def test_a_body_too_large_is_a_413_unread(running):
         sock.sendall(
             (
                 f"POST /api/program HTTP/1.1\r\nHost: {address}:{port}\r\nOrigin: {running.origin}\r\n"
-                f"Content-Type: application/toml\r\nContent-Length: {MAX_BODY + 1}\r\n\r\n"
+                f"Content-Type: application/json\r\nContent-Length: {MAX_BODY + 1}\r\n\r\n"
             ).encode()
         )
         answer = read_all(sock)
@@ -231,7 +247,7 @@ def test_a_bad_content_length_is_a_400_in_one_line(running, length):
         sock.sendall(
             (
                 f"POST /api/program HTTP/1.1\r\nHost: {address}:{port}\r\nOrigin: {running.origin}\r\n"
-                f"Content-Type: application/toml\r\nContent-Length: {length}\r\n\r\n"
+                f"Content-Type: application/json\r\nContent-Length: {length}\r\n\r\n"
             ).encode()
         )
         answer = read_all(sock)
@@ -250,9 +266,9 @@ def test_a_stalled_request_is_dropped_and_others_are_answered(running):
     stalled.sendall(
         (
             f"POST /api/program HTTP/1.1\r\nHost: {address}:{port}\r\nOrigin: {running.origin}\r\n"
-            f"Content-Type: application/toml\r\nContent-Length: {len(FEED)}\r\n\r\n"
+            f"Content-Type: application/json\r\nContent-Length: {len(as_json(FEED))}\r\n\r\n"
         ).encode()
-        + FEED[:100].encode()
+        + as_json(FEED)[:100].encode()
     )
     time.sleep(0.2)  # the server is reading it
     started = time.monotonic()
@@ -276,7 +292,7 @@ def test_a_slow_drip_body_is_dropped_at_the_timeout(running):
         sock.sendall(
             (
                 f"POST /api/program HTTP/1.1\r\nHost: {address}:{port}\r\nOrigin: {running.origin}\r\n"
-                f"Content-Type: application/toml\r\nContent-Length: 100\r\n\r\n"
+                f"Content-Type: application/json\r\nContent-Length: 100\r\n\r\n"
             ).encode()
         )
         started, closed = time.monotonic(), False

@@ -132,7 +132,7 @@ def test_sweep_spec_advice_of_a_coarser_step_is_one_that_loads(tmp_path):
             'names = ["cycloidal"]\n')
     path = tmp_path / "spec.toml"
     path.write_text(spec.format(0.5))
-    with pytest.raises(ValueError, match=r"phase_step at least ([\d.]+), at most 1\.5\)") as error:
+    with pytest.raises(ValueError, match=r"phase_step at least ([\d.]+), at most 1\.5$") as error:
         distributed.load_spec(path)
     advised = float(str(error.value).split("phase_step at least ")[1].split(",")[0])
     assert 2 * math.pi * 1e5 / 2**20 <= advised < 1.01 * 2 * math.pi * 1e5 / 2**20
@@ -233,7 +233,7 @@ def test_getting_started_states_the_exact_paths_reach_from_the_code():
     reach = math.floor(MAX_GRID_INTERVALS * MAX_PHASE_STEP / (2 * math.pi))
     page = (ROOT / "docs" / "getting-started.md").read_text()
     assert f"n above about {reach:,}" in page and "83,000" not in page
-    with pytest.raises(ValueError, match="needs a grid of"):
+    with pytest.raises(ValueError, match="grid intervals"):
         camjax.ct_curve("cycloidal", [reach + 1.0])
     install = re.search(r'pip install "jax\[(cuda\d+)\]', page).group(1)
     assert f"`jax[{install}]` for a CUDA {install[4:]} driver, as below" in page

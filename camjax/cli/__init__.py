@@ -9,6 +9,7 @@ import importlib
 import os
 import sys
 
+from .._cache_dir import using_cache_dir
 from ._cache import cache_dir as cache_dir
 from ._cache import enable_compilation_cache
 from ._common import CliError as CliError
@@ -49,11 +50,12 @@ def main(argv: list[str] | None = None, *, one_run: bool = False) -> int:
     executable), so XLA may be set up for it (:func:`compile_for_one_run`)."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    enable_compilation_cache()
+    directory = enable_compilation_cache()
     try:
-        if one_run:
-            compile_for_one_run(args)
-        return args.func(args) or 0
+        with using_cache_dir(directory):  # the library's traces follow, the environment untouched
+            if one_run:
+                compile_for_one_run(args)
+            return args.func(args) or 0
     except (CliError, ValueError) as error:
         print(f"camjax {args.command}: error: {error}", file=sys.stderr)
         return 2

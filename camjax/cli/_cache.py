@@ -6,7 +6,9 @@ the user's cache directory (``platformdirs.user_cache_dir("camjax")/jax``).  The
 environment variable ``CAMJAX_CACHE_DIR`` moves it (a directory) or turns it off
 (``0``, ``off``, ``false``, ``no`` or empty).  A cache that JAX_COMPILATION_CACHE_DIR (or
 the caller's ``jax.config``) already set is left alone.  The traced programs kept beside
-it follow the same setting (``camjax._cache_dir``).
+it follow the same setting: the command runs inside ``using_cache_dir`` of the directory
+``enable_compilation_cache`` returns (``camjax._cache_dir``), without writing the
+environment.
 """
 
 from __future__ import annotations
@@ -31,15 +33,15 @@ def enable_compilation_cache() -> Path | None:
 
     JAX by default only keeps programs that took over a second to compile; camjax's
     commands compile several smaller ones, so the thresholds are set to zero.  Returns
-    the directory in use (None when off).
+    the directory of the command's caches, the setting its run is given
+    (``camjax._cache_dir.using_cache_dir``): None when off.
     """
     import jax
 
     if jax.config.jax_compilation_cache_dir:
-        path = Path(jax.config.jax_compilation_cache_dir)
-        if cache_dir() is not None:
-            os.environ.setdefault(ENV, str(path))  # the traces beside it (camjax._cache_dir)
-        return path
+        if os.environ.get(ENV) is not None:  # the setting's own directory, or off
+            return cache_dir()
+        return Path(jax.config.jax_compilation_cache_dir)
     path = cache_dir()
     if path is None:
         return None
@@ -47,7 +49,6 @@ def enable_compilation_cache() -> Path | None:
         path.mkdir(parents=True, exist_ok=True)
     except OSError:
         return None  # an unwritable cache only costs time: run without it
-    os.environ.setdefault(ENV, str(path))  # the library's traces follow (camjax._cache_dir)
     jax.config.update("jax_compilation_cache_dir", str(path))
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)

@@ -5,7 +5,6 @@ The study itself is :mod:`camjax.studies`; this module parses and prints.
 
 from __future__ import annotations
 
-import math
 import sys
 
 from ._common import (
@@ -15,6 +14,7 @@ from ._common import (
     add_law_option,
     dump_json,
     laws_of,
+    options_named,
     parse_range,
 )
 
@@ -43,7 +43,6 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..sdof import MAX_GRID_INTERVALS, TARGET_PHASE_STEP
     from ..studies import (
         ACCURACY_GOAL,
         default_method,
@@ -57,11 +56,8 @@ def run(args) -> int:
     n = parse_range(args.n, "--n")
     if (n < 1e-3).any() or n.size < 1:
         raise CliError("--n: period ratios must be positive")
-    if reference_resolution(float(n.max())) > MAX_GRID_INTERVALS:
-        largest = MAX_GRID_INTERVALS / 4 * TARGET_PHASE_STEP / (2 * math.pi)
-        raise CliError(f"--n: the reference (the exact path on a grid four times finer than w h = "
-                       f"{TARGET_PHASE_STEP:g}) "
-                       f"reaches period ratios up to {math.floor(largest):,}, got {n.max():g}")
+    with options_named("--n"):
+        reference_resolution(float(n.max()))  # refused here, before any work
     if args.repeats < 1:
         raise CliError(f"--repeats: must be at least 1, got {args.repeats}")
     cases = study_cases(args.level, float(n.max()))

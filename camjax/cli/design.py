@@ -125,22 +125,36 @@ def _band(text: str) -> tuple[float, float]:
     return n1, n2
 
 
-def _standard_laws_compared(ratios, damping: float, knots: int, sweep_options: dict) -> dict:
+def _standard_laws_compared(ratios, damping: float, knots: int, sweep_options: dict,
+                            csv_tau: np.ndarray) -> dict:
     """``(law, CtCurve, peak coefficients)`` of every standard law over ``ratios``, swept by
-    the program that will sweep the designed spline of ``knots`` coefficients."""
+    the program that will sweep the designed spline of ``knots`` coefficients.
+
+    Then the designed spline's own programs, compiled here while the design runs on the
+    main thread (their values are thrown away; the designed spline has the same shapes, so
+    it finds them compiled), in the order the design needs them: its peak search (the cap
+    checks read it), its samples on the sweep's grid (the reports) and its evaluation on the
+    CSV's points."""
     from ..laws import BSplineLaw, standard_laws
-    from ..sweep import ct_curves
+    from ..sweep import ct_curves, prepare_sweep
 
     laws = {law.name: law for law in standard_laws()}
     designed_size = BSplineLaw(np.zeros(knots))  # the designed law's pieces, any values
     curves = ct_curves(laws, ratios, damping=damping, like=[designed_size], **sweep_options)
-    return {name: (law, curves[name], law.peak_coefficients()) for name, law in laws.items()}
+    compared = {name: (law, curves[name], law.peak_coefficients()) for name, law in laws.items()}
+    designed_size.peak_coefficients()
+    _, template, options = prepare_sweep(ratios, damping=damping, **sweep_options)
+    template.sweep_law(designed_size, options)
+    designed_size.evaluate(csv_tau)
+    return compared
 
 
 def run(args) -> int:
     from concurrent.futures import ThreadPoolExecutor
 
     from tqdm import tqdm
+
+    from ..caches import carried
 
     plotting = import_aside("camjax.plot")  # imports while the design compiles
     from .. import law_design as D
@@ -189,15 +203,15 @@ def run(args) -> int:
     # The standard laws' side of the comparison does not depend on the design: it is
     # traced, compiled and run on a thread beside the design (XLA releases the GIL while it
     # compiles and runs, so the two compiles share the machine's cores).
+    tau = np.linspace(0.0, 1.0, 10001)  # the CSV's points
     with ThreadPoolExecutor(1) as pool:
-        standard = pool.submit(_standard_laws_compared, ratios, args.damping, args.knots,
-                               sweep_options)
+        standard = pool.submit(carried(_standard_laws_compared), ratios, args.damping, args.knots,
+                               sweep_options, tau)
         result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=steps,
                           optimizer=args.optimizer, progress=not args.quiet,
                           sweep_options=sweep_options)
         law = result.law
         save(law, out / "law.json")
-        tau = np.linspace(0.0, 1.0, 10001)
         columns = np.stack([tau, *(np.asarray(x) for x in law.evaluate(tau))], axis=1)
         np.savetxt(out / "law.csv", columns, delimiter=",", header="tau,s,v,a,j", comments="",
                    fmt="%.17g")
@@ -236,7 +250,8 @@ def run(args) -> int:
     bar.set_postfix_str("figures")
     plot = plotting()
     title = plot.design_title(objective.label, caps, args.damping)
-    plot.save(plot.law_curves([law], title=title), out / "law.png")
+    # Drawn on the CSV's points: the law's evaluation is then compiled for one size, not two.
+    plot.save(plot.law_curves([law], tau.size, title=title), out / "law.png")
     plot.save(plot.design_comparison(ratios, curves, title=title), out / "curves.png")
     bar.update()
     bar.close()
@@ -290,7 +305,7 @@ def _run_rms(args, out) -> int:
               out / "summary.json")
     plot = import_aside("camjax.plot")()
     title = plot.design_title(objective.label, caps, 0.0)
-    plot.save(plot.law_curves([law], title=title), out / "law.png")
+    plot.save(plot.law_curves([law], tau.size, title=title), out / "law.png")  # the CSV's points
     best = min(rows[1:], key=lambda r: r["Ca_rms"])
     print(f"Ca_rms: designed {value:.5g} ({value / RMS_ACCELERATION_FLOOR:.4f} of the floor "
           f"2 sqrt(3) = {RMS_ACCELERATION_FLOOR:.5g}); best standard {best['law']} "

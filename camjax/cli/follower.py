@@ -77,13 +77,14 @@ def follower_report(model, law_name: str) -> tuple[dict, object]:
 
     import numpy as np
 
+    from ..caches import carried
     from ..models import solve, spectral_peaks, spectrum, trace_solve
 
     # The solve is traced first (Python holds the GIL); its compile then releases the GIL,
     # and the natural frequency's program is traced and compiled beside it on a thread.
     trace_solve(None, model, turns=_TURNS)
     with ThreadPoolExecutor(1) as pool:
-        fundamental = pool.submit(model.fundamental_frequency)
+        fundamental = pool.submit(carried(model.fundamental_frequency))
         response = solve(None, model, turns=_TURNS)
         natural = float(fundamental.result())
     order = natural / float(model.omega)

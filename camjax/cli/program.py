@@ -32,7 +32,7 @@ def register(subparsers) -> None:
             "adds the train's table: natural frequencies, harmonic check, each body's peak "
             "acceleration, the spring's seat force and surge, the chain's jump speed.  "
             "Without FILE, the built-in 'indexer' example; FILE may also name a built-in "
-            "example ('indexer', 'feed', 'valve')."
+            "example ('indexer', 'feed', 'valve', 'swinging_arm')."
         ),
     )
     parser.add_argument("file", nargs="?", metavar="FILE",
@@ -192,6 +192,22 @@ def _train_lines(train: dict) -> list[str]:
     lines.append("max|a|: each body's peak acceleration (m/s2); lift err: the last body's largest distance "
                  "from its kinematic lift; seat: the spring's force at its seat; surge: that force's largest "
                  "distance from the static spring force")
+    if train.get("arm") is not None:
+        lines += _arm_lines(train["arm"])
+    return lines
+
+
+def _arm_lines(arm: dict) -> list[str]:
+    """The flexible arm's block: its first bending mode and the harmonics of its bending."""
+    lines = [f"arm: first bending mode, cam held, {arm['fundamental_hz']:.5g} Hz = "
+             f"{arm['fundamental_rad_s']:.5g} rad/s",
+             f"arm bending at {arm['body']} (its displacement less the rigid swing's), amplitude of each "
+             "cam order in mm:"]
+    titles = ["fund. orders", "max mm", *(f"order {k}" for k in arm["orders"])]
+    lines.append(f"{'rpm':>16}" + "".join(f"{t:>14}" for t in titles))
+    for s in arm["speeds"]:
+        cells = [s["fundamental_orders"], s["max_bending_mm"], *s["bending_harmonics_mm"]]
+        lines.append(f"{s['rpm']:>16.6g}" + "".join(f"{v:>14.4g}" for v in cells))
     return lines
 
 

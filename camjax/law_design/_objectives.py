@@ -14,11 +14,13 @@ import numpy as np
 from ..laws import RMS_ACCELERATION_FLOOR
 from ..models import SpringMassOptions
 from ..sdof import (
-    MAX_GRID_INTERVALS,
+    TARGET_PHASE_STEP,
+    check_grid_size,
     default_resolution,
     dwell_peak,
     mode_gain,
     motion_grid,
+    period_ratio_reach,
     propagate,
 )
 from ._residual import _modulus, _residual_components, quadrature, residual
@@ -44,11 +46,9 @@ def _training_resolution(max_period_ratio: float, name: str) -> int:
     """The Ca*Ct training grid for period ratios up to ``max_period_ratio``, or a
     ``ValueError`` (before any work) where it would pass ``MAX_GRID_INTERVALS``."""
     resolution = _TRAINING_OVERSAMPLING * default_resolution(max_period_ratio)
-    if resolution > MAX_GRID_INTERVALS:
-        largest = MAX_GRID_INTERVALS * 0.5 / (2 * math.pi * _TRAINING_OVERSAMPLING)
-        raise ValueError(f"{name}: period ratio {max_period_ratio:g} needs a training grid of "
-                         f"{resolution:,} intervals; the limit is {MAX_GRID_INTERVALS:,} (period "
-                         f"ratios up to about {largest:,.0f})")
+    largest = period_ratio_reach(TARGET_PHASE_STEP / _TRAINING_OVERSAMPLING)
+    check_grid_size(resolution, f"{name}: the training grid at period ratio {max_period_ratio:g}",
+                    f"period ratios up to about {largest:,.0f}")
     return resolution
 
 

@@ -36,6 +36,7 @@ from ..sdof import (
     SUBSTEPS_PER_INTERVAL,
     MotionGrid,
     SampledLaw,
+    check_grid_size,
     checked_peak_search,
     chunk_nodes,
     chunked_map,
@@ -45,6 +46,7 @@ from ..sdof import (
     mode_gain,
     motion_grid,
     peak_in_motion,
+    period_ratio_reach,
     propagate,
     residual_of_mode,
     steps_within,
@@ -90,12 +92,13 @@ class SpringMassOptions(Options):
         )
         resolution = self.resolution or default_resolution(max_period_ratio, MAX_PHASE_STEP)
         require(int(resolution) >= 8, f"resolution must be at least 8 intervals, got {resolution}")
-        require(
-            int(resolution) <= MAX_GRID_INTERVALS,
-            f"period ratio {max_period_ratio or 0:g} needs a grid of {int(resolution):,} intervals "
-            f"per rise; the limit is {MAX_GRID_INTERVALS:,} (period ratios up to about "
-            f"{MAX_GRID_INTERVALS * MAX_PHASE_STEP / (2 * math.pi):,.0f} at the default resolution)",
-        )
+        reach = f"period ratios up to about {period_ratio_reach(MAX_PHASE_STEP):,.0f}"
+        if self.resolution is None:
+            check_grid_size(int(resolution), f"a rise at period ratio {max_period_ratio:g}",
+                            f"{reach} at the default resolution")
+        else:
+            check_grid_size(int(resolution), f"a rise at resolution {int(resolution):,}",
+                            f"pass resolution at most {MAX_GRID_INTERVALS:,} ({reach})")
         checked_peak_search(self.peak_search)
         for label, value in (("rtol", self.rtol), ("atol", self.atol)):
             require(math.isfinite(value) and value > 0, f"{label} must be positive, got {value}")
@@ -109,7 +112,7 @@ class SpringMassOptions(Options):
 
     def largest_period_ratio(self) -> float:
         """The largest period ratio that this grid resolves (``w h <= MAX_PHASE_STEP``)."""
-        return self.resolution * MAX_PHASE_STEP / (2 * math.pi)
+        return period_ratio_reach(MAX_PHASE_STEP, self.resolution)
 
     def too_coarse(self) -> str:
         """The error for a period ratio past ``largest_period_ratio``."""
@@ -291,10 +294,10 @@ def _traced_too_coarse() -> str:
     """The error for a traced period ratio past ``TRACED_RESOLUTION``'s reach: how to pass
     a grid that reaches further (4.19 intervals per unit of n)."""
     per_n = 2 * math.pi / MAX_PHASE_STEP
-    return (f"period ratio must be at most {_down(TRACED_RESOLUTION / per_n):.4g} on a traced "
-            f"period ratio's default grid (resolution {TRACED_RESOLUTION}; a concrete one sizes "
-            f"its own): pass resolution >= {per_n:.3g} n, up to {MAX_GRID_INTERVALS:,} "
-            f"(n <= {_down(MAX_GRID_INTERVALS / per_n, 6):,.0f}), such as "
+    return (f"period ratio must be at most {_down(period_ratio_reach(MAX_PHASE_STEP, TRACED_RESOLUTION)):.4g} "
+            f"on a traced period ratio's default grid (resolution {TRACED_RESOLUTION}; a concrete one "
+            f"sizes its own): pass resolution >= {per_n:.3g} n, up to {MAX_GRID_INTERVALS:,} "
+            f"(n <= {_down(period_ratio_reach(MAX_PHASE_STEP), 6):,.0f}), such as "
             f"torsion_factor(law, n, resolution=4096) for n <= {_down(4096 / per_n, 3):.3g}")
 
 
@@ -312,7 +315,7 @@ def _exact_metrics(law, period_ratio, damping, dwell, resolution, tool: str) -> 
     model = SpringMass(period_ratio, damping)  # concrete values checked here
     if resolution is None and model._option_scale() is None:
         resolution = TRACED_RESOLUTION
-        reach = TRACED_RESOLUTION * MAX_PHASE_STEP / (2 * math.pi)  # the grid's own check's
+        reach = period_ratio_reach(MAX_PHASE_STEP, TRACED_RESOLUTION)  # the grid's own check's
         model = SpringMass(checks.ensure(period_ratio, lambda v: v <= reach, _traced_too_coarse()), damping)
     options = model.options("exact", dwell, resolution=resolution)
     model = model.with_array_leaves()

@@ -12,7 +12,7 @@ the profile, the figures); ``analyse_machine`` adds the torques of several cams 
 (``Machine``); ``write_drive_table`` writes the motion as servo drives load it
 (``drive_table``, ``read_drive_table``); ``design_segment`` designs one segment's law (``MaxPreload``: the least
 preload over a speed range).  ``Chain`` is the follower as a chain of bodies (a valve
-train, a spring that surges); ``Oscillator`` is the follower's modes in physical units,
+train, a spring that surges, or bodies on a swinging follower's flexible ``Arm``); ``Oscillator`` is the follower's modes in physical units,
 the classic one-body follower's or a chain's, which ``SteadyState`` takes alike; a
 servo's ``Drive`` and ``Motor`` give the motor's torque over the turn (``duty_cycle``,
 ``size_motor``, ``choose_motor`` from a catalogue, ``program_motor_choice`` at a program's
@@ -23,11 +23,24 @@ docs/machine.md, docs/valve-trains.md and docs/servo.md.
 
 from typing import TYPE_CHECKING
 
+from ._arm import Arm as Arm
+from ._arm import arm_bending as arm_bending
 from ._compensate import Compensation as Compensation
 from ._compensate import check_smooth as check_smooth
 from ._compensate import compensate as compensate
 from ._compensate import compensated_lift as compensated_lift
 from ._compensate import deviation_from_law as deviation_from_law
+from ._contact import ContactGeometry as ContactGeometry
+from ._contact import Geometry as Geometry
+from ._contact import JoinCurvature as JoinCurvature
+from ._contact import NodeContact as NodeContact
+from ._contact import RefinedStress as RefinedStress
+from ._contact import cam_geometry as cam_geometry
+from ._contact import contact_geometry as contact_geometry
+from ._contact import node_contact as node_contact
+from ._contact import refined_contact_stress as refined_contact_stress
+from ._cycle import Cycle as Cycle
+from ._cycle import TrainPeaks as TrainPeaks
 from ._design import design_segment as design_segment
 from ._design import write_program as write_program
 from ._drive import DRIVE_TABLE_FILE_NAMES as DRIVE_TABLE_FILE_NAMES
@@ -40,10 +53,8 @@ from ._drive import write_drive_table as write_drive_table
 from ._dxf_import import DxfProfile as DxfProfile
 from ._dxf_import import lift_from_dxf as lift_from_dxf
 from ._dxf_import import read_dxf_profile as read_dxf_profile
-from ._dynamics import Cycle as Cycle
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
-from ._dynamics import TrainPeaks as TrainPeaks
 from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
 from ._export import MAX_PROFILE_POINTS as MAX_PROFILE_POINTS
@@ -52,6 +63,9 @@ from ._export import profile as profile
 from ._export import shape as shape
 from ._export import write_csv as write_csv
 from ._export import write_dxf as write_dxf
+from ._follower import FOLLOWER_KINDS as FOLLOWER_KINDS
+from ._follower import MAX_PRESSURE_ANGLE_DEG as MAX_PRESSURE_ANGLE_DEG
+from ._follower import follower_kinds as follower_kinds
 from ._groove import MAX_GROOVE_SAMPLES as MAX_GROOVE_SAMPLES
 from ._groove import MAX_TURNS as MAX_TURNS
 from ._groove import SETTLED_DEG as SETTLED_DEG
@@ -68,21 +82,12 @@ from ._jump import flights_at as flights_at
 from ._jump import jump_speed_rpm as jump_speed_rpm
 from ._jump import min_preload_n as min_preload_n
 from ._jump import scan_speeds as scan_speeds
-from ._machine import ABSURD_SIZES as ABSURD_SIZES
-from ._machine import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
-from ._machine import MAX_HALF_WIDTH_RATIO as MAX_HALF_WIDTH_RATIO
-from ._machine import MAX_PRESSURE_ANGLE_DEG as MAX_PRESSURE_ANGLE_DEG
-from ._machine import MODULUS_RANGE_GPA as MODULUS_RANGE_GPA
-from ._machine import ContactGeometry as ContactGeometry
-from ._machine import Geometry as Geometry
-from ._machine import JoinCurvature as JoinCurvature
-from ._machine import NodeContact as NodeContact
-from ._machine import RefinedStress as RefinedStress
-from ._machine import cam_geometry as cam_geometry
-from ._machine import contact_geometry as contact_geometry
-from ._machine import design_warnings as design_warnings
-from ._machine import node_contact as node_contact
-from ._machine import refined_contact_stress as refined_contact_stress
+from ._machine import Machine as Machine
+from ._machine import MachineReport as MachineReport
+from ._machine import ShaftSpeedReport as ShaftSpeedReport
+from ._machine import analyse_machine as analyse_machine
+from ._machine import is_machine_file as is_machine_file
+from ._machine import shaft_torque as shaft_torque
 from ._motion import EndState as EndState
 from ._motion import Join as Join
 from ._motion import segment_kinematics as segment_kinematics
@@ -117,12 +122,6 @@ from ._report import max_contact_stress as max_contact_stress
 from ._report import period_ratios as period_ratios
 from ._report import response as response
 from ._servo import program_motor_choice as program_motor_choice
-from ._shaft import Machine as Machine
-from ._shaft import MachineReport as MachineReport
-from ._shaft import ShaftSpeedReport as ShaftSpeedReport
-from ._shaft import analyse_machine as analyse_machine
-from ._shaft import is_machine_file as is_machine_file
-from ._shaft import shaft_torque as shaft_torque
 from ._spec import MAX_SEGMENTS as MAX_SEGMENTS
 from ._spec import Follower as Follower
 from ._spec import Materials as Materials
@@ -136,6 +135,8 @@ from ._speeds import IMPLAUSIBLE_PERIOD_RATIO as IMPLAUSIBLE_PERIOD_RATIO
 from ._speeds import IMPLAUSIBLE_RPM as IMPLAUSIBLE_RPM
 from ._speeds import Speeds as Speeds
 from ._speeds import warn_implausible as warn_implausible
+from ._torque import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
+from ._train import CLASSIC_FIELDS as CLASSIC_FIELDS
 from ._train import Body as Body
 from ._train import Chain as Chain
 from ._train import Seat as Seat
@@ -144,6 +145,10 @@ from ._train import chain_from_dict as chain_from_dict
 from ._train import load_chain as load_chain
 from ._turn import JOIN_TOLERANCE_DEG as JOIN_TOLERANCE_DEG
 from ._turn import Turn as Turn
+from ._warnings import ABSURD_SIZES as ABSURD_SIZES
+from ._warnings import MAX_HALF_WIDTH_RATIO as MAX_HALF_WIDTH_RATIO
+from ._warnings import MODULUS_RANGE_GPA as MODULUS_RANGE_GPA
+from ._warnings import design_warnings as design_warnings
 from ._writers import RESPONSE_SPEEDS as RESPONSE_SPEEDS
 from ._writers import write_machine_report as write_machine_report
 from ._writers import write_report as write_report

@@ -4,7 +4,8 @@ The inverse of ``write_dxf``: the profile is a closed curve in mm in the cam-fix
 ``camjax.geometry`` (cam centre at the origin, the cam turning counter-clockwise, the
 follower at angle 0 where the program's angle 0 puts it).  The curve is flattened by ezdxf
 (``ezdxf.path``) into a polygon whose vertices lie on it; at each cam angle the polygon is
-turned by the angle into the fixed frame and the follower is placed where it touches it:
+turned by the angle into the fixed frame and the follower is placed where it touches it,
+by its ``camjax.geometry`` class's ``lift_from_polygon``:
 
 - translating roller: the highest roller centre on the line ``x = offset`` whose roller
   touches the polygon (the upper end of the polygon's roller-radius neighbourhood on the
@@ -21,11 +22,12 @@ lift is measured from it and the cam's geometry (pressure angle, curvature) depe
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
+
+from ..geometry import polygon_edges
 
 FLATTEN_MM = 1e-4
 """Largest distance of ezdxf's flattened polygon from a curved entity (arc, spline), mm."""
@@ -41,7 +43,7 @@ DEFAULT_POINTS = 720
 quintic spline through them follows the lift within 1e-7 mm on the example cams; a denser
 table gains little there and costs the engine a piece per point."""
 _CURVES = ("LWPOLYLINE", "POLYLINE", "SPLINE", "CIRCLE", "ELLIPSE")
-_CHUNK = 128
+_CHUNK = 128  # profile vertices checked at once against the roller centres' path
 _ARC_BEZIERS = 128
 
 
@@ -266,14 +268,9 @@ def _lift(cam: DxfProfile, path, follower, points: int):
     if f.swinging and f.pivot_mm <= r_max:
         raise ValueError(f"{name}: the pivot (pivot_mm = {f.pivot_mm:g}) lies within the profile's "
                          f"largest radius ({r_max:.6g} mm); move the pivot out")
-    if f.kind == "translating-roller":
-        lift, centres = _translating_roller(q, theta, f)
-    elif f.kind == "swinging-roller":
-        lift, centres = _swinging_roller(q, theta, f)
-    elif f.kind == "translating-flat":
-        lift, centres = _chunked(q, theta, lambda x: np.max(x[..., 1], axis=1)) - f.base_radius_mm, None
-    else:
-        lift, centres = _swinging_flat(q, theta, f), None
+    follower_geometry = f.geometry
+    displacement, centres = follower_geometry.lift_from_polygon(q, theta)
+    lift = follower_geometry.lift_per_displacement * displacement
     missed = ~np.isfinite(lift)
     if missed.any():
         raise ValueError(f"{name}: the follower does not reach the profile at cam angle "
@@ -287,100 +284,6 @@ def _lift(cam: DxfProfile, path, follower, points: int):
     return np.degrees(theta), np.maximum(lift, 0.0)
 
 
-def _rotated(q: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """The profile's vertices in the fixed frame at each cam angle, ``(n, m, 2)``."""
-    c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
-    return np.stack([c * q[:, 0] - s * q[:, 1], s * q[:, 0] + c * q[:, 1]], axis=-1)
-
-
-def _chunked(q, theta, one) -> np.ndarray:
-    return np.concatenate([one(_rotated(q, theta[i:i + _CHUNK])) for i in range(0, theta.size, _CHUNK)])
-
-
-def _edges(x: np.ndarray):
-    """Start points, unit directions and lengths of the closed polygon's edges."""
-    a = x
-    step = np.roll(x, -1, axis=-2) - a
-    length = np.hypot(step[..., 0], step[..., 1])
-    return a, step / length[..., None], length
-
-
-def _translating_roller(q, theta, f):
-    """Highest roller centre on ``x = offset`` that touches the polygon at each angle."""
-    e, r = f.offset_mm, f.roller_radius_mm
-
-    def one(x):
-        dx = x[..., 0] - e
-        cap = np.where(np.abs(dx) <= r, x[..., 1] + np.sqrt(np.maximum(r * r - dx * dx, 0.0)), -np.inf)
-        a, t, length = _edges(x)
-        nu = np.stack([t[..., 1], -t[..., 0]], axis=-1)
-        nu = np.where(nu[..., 1:2] < 0, -nu, nu)  # the offset line above the edge
-        with np.errstate(divide="ignore", invalid="ignore"):
-            u = (e - a[..., 0] - r * nu[..., 0]) / t[..., 0]
-        side = np.where((u >= 0) & (u <= length), a[..., 1] + r * nu[..., 1] + u * t[..., 1], -np.inf)
-        return np.max(np.maximum(cap, side), axis=1)
-
-    height = _chunked(q, theta, one)
-    lift = height - math.sqrt((f.base_radius_mm + r) ** 2 - e * e)
-    centres = np.stack([e * np.cos(theta) + height * np.sin(theta), -e * np.sin(theta) + height * np.cos(theta)], axis=1)
-    return lift, centres
-
-
-def _swinging_roller(q, theta, f):
-    """The arm swung as far out as the polygon pushes the roller, at each angle: the least
-    arm direction (about the pivot, above the pivot-centre line) whose roller touches it."""
-    d, l, r = f.pivot_mm, f.arm_mm, f.roller_radius_mm
-    rp = f.base_radius_mm + r
-    gamma0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
-    pivot = np.array([d, 0.0])
-
-    def direction(z):
-        return np.where(z[..., 1] > 0, np.arctan2(z[..., 1], z[..., 0]), np.inf)  # (0, pi) only
-
-    def one(x):
-        w = x - pivot
-        rho = np.hypot(w[..., 0], w[..., 1])
-        c = (l * l + rho * rho - r * r) / (2 * l * rho)
-        phi = np.arctan2(w[..., 1], w[..., 0])
-        half = np.arccos(np.clip(c, -1.0, 1.0))
-        best = np.full(x.shape[0], np.inf)
-        for sign in (-1.0, 1.0):
-            psi = phi + sign * half
-            z = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
-            best = np.minimum(best, np.min(np.where(np.abs(c) <= 1, direction(z), np.inf), axis=1))
-        a, t, length = _edges(x)
-        nu = np.stack([t[..., 1], -t[..., 0]], axis=-1)
-        for side in (-1.0, 1.0):
-            start = a + side * r * nu - pivot
-            b = np.sum(t * start, axis=-1)
-            disc = b * b - (np.sum(start * start, axis=-1) - l * l)
-            root = np.sqrt(np.maximum(disc, 0.0))
-            for u in (-b - root, -b + root):
-                ok = (disc >= 0) & (u >= 0) & (u <= length)
-                best = np.minimum(best, np.min(np.where(ok, direction(start + u[..., None] * t), np.inf), axis=1))
-        return best
-
-    psi = _chunked(q, theta, one)
-    lift = l * ((math.pi - gamma0) - psi)
-    centre = np.stack([d + l * np.cos(psi), l * np.sin(psi)], axis=1)
-    c, s = np.cos(theta), np.sin(theta)
-    centres = np.stack([c * centre[:, 0] + s * centre[:, 1], -s * centre[:, 0] + c * centre[:, 1]], axis=1)
-    return lift, centres
-
-
-def _swinging_flat(q, theta, f):
-    """The face through the pivot tangent to the polygon: its normal's angle is the least
-    direction of a vertex seen from the pivot, less 90 degrees."""
-    d = f.pivot_mm
-
-    def one(x):
-        phi = np.mod(np.arctan2(x[..., 1], x[..., 0] - d), 2 * np.pi)
-        return np.min(phi, axis=1)
-
-    beta = _chunked(q, theta, one) - math.pi / 2
-    return f.arm_mm * (math.acos(f.base_radius_mm / d) - beta)
-
-
 def _polar_deg(p: np.ndarray) -> float:
     return float(np.mod(np.degrees(np.arctan2(p[1], p[0])), 360.0))
 
@@ -388,7 +291,7 @@ def _polar_deg(p: np.ndarray) -> float:
 def _check_reach(q: np.ndarray, centres: np.ndarray, r: float, name: str) -> None:
     """Every profile vertex lies a roller radius from the roller centres' path (the pitch
     polygon), within the tolerance plus the sag of its chords over a hollow (``h^2 / 8 r``)."""
-    a, t, length = _edges(centres)
+    a, t, length = polygon_edges(centres)
     gap = np.empty(len(q))
     for i in range(0, len(q), _CHUNK):
         p = q[i:i + _CHUNK, None, :] - a[None]
@@ -408,7 +311,7 @@ def _check_convex(q: np.ndarray, name: str, kind: str) -> None:
     from scipy.spatial import ConvexHull
 
     hull = q[ConvexHull(q).vertices]  # counter-clockwise
-    a, t, _ = _edges(hull)
+    a, t, _ = polygon_edges(hull)
     normal = np.stack([t[:, 1], -t[:, 0]], axis=-1)
     offset = np.sum(normal * a, axis=-1)
     depth = np.min(offset[None] - q @ normal.T, axis=1)

@@ -45,20 +45,6 @@ class Profile(NamedTuple):
         return self.face_position_mm is not None
 
 
-def follower_geometry(program: Program) -> geometry.AbstractRollerFollower | geometry.AbstractFlatFollower:
-    """The ``camjax.geometry`` follower of the program, in mm."""
-    f = program.follower
-    if f.kind == "swinging-roller":
-        return geometry.SwingingRollerFollower(pivot_distance=f.pivot_mm, arm_length=f.arm_mm,
-                                               roller_radius=f.roller_radius_mm, base_radius=f.base_radius_mm)
-    if f.kind == "translating-flat":
-        return geometry.TranslatingFlatFollower(base_radius=f.base_radius_mm)
-    if f.kind == "swinging-flat":
-        return geometry.SwingingFlatFollower(pivot_distance=f.pivot_mm, base_radius=f.base_radius_mm)
-    return geometry.TranslatingRollerFollower(offset=f.offset_mm, roller_radius=f.roller_radius_mm,
-                                              base_radius=f.base_radius_mm)
-
-
 def _angle_ranges(theta_deg: np.ndarray, bad: np.ndarray) -> str:
     """``"a-b, c-d deg"`` of the runs of ``bad`` (sorted angles)."""
     runs, i = [], 0
@@ -84,12 +70,13 @@ def shape(program: Program, theta_deg, side: str = "after"):
     theta_deg = np.asarray(theta_deg, dtype=float)
     y, dy, ddy = program.lift(theta_deg, side)
     f = program.follower
+    follower = f.geometry
     per_rad = 180.0 / math.pi
-    scale = 1.0 / f.arm_mm if f.swinging else 1.0
+    scale = 1.0 / follower.lift_per_displacement
     jet = (np.radians(theta_deg), scale * y, scale * dy * per_rad, scale * ddy * per_rad**2)
     if not f.flat_face:
-        return geometry.cam_profile_from_jet(follower_geometry(program), *jet)
-    flat = jax.tree.map(np.asarray, geometry.flat_profile_from_jet(follower_geometry(program), *jet))
+        return follower.profile_from_jet(*jet)
+    flat = jax.tree.map(np.asarray, follower.profile_from_jet(*jet))
     cusp = ~(flat.radius_of_curvature > 0)
     if cusp.any():
         order = np.argsort(np.mod(theta_deg, 360.0))
@@ -97,7 +84,7 @@ def shape(program: Program, theta_deg, side: str = "after"):
                          f"(r_b + y + y'' for a translating one) is not positive at "
                          f"{_angle_ranges(np.mod(theta_deg, 360.0)[order], cusp[order])}: a cusp; "
                          "raise base_radius_mm or soften the motion")
-    if f.kind == "swinging-flat" and not (flat.face_position > 0).all():
+    if not follower.on_face(flat.face_position).all():  # a swinging face's contact past its pivot
         raise ValueError("follower.pivot_mm: the contact point passes the pivot along the face; "
                          "move the pivot further out")
     return flat

@@ -173,7 +173,7 @@ def save_figures(out: Path, program: Program, report, history: tuple, prof: Prof
 def shaft_figures(out: Path, machine, report, rpm) -> None:
     """The shaft's torque over the turn at up to four speeds, and against speed (a ``MachineReport``)."""
     from ._dynamics import SteadyState
-    from ._shaft import shaft_torque
+    from ._machine import shaft_torque
     from ._speeds import Speeds
 
     rpm = Speeds.of(rpm)

@@ -1,16 +1,59 @@
 """The follower train a cam program drives, and the materials of its contact (mm, N, kg).
 
-Every check names the field that fails, with a one-line ``ValueError``.
+Every check names the field that fails, with a one-line ``ValueError``.  The follower's
+kind is read here and nowhere else: ``FOLLOWER_KINDS`` maps each name to its
+``camjax.geometry`` class, which holds that kind's geometry and rules
+(``Follower.geometry``); a new kind is a new class there and its entry here.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import re
+import types
 
+from .. import geometry
 from ..checks import finite_number
 
-FOLLOWER_KINDS = ("translating-roller", "swinging-roller", "translating-flat", "swinging-flat")
+FOLLOWER_KINDS = types.MappingProxyType({kind.name: kind for kind in (
+    geometry.TranslatingRollerFollower, geometry.SwingingRollerFollower,
+    geometry.TranslatingFlatFollower, geometry.SwingingFlatFollower)})
+"""The follower kinds a program file names (``[follower] kind``), each its geometry's class."""
+MAX_PRESSURE_ANGLE_DEG = types.MappingProxyType({name: kind.max_pressure_angle_deg for name, kind in FOLLOWER_KINDS.items()
+                                                 if kind.max_pressure_angle_deg is not None})
+"""The pressure angle above which a roller follower is taken to jam or wear (the design
+rule of thumb: 30 degrees translating, 45 swinging), by kind (each class's
+``max_pressure_angle_deg``); flat faces have their own checks."""
+GEOMETRY_KEYS = types.MappingProxyType({"base_radius": "base_radius_mm", "roller_radius": "roller_radius_mm",
+                                        "offset": "offset_mm", "arm_length": "arm_mm",
+                                        "pivot_distance": "pivot_mm"})
+"""The ``Follower`` field (mm) of each field of the ``camjax.geometry`` followers."""
+
+
+def follower_kind(name) -> type[geometry.AbstractFollower]:
+    """The ``camjax.geometry`` class of the kind ``name`` (a ``ValueError`` if none)."""
+    kind = FOLLOWER_KINDS.get(name) if isinstance(name, str) else None
+    if kind is None:
+        raise ValueError(f"follower.kind must be one of {', '.join(FOLLOWER_KINDS)}, got {name!r}")
+    return kind
+
+
+def follower_keys(kind: type[geometry.AbstractFollower]) -> tuple[str, ...]:
+    """The ``Follower`` fields (``[follower]`` keys) that shape a kind's geometry."""
+    return tuple(GEOMETRY_KEYS[field.name] for field in dataclasses.fields(kind))
+
+
+def follower_kinds() -> list[dict]:
+    """Each kind with the keys of its geometry, whether it has a roller and whether it
+    swings: what the studio offers and draws."""
+    return [{"name": name, "keys": list(follower_keys(kind)), "roller": issubclass(kind, geometry.AbstractRollerFollower),
+             "swinging": kind.swinging} for name, kind in FOLLOWER_KINDS.items()]
+
+
+def _in_keys(message: str) -> str:
+    """A ``camjax.geometry`` follower's message with its fields named by their keys."""
+    return re.sub(r"\b(" + "|".join(GEOMETRY_KEYS) + r")\b", lambda m: GEOMETRY_KEYS[m.group(1)], message)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -19,9 +62,12 @@ class Follower:
 
     ``spring_rate_n_per_mm=None`` is a form-closed (grooved) cam: no return spring, no
     preload, no jump; ``groove_clearance_mm`` (form-closed only) is how much wider than
-    the roller its groove is: the roller then crosses it when the train force changes sign.  For ``kind="swinging-roller"`` the lift is the arc length of the
-    roller centre (swing angle times ``arm_mm``) and ``pivot_mm`` is the cam-centre to pivot
-    distance.  A flat-faced follower (``"translating-flat"``, ``"swinging-flat"``) has no
+    the roller its groove is: the roller then crosses it when the train force changes sign.
+
+    ``kind`` names the follower's geometry (``FOLLOWER_KINDS``; ``geometry`` is its
+    ``camjax.geometry`` follower, with the fields of ``follower_keys``).  For a swinging
+    roller the lift is the arc length of the roller centre (swing angle times ``arm_mm``)
+    and ``pivot_mm`` is the cam-centre to pivot distance.  A flat-faced follower has no
     roller: the swinging face is a plane through the pivot and its lift is the swing angle
     times ``arm_mm``.  ``contact_width_mm`` is the width of the line contact (the roller's, or
     the cam's under a flat face) for the Hertz stress; without it no stress is reported.
@@ -35,7 +81,7 @@ class Follower:
     base_radius_mm: float = 40.0
     roller_radius_mm: float = 10.0
     offset_mm: float = 0.0
-    kind: str = "translating-roller"
+    kind: str = geometry.TranslatingRollerFollower.name
     arm_mm: float | None = None
     pivot_mm: float | None = None
     groove_clearance_mm: float | None = None
@@ -45,12 +91,19 @@ class Follower:
         _as_floats(self)
 
     @property
+    def geometry(self) -> geometry.AbstractFollower:
+        """The follower's geometry in mm: its kind's ``camjax.geometry`` class, built from
+        the fields of ``follower_keys``."""
+        kind = follower_kind(self.kind)
+        return kind(**{field.name: getattr(self, GEOMETRY_KEYS[field.name]) for field in dataclasses.fields(kind)})
+
+    @property
     def flat_face(self) -> bool:
-        return self.kind.endswith("-flat")
+        return not issubclass(follower_kind(self.kind), geometry.AbstractRollerFollower)
 
     @property
     def swinging(self) -> bool:
-        return self.kind.startswith("swinging")
+        return follower_kind(self.kind).swinging
 
     @property
     def form_closed(self) -> bool:
@@ -96,6 +149,18 @@ def _as_floats(record) -> None:
             object.__setattr__(record, field.name, float(value))
 
 
+def field_number(value, where: str, *, positive: bool = False, non_negative: bool = False) -> float:
+    """A program file's number ``value`` as a float, finite (and positive or non-negative if
+    asked), else a ``ValueError`` naming ``where`` (the table, body and field)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{where} must be a finite number, got {value!r}")
+    if positive and not value > 0:
+        raise ValueError(f"{where} must be positive, got {value:g}")
+    if non_negative and value < 0:
+        raise ValueError(f"{where} must be non-negative, got {value:g}")
+    return float(value)
+
+
 def _positive(value, what: str) -> float:
     value = _finite(value, what)
     if value <= 0:
@@ -104,8 +169,7 @@ def _positive(value, what: str) -> float:
 
 
 def _check_follower(f: Follower) -> None:
-    if f.kind not in FOLLOWER_KINDS:
-        raise ValueError(f"follower.kind must be one of {', '.join(FOLLOWER_KINDS)}, got {f.kind!r}")
+    kind = follower_kind(f.kind)
     for name in ("mass_kg", "stiffness_n_per_mm", "base_radius_mm", "roller_radius_mm"):
         _positive(getattr(f, name), f"follower.{name}")
     zeta = _finite(f.damping_ratio, "follower.damping_ratio")
@@ -123,30 +187,22 @@ def _check_follower(f: Follower) -> None:
     if f.contact_width_mm is not None:
         _positive(f.contact_width_mm, "follower.contact_width_mm")
     offset = _finite(f.offset_mm, "follower.offset_mm")
-    if f.kind == "translating-roller" and abs(offset) >= f.base_radius_mm + f.roller_radius_mm:
-        raise ValueError("follower.offset_mm: |offset| must be below base_radius_mm + roller_radius_mm")
     if f.flat_face and f.groove_clearance_mm is not None:
         raise ValueError("follower.groove_clearance_mm: a flat-faced follower runs on no groove")
-    if f.kind == "translating-flat" and offset != 0:
+    if kind is geometry.TranslatingFlatFollower and offset != 0:
         raise ValueError("follower.offset_mm: a flat face's profile does not depend on an offset; "
                          "leave it 0")
-    if f.swinging:
-        for name in ("arm_mm", "pivot_mm"):
-            if getattr(f, name) is None:
-                raise ValueError(f"follower.{name} is missing: a {f.kind} follower needs "
-                                 "arm_mm and pivot_mm")
-    if f.kind == "swinging-flat":
-        _positive(f.arm_mm, "follower.arm_mm")
-        if _positive(f.pivot_mm, "follower.pivot_mm") <= f.base_radius_mm:
-            raise ValueError("follower.pivot_mm: the pivot must lie outside the base circle "
-                             "(pivot_mm > base_radius_mm) for its face to touch it")
-    if f.kind == "swinging-roller":
-        arm = _positive(f.arm_mm, "follower.arm_mm")
-        pivot = _positive(f.pivot_mm, "follower.pivot_mm")
-        rp = f.base_radius_mm + f.roller_radius_mm
-        if not abs(pivot - arm) < rp < pivot + arm:
-            raise ValueError("follower.arm_mm, pivot_mm: the arm cannot reach the base circle "
-                             "(|pivot - arm| < base + roller < pivot + arm fails)")
+    keys = follower_keys(kind)
+    needed = [field.name for field in dataclasses.fields(Follower) if field.name in keys and field.default is None]
+    for key in needed:
+        if getattr(f, key) is None:
+            raise ValueError(f"follower.{key} is missing: a {f.kind} follower needs {' and '.join(needed)}")
+    for key in needed:
+        _positive(getattr(f, key), f"follower.{key}")
+    try:
+        f.geometry  # noqa: B018  (its own checks)
+    except ValueError as error:
+        raise ValueError(f"follower.{_in_keys(str(error))}") from None
 
 
 @dataclasses.dataclass(frozen=True)

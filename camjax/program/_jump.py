@@ -20,13 +20,12 @@ import math
 
 import numpy as np
 
-from ..sdof import psi_host, step_within_host
+from ..sdof import first_roots, narrowed_crossing, polished_maxima, psi_host, step_within_host
 from ._dynamics import SPEED_BLOCK, SteadyState
 from ._oscillator import CONTACT_FORCE
 from ._outputs import min_preload_n as min_preload_n
 from ._speeds import Speeds
 
-_BISECTIONS = 3  # rounds of 64-way subdivision before the secant: a bracket shrinks by 65^3
 _SAMPLES_PER_INTERVAL = 8
 
 
@@ -85,17 +84,12 @@ def _jump_speed(steady: SteadyState, rpm_lo: float, rpm_hi: float, tolerance_rpm
         return None
     if i == 0:
         return float(rpm_lo)
-    lo, hi = rpm[i - 1], rpm[i]
-    while hi - lo > tolerance_rpm:
-        trial = np.linspace(lo, hi, 18)[1:-1]
-        f = steady.min_contact_force_n(trial)
-        below = np.flatnonzero(f < 0)
-        if below.size:
-            hi = trial[below[0]]
-            lo = trial[below[0] - 1] if below[0] > 0 else lo
-        else:
-            lo = trial[-1]
-    return float(0.5 * (lo + hi))
+    return float(narrowed_crossing(lambda trial: steady.min_contact_force_n(trial) < 0, rpm[i - 1], rpm[i],
+                                   tolerance_rpm, _ROUND_SPEEDS))
+
+
+_ROUND_SPEEDS = 16
+"""Speeds of each round of the jump speed's bisection (one block): the bracket shrinks 17-fold."""
 
 
 _BOUND_MARGIN = 0.01
@@ -335,24 +329,6 @@ class _Turns:
         return times, out
 
 
-def _first_roots(f, lo, hi) -> np.ndarray:
-    """The first root of ``f`` in each row's ``[lo, hi]`` (``f(lo) > 0 >= f(hi)``); ``f`` maps
-    times ``(rows, points)`` to values.  Three rounds of 64-way subdivision shrink each
-    bracket 274,625-fold around its first sign change; the root is then the secant's through
-    the bracket's ends (the force is smooth there: the error is of the bracket's square)."""
-    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    rows = np.arange(lo.size)
-    f_lo = f_hi = np.zeros_like(lo)
-    for _ in range(_BISECTIONS):
-        t = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, 66)
-        values = f(t)
-        hit = values[:, 1:] <= 0
-        i = np.where(hit.any(axis=1), hit.argmax(axis=1) + 1, 65)
-        lo, hi, f_lo, f_hi = t[rows, i - 1], t[rows, i], values[rows, i - 1], values[rows, i]
-    secant = (f_lo > 0) & (f_hi <= 0) & (f_lo != f_hi)
-    return np.where(secant, lo + (hi - lo) * f_lo / np.where(secant, f_lo - f_hi, 1.0), 0.5 * (lo + hi))
-
-
 def flights(steady: SteadyState, rpm: float) -> list[Flight]:
     """Every flight in one turn at ``rpm`` (empty where contact holds); see ``flights_at``."""
     return flights_at(steady, Speeds.of(rpm)[:1])[0]
@@ -407,7 +383,7 @@ def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
         if not sub.size:
             break
         here = np.arange(sub.size)
-        tau = _first_roots(lambda t, c=contact, rows_=sub[here, None]: c.force(rows_, t),
+        tau = first_roots(lambda t, c=contact, rows_=sub[here, None]: c.force(rows_, t),
                            samples[sub, stop[sub] - 1], samples[sub, stop[sub]])
         rows = rows[sub]
         t_sep[rows] = t_i[sub] + tau
@@ -445,7 +421,7 @@ def _first_separations(turns: _Turns, times: np.ndarray, table: np.ndarray) -> n
             i = int(np.clip(turns.contact_force(r, t * turns.period[r]).argmin(), 1, 31))
             lo[r], hi[r] = t[i - 1], t[i]
     period = turns.period
-    return _first_roots(lambda t: turns.contact_force(rows[:, None], t), lo * period, hi * period)
+    return first_roots(lambda t: turns.contact_force(rows[:, None], t), lo * period, hi * period)
 
 
 def _fly(turns: _Turns, rows, t_sep, x0, v0, e0):
@@ -480,7 +456,7 @@ def _fly(turns: _Turns, rows, t_sep, x0, v0, e0):
     first = hits[back].argmax(axis=1)
     lo = np.where(first > 0, tau[back, first - 1], 0.5 * step[back])
     here = np.arange(back.size)
-    tau_i = _first_roots(lambda t: gap(back[here, None], t), lo, tau[back, first])
+    tau_i = first_roots(lambda t: gap(back[here, None], t), lo, tau[back, first])
     x, v = payload(back, tau_i)
     _, e_rate = train(back, tau_i)
     t_i[back] = t_sep[back] + tau_i
@@ -539,29 +515,13 @@ class _Contact:
 
 
 def _peaks(contact: _Contact, samples, values, stop) -> np.ndarray:
-    """Largest contact force of each row from the impact to ``samples[stop]``, polished by
-    zooming: three rounds of 32 samples around the best one (the bracket shrinks 16-fold
-    each), then the vertex of the parabola through the best three (the force is smooth)."""
+    """Largest contact force of each row from the impact to ``samples[stop]``: the largest
+    sample, polished between its neighbours (``polished_maxima``; the force is smooth)."""
     masked = np.where(np.arange(values.shape[1]) < stop[:, None], values, -np.inf)
     k = masked.argmax(axis=1)
     peak = masked[np.arange(k.size), k]
     sub = np.flatnonzero((k > 0) & (k < stop - 1))
-    if not sub.size:
-        return peak
-    here = np.arange(sub.size)
-    lo, hi = samples[sub, k[sub] - 1], samples[sub, k[sub] + 1]
-    best = peak[sub]
-    for _ in range(3):
-        t = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, 33)
-        f = contact.force(sub[:, None], t)
-        j = np.clip(f.argmax(axis=1), 1, 31)
-        best = np.maximum(best, f[here, j])
-        lo, hi = t[here, j - 1], t[here, j + 1]
-    mid = 0.5 * (lo + hi)
-    fa, fb, fc = (contact.force(sub, x) for x in (lo, mid, hi))
-    curvature = fa - 2 * fb + fc
-    ok = curvature < 0
-    vertex = mid + 0.25 * (hi - lo) * (fa - fc) / np.where(ok, curvature, -1.0)
-    best = np.where(ok, np.maximum(best, contact.force(sub, np.where(ok, vertex, mid))), best)
-    peak[sub] = best
+    if sub.size:
+        peak[sub] = polished_maxima(lambda t: contact.force(sub[:, None], t), samples[sub, k[sub] - 1],
+                                    samples[sub, k[sub] + 1], peak[sub])
     return peak

@@ -15,13 +15,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
-from ._dynamics import (
-    SteadyState,
-    _cycle,
-    program_grid,
-    residual_modes,
-    with_segment_law,
-)
+from ._cycle import _cycle, residual_modes
+from ._cycle_grid import program_grid, with_segment_law
+from ._dynamics import SteadyState
 from ._jump import even_periods, scan_speeds
 from ._oscillator import CONTACT_FORCE, Oscillator
 from ._outputs import cam_levers, min_preload_n

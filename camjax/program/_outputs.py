@@ -28,7 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._machine import flywheel_inertia_kg_m2
+from ._torque import flywheel_inertia_kg_m2
 
 
 class ProbeContext(NamedTuple):

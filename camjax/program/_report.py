@@ -10,23 +10,18 @@ import json
 import numpy as np
 
 from .._plain import json_ready, plot_speed
+from ._arm import arm_section
+from ._contact import Geometry, RefinedStress, cam_geometry, refined_contact_stress
 from ._dynamics import SteadyState
 from ._groove import Impact, groove_turns
 from ._jump import Flight, _Turns, flights_at, jump_speed_rpm
-from ._machine import (
-    DEFAULT_SPEED_FLUCTUATION,
-    Geometry,
-    RefinedStress,
-    cam_geometry,
-    check_speed_fluctuation,
-    design_warnings,
-    refined_contact_stress,
-)
 from ._motion import Join, segment_kinematics
 from ._oscillator import PAYLOAD_DISPLACEMENT
 from ._outputs import Outputs, Probe, ProbeContext, kinematic_peak_m_s2
 from ._spec import Program
 from ._speeds import Speeds
+from ._torque import DEFAULT_SPEED_FLUCTUATION, check_speed_fluctuation
+from ._warnings import design_warnings
 
 
 def kinematic_acceleration_m_s2(program: Program, rpm) -> np.ndarray:
@@ -218,6 +213,8 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
         jump_speed = jump_speed_rpm(steady, speeds.min(), speeds.max())
     geometry = cam_geometry(program, np.union1d(theta_nodes[:-1], np.arange(3600) * 0.1))
     train = None if program.chain is None else train_section(program, out, rpm, jump_speed, below)
+    if train is not None and program.chain.arm is not None:  # its bending's cam orders
+        train["arm"] = arm_section(steady, out.cycles, rpm)
     report = Report(program.name, tuple(rows), jump_speed, below, tuple(segment_kinematics(program)),
                     tuple(program.joins()), geometry, speed_fluctuation, outputs=outputs, train=train)
     return dataclasses.replace(report, warnings=tuple(design_warnings(program, report)))

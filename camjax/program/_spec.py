@@ -18,8 +18,16 @@ import numpy as np
 from .. import laws
 from ..checks import is_concrete, read_toml, speeds
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, ConstantVelocity, TableLaw
-from ._follower import FOLLOWER_KINDS as FOLLOWER_KINDS
-from ._follower import Follower, Materials, _as_floats, _check_follower, _finite, _positive
+from ._follower import (
+    FOLLOWER_KINDS,
+    Follower,
+    Materials,
+    _as_floats,
+    _check_follower,
+    _finite,
+    _positive,
+    follower_keys,
+)
 from ._motion import (
     END_STATE_KEYS,
     MATCH,
@@ -137,6 +145,8 @@ class Program:
                 raise ValueError(f"chain must be a camjax.program.Chain or None, got {self.chain!r}")
             object.__setattr__(self, "follower", dataclasses.replace(self.follower, **self.chain.follower_fields()))
         _check_follower(self.follower)
+        if self.chain is not None:
+            self.chain.check_follower(self.follower)
 
     @property
     def one_body(self) -> bool:
@@ -165,7 +175,7 @@ class Program:
     def from_dict(cls, data: dict, *, base: Path | None = None) -> Program:
         """A program from the TOML structure (``program``, ``segment`` list, ``follower``)."""
         _no_unknown(data, {"program", "segment", "follower", "materials", "drive", "motor", "train", "spring",
-                           "seat"}, "top level")
+                           "seat", "arm"}, "top level")
         chain = chain_from_dict(data)  # refuses a [[train]] beside the classic follower fields
         header = data.get("program", {})
         _no_unknown(header, {"name", *TABLE_KEYS, *DXF_KEYS}, "[program]")
@@ -197,7 +207,9 @@ class Program:
         for required in ("mass_kg", "stiffness_n_per_mm"):
             if required not in follower_data:
                 raise ValueError(f"[follower] needs {required}")
-        if str(follower_data.get("kind", "")).endswith("-flat") and "roller_radius_mm" in follower_data:
+        kind = follower_data.get("kind", Follower.kind)
+        if ("roller_radius_mm" in follower_data and isinstance(kind, str) and kind in FOLLOWER_KINDS
+                and "roller_radius_mm" not in follower_keys(FOLLOWER_KINDS[kind])):
             raise ValueError("[follower] roller_radius_mm: a flat-faced follower has no roller")
         materials = data.get("materials", {})
         _no_unknown(materials, {f.name for f in dataclasses.fields(Materials)}, "[materials]")
@@ -329,7 +341,7 @@ class Program:
 
     def lift_curve(self) -> LiftCurve:
         """The lift as a pytree (laws as leaves) for ``camjax.geometry`` and other JAX code."""
-        return LiftCurve(self.turn, 1.0 / self.follower.arm_mm if self.follower.swinging else 1.0)
+        return LiftCurve(self.turn, 1.0 / self.follower.geometry.lift_per_displacement)
 
     def displacement(self, theta):
         """Follower displacement at cam angle ``theta`` (radians), jittable: see ``LiftCurve``."""
@@ -558,7 +570,7 @@ def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -
 
 def example_path(name: str = "indexer") -> Path:
     """Path of a program file shipped with camjax (``camjax/program/examples``, or its
-    ``trains`` folder: 'valve')."""
+    ``trains`` folder: 'valve', 'swinging_arm')."""
     examples = Path(__file__).parent / "examples"
     train = examples / "trains" / f"{name}.toml"
     return train if train.exists() and not (examples / f"{name}.toml").exists() else examples / f"{name}.toml"
@@ -566,7 +578,7 @@ def example_path(name: str = "indexer") -> Path:
 
 def program_path(text: str | None, default: str = "indexer") -> Path:
     """The program file ``text`` names: a path, or a built-in example's name ('indexer',
-    'feed', 'valve') where no such file exists; without ``text``, the example ``default``."""
+    'feed', 'valve', 'swinging_arm') where no such file exists; without ``text``, the example ``default``."""
     if not text:
         return example_path(default)
     path = Path(text)

@@ -24,7 +24,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..geometry import SwingingRollerFollower
+from ._arm import Arm, ArmAssembly, arm_from_dict
 from ._follower import Follower
+from ._follower import field_number as _number
 
 SURGE_TOLERANCE = 0.005
 """Default spring discretisation: the fewest elements whose first three surge frequencies
@@ -32,22 +35,15 @@ SURGE_TOLERANCE = 0.005
 MAX_SPRING_ELEMENTS = 64
 
 
-def _number(value, where: str, *, positive: bool = False, non_negative: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"{where} must be a finite number, got {value!r}")
-    if positive and not value > 0:
-        raise ValueError(f"{where} must be positive, got {value:g}")
-    if non_negative and value < 0:
-        raise ValueError(f"{where} must be non-negative, got {value:g}")
-    return float(value)
-
-
 @dataclasses.dataclass(frozen=True)
 class Body:
     """One body of the chain and the element that joins it to the body before (the cam for
     the first).  ``stiffness_n_per_mm=None``: no element, the body rides on the cam (the
     first body only).  ``lever_mass_kg``: the lever's moment of inertia over the square of
-    its arm on the side of the body before (a rocker's inertia at that end)."""
+    its arm on the side of the body before (a rocker's inertia at that end).  ``at_mm``: on a
+    chain with a flexible ``Arm``, where the body is clamped on it (mm from the pivot; the
+    first body rides on the cam at the roller and needs none); a body on an arm has no
+    element (the arm is its element) and may have no mass (a point of the arm watched)."""
 
     name: str
     mass_kg: float
@@ -56,6 +52,7 @@ class Body:
     ratio: float = 1.0
     lever_mass_kg: float = 0.0
     lash_mm: float = 0.0
+    at_mm: float | None = None
 
     @property
     def rides(self) -> bool:
@@ -129,12 +126,15 @@ class Chain:
     """A linear chain of bodies from the cam outward, its return spring and optional seat.
 
     ``Chain.of_follower`` is today's one-body follower; ``chain_from_dict`` reads the
-    program file's ``[[train]]``, ``[spring]`` and ``[seat]`` tables.
+    program file's ``[[train]]``, ``[spring]``, ``[seat]`` and ``[arm]`` tables.  With an
+    ``arm`` the bodies sit on a swinging follower's flexible arm (``camjax.program.Arm``):
+    the first rides on the cam at the roller, the others are clamped at their ``at_mm``.
     """
 
     bodies: tuple[Body, ...]
     spring: Spring | None = None
     seat: Seat | None = None
+    arm: Arm | None = None
 
     def __post_init__(self):
         _check_chain(self)
@@ -162,7 +162,8 @@ class Chain:
         numbers are exactly the chain's."""
         (body, *rest), s = self.bodies, self.spring
         return (
-            not rest
+            self.arm is None
+            and not rest
             and not body.rides
             and body.ratio == 1.0
             and not body.lever_mass_kg
@@ -220,6 +221,8 @@ class Chain:
                 if value != field.default or field.default is dataclasses.MISSING:
                     lines.append(f"{field.name} = {value!r}")
             lines.append("")
+        if self.arm is not None:
+            lines += self.arm.toml_lines()
         return lines
 
     # -- the assembled system ------------------------------------------------------------
@@ -227,7 +230,11 @@ class Chain:
     def matrices(self, *, contact: bool = True) -> Assembly:
         """Mass, damping and stiffness (SI) over every coordinate: the cam's (index 0: the
         first body's own where it rides), the bodies', the spring's inner nodes and its
-        seat (last).  ``contact=False`` drops the first element (the cam let go)."""
+        seat (last).  ``contact=False`` drops the first element (the cam let go).  With an
+        arm: the roller's displacement (the cam's), the arm's nodes (``ArmAssembly``), the
+        spring's inner nodes and its seat."""
+        if self.arm is not None:
+            return self._arm_matrices()
         rides = self.bodies[0].rides
         n_bodies = len(self.bodies)
         n_spring = self.spring.element_count() if self.spring is not None else 0
@@ -256,23 +263,62 @@ class Chain:
                 body.damping_n_s_per_m,
                 body.ratio,
             )
-        if self.spring is not None:
-            s = self.spring
-            nodes = [body_index[-1], *inner, seat]
-            k_e = 1e3 * s.rate_n_per_mm * n_spring
-            tau = 0.0
-            if s.surges and s.damping_ratio > 0:
-                tau = 2 * s.damping_ratio / (2 * math.pi * s.surge_hz)
-            for a, b in zip(nodes[:-1], nodes[1:]):
-                element(a, b, k_e, k_e * tau)
-                if s.surges:
-                    M[np.ix_([a, b], [a, b])] += _bar_mass(n_spring, s.mass_kg)
+        self._add_spring(M, C, K, [body_index[-1], *inner, seat])
         return Assembly(M, C, K, np.asarray(body_index), size - 1)
+
+    def _add_spring(self, M, C, K, nodes) -> None:
+        """The return spring's elements (and its mass) over ``nodes``, the last body's
+        coordinate first and its seat last."""
+        s = self.spring
+        if s is None:
+            return
+        n_spring = len(nodes) - 1
+        k_e = 1e3 * s.rate_n_per_mm * n_spring
+        tau = 0.0
+        if s.surges and s.damping_ratio > 0:
+            tau = 2 * s.damping_ratio / (2 * math.pi * s.surge_hz)
+        g = np.array([1.0, -1.0])
+        for a, b in zip(nodes[:-1], nodes[1:]):
+            i = np.ix_([a, b], [a, b])
+            K[i] += k_e * np.outer(g, g)
+            C[i] += k_e * tau * np.outer(g, g)
+            if s.surges:
+                M[i] += _bar_mass(n_spring, s.mass_kg)
+
+    def _arm_matrices(self) -> Assembly:
+        """The bodies on the flexible arm: its beam (``ArmAssembly``), each body's mass at
+        its node, the spring on the last body, and the arm's strain-rate damping scaled to
+        its first mode with the cam held."""
+        import scipy.linalg  # the generalised symmetric eigenproblem
+
+        arm = self.arm
+        beam = ArmAssembly(arm, [arm.roller_mm, *(b.at_mm for b in self.bodies[1:])])
+        beam_K, beam_M, body_index = beam.reduced(arm.modes)
+        n_beam = beam_K.shape[0]
+        n_spring = self.spring.element_count() if self.spring is not None else 1
+        size = n_beam + n_spring
+        seat = size - 1
+        M, C, K = (np.zeros((size, size)) for _ in range(3))
+        M[:n_beam, :n_beam] += beam_M
+        K[:n_beam, :n_beam] += beam_K
+        for body, i in zip(self.bodies, body_index):
+            M[i, i] += body.mass_kg
+        self._add_spring(M, C, K, [body_index[-1], *range(n_beam, seat), seat])
+        free = np.arange(1, seat)
+        w2 = scipy.linalg.eigh(K[np.ix_(free, free)], M[np.ix_(free, free)], eigvals_only=True)
+        tau = 2 * arm.damping_ratio / math.sqrt(w2[0])
+        C[:n_beam, :n_beam] += tau * beam_K
+        return Assembly(M, C, K, body_index, seat)
 
     @property
     def lever_ratio(self) -> float:
-        """The last body's travel per unit of the cam's lift (its kinematic lift's scale),
-        and the factor of the spring's preload at the cam: the product of the levers."""
+        """The last body's travel per unit of the cam's lift with the elements rigid (its
+        kinematic lift's scale), and by virtual work the factor of the spring's preload at
+        the cam: the product of the levers, or on an arm the last body's place over the
+        roller's (``at_mm / arm_mm``, the rigid swing)."""
+        if self.arm is not None:
+            last = self.bodies[-1]  # the first rides at the roller; the others sit at at_mm
+            return 1.0 if len(self.bodies) == 1 else float(last.at_mm) / self.arm.roller_mm
         return float(np.prod([b.ratio for b in self.bodies if not b.rides]))
 
     @property
@@ -281,6 +327,21 @@ class Chain:
         if self.spring is None:
             return 0.0
         return self.spring.preload_n * self.lever_ratio
+
+    def check_follower(self, follower: Follower) -> None:
+        """A chain with an arm needs the swinging roller follower whose ``arm_mm`` is the
+        arm's roller place (one line naming the field otherwise)."""
+        if self.arm is None:
+            return
+        if not isinstance(follower.geometry, SwingingRollerFollower):
+            raise ValueError(
+                f"[arm]: a flexible arm belongs to a swinging roller follower, not {follower.kind!r}"
+            )
+        if abs(follower.arm_mm - self.arm.roller_mm) > 1e-9 * follower.arm_mm:
+            raise ValueError(
+                f"[arm] roller_mm = {self.arm.roller_mm:g} is not the follower's arm_mm = "
+                f"{follower.arm_mm:g} (where the roller sits)"
+            )
 
     # -- natural frequencies -----------------------------------------------------------
 
@@ -340,6 +401,11 @@ def _check_chain(chain: Chain) -> None:
         if body.name in names:
             raise ValueError(f"{where}: name given twice")
         names.add(body.name)
+        if chain.arm is not None:
+            _check_arm_body(chain.arm, body, j, where)
+            continue
+        if body.at_mm is not None:
+            raise ValueError(f"{where} at_mm: a place on the arm needs an [arm] table")
         _number(body.mass_kg, f"{where} mass_kg", positive=True)
         if body.rides and j > 1:
             raise ValueError(
@@ -389,14 +455,66 @@ def _check_chain(chain: Chain) -> None:
         elif s.surges and s.element_count() > MAX_SPRING_ELEMENTS:
             raise ValueError("[spring]: its surge cannot be resolved")
     if chain.seat is not None:
+        if chain.arm is not None:
+            raise ValueError("[seat]: a valve seat belongs to a valve train, not to a swinging arm")
         _number(chain.seat.stiffness_n_per_mm, "[seat] stiffness_n_per_mm", positive=True)
         if s is None or s.preload_n <= 0:
             raise ValueError(
                 "[seat]: a seat needs a [spring] with preload_n > 0 to close the valve onto it"
             )
-    if s is None and chain.bodies[-1].rides:
+    if s is None and chain.bodies[-1].rides and chain.arm is None:
         raise ValueError(
             "[[train]]: a single body riding on the cam needs a [spring] (nothing holds it)"
+        )
+
+
+def _check_arm_body(arm: Arm, body: Body, j: int, where: str) -> None:
+    """A body on a flexible arm: the first rides on the cam at the roller, the others are
+    clamped at ``at_mm`` along it with no element of their own (the arm is theirs)."""
+    if not isinstance(arm, Arm):
+        raise ValueError(f"arm must be a camjax.program.Arm or None, got {arm!r}")
+    if j == 1:
+        if not body.rides:
+            raise ValueError(
+                f"{where}: on an [arm] the first body rides on the cam at the roller (no "
+                "stiffness_n_per_mm: the arm joins the bodies)"
+            )
+        _number(body.mass_kg, f"{where} mass_kg", positive=True)
+        if body.at_mm is not None and abs(body.at_mm - arm.roller_mm) > 1e-9 * arm.roller_mm:
+            raise ValueError(
+                f"{where} at_mm: the body riding on the cam sits at the roller ({arm.roller_mm:g} "
+                "mm, the follower's arm_mm); leave at_mm out"
+            )
+        if body.ratio != 1.0 or body.lash_mm or body.lever_mass_kg or body.damping_n_s_per_m:
+            raise ValueError(
+                f"{where}: ratio, lash_mm, lever_mass_kg and damping_n_s_per_m belong to an "
+                "element, and a body riding on the cam has none"
+            )
+        return
+    _number(body.mass_kg, f"{where} mass_kg", non_negative=True)
+    if body.at_mm is None:
+        raise ValueError(f"{where}: needs at_mm, its place on the [arm] (mm from the pivot)")
+    at = _number(body.at_mm, f"{where} at_mm", positive=True)
+    if at > 1e3 * arm.length * (1 + 1e-12):
+        raise ValueError(
+            f"{where} at_mm = {at:g} is past the arm's end ({1e3 * arm.length:g} mm; give [arm] "
+            "length_mm for an arm that carries on past the roller)"
+        )
+    extra = [
+        name
+        for name, value, default in (
+            ("stiffness_n_per_mm", body.stiffness_n_per_mm, None),
+            ("damping_n_s_per_m", body.damping_n_s_per_m, 0.0),
+            ("ratio", body.ratio, 1.0),
+            ("lever_mass_kg", body.lever_mass_kg, 0.0),
+            ("lash_mm", body.lash_mm, 0.0),
+        )
+        if value != default
+    ]
+    if extra:
+        raise ValueError(
+            f"{where} {', '.join(extra)}: a body on the [arm] is joined by the arm itself (its "
+            "bending_stiffness_n_m2 and damping_ratio), not by an element"
         )
 
 
@@ -428,7 +546,13 @@ def chain_from_dict(data: dict) -> Chain | None:
     or ``None`` where the file has none (its ``[follower]`` fields are the one-body train).
     Bad input is one ``ValueError`` line naming the table, the body and the field."""
     train, spring, seat = data.get("train"), data.get("spring"), data.get("seat")
+    arm = data.get("arm")
     if train is None:
+        if arm is not None:
+            raise ValueError(
+                "[arm] needs [[train]] bodies: the first rides on the cam at the roller (its "
+                "mass_kg), the others sit at their at_mm on the arm"
+            )
         for table, value in (("[spring]", spring), ("[seat]", seat)):
             if value is not None:
                 raise ValueError(
@@ -480,7 +604,8 @@ def chain_from_dict(data: dict) -> Chain | None:
         if not isinstance(seat, dict) or set(seat) != {"stiffness_n_per_mm"}:
             raise ValueError("[seat] takes one field, stiffness_n_per_mm")
         seat_obj = Seat(seat["stiffness_n_per_mm"])
-    return Chain(tuple(bodies), spring_obj, seat_obj)
+    arm_obj = None if arm is None else arm_from_dict(arm, data.get("follower"))
+    return Chain(tuple(bodies), spring_obj, seat_obj, arm_obj)
 
 
 # -- the exact periodic steady state -----------------------------------------------------

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
+from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
 import equinox as eqx
@@ -84,8 +85,10 @@ SUBSTEPS_PER_INTERVAL = math.ceil(MAX_PHASE_STEP / TARGET_PHASE_STEP)
 ``solve``'s samples per interval (a smooth curve to plot)."""
 
 
-def default_resolution(max_period_ratio: float, phase_step: float = TARGET_PHASE_STEP) -> int:
-    """Intervals per unit of tau that keep ``w h <= phase_step`` (a multiple of 64).
+def default_resolution(max_period_ratio: float, phase_step: float = TARGET_PHASE_STEP,
+                       minimum: float = 128) -> int:
+    """Intervals per unit of tau that keep ``w h <= phase_step`` (a multiple of 64), and
+    at least ``minimum``.
 
     The step bounds the error of a septic peak refinement near ``(w h)^8 / 1e7`` (4e-10
     relative at the default 0.5; the SDOF path's grid, at ``MAX_PHASE_STEP``, refines by
@@ -93,7 +96,30 @@ def default_resolution(max_period_ratio: float, phase_step: float = TARGET_PHASE
     of 64 limits recompilation across nearby requests.
     """
     needed = 2 * math.pi * max_period_ratio / phase_step
-    return max(128, 64 * math.ceil(needed / 64))
+    return 64 * math.ceil(max(needed, minimum) / 64)
+
+
+def period_ratio_reach(phase_step: float, intervals: int = MAX_GRID_INTERVALS) -> float:
+    """The largest period ratio (vibrations per unit of tau) that a grid of ``intervals``
+    resolves at ``w h <= phase_step``: what a refusal of a larger grid can offer instead."""
+    return intervals * phase_step / (2 * math.pi)
+
+
+def check_grid_size(intervals: int, what: str, remedy: str | Callable[[], str]) -> None:
+    """The one refusal of a grid of more than ``MAX_GRID_INTERVALS`` intervals, made by every
+    caller that sizes one (a rise, a turn, a sweep's spec, a design's training grid, a
+    reference), before any work.
+
+    Raises ``ValueError("{what} needs {intervals} grid intervals (the limit is
+    {MAX_GRID_INTERVALS}): {remedy}")``: ``what`` names the request in the caller's terms
+    (``"a turn at 1e-06 rpm"``) and ``remedy`` says what to change there (a callable is
+    called only when the grid is refused).
+    """
+    if intervals <= MAX_GRID_INTERVALS:
+        return
+    text = remedy() if callable(remedy) else remedy
+    raise ValueError(f"{what} needs {int(intervals):,} grid intervals (the limit is "
+                     f"{MAX_GRID_INTERVALS:,}): {text}")
 
 
 class MotionGrid(NamedTuple):
@@ -229,6 +255,75 @@ def piecewise_grid(edges, counts, total: int | None = None):
     return MotionGrid(jnp.asarray(nodes), piece, jnp.asarray(piece_width), None), sample_times
 
 
+SEGMENT_MINIMUM = 64
+"""Intervals that every moving segment of a segmented interval (a cam program's turn) gets
+at least, however fast its follower: a short rise sampled by a handful of intervals would
+read its peaks off a coarse interpolant of its motion."""
+
+SEGMENT_PIECE_MINIMUM = 4
+"""Intervals that every piece of a segment (a law's smooth piece, or a dwell) gets at least."""
+
+SEGMENTED_MINIMUM = 256
+"""Intervals per unit (a turn) of a segmented interval's grid at least."""
+
+
+class GridSegment(NamedTuple):
+    """One segment of a segmented interval: from ``start`` over ``width`` (fractions of the
+    interval), cut at its law's ``breakpoints`` (fractions of the segment; ``None`` for a
+    segment whose forcing is flat, such as a dwell: one piece, no segment minimum)."""
+
+    start: float
+    width: float
+    breakpoints: tuple[float, ...] | None
+
+
+class SegmentLayout(NamedTuple):
+    """Pieces of a segmented interval: ``edges`` (``(P + 1,)``, from 0 to 1), interval
+    ``counts`` (``(P,)``) and the index of each segment's first piece (``first_piece``)."""
+
+    edges: np.ndarray
+    counts: np.ndarray
+    first_piece: np.ndarray
+
+    @property
+    def intervals(self) -> int:
+        return int(self.counts.sum())
+
+    @property
+    def segment_start(self) -> np.ndarray:
+        """The interval index where each segment starts."""
+        return np.concatenate([[0], np.cumsum(self.counts)])[self.first_piece]
+
+    def grid(self):
+        """``piecewise_grid`` of these pieces: the grid (forcing ``None``) and its sample times."""
+        return piecewise_grid(self.edges, self.counts)
+
+
+def segment_layout(segments: Sequence[GridSegment], vibrations: float,
+                   phase_step: float = TARGET_PHASE_STEP) -> SegmentLayout:
+    """Interval counts of an interval cut into segments (a cam program's turn), for a
+    forcing that vibrates ``vibrations`` times over it.
+
+    The interval gets ``default_resolution(vibrations, phase_step)`` intervals per unit
+    (``w h <= phase_step``), or enough that its shortest moving segment gets
+    ``SEGMENT_MINIMUM``, and ``SEGMENTED_MINIMUM`` at least; each piece gets its share of
+    that, rounded up, and ``SEGMENT_PIECE_MINIMUM`` at least.  Check the total with
+    ``check_grid_size`` before building the grid (``SegmentLayout.grid``).
+    """
+    shortest = min((s.width for s in segments if s.breakpoints is not None), default=1.0)
+    per_unit = default_resolution(vibrations, phase_step, max(SEGMENT_MINIMUM / shortest, SEGMENTED_MINIMUM))
+    edges, counts, first_piece = [0.0], [], []
+    for segment in segments:
+        s0, f = segment.start, segment.width
+        local = [0.0, 1.0] if segment.breakpoints is None else [0.0, *segment.breakpoints, 1.0]
+        first_piece.append(len(counts))
+        for a, b in zip(local[:-1], local[1:]):
+            edges.append(s0 + f * b)
+            counts.append(max(SEGMENT_PIECE_MINIMUM, math.ceil(per_unit * f * (b - a))))
+    edges[-1] = 1.0
+    return SegmentLayout(np.asarray(edges), np.asarray(counts), np.asarray(first_piece, dtype=int))
+
+
 PIECE_BLOCK = 8
 """Sampled laws pad their piece count to a multiple of this (SCCA laws have 8 pieces,
 polynomials 1): laws of every type then share a handful of grid shapes."""
@@ -255,7 +350,7 @@ class SampledLaw(eqx.Module):
         warm ``ct_curve`` of a law swept before skips its sampling (0.6 ms of about 6).
         """
         pieces = pieces or cls.padded_pieces(law)
-        key = (_value_key(law), int(resolution), pieces)
+        key = (law_value_key(law), int(resolution), pieces)
         if key in _SAMPLED:  # checked when it was sampled
             _SAMPLED.move_to_end(key)
             return _SAMPLED[key]
@@ -301,8 +396,10 @@ SAMPLED_LAWS_KEPT = 32
 _SAMPLED: OrderedDict = OrderedDict()
 
 
-def _value_key(law: AbstractMotionLaw):
-    """A hashable key equal for laws of one structure and equal values (concrete)."""
+def law_value_key(law: AbstractMotionLaw):
+    """A hashable key equal for laws of one structure and equal values (concrete): what a
+    cache of anything computed from a law is keyed by (not its name, which two laws of
+    different values may share)."""
     leaves, structure = jax.tree.flatten(law)
     values = tuple((x.dtype.str, x.shape, x.tobytes()) if isinstance(x, np.ndarray) else x
                    for x in (np.asarray(leaf) if eqx.is_array(leaf) else leaf for leaf in leaves))

@@ -2,8 +2,8 @@
 
 A small server (Python's standard library) serves one page and a JSON API over the
 public program API: ``GET /api/report`` is the report of ``camjax program --format json``,
-``POST /api/program`` (the program's TOML as the body, ``?rpm=START:STOP:COUNT``) replaces
-the program and answers its report, or a 400 status with ``{"error": "..."}`` holding the
+``POST /api/program`` (the program's structure as a JSON body, ``?rpm=START:STOP:COUNT``)
+replaces the program and answers its report, or a 400 status with ``{"error": "..."}`` holding the
 library's one-line message; ``GET /api/curves?rpm=R`` gives the histories the page draws;
 ``POST /api/design`` designs a segment's law on a background thread (``GET /api/design``
 its progress, ``POST /api/design/keep`` or ``/discard`` its outcome).
@@ -19,6 +19,7 @@ from ._workbench import DEFAULT_RPM as DEFAULT_RPM
 from ._workbench import MAX_SPEEDS as MAX_SPEEDS
 from ._workbench import Workbench as Workbench
 from ._workbench import kinematics as kinematics
+from ._workbench import parse_json_program as parse_json_program
 from ._workbench import parse_program as parse_program
 from ._workbench import rigid_contact_force_n as rigid_contact_force_n
 
@@ -51,4 +52,5 @@ def show(program=None, *, rpm: str = DEFAULT_RPM, height: int = 900):
 
 
 __all__ = ["Studio", "Workbench", "studio", "show", "kinematics", "rigid_contact_force_n", "parse_program",
+           "parse_json_program",
            "DEFAULT_RPM", "MAX_SPEEDS", "MAX_BODY", "TIMEOUT_S"]

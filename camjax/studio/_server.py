@@ -13,6 +13,7 @@ the studio's folder only.
 
 from __future__ import annotations
 
+import contextvars
 import io
 import ipaddress
 import json
@@ -29,6 +30,7 @@ from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 
+from ..caches import carried
 from ._workbench import (
     DEFAULT_RPM,
     Busy,
@@ -37,6 +39,8 @@ from ._workbench import (
     ReportCache,
     Workbench,
     _file_name,
+    parse_json_program,
+    parse_toml,
     program_files,
 )
 
@@ -48,9 +52,10 @@ MAX_BODY = 1 << 20
 TIMEOUT_S = 10.0
 """Seconds a request may take to arrive (its headers and its whole body): a stalled one is
 dropped, and never holds a workbench meanwhile."""
-BODY_TYPES = ("application/toml",)
+BODY_TYPES = ("application/json",)
 """Content types a request body may have: not a type a cross-site form or ``text/plain``
-request can send without the browser asking first (which this server never allows)."""
+request can send without the browser asking first (which this server never allows).  The
+page posts its program as JSON (its structure); the server writes TOML (``Program.to_toml``)."""
 TOKEN_COOKIE = "camjax-studio-token"
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "[::1]")
 _TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
@@ -60,8 +65,8 @@ _TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=
 class Studio:
     """A running studio: the server, its thread and its workbenches.
 
-    ``toml`` is the program every new workbench starts from; ``base`` the folder its law
-    files are read from.  ``port=0`` picks a free port (``url`` says which).  ``root`` is
+    ``toml`` is the program every new workbench starts from (a program file's text);
+    ``base`` the folder its law files are read from.  ``port=0`` picks a free port (``url`` says which).  ``root`` is
     the folder whose files a posted program may name (default ``base``, else the current
     folder); ``token`` the secret every request must carry (``?token=`` once, then a
     cookie, or ``Authorization: token ...``): generated when serving beyond loopback, where
@@ -73,6 +78,7 @@ class Studio:
                  idle_s: float = IDLE_S, root: Path | None = None, token: str | None = None,
                  timeout_s: float = TIMEOUT_S):
         self.toml, self.base, self.rpm, self.with_flight, self.idle_s = toml, base, rpm, with_flight, idle_s
+        self.data = parse_toml(toml)  # its structure, as the page edits it
         self.workbenches: dict[str, Workbench] = {}
         self.reports = ReportCache()  # analyses shared by the workbenches (Workbench.update)
         self._lock = threading.Lock()
@@ -88,6 +94,7 @@ class Studio:
         self.token, self.timeout_s = token, timeout_s
         self.httpd = _Server((host, port), _Handler)
         self.httpd.studio = self
+        self.httpd.context = contextvars.copy_context()
         self.hosts = self._hosts(host)
         self.thread: threading.Thread | None = None
 
@@ -123,7 +130,7 @@ class Studio:
                 del self.workbenches[key]
             bench = self.workbenches.get(session)
             if bench is None:
-                bench = self.workbenches[session] = Workbench(self.toml, self.rpm, self.base,
+                bench = self.workbenches[session] = Workbench(self.data, self.rpm, self.base,
                                                               with_flight=self.with_flight, cache=self.reports,
                                                               law_dir=Path(self._laws.name), access=self.access)
             bench.touch()
@@ -143,7 +150,7 @@ class Studio:
 
         def first_look():
             try:
-                bench = Workbench(self.toml, self.rpm, self.base, with_flight=self.with_flight, cache=self.reports)
+                bench = Workbench(self.data, self.rpm, self.base, with_flight=self.with_flight, cache=self.reports)
                 bench.ensure()
                 bench.curves()
             except Exception:  # the page's own request reports it
@@ -159,7 +166,7 @@ class Studio:
             except Exception:
                 pass
 
-        threads = [threading.Thread(target=t, name=f"camjax-studio-warm-{i}", daemon=True)
+        threads = [threading.Thread(target=carried(t), name=f"camjax-studio-warm-{i}", daemon=True)
                    for i, t in enumerate((first_look, geometry))]
 
         def wait():
@@ -200,8 +207,6 @@ def is_loopback(host: str) -> bool:
 def _named_files(toml: str, base: Path) -> frozenset[Path]:
     """The files the starting program names (it may reach outside the studio's folder: it
     was given on the command line), resolved."""
-    from ._workbench import parse_toml
-
     try:
         data = parse_toml(toml)
     except ValueError:
@@ -219,6 +224,14 @@ class Refused(Exception):
 
 class _Server(ThreadingHTTPServer):
     daemon_threads = True
+    context: contextvars.Context | None = None
+    """The context of the ``Studio`` that made the server (the command's cache setting,
+    ``camjax._cache_dir``): each request's thread runs in a copy of it."""
+
+    def process_request_thread(self, request, client_address):
+        if self.context is None:
+            return super().process_request_thread(request, client_address)
+        return self.context.copy().run(super().process_request_thread, request, client_address)
 
     def handle_error(self, request, client_address):
         """One line for a request the handler could not answer (a dropped connection, a
@@ -398,7 +411,16 @@ class _Handler(BaseHTTPRequestHandler):
         self._json(bench.ensure())
 
     def post_program(self, bench: Workbench, query: dict) -> None:
-        self._json(bench.update(self.body, query.get("rpm"), opened=query.get("opened") == "1"))
+        """The program's structure posted as JSON (as the TOML reader gives it)."""
+        self._json(bench.update(parse_json_program(self.body), query.get("rpm"), opened=query.get("opened") == "1"))
+
+    def open_file(self, bench: Workbench, query: dict) -> None:
+        """A program file's text opened in the page, posted as JSON ``{"toml": TEXT}``: read
+        here (the page has no TOML reader), a file it names relative to itself refused."""
+        body = parse_json_program(self.body)
+        if set(body) != {"toml"} or not isinstance(body["toml"], str):
+            raise ValueError('the body must be {"toml": the program file\'s text}')
+        self._json(bench.update(parse_toml(body["toml"]), query.get("rpm"), opened=True))
 
     def get_program(self, bench: Workbench, query: dict) -> None:
         bench.ensure()
@@ -493,6 +515,7 @@ def _number(query: dict, key: str, kind):
 _ROUTES = {
     ("GET", "/api/report"): _Handler.report,
     ("POST", "/api/program"): _Handler.post_program,
+    ("POST", "/api/open"): _Handler.open_file,
     ("GET", "/api/program"): _Handler.get_program,
     ("GET", "/api/curves"): _Handler.curves,
     ("GET", "/api/outputs"): lambda h, b, q: h._json(b.output_columns()),

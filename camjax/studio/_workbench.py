@@ -1,7 +1,10 @@
-"""One workbench's state: the program (as TOML text), the speed range and its report.
+"""One workbench's state: the program (its structure, as the TOML reader takes it), the
+speed range and its report.
 
 Everything the page shows comes from the public program API (``camjax.program``): the
-report is ``camjax.program.analyse``'s, as ``camjax program --format json`` prints it.
+report is ``camjax.program.analyse``'s, as ``camjax program --format json`` prints it.  The
+page posts the program's structure as JSON; wherever TOML is needed (the download, a
+design's program) it is ``Program.to_toml``'s, the one writer of a program file.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, plot_speed
+from ..caches import carried
 from ..checks import MAX_SPEEDS as MAX_SPEEDS
 
 DEFAULT_RPM = "200:1400:101"
@@ -60,6 +64,53 @@ def parse_program(text: str, base: Path | None = None):
     from ..program import Program
 
     return Program.from_dict(parse_toml(text), base=base)
+
+
+JSON_INT_LIMIT = 2**31
+"""A whole number in a posted program at or beyond this size is read as a float: a length,
+not an index (a TOML file's integer past 64 bits overflows the arrays; the follower reads
+its own fields as floats, but a table's points do not)."""
+
+
+def parse_json_program(text: str) -> dict:
+    """A program's structure posted as JSON (what ``Program.from_dict`` takes, as the TOML
+    reader gives it), or a one-line ``ValueError``: an object, no ``null`` (TOML has none:
+    leave the key out), no NaN or infinity."""
+
+    def constant(name):
+        raise ValueError(f"the program holds {name}: every number must be finite")
+
+    def whole(digits: str):
+        value = int(digits)
+        return value if abs(value) < JSON_INT_LIMIT else float(digits)
+
+    try:
+        data = json.loads(text, parse_constant=constant, parse_int=whole)
+    except json.JSONDecodeError as error:
+        raise ValueError(f"not valid JSON ({error})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"the program must be a JSON object (its tables by name), got {type(data).__name__}")
+    _no_null(data, "")
+    return data
+
+
+def _no_null(value, where: str) -> None:
+    if value is None:
+        raise ValueError(f"{where or 'the program'}: null is no value (TOML has none): leave the key out")
+    if isinstance(value, dict):
+        for key, item in value.items():
+            _no_null(item, f"{where}.{key}" if where else key)
+    elif isinstance(value, list):
+        for i, item in enumerate(value, 1):
+            _no_null(item, f"{where} {i}")
+
+
+def law_file_names(data: dict) -> dict[int, str]:
+    """The law files a program's structure names, by 1-based segment (``Program.to_toml``'s
+    ``law_files``: the TOML names them as the structure does)."""
+    segments = data.get("segment") if isinstance(data, dict) else None
+    return {i: seg["law"] for i, seg in enumerate(segments if isinstance(segments, list) else (), 1)
+            if isinstance(seg, dict) and isinstance(seg.get("law"), str) and seg["law"].endswith(".json")}
 
 
 def parse_speeds(text: str):
@@ -191,9 +242,10 @@ def _canonical(value):
 
 @dataclasses.dataclass
 class Workbench:
-    """A program being edited: its last good TOML text, speeds, report and steady state."""
+    """A program being edited: its last good structure (``data``, as the TOML reader gives
+    it and the page posts it), speeds, report and steady state."""
 
-    toml: str
+    data: dict
     rpm_text: str = DEFAULT_RPM
     base: Path | None = None
     with_flight: bool = True
@@ -229,26 +281,35 @@ class Workbench:
     def ensure(self) -> dict:
         """The report, computed on first need."""
         if self.report is None:
-            self.update(self.toml, self.rpm_text)
+            self.update(self.data, self.rpm_text)
         return self.report
 
-    def update(self, toml: str, rpm_text: str | None = None, *, opened: bool = False) -> dict:
-        """Replace the program (and the speeds): the new report, or a ValueError that
-        leaves the last good state as it was.  ``opened``: the text is a file opened in the
-        page, so a file it names relative to itself cannot be found (refused)."""
+    @property
+    def toml(self) -> str:
+        """The last good program as TOML: ``Program.to_toml`` (the one writer of a program
+        file), law files named as the structure names them."""
+        self.ensure()
+        return self.program.to_toml(law_files=law_file_names(self.data))
+
+    def update(self, data: dict, rpm_text: str | None = None, *, opened: bool = False) -> dict:
+        """Replace the program (its structure) and the speeds: the new report, or a
+        ValueError that leaves the last good state as it was.  ``opened``: a file opened in
+        the page, so a file it names relative to itself cannot be found (refused)."""
         rpm_text = self.rpm_text if rpm_text is None else str(rpm_text)
         rpm = parse_speeds(rpm_text)
-        self.program, self.steady, self.report, self.warnings = self.analysed(toml, rpm, opened=opened)
-        self.toml, self.rpm_text, self.rpm = toml, rpm_text, rpm
+        self.program, self.steady, self.report, self.warnings = self.analysed(data, rpm, opened=opened)
+        self.data, self.rpm_text, self.rpm = data, rpm_text, rpm
         return self.report
 
-    def analysed(self, toml: str, rpm, *, opened: bool = False) -> tuple:
-        """``(program, steady state, report, warnings)`` of ``toml`` at ``rpm``, changing
-        nothing.  The same program (the same TOML structure, whatever its layout and
-        comments) at the same speeds and outputs (``output_set``) is analysed once per ``cache``."""
+    def analysed(self, data: dict, rpm, *, opened: bool = False) -> tuple:
+        """``(program, steady state, report, warnings)`` of the structure ``data`` at
+        ``rpm``, changing nothing.  The same program (the same structure, whole numbers and
+        floats alike) at the same speeds and outputs (``output_set``) is analysed once per
+        ``cache``."""
         from ..program import Program, SteadyState, analyse, program_motor_choice
 
-        data = parse_toml(toml)
+        if not isinstance(data, dict):
+            raise ValueError(f"the program must be a table of tables, got {type(data).__name__}")
         if self.access is not None:
             self.access.check(data, self.base, relative=not opened)
         program = Program.from_dict(data, base=self.base)
@@ -257,11 +318,17 @@ class Workbench:
                self.speed_fluctuation, str(self.base), outputs)
 
         def compute():
-            steady = SteadyState(program, rpm)
+            steady = SteadyState(program, rpm)  # a chain of bodies' too (the one compiled cycle)
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
                                         speed_fluctuation=self.speed_fluctuation, outputs=outputs))
             if program.motors:  # a servo: the motor sizing at the same speeds (the page's motor panel)
-                report["motor"] = json_ready(program_motor_choice(program, rpm, steady=steady).shown_dict())
+                choice = program_motor_choice(program, rpm, steady=steady)
+                # the shown motor's continuous stall torque: its RMS limit drawn as motor.png draws it
+                report["motor"] = json_ready({**choice.shown_dict(),
+                                              "continuous_stall_torque_n_m": choice.shown.continuous_stall_torque_n_m})
+            # the segments each speed's residual_vibration_mm belongs to, in order (1-based):
+            # the program's rule, not the page's
+            report["residual_segments"] = [i + 1 for i in program.residual_segments()]
             return program, steady, report, list(report.get("warnings", ()))
 
         return self.cache.get(key, compute)
@@ -285,35 +352,40 @@ class Workbench:
                 h = response(program, float(rpm), steady=self.steady)
         except (OverflowError, FloatingPointError):
             raise ValueError(f"rpm: {rpm:g} rpm is too fast to compute a turn at (a number overflows)") from None
+        # the rigid follower's force is the one-body train's limit; a chain's stand-in mass is not its own
+        h["rigid_contact_force_n"] = (rigid_contact_force_n(program, h["lift_mm"], h["kinematic_acceleration_m_s2"])
+                                      if program.one_body else None)
         prof = profile(program, PROFILE_POINTS)
         f = program.follower
         return json_ready({
             "rpm": float(rpm),
             "kinematics": {"theta_deg": theta, **kinematics(program, theta)},
-            "response": {**h, "rigid_contact_force_n":
-                         rigid_contact_force_n(program, h["lift_mm"], h["kinematic_acceleration_m_s2"])},
+            "response": h,
             "profile": {"theta_deg": prof.theta_deg, "pitch": prof.pitch, "profile": prof.profile,
                         "outer": prof.outer if f.form_closed else None,
                         "flat_face": prof.flat_face},
-            "follower": dataclasses.asdict(f) | {"form_closed": f.form_closed},
+            "follower": dataclasses.asdict(f) | {"form_closed": f.form_closed, "flat_face": f.flat_face,
+                                                 "swinging": f.swinging},
             "warnings": self.warnings + ([f"follower.preload_n = {f.preload_n:g} N does nothing on a grooved cam "
                                           "(no spring_rate_n_per_mm): the groove holds the follower"]
                                          if f.form_closed and f.preload_n else []),
         })
 
     def state(self) -> dict:
-        """The program as its TOML structure (for the page's tables), its text and the speeds,
-        what an empty follower or ``[materials]`` field stands for; ``bundle``: whether it
-        holds a designed law (saved as a zip with its law files)."""
+        """The program as its structure (for the page's tables), its TOML text and the speeds,
+        what an empty follower or ``[materials]`` field stands for, the fields the page
+        edits (``fields``, from the program's own types); ``bundle``: whether it holds a
+        designed law (saved as a zip with its law files)."""
         from .. import laws
         from ..program import Follower, Materials
 
         defaults = {f.name: f.default for f in dataclasses.fields(Follower) if f.default is not dataclasses.MISSING}
         materials = {f.name: f.default for f in dataclasses.fields(Materials)}
-        return {"toml": self.toml, "program": tomllib.loads(self.toml), "rpm": self.rpm_text,
+        designed = self.law_dir is not None and any(Path(name).is_relative_to(self.law_dir)
+                                                    for name in law_file_names(self.data).values())
+        return {"toml": self.toml, "program": self.data, "rpm": self.rpm_text,
                 "laws": [*laws.names(), "constant-velocity", "polynomial"], "follower_defaults": defaults,
-                "materials_defaults": materials,
-                "bundle": self.law_dir is not None and self.law_dir.as_posix() in self.toml,
+                "materials_defaults": materials, "fields": program_fields(), "bundle": designed,
                 "design": {"steps": DESIGN_STEPS, "knots": DESIGN_KNOTS, "objectives": list(DESIGN_OBJECTIVES)}}
 
     # -- designing a segment's law -------------------------------------------------------
@@ -336,8 +408,8 @@ class Workbench:
                 raise ValueError(f"{name}: must be from 1 to {most:,}, got {value}")
         segment_band(self.program, segment, rpm_lo, rpm_hi)  # its one-line error names what is wrong
         job = self.job = DesignJob(segment, objective, float(rpm_lo), float(rpm_hi), steps, knots,
-                                   toml=self.toml, rpm=self.rpm, before=self.report)
-        threading.Thread(target=self._design, args=(job, self.program), name="camjax-studio-design",
+                                   data=self.data, rpm=self.rpm, before=self.report)
+        threading.Thread(target=carried(self._design), args=(job, self.program), name="camjax-studio-design",
                          daemon=True).start()
         return job.as_dict()
 
@@ -364,9 +436,9 @@ class Workbench:
                 self.law_dir.mkdir(parents=True, exist_ok=True)
                 path = self.law_dir / f"{_file_name(program.name)}-segment{job.segment}-{uuid.uuid4().hex[:8]}.json"
                 laws.save(new.segments[job.segment - 1].law, path)
-                job.designed_toml = designed_toml(job.toml, new, job.segment, path, self.base)
+                job.designed = designed_data(job.data, new, job.segment, path, self.base)
                 job.phase = "analysing the designed program"
-                job.after = self.analysed(job.designed_toml, job.rpm)[2]
+                job.after = self.analysed(job.designed, job.rpm)[2]
             job.state, job.phase = "done", "done"
         except (ValueError, SolverError) as error:
             job.state, job.message = "error", str(error)
@@ -377,10 +449,10 @@ class Workbench:
     def keep_design(self) -> dict:
         """Replace the segment's law by the finished design's: the new report."""
         job = self._finished()
-        if self.toml != job.toml:
+        if self.data != job.data:
             raise Busy("the program changed since the design started: design it again")
         job.state = "kept"
-        return self.report if job.designed_toml is None else self.update(job.designed_toml)
+        return self.report if job.designed is None else self.update(job.designed)
 
     def discard_design(self) -> dict:
         """Forget the finished design; the program stays as it is."""
@@ -396,16 +468,34 @@ class Workbench:
         return self.job
 
 
-def designed_toml(toml: str, program, segment: int, law_path: Path, base: Path | None) -> str:
-    """The TOML of ``program`` (a design of segment ``segment`` of the program ``toml``):
-    the designed law by its file ``law_path``, any other law file by its full path (the text
-    must stand where ``base`` is not its folder)."""
-    files = {segment: law_path.as_posix()}
-    for i, seg in enumerate(parse_toml(toml).get("segment") or (), 1):
-        law = seg.get("law") if isinstance(seg, dict) else None
-        if i != segment and isinstance(law, str) and law.endswith(".json"):
-            files[i] = (Path(law) if base is None else (base / law).resolve()).as_posix()
-    return program.to_toml(law_files=files)
+def designed_data(data: dict, program, segment: int, law_path: Path, base: Path | None) -> dict:
+    """The structure of ``program`` (a design of segment ``segment`` of the program
+    ``data``), as ``Program.to_toml`` writes it: the designed law by its file ``law_path``,
+    any other law file by its full path (the program must stand where ``base`` is not its
+    folder)."""
+    files = {i: (Path(law) if base is None else (base / law).resolve()).as_posix()
+             for i, law in law_file_names(data).items() if i != segment}
+    return parse_toml(program.to_toml(law_files={**files, segment: law_path.as_posix()}))
+
+
+def program_fields() -> dict:
+    """The fields the page edits, from the program's own types: the follower's kinds
+    (``camjax.program.follower_kinds``: each with its keys, whether it has a roller and
+    whether it swings) and fields, the chain's
+    body, spring and seat fields with their defaults (``required``: none), and the
+    ``[follower]`` fields a chain replaces."""
+    from ..program import CLASSIC_FIELDS, Body, Follower, Seat, Spring, follower_kinds
+
+    def fields(record) -> list[dict]:
+        return [{"name": f.name, "required": f.default is dataclasses.MISSING,
+                 "default": None if f.default is dataclasses.MISSING else f.default}
+                for f in dataclasses.fields(record)]
+
+    follower = [f.name for f in dataclasses.fields(Follower)]
+    return {"follower_kinds": follower_kinds(),
+            "follower": ["kind", *(name for name in follower if name != "kind")],
+            "body": fields(Body), "spring": fields(Spring), "seat": fields(Seat),
+            "chain_replaces": list(CLASSIC_FIELDS)}
 
 
 def _file_name(name: str) -> str:
@@ -436,7 +526,7 @@ class DesignJob:
     rpm_hi: float
     steps: int
     knots: int
-    toml: str = ""
+    data: dict | None = None  # the program's structure when it started
     rpm: object = None  # camjax.program.Speeds
     before: dict | None = None
     state: str = "running"
@@ -447,7 +537,7 @@ class DesignJob:
     before_value: float | None = None
     after_value: float | None = None
     kept_initial: bool = False
-    designed_toml: str | None = None
+    designed: dict | None = None  # the designed program's structure
     after: dict | None = None
     message: str | None = None
     started: float = dataclasses.field(default_factory=time.monotonic)

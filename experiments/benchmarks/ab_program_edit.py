@@ -6,7 +6,8 @@ checkout and ``--baseline``, each with its code first on ``PYTHONPATH``) load th
 analyse it once (compiles), then take turns: each edit (every moving segment's lift scaled by
 a factor near 1) is analysed by one worker, then the same edit by the other, with the jump
 speed and the flights.  Prints every pair, the medians and the median of the pairs' ratios,
-with the load average.
+with the load average; and each edit's CPU time (all the worker's threads), which a loaded
+machine inflates far less than the wall time.
 
     python experiments/benchmarks/ab_program_edit.py --baseline /work/main [--program feed] \\
         [--rpm 300:900:101] [--edits 10]
@@ -39,9 +40,9 @@ for line in sys.stdin:
     factor = float(line)
     edited = dataclasses.replace(program, segments=tuple(
         dataclasses.replace(s, lift_mm=s.lift_mm * factor) if s.moving else s for s in program.segments))
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     report = cp.analyse(edited, rpm)
-    print(json.dumps([time.perf_counter() - start, report.jump_speed_rpm]), flush=True)
+    print(json.dumps([time.perf_counter() - start, report.jump_speed_rpm, time.process_time() - cpu]), flush=True)
 """
 
 
@@ -95,18 +96,20 @@ def main(argv=None) -> int:
         f"# {args.program} over --rpm {args.rpm}, edits in turn; commit {commit} against {args.baseline}, "
         f"{time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores"
     )
-    print("| edit | this s | baseline s | ratio | same jump speed |")
-    print("|---|---|---|---|---|")
+    print("| edit | this s | baseline s | ratio | same jump speed | this CPU s | baseline CPU s |")
+    print("|---|---|---|---|---|---|---|")
     for k, row in enumerate(rows, 1):
         print(
             f"| {k} | {row['this'][0]:.3f} | {row['baseline'][0]:.3f} | "
-            f"{row['this'][0] / row['baseline'][0]:.3f} | {row['this'][1] == row['baseline'][1]} |"
+            f"{row['this'][0] / row['baseline'][0]:.3f} | {row['this'][1] == row['baseline'][1]} | "
+            f"{row['this'][2]:.3f} | {row['baseline'][2]:.3f} |"
         )
     this, base = ([r[lab][0] for r in rows] for lab in ("this", "baseline"))
     ratios = [a / b for a, b in zip(this, base)]
     print(
         f"| median | {statistics.median(this):.3f} | {statistics.median(base):.3f} | "
-        f"{statistics.median(ratios):.3f} (median of the ratios) | |"
+        f"{statistics.median(ratios):.3f} (median of the ratios) | | "
+        f"{statistics.median(r['this'][2] for r in rows):.3f} | {statistics.median(r['baseline'][2] for r in rows):.3f} |"
     )
     print(f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     return 0

@@ -41,11 +41,13 @@ def _get(url: str):
         return json.load(response)
 
 
-def _post(url: str, text: str):
-    """POST ``text`` as the page does: from the studio's own origin, as TOML (else refused)."""
+def _post(url: str, program: dict):
+    """POST the program's structure as the page does: from the studio's own origin, as JSON
+    (else refused)."""
     parts = urllib.parse.urlsplit(url)
-    headers = {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/toml"}
-    request = urllib.request.Request(url, data=text.encode(), headers=headers, method="POST")
+    headers = {"Origin": f"{parts.scheme}://{parts.netloc}", "Content-Type": "application/json"}
+    body = json.dumps(program).encode()
+    request = urllib.request.Request(url, data=body, headers=headers, method="POST")
     with urllib.request.urlopen(request, timeout=900) as response:
         return json.load(response)
 
@@ -172,16 +174,17 @@ def main() -> None:
               f"{first_curves:.1f} s (jump speed {report['jump_speed_rpm']})")
 
         state = _get(url + "api/program")
-        text, program = state["toml"], state["program"]
-        rises = [s for s in program["segment"] if s.get("lift_mm", 0) > 0]
-        falls = [s for s in program["segment"] if s.get("lift_mm", 0) < 0]
-        rise, fall = rises[0]["lift_mm"], falls[-1]["lift_mm"]
+        program = state["program"]
+        segments = program["segment"]
+        first_rise = next(i for i, s in enumerate(segments) if s.get("lift_mm", 0) > 0)
+        last_fall = max(i for i, s in enumerate(segments) if s.get("lift_mm", 0) < 0)
+        rise, fall = segments[first_rise]["lift_mm"], segments[last_fall]["lift_mm"]
         posts, curves = [], []
         for i in range(1, args.edits + 1):
             delta = 0.25 * i * (-1) ** i  # the first rise and the last return change together
-            edited = text.replace(f"lift_mm = {rise}\n", f"lift_mm = {rise + delta}\n", 1)
-            edited = edited.replace(f"lift_mm = {fall}\n", f"lift_mm = {fall - delta}\n", 1)
-            assert edited != text, "the edit did not apply"
+            edited = json.loads(json.dumps(program))
+            edited["segment"][first_rise]["lift_mm"] = rise + delta
+            edited["segment"][last_fall]["lift_mm"] = fall - delta
             t = time.perf_counter()
             jump = _post(url + f"api/program?rpm={args.rpm}", edited)["jump_speed_rpm"]
             posts.append(time.perf_counter() - t)
@@ -197,8 +200,8 @@ def main() -> None:
                   f"{statistics.median(posts):.2f} s")
 
         if not args.no_design:
-            _post(url + f"api/program?rpm={args.rpm}", text)
-            segment = 1 + program["segment"].index(rises[0])
+            _post(url + f"api/program?rpm={args.rpm}", program)
+            segment = 1 + first_rise
             speeds = [s["rpm"] for s in report["speeds"]]
             t, cpu = time.perf_counter(), _cpu_s(server)
             job = _post(url + f"api/design?segment={segment}&objective=preload&rpm={min(speeds)}:{max(speeds)}", "")

@@ -1,24 +1,23 @@
-// camjax studio: the page.  The program lives here as its TOML structure (`model`); every
-// edit writes it back to TOML and posts it (debounced); the server answers the report of
-// `camjax program --format json`, or the library's one-line error, shown beside the field
-// edited last while the last good state stays drawn.
+// camjax studio: the page.  The program lives here as its structure (`model`, as the TOML
+// reader gives it); every edit posts it as JSON (debounced) and the server, which alone
+// reads and writes TOML, answers the report of `camjax program --format json`, or the
+// library's one-line error, shown beside the field edited last while the last good state
+// stays drawn.  The fields, the follower's kinds and which segments carry a residual
+// vibration come from the server (GET /api/program's `fields`, the report), not from here.
 "use strict";
 
 const SESSION = (crypto.randomUUID ? crypto.randomUUID() : String(Math.random()).slice(2));
 const END_KEYS = ["velocity_mm_per_deg", "acceleration_mm_per_deg2", "jerk_mm_per_deg3"];
-const FOLLOWER_KINDS = ["translating-roller", "swinging-roller", "translating-flat", "swinging-flat"];
-const FOLLOWER_FIELDS = ["kind", "mass_kg", "stiffness_n_per_mm", "damping_ratio", "spring_rate_n_per_mm",
-  "preload_n", "base_radius_mm", "roller_radius_mm", "offset_mm", "arm_mm", "pivot_mm",
-  "groove_clearance_mm", "contact_width_mm"];
 const NUMBER = /^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/;
 
 let model = null;        // {program: {name}, segment: [...], follower: {...}, materials?: {...}}
 let bundle = false;      // the program holds a designed law: saved as a zip with its law files
 let designDefaults = {steps: 60};   // the server's (GET /api/program)
 let followerDefaults = {};          // what an empty follower field stands for (GET /api/program)
+let fields = {follower: [], follower_kinds: [], body: [], spring: [], seat: [], chain_replaces: []};  // the server's
 const dwellLift = new WeakMap();    // a segment's lift while it is a dwell, restored with a law
 let rollerCleared = false;
-let errorFrom = null;               // what the standing error came from: "program" or "chosen" (the speed)          // the switch to a flat face has just cleared the roller's radius
+let errorFrom = null;               // what the standing error came from: "program" or "chosen" (the speed)
 let polling = null;      // the design's progress timer
 let laws = [];
 let rpmText = "";
@@ -31,39 +30,16 @@ let timer = null, inFlight = false, dirty = false;
 const charts = {};
 
 const $ = (id) => document.getElementById(id);
+// A follower kind's record from the server's list (camjax.program.follower_kinds); the
+// default kind's where none is named.
+const kindOf = (name) => fields.follower_kinds.find((k) => k.name === (name || followerDefaults.kind)) ||
+  {name, keys: [], roller: true, swinging: false};
 const api = (path, params = {}) =>
   `/api/${path}?` + new URLSearchParams({session: SESSION, ...params}).toString();
 
-// ---- TOML ------------------------------------------------------------------------------
+// ---- cells -----------------------------------------------------------------------------
 
-function tomlValue(v) {
-  if (typeof v === "string") return JSON.stringify(v);
-  // a whole number beyond 2^31 in exponent form: TOML reads it as a float, not a 64-bit integer
-  if (typeof v === "number") return Number.isInteger(v) && Math.abs(v) >= 2 ** 31 ? v.toExponential() : String(v);
-  if (typeof v === "boolean") return String(v);
-  if (Array.isArray(v)) return "[" + v.map(tomlValue).join(", ") + "]";
-  return "{ " + Object.entries(v).map(([k, x]) => `${k} = ${tomlValue(x)}`).join(", ") + " }";
-}
-
-function table(name, obj) {
-  const keys = Object.keys(obj || {});
-  return keys.length ? [`[${name}]`, ...keys.map((k) => `${k} = ${tomlValue(obj[k])}`), ""] : [];
-}
-
-function toToml(m) {
-  const lines = table("program", m.program);
-  for (const seg of m.segment || []) {
-    lines.push("[[segment]]");
-    for (const [k, v] of Object.entries(seg)) lines.push(`${k} = ${tomlValue(v)}`);
-    lines.push("");
-  }
-  lines.push(...table("follower", m.follower));
-  if (m.materials) lines.push(...table("materials", m.materials));
-  lines.push(...servoTables(m));
-  return lines.join("\n");
-}
-
-// A cell's text as a TOML value: a number where it reads as one, else the text itself (the
+// A cell's text as a program value: a number where it reads as one, else the text itself (the
 // library names what is wrong with it); empty: the key is left out.
 function parseCell(text) {
   text = text.trim();
@@ -147,9 +123,10 @@ function lawInput(seg, n) {
   return el;
 }
 
+
 // Beside each follower field, what it makes of the machine when empty (or does not do).
 function renderFollowerNotes() {
-  const f = model.follower || {}, flat = (f.kind || "").endsWith("-flat");
+  const f = model.follower || {}, flat = !kindOf(f.kind || followerDefaults.kind).roller;
   document.querySelectorAll("#follower .fnote").forEach((note) => {
     const key = note.dataset.note;
     note.textContent =
@@ -233,14 +210,16 @@ function renderEditor() {
   const box = $("follower");
   box.innerHTML = "";
   const f = model.follower = model.follower || {};
-  for (const key of FOLLOWER_FIELDS) {
+  const chained = Array.isArray(model.train);  // a chain gives these fields in its own tables
+  for (const key of fields.follower) {
+    if (chained && fields.chain_replaces.includes(key)) continue;
     const label = document.createElement("label");
     label.textContent = key + " ";
     if (key === "kind") {
       // a flat face has no roller: its radius goes with the switch (said beside the field)
-      label.appendChild(select(FOLLOWER_KINDS, f.kind || "translating-roller", (v) => {
+      label.appendChild(select(fields.follower_kinds.map((k) => k.name), f.kind || followerDefaults.kind, (v) => {
         f.kind = v;
-        if (v.endsWith("-flat") && f.roller_radius_mm !== undefined) { delete f.roller_radius_mm; rollerCleared = true; }
+        if (!kindOf(v).roller && f.roller_radius_mm !== undefined) { delete f.roller_radius_mm; rollerCleared = true; }
       }, {key}));
     } else {
       label.appendChild(input(f[key], (t) => {
@@ -255,6 +234,7 @@ function renderEditor() {
     box.appendChild(label);
   }
   renderFollowerNotes();
+  renderChain();
   renderMaterials();
   rollerCleared = false;
   renderNotes();
@@ -294,8 +274,9 @@ function showError(message, from = "program") {
   const span = document.createElement("span");
   span.className = "err";
   span.textContent = message;
-  const m = /^segment (\d+)/.exec(message);
-  const row = m && document.querySelector(`#segments tr[data-seg="${m[1]}"]`);
+  const m = /^segment (\d+)/.exec(message), b = /^\[\[train\]\] body (\d+)/.exec(message);
+  const row = m ? document.querySelector(`#segments tr[data-seg="${m[1]}"]`) :
+    b ? document.querySelector(`#train tr[data-body="${b[1]}"]`) : null;
   if (row) row.classList.add("bad");
   const field = lastField && document.body.contains(lastField) ? lastField : null;
   if (field) field.insertAdjacentElement("afterend", span);
@@ -318,7 +299,7 @@ async function send() {
   setStatus("computing\u2026", "busy");
   try {
     const response = await fetch(api("program", {rpm: rpmText, ...(opened ? {opened: 1} : {})}),
-      {method: "POST", body: toToml(model), headers: {"Content-Type": "application/toml"}});
+      {method: "POST", body: JSON.stringify(model), headers: {"Content-Type": "application/json"}});
     const answer = await response.json();
     if (!response.ok) { showError(answer.error); return; }
     report = answer;
@@ -361,6 +342,7 @@ function load(state) {
   bundle = !!state.bundle;
   designDefaults = state.design || designDefaults;
   followerDefaults = state.follower_defaults || followerDefaults;
+  fields = state.fields || fields;
   materialDefaults = state.materials_defaults || materialDefaults;
   renderLawNames();
   $("range").value = rpmText;
@@ -476,15 +458,22 @@ function plot(id, title, x, series, opts = {}) {
   if (charts[id]) { charts[id].destroy(); delete charts[id]; }
   el.innerHTML = "";
   if (!series.length) return;
+  // a series the report leaves empty (not computed for this program) is not drawn; none: said
+  const given = series.filter((s) => (s.y || []).some((v) => v !== null && v !== undefined));
+  if (!given.length) { el.textContent = `${title}: not in the report for this program`; return; }
+  series = given;
   const colors = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b"];
   const width = Math.max(300, el.clientWidth - 8);
   charts[id] = new uPlot({
-    title, width, height: 200,
+    title, width, height: opts.height || 200,
     legend: {live: false},
     scales: {x: {time: false}},
-    axes: [{label: opts.xlabel || "cam angle (deg)"}, {label: opts.ylabel || "", size: 60}],
+    axes: [{label: opts.xlabel || "cam angle (deg)",
+      ...(opts.xticks ? {splits: () => opts.xticks.map((_, i) => i + 1), values: () => opts.xticks} : {})},
+    {label: opts.ylabel || "", size: 60}],
     series: [{}, ...series.map((s, i) => ({label: s.label, stroke: s.color || colors[i % colors.length],
-      width: 1.2, dash: s.dash, points: {show: !!opts.points}}))],
+      width: 1.2, dash: s.dash, ...(opts.lines === false ? {paths: () => null} : {}),
+      points: {show: !!opts.points, size: opts.lines === false ? 6 : 5, fill: s.color || colors[i % colors.length]}}))],
     hooks: {draw: [(u) => (opts.marks || []).forEach((m) => mark(u, m))]},
   }, [x, ...series.map((s) => s.y)], el);
 }
@@ -518,6 +507,7 @@ function draw() {
   plot("c-acc", "acceleration y'' (mm/deg\u00b2)", k.theta_deg, [{label: "y''", y: k.acceleration_mm_per_deg2}]);
   plot("c-jerk", "jerk y''' (mm/deg\u00b3)", k.theta_deg, [{label: "y'''", y: k.jerk_mm_per_deg3}]);
   const at = `at ${fmt(curves.rpm, 5)} rpm`;
+  // a chain's payload is its last body; its rigid force is not served (the one-body limit)
   plot("c-payload", `acceleration ${at} (m/s\u00b2)`, r.theta_deg, [
     {label: "payload x''", y: r.payload_acceleration_m_s2},
     {label: "rigid follower y''", y: r.kinematic_acceleration_m_s2, dash: [4, 3]}]);
@@ -532,16 +522,16 @@ function draw() {
   plot("c-preload", "minimum preload (N) vs speed", rpm,
     f.form_closed ? [] : [{label: "min preload", y: speeds.map((s) => s.min_preload_n)}],
     {...so, marks: [...jumpMark, {y: f.preload_n, color: "#ff7f0e"}]});
-  const dwells = speeds[0].residual_vibration_mm.length;
-  const still = report.segments.filter((g) => g.kind === "dwell" || g.kind === "constant-velocity").map((g) => g.segment);
+  const still = report.residual_segments || [];  // the program's rule, from the server
   plot("c-residual", "residual vibration (mm) vs speed", rpm,
-    [...Array(dwells).keys()].map((i) => ({label: `segment ${still[i]}`, y: speeds.map((s) => s.residual_vibration_mm[i])})), so);
+    still.map((n, i) => ({label: `segment ${n}`, y: speeds.map((s) => (s.residual_vibration_mm || [])[i])}))
+      .filter((series) => series.y.some((v) => v !== null && v !== undefined)), so);
   plot("c-torque-speed", "drive torque (N m) vs speed", rpm, [
     {label: "peak |T|", y: speeds.map((s) => s.max_drive_torque_n_m)},
     {label: "RMS T", y: speeds.map((s) => s.rms_drive_torque_n_m)}], so);
   plot("c-torque-turn", `drive torque ${at} (N m)`, r.theta_deg, [{label: "T", y: r.drive_torque_n_m}],
     {marks: [{y: 0, color: "#000"}]});
-  const stressed = speeds.some((s) => s.max_contact_stress_mpa !== null);
+  const stressed = speeds.some((s) => s.max_contact_stress_mpa !== null && s.max_contact_stress_mpa !== undefined);
   plot("c-stress-turn", stressed ? `Hertz stress ${at} (MPa)` : "Hertz stress: set follower contact_width_mm",
     r.theta_deg, stressed ? [{label: "p", y: r.contact_stress_mpa}] : []);
   plot("c-stress-speed", "peak Hertz stress (MPa) vs speed", rpm,
@@ -554,6 +544,7 @@ function draw() {
   if (!isTable()) renderDesign();
   drawProfile();
   drawMotor();
+  drawTrain();
 }
 
 function drawHeadline() {
@@ -613,13 +604,13 @@ function renderNotes() {
 
 function drawProfile() {
   const canvas = $("profile"), ctx = canvas.getContext("2d");
-  const p = curves.profile, f = curves.follower;
+  const p = curves.profile, f = curves.follower, kind = kindOf(f.kind);
   const deg = Number($("angle").value);
   $("angle-text").textContent = `${deg} deg`;
   ctx.clearRect(0, 0, canvas.width, canvas.height);
   const pts = [...p.pitch, ...p.profile, ...(p.outer || [])];
   const reach = Math.max(Math.max(...pts.map(([x, y]) => Math.hypot(x, y))) + (f.roller_radius_mm || 0) * 2 + 5,
-    f.kind.startsWith("swinging") ? f.pivot_mm + 8 : 0);
+    kind.swinging ? f.pivot_mm + 8 : 0);
   const scale = canvas.width / 2 / reach, cx = canvas.width / 2, cy = canvas.height / 2;
   const t = deg * Math.PI / 180, c = Math.cos(t), s = Math.sin(t);
   // the cam turns by the cam angle; the follower stays on its axis (camjax.geometry's frame)
@@ -635,7 +626,7 @@ function drawProfile() {
   ctx.setLineDash([]);
   const i = Math.round(deg / 360 * p.theta_deg.length) % p.theta_deg.length;
   ctx.strokeStyle = "#d62728"; ctx.lineWidth = 2;
-  if (p.flat_face && f.kind === "swinging-flat") {
+  if (p.flat_face && kind.swinging) {
     drawSwingingArm(ctx, at(p.profile[i]), cx + scale * f.pivot_mm, cy, true);
   } else if (p.flat_face) {
     const [u, v] = at(p.profile[i]);
@@ -643,8 +634,8 @@ function drawProfile() {
   } else {
     const [u, v] = at(p.pitch[i]);
     ctx.beginPath(); ctx.arc(u, v, scale * f.roller_radius_mm, 0, 2 * Math.PI); ctx.stroke();
-    if (f.kind === "translating-roller") { ctx.beginPath(); ctx.moveTo(u, v); ctx.lineTo(u, 0); ctx.stroke(); }
-    if (f.kind === "swinging-roller") drawSwingingArm(ctx, [u, v], cx + scale * f.pivot_mm, cy, false);
+    if (!kind.swinging) { ctx.beginPath(); ctx.moveTo(u, v); ctx.lineTo(u, 0); ctx.stroke(); }
+    else drawSwingingArm(ctx, [u, v], cx + scale * f.pivot_mm, cy, false);
   }
   drawRotation(ctx, cx, cy, Math.min(40, scale * f.base_radius_mm * 0.5));
   ctx.lineWidth = 1;
@@ -654,14 +645,6 @@ function drawProfile() {
 // ---- the servo motor ------------------------------------------------------------------
 // A program with a [drive] and motors: the report's "motor" (camjax.program.program_motor_choice)
 // drawn as a table per speed, its checks, and the (speed, torque) points over the envelope.
-
-// The program's [drive] and [motor] kept through an edit ([[motor]] records one by one).
-function servoTables(m) {
-  const lines = m.drive ? table("drive", m.drive) : [];
-  if (Array.isArray(m.motor)) for (const record of m.motor) lines.push(...table("motor", record).map((l, i) => i ? l : "[[motor]]"));
-  else if (m.motor) lines.push(...table("motor", m.motor));
-  return lines;
-}
 
 function drawMotor() {
   const box = $("motor-box"), sizing = report.motor;
@@ -724,22 +707,33 @@ function drawTorqueSpeed(sizing) {
     s.rigid.points.forEach(([n, t], i) => (i ? ctx.lineTo : ctx.moveTo).call(ctx, X(n), Y(t)));
     ctx.stroke(); ctx.globalAlpha = 1; ctx.fillStyle = color;
     for (const [n, t] of s.dynamic.points) ctx.fillRect(X(n) - 1, Y(t) - 1, 2, 2);
-    ctx.fillText(`${fmt(s.rpm, 5)} rpm: dots dynamic, line rigid`, pad, h - 8 - 14 * (sizing.sizings.length - 1 - k));
+    ctx.fillRect(X(0) - 3, Y(s.dynamic.rms_torque_n_m) - 3, 6, 6);  // its RMS torque, as motor.png marks it
+    ctx.fillText(`${fmt(s.rpm, 5)} rpm: dots dynamic, line rigid, square RMS`, pad, h - 8 - 14 * (sizing.sizings.length - 1 - k));
   });
+  // the RMS limit: rms_share_limit (80%) of the continuous stall torque, as motor.png draws it
+  const share = sizing.sizings[0].rms_share_limit, limit = share * sizing.continuous_stall_torque_n_m;
+  if (Number.isFinite(limit)) {
+    ctx.save(); ctx.strokeStyle = "#000"; ctx.setLineDash([2, 3]); ctx.beginPath();
+    for (const sy of [1, -1]) { ctx.moveTo(X(-xmax), Y(sy * limit)); ctx.lineTo(X(xmax), Y(sy * limit)); }
+    ctx.stroke(); ctx.restore();
+    ctx.fillStyle = "#000"; ctx.textAlign = "right";
+    ctx.fillText(`${fmt(100 * share, 3)}% of continuous stall torque (${fmt(limit, 3)} N m): the RMS limit`,
+      X(xmax) - 4, Y(limit) - 4);
+    ctx.textAlign = "left";
+  }
+  canvas.dataset.rmsLimit = limit;
 }
 
 // ---- materials: [materials], the elastic constants of the Hertz stress --------------------
 
-const MATERIAL_FIELDS = ["cam_youngs_modulus_gpa", "cam_poisson_ratio", "follower_youngs_modulus_gpa",
-  "follower_poisson_ratio"];
-let materialDefaults = {};          // what an empty field stands for (GET /api/program)
+let materialDefaults = {};          // each field of [materials] and what it stands for empty (GET /api/program)
 
 // Like the follower's fields: an empty one is left out of [materials] (its default said
 // beside it); no field set, no [materials] table.
 function renderMaterials() {
   const box = $("materials");
   box.innerHTML = "";
-  for (const key of MATERIAL_FIELDS) {
+  for (const key of Object.keys(materialDefaults)) {
     const label = document.createElement("label");
     label.textContent = key + " ";
     const note = document.createElement("span");
@@ -792,6 +786,133 @@ function drawRotation(ctx, cx, cy, r) {
   ctx.font = "11px system-ui, sans-serif";
   ctx.fillText("counter-clockwise", cx + r * 0.75, cy - r * 0.75 - 4);
   ctx.restore();
+}
+
+// ---- the chain of bodies: [[train]], [spring], [seat] ------------------------------------
+// Its fields come from the server (GET /api/program's `fields`: the chain's own types); an
+// empty field is left out of the program, which then takes the library's default or names
+// what is missing in its one-line error, shown at the field.
+
+function renderChain() {
+  const box = $("chain-box"), bodies = model.train;
+  box.hidden = !Array.isArray(bodies);
+  if (box.hidden) return;
+  const columns = fields.body.map((x) => x.name);
+  const empty = Object.fromEntries(fields.body.map((x) => [x.name, x.required ? "required" : x.default === null ? "" : String(x.default)]));
+  $("train").querySelector("thead").innerHTML =
+    `<tr><th>#</th>${columns.map((c) => `<th>${c}</th>`).join("")}<th></th><th>notes</th></tr>`;
+  const body = $("train").querySelector("tbody");
+  body.innerHTML = "";
+  bodies.forEach((b, i) => {
+    const n = i + 1, row = document.createElement("tr");
+    row.dataset.body = n;
+    cell(row, String(n));
+    for (const key of columns) {
+      const text = key === "name" ? (t) => { if (t.trim() === "") delete b.name; else b.name = t; } :
+        (t) => { const v = parseCell(t); if (v === undefined) delete b[key]; else b[key] = v; };
+      const el = cell(row, input(b[key], text, {body: n, key, size: key === "name" ? 8 : 6})).firstChild;
+      el.placeholder = key === "name" ? `body ${n}` : empty[key];  // what an empty field stands for
+    }
+    const tools = cell(row);
+    tools.className = "tools";
+    tools.append(
+      button("\u2191", "move up (toward the cam)", () => { if (i > 0) bodies.splice(i - 1, 0, ...bodies.splice(i, 1)); }),
+      button("\u2193", "move down", () => { if (i < bodies.length - 1) bodies.splice(i + 1, 0, ...bodies.splice(i, 1)); }),
+      button("\u2715", "delete the body", () => { bodies.splice(i, 1); }));
+    cell(row).className = "notes";
+    body.appendChild(row);
+  });
+  for (const table of ["spring", "seat"]) renderRecord(table, fields[table]);
+}
+
+// The fields of one table ([spring] or [seat]); every field empty: no such table.
+function renderRecord(table, spec) {
+  const box = $(table);
+  box.innerHTML = "";
+  for (const {name, required, default: d} of spec) {
+    const label = document.createElement("label");
+    label.textContent = name + " ";
+    label.appendChild(input((model[table] || {})[name], (t) => {
+      const v = parseCell(t), rec = model[table] = model[table] || {};
+      if (v === undefined) delete rec[name]; else rec[name] = v;
+      if (!Object.keys(rec).length) delete model[table];
+    }, {table, key: name}));
+    const note = document.createElement("span");
+    note.className = "fnote";
+    note.textContent = (model[table] || {})[name] !== undefined ? "" : !required ? `empty: ${d === null ? "the library's choice" : d}` :
+      model[table] ? "empty: required" : `empty: no [${table}]`;
+    label.appendChild(note);
+    box.appendChild(label);
+  }
+}
+
+// The report's train section (camjax.program's train_section), read key by key so what
+// the library adds shows: the natural frequencies and mode shapes (one small plot per mode
+// over the bodies), the harmonic check, and a row per speed of every per-speed value.
+function drawTrain() {
+  const t = report.train, box = $("train-box");
+  box.hidden = !t;
+  if (!t) return;
+  $("train-note").textContent = t.note || "";
+  const shown = new Set(["note", "bodies", "speeds", "harmonic_check", "one_body"]);
+  const facts = Object.entries(t).filter(([k, v]) => !shown.has(k) && !k.startsWith("mode_shapes_") &&
+    !k.startsWith("natural_frequencies_"));
+  const freq = (key) => (t[key] || []).map((f) => fmt(f, 5)).join(", ");
+  $("train-facts").innerHTML =
+    `<div>natural frequencies, cam contact held: <b id="train-held">${freq("natural_frequencies_held_hz")}</b> Hz</div>` +
+    `<div>free (in flight): ${freq("natural_frequencies_free_hz")} Hz</div>` +
+    facts.map(([k, v]) => `<div>${k}: ${typeof v === "number" ? fmt(v, 6) : v === null ? "none" : JSON.stringify(v)}</div>`).join("");
+  drawModes(t);
+  drawHarmonics(t);
+  drawTrainSpeeds(t);
+}
+
+function drawModes(t) {
+  const box = $("train-modes"), held = t.mode_shapes_held || [], free = t.mode_shapes_free || [];
+  for (const id of Object.keys(charts).filter((k) => k.startsWith("c-mode-"))) { charts[id].destroy(); delete charts[id]; }
+  box.innerHTML = "";
+  const x = t.bodies.map((_, i) => i + 1);
+  // mode k held and free (the free chain has one more: the cam's contact let go)
+  [...Array(Math.max(held.length, free.length)).keys()].forEach((k) => {
+    const el = document.createElement("div");
+    el.className = "chart"; el.id = `c-mode-${k + 1}`;
+    box.appendChild(el);
+    const series = [];
+    if (held[k]) series.push({label: `held ${fmt(t.natural_frequencies_held_hz[k], 5)} Hz`, y: held[k]});
+    if (free[k]) series.push({label: `free ${fmt(t.natural_frequencies_free_hz[k], 5)} Hz`, y: free[k], dash: [4, 3],
+      color: "#ff7f0e"});
+    plot(el.id, `mode ${k + 1}`, x, series,
+      {xlabel: `body (${t.bodies.join(", ")})`, points: true, height: 140, xticks: t.bodies});
+  });
+}
+
+// Each mode's frequency f against the cam orders n that meet it in the speed range: the
+// speed 60 f / n at which order n excites it (the harmonic check).
+function drawHarmonics(t) {
+  const checks = t.harmonic_check || [];
+  const xs = [...new Set(checks.flatMap((c) => c.orders.map((n) => 60 * c.frequency_hz / n)))].sort((a, b) => a - b);
+  if (!xs.length) { plot("c-harmonics", "", [], []); $("c-harmonics").textContent = "harmonic check: no cam order meets a mode in the range"; return; }
+  plot("c-harmonics", "harmonic check: the cam order meeting each mode (held) at each speed", xs,
+    checks.map((c) => {
+      const at = new Map(c.orders.map((n) => [60 * c.frequency_hz / n, n]));
+      return {label: `${fmt(c.frequency_hz, 5)} Hz`, y: xs.map((x) => at.has(x) ? at.get(x) : null)};
+    }), {xlabel: "speed (rpm)", ylabel: "cam order", points: true, lines: false});
+}
+
+function drawTrainSpeeds(t) {
+  const rows = t.speeds || [];
+  const table = $("train-speeds");
+  if (!rows.length) { table.innerHTML = "<thead></thead><tbody></tbody>"; return; }
+  // every value of a row, a table of them (per body) spread over its keys
+  const columns = Object.entries(rows[0]).flatMap(([k, v]) =>
+    v !== null && typeof v === "object" && !Array.isArray(v) ? Object.keys(v).map((b) => [k, b]) : [[k, null]]);
+  const value = (row, [k, b]) => b === null ? row[k] : (row[k] || {})[b];
+  table.querySelector("thead").innerHTML =
+    `<tr>${columns.map(([k, b]) => `<th>${b === null ? k : `${k}: ${b}`}</th>`).join("")}</tr>`;
+  table.querySelector("tbody").innerHTML = rows.map((row) => `<tr>${columns.map((c) => {
+    const v = value(row, c);
+    return `<td>${typeof v === "number" ? fmt(v, 5) : v === null || v === undefined ? "-" : JSON.stringify(v)}</td>`;
+  }).join("")}</tr>`).join("");
 }
 
 // ---- undo: the last edits, the program as the page holds it ------------------------------
@@ -853,6 +974,8 @@ document.addEventListener("keydown", (e) => {
 // ---- wiring ----------------------------------------------------------------------------
 
 $("add").addEventListener("click", () => { lastField = null; model.segment.push({angle_deg: 10}); renderEditor(); edited(); });
+// a new body at the chain's end, its fields empty: the library names what it needs
+$("add-body").addEventListener("click", () => { lastField = null; model.train.push({}); renderEditor(); edited(); });
 $("name").addEventListener("input", (e) => { lastField = e.target; model.program = {...(model.program || {}), name: e.target.value}; edited(); });
 $("range").addEventListener("input", (e) => { lastField = e.target; rpmText = e.target.value; edited(); });
 $("chosen").addEventListener("change", async (e) => {
@@ -870,8 +993,9 @@ $("open").addEventListener("change", async (e) => {
   e.target.value = "";
   document.body.dataset.busy = "1";
   setStatus("computing\u2026", "busy");
-  const response = await fetch(api("program", {rpm: rpmText, opened: 1}), {method: "POST", body: text,
-    headers: {"Content-Type": "application/toml"}});
+  // the server reads the file (the page has no TOML reader): posted as JSON {toml: text}
+  const response = await fetch(api("open", {rpm: rpmText}), {method: "POST", body: JSON.stringify({toml: text}),
+    headers: {"Content-Type": "application/json"}});
   const answer = await response.json();
   if (!response.ok) { lastField = null; showError(`${file.name}: ${answer.error}`); document.body.dataset.busy = "0"; return; }
   report = answer;

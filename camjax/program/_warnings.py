@@ -1,0 +1,158 @@
+"""The warnings a program's report carries: sizes no machine has, a design past the usual
+limits (pressure angle, Hertz half-width, moduli), an unsettled groove, a noisy or coarse
+lift table."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._spec import Program
+from ._speeds import speed_warnings
+
+MODULUS_RANGE_GPA = (1.0, 1000.0)
+"""Young's moduli of engineering solids, polymers to diamond: a value outside is taken for
+a unit slip (a modulus in Pa or MPa)."""
+MAX_HALF_WIDTH_RATIO = 0.1
+"""Largest Hertz half-width ``b`` against the relative radius ``R'`` where the stress peaks
+(``b / R' = 2 p / E*``) for which the Hertz line contact holds (it needs ``b << R'``)."""
+
+
+ABSURD_SIZES = {"mm": 10_000.0, "kg": 10_000.0, "N": 1e6, "N/mm": 1e9}
+"""Sizes no cam machine has, by unit: a length past 10 m, a moving mass past 10 tonnes, a
+force past a meganewton, a stiffness past 1e9 N/mm.  A value past them is computed but
+warned of (``size_warnings``): often a unit slip, and a length past 1e12 mm also loses the
+cam's curvature to rounding."""
+_SIZED_FIELDS = (("base_radius_mm", "mm"), ("roller_radius_mm", "mm"), ("offset_mm", "mm"), ("arm_mm", "mm"),
+                 ("pivot_mm", "mm"), ("groove_clearance_mm", "mm"),  # contact_width_mm: against the base circle
+                 ("mass_kg", "kg"), ("preload_n", "N"), ("stiffness_n_per_mm", "N/mm"),
+                 ("spring_rate_n_per_mm", "N/mm"))
+
+
+def size_warnings(program: Program) -> list[str]:
+    """A line for each follower field and segment lift past ``ABSURD_SIZES``, naming the key
+    and its value."""
+    f = program.follower
+    given = [(f"follower.{name}", getattr(f, name), unit) for name, unit in _SIZED_FIELDS
+             if getattr(f, name) is not None and not (name == "roller_radius_mm" and f.flat_face)]
+    given += [(f"segment {i}: lift_mm", s.lift_mm, "mm") for i, s in enumerate(program.segments, 1)]
+    return [f"{key} = {value:g} is more than {ABSURD_SIZES[unit]:,.0f} {unit}, larger than any cam machine's: "
+            f"check its unit ({unit})" for key, value, unit in given if abs(value) > ABSURD_SIZES[unit]]
+
+
+def design_warnings(program: Program, report=None) -> list[str]:
+    """Where the input or a result lies outside what the design rules and the models hold,
+    one line each (empty where all is well): the program's own numbers (sizes past
+    ``ABSURD_SIZES``, a grooved cam's preload, a lift table's noise or spacing among them), and
+    with ``report`` (``analyse``'s ``Report`` or its ``as_dict()``) its speeds
+    (``speed_warnings``), the pressure angle, the Hertz contact and a grooved cam's strikes
+    that did not settle.
+
+    Each is a warning, not an error: the numbers are computed, but they are not to be
+    trusted as they stand.  ``analyse`` puts them in its report (``Report.warnings``, in
+    ``--format json`` and the studio); ``camjax program`` prints them on stderr.
+    """
+    out = table_warnings(program)  # first: a drawing's or table's note says what was read
+    f, materials = program.follower, program.materials
+    report = report.as_dict() if hasattr(report, "as_dict") else report
+    limit = f.geometry.max_pressure_angle_deg  # a roller's: 30 degrees translating, 45 swinging
+    angle = ((report or {}).get("geometry") or {}).get("max_pressure_angle_deg")
+    if limit is not None and angle is not None and abs(angle) > limit:
+        out.append(f"the pressure angle reaches {abs(angle):.3g} deg, above the {limit:g} deg a "
+                   f"{f.kind} follower tolerates: enlarge follower.base_radius_mm "
+                   "or lengthen the rises")
+    out += size_warnings(program)
+    if f.form_closed and f.preload_n != 0:
+        out.append(f"follower.preload_n = {f.preload_n:g} does nothing on a grooved cam (no "
+                   "spring_rate_n_per_mm: no return spring preloads the follower, the groove holds it): "
+                   "remove it, or give the return spring's spring_rate_n_per_mm")
+    stroke = max(abs(float(y)) for y in np.cumsum([s.lift_mm for s in program.segments]))
+    if stroke > 2 * f.base_radius_mm:
+        out.append(f"the lift ({stroke:g} mm) is more than twice the base circle's radius "
+                   f"({f.base_radius_mm:g} mm): check the program's units")
+    low, high = MODULUS_RANGE_GPA
+    for part in ("cam", "follower"):
+        modulus = getattr(materials, f"{part}_youngs_modulus_gpa")
+        if not low <= modulus <= high:
+            out.append(f"materials.{part}_youngs_modulus_gpa = {modulus:g} lies outside {low:g}-{high:g} "
+                       "GPa (steel is about 210): check the unit (GPa, not Pa or MPa)")
+    if f.contact_width_mm is None and materials != type(materials)():
+        out.append("[materials] is used only for the Hertz contact stress, which needs "
+                   "follower.contact_width_mm: without it no stress is computed")
+    if f.contact_width_mm is not None and f.contact_width_mm > 20 * f.base_radius_mm:
+        out.append(f"follower.contact_width_mm = {f.contact_width_mm:g} is more than ten times the "
+                   f"base circle's diameter: check the unit (mm)")
+    if report is None:
+        return out
+    out += speed_warnings(program, [s["rpm"] for s in report["speeds"]])
+    worst = max((s for s in report["speeds"] if s.get("contact_half_width_mm")),
+                key=lambda s: s["max_contact_stress_mpa"], default=None)
+    if worst is not None:
+        ratio = 2 * worst["max_contact_stress_mpa"] / materials.contact_modulus_mpa  # b / R'
+        if ratio > MAX_HALF_WIDTH_RATIO:
+            radius = worst["contact_half_width_mm"] / ratio
+            out.append(f"at {worst['rpm']:g} rpm the Hertz contact half-width "
+                       f"({worst['contact_half_width_mm']:.3g} mm) is {ratio:.3g} times the relative "
+                       f"radius of the contact ({radius:.3g} mm), past the {MAX_HALF_WIDTH_RATIO:g} "
+                       "where Hertz theory holds: its stress "
+                       f"({worst['max_contact_stress_mpa']:.3g} MPa) is not to be trusted; check "
+                       "follower.contact_width_mm and the moduli")
+    out += _unsettled_grooves(report["speeds"])
+    return out
+
+
+def _unsettled_grooves(speeds) -> list[str]:
+    """A grooved cam's strikes that still moved from turn to turn after the longest run."""
+    from ._groove import MAX_GROOVE_SAMPLES, MAX_TURNS, SETTLED_DEG
+
+    out = []
+    for s in speeds:
+        change = s.get("impacts_change_deg")
+        if change is not None and not change <= SETTLED_DEG:
+            out.append(f"at {s['rpm']:g} rpm the groove's strikes had not settled within the longest run "
+                       f"allowed ({MAX_TURNS} turns, {MAX_GROOVE_SAMPLES:,} samples; "
+                       + (f"they still move by {change:.3g} deg per turn" if math.isfinite(change) else
+                          "they still differ in number or flank from turn to turn")
+                       + "): the roller chatters without a period, and the last turn is reported; a "
+                       "narrower groove (groove_clearance_mm) or more damping settles sooner")
+    return out
+
+
+NOISY_ACCELERATION_RATIO = 1.2
+"""A table fit's peak acceleration this many times that of a fit smoothed to three times the
+points' scatter: the noise, not the cam, sets its accelerations."""
+COARSE_SPACING_CHANGE = 0.05
+"""A change of the peak acceleration this large when every other point of a table is
+dropped: the spacing does not resolve the acceleration."""
+
+
+def table_warnings(program: Program) -> list[str]:
+    """The lift tables' warnings: points noisy or sparse enough to make the accelerations
+    unreliable (``camjax.laws.TableFit``'s two checks), once per table."""
+    out, seen = [], set()
+    for i, seg in enumerate(program.segments, 1):
+        fit = getattr(seg.law, "fit_info", None)
+        if fit is None or (fit.turn is not None and fit.turn in seen):
+            continue
+        where = "the cam's lift table" if fit.turn is not None else f"segment {i}: the lift table"
+        if fit.turn is not None:
+            seen.add(fit.turn)
+        where += f" ({fit.source})"
+        out += list(fit.notes)
+        if fit.acceleration_ratio > NOISY_ACCELERATION_RATIO:
+            out.append(f"{where}: the points scatter by about {fit.noise_mm:.2g} mm; the fit's peak "
+                       f"acceleration is {fit.acceleration_ratio:.3g} times that of a fit within "
+                       f"{3 * fit.noise_mm:.2g} mm of them, so its accelerations and forces follow the "
+                       f"noise: set smoothing_mm = {3 * fit.noise_mm:.2g} (about three times the scatter)")
+        elif math.isnan(fit.spacing_ratio):
+            count = len(fit.turn if fit.turn is not None else fit.points)
+            out.append(f"{where}: its {count} points are too few to check that they resolve the "
+                       "acceleration (a fit through every other point needs 6); give points closer together")
+        elif abs(fit.spacing_ratio - 1) > COARSE_SPACING_CHANGE:
+            angles = [a for a, _ in (fit.turn if fit.turn is not None else fit.points)]
+            spacing = max(np.diff(angles + ([360.0] if fit.turn is not None else [])))
+            out.append(f"{where}: its points (up to {spacing:.3g} deg apart) are too sparse for its "
+                       f"acceleration: against {fit.spacing_check}, the peak acceleration differs "
+                       f"by {100 * abs(fit.spacing_ratio - 1):.3g}%; give points closer together")
+    return out
