@@ -227,7 +227,7 @@ def compensate(
     Refused with one line: a law not smooth enough (``check_smooth``), a train with lash (a
     groove's clearance) or whose contact is lost at ``rpm`` (the inverse is linear only).
     """
-    from ._spec import Program
+    from ._program import Program
     from ._speeds import Speeds
 
     speeds = Speeds.of(rpm)

@@ -17,7 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._export import _angle_ranges, shape
-from ._spec import Program
+from ._program import Program
 
 
 class ContactGeometry(NamedTuple):

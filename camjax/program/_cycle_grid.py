@@ -22,7 +22,7 @@ from ..sdof import (
     segment_layout,
     to_monomial,
 )
-from ._spec import Program
+from ._program import Program
 
 
 class CycleGrid(NamedTuple):

@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import laws
 from ._motion import MATCH, is_polynomial
-from ._spec import Program, segment_band, with_law
+from ._program import Program, segment_band, with_law
 
 OBJECTIVES = ("residual", "ca-ct", "preload")
 

@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..laws import ConstantVelocity
-from ._spec import Program
+from ._program import Program
 from ._turn import JOIN_TOLERANCE_DEG
 
 DRIVE_TABLE_FORMATS = ("csv", "xyva", "codesys", "twincat")

@@ -39,7 +39,7 @@ from ._oscillator import (
     Oscillator,
 )
 from ._outputs import Outputs, Probe
-from ._spec import Program
+from ._program import Program
 from ._speeds import Speeds
 
 

@@ -16,7 +16,7 @@ import jax
 import numpy as np
 
 from .. import geometry
-from ._spec import Program
+from ._program import Program
 
 
 class Profile(NamedTuple):

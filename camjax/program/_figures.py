@@ -8,7 +8,7 @@ import numpy as np
 
 from .. import plot
 from ._export import Profile
-from ._spec import Program
+from ._program import Program
 
 plt = plot.plt
 

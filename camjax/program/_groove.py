@@ -32,7 +32,7 @@ from tqdm import tqdm
 
 from ..errors import SolverError
 from ..laws import AbstractMotionLaw
-from ._spec import Program
+from ._program import Program
 from ._speeds import Speeds
 from ._turn import Turn
 

@@ -24,8 +24,9 @@ from ..checks import read_toml
 from ..metrics import septic_coefficients
 from ._dynamics import SteadyState
 from ._outputs import BUILT_IN
+from ._program import Program
+from ._reader import no_unknown as _no_unknown
 from ._report import Report, analyse
-from ._spec import Program, _no_unknown
 from ._speeds import Speeds
 from ._torque import (
     DEFAULT_SPEED_FLUCTUATION,

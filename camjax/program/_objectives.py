@@ -21,7 +21,7 @@ from ._dynamics import SteadyState
 from ._jump import even_periods, scan_speeds
 from ._oscillator import CONTACT_FORCE, Oscillator
 from ._outputs import cam_levers, min_preload_n
-from ._spec import Program, segment_band, with_law
+from ._program import Program, segment_band, with_law
 
 _SPEEDS_PER_CYCLE = 8  # training speeds per natural-frequency cycle the turn gains across the range
 

@@ -19,7 +19,7 @@ from ._jump import Flight, _Turns, flights_at, jump_speed_rpm
 from ._motion import Join, segment_kinematics
 from ._oscillator import PAYLOAD_DISPLACEMENT
 from ._outputs import Outputs, Probe, ProbeContext, kinematic_peak_m_s2
-from ._spec import Program
+from ._program import Program
 from ._speeds import Speeds
 from ._torque import DEFAULT_SPEED_FLUCTUATION, check_speed_fluctuation
 from ._warnings import design_warnings

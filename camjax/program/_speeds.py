@@ -8,7 +8,7 @@ import numpy as np
 
 from .. import checks
 from .._plain import parse_range
-from ._spec import Program
+from ._program import Program
 
 IMPLAUSIBLE_RPM = 100_000.0
 """A speed above it is warned of (not refused): no cam runs so fast, often a unit slip."""

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from ._spec import Program
+from ._program import Program
 from ._speeds import speed_warnings
 
 MODULUS_RANGE_GPA = (1.0, 1000.0)

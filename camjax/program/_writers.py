@@ -14,8 +14,8 @@ from .._plain import json_ready
 from ._dynamics import SteadyState
 from ._export import profile, write_csv, write_dxf
 from ._groove import groove_turns
+from ._program import Program
 from ._report import Report, response
-from ._spec import Program
 
 RESPONSE_SPEEDS = 10
 """Most speeds whose histories over the turn ``response.csv`` holds (the first ones)."""
