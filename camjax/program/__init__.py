@@ -24,7 +24,7 @@ docs/machine.md, docs/valve-trains.md and docs/servo.md.
 from typing import TYPE_CHECKING
 
 from ._arm import Arm as Arm
-from ._arm import arm_bending as arm_bending
+from ._arm_report import arm_bending as arm_bending
 from ._chain_contacts import ChainContacts as ChainContacts
 from ._chain_contacts import ContactOptions as ContactOptions
 from ._chain_contacts import ContactSummary as ContactSummary

@@ -10,7 +10,7 @@ import json
 import numpy as np
 
 from .._plain import json_ready, plot_speed
-from ._arm import arm_section
+from ._arm_report import arm_section
 from ._chain_contacts import simulated_train
 from ._contact import Geometry, RefinedStress, cam_geometry, refined_contact_stress
 from ._dynamics import SteadyState
