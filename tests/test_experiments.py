@@ -37,7 +37,11 @@ NOT_RUN = {
     "design_caact.py": "no quick mode yet: 24-knot designs and an SCCA sweep",
     "design_pareto.py": "no quick mode yet: one design and one LP per Ca cap",
     "docs_screenshots.py": "needs a built site (mkdocs build --strict) and Chromium",
+    "swinging_arm_program.py": "no quick mode yet: the paper's rod through a program file, four laws and seven "
+                               "parameter sets at about 10 s of CPU each; tests/test_swinging_arm.py checks its numbers",
     "swinging_follower.py": "no quick mode yet: three cam turns of the flexible rod per law",
+    "valve_seating.py": "draws the docs' figure docs/valve-seating.png (one file, not a folder); "
+                        "tests/test_chain_contacts.py checks its numbers",
 }
 """Examples not run here, and why."""
 
