@@ -17,6 +17,9 @@ In the process:
 
 - **Compiled programs**: JAX's and equinox's own jit caches, keyed by the shapes and static
   arguments of module-level compiled functions (a cam program's turn, a design's steps).
+  Each holds memory maps of the process; ``relieve_memory_maps`` lets them all go when the
+  process holds more than ``CROWDED_FRACTION`` of the system's limit (the studio before
+  each analysis; ``camjax._memory_maps`` says why).
 - **Sampled laws** (``camjax.sdof.SampledLaw.of``): the last ``SAMPLED_LAWS_KEPT``, keyed by
   the law's values (``camjax.sdof.law_value_key``).
 - **Compiled accelerations of the studies' scipy reference** (``camjax.studies``): the last
@@ -31,6 +34,9 @@ from ._cache_dir import ENV as SETTING
 from ._cache_dir import carried as carried
 from ._cache_dir import configured_dir as configured_dir
 from ._cache_dir import using_cache_dir as using_cache_dir
+from ._memory_maps import CROWDED_FRACTION as CROWDED_FRACTION
+from ._memory_maps import memory_maps as memory_maps
+from ._memory_maps import relieve as relieve_memory_maps
 from ._traces import KEPT_VERSIONS as KEPT_VERSIONS
 from ._traces import MEMO_SIZE as MEMO_SIZE
 from ._traces import exported_jit as exported_jit
@@ -40,6 +46,7 @@ from ._traces import version_key as version_key
 from .sdof import SAMPLED_LAWS_KEPT as SAMPLED_LAWS_KEPT
 
 __all__ = [
+    "CROWDED_FRACTION",
     "SETTING",
     "KEPT_VERSIONS",
     "MEMO_SIZE",
@@ -47,7 +54,9 @@ __all__ = [
     "carried",
     "configured_dir",
     "exported_jit",
+    "memory_maps",
     "prune_traces",
+    "relieve_memory_maps",
     "traces_kept",
     "using_cache_dir",
     "version_key",

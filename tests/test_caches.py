@@ -92,3 +92,36 @@ def test_the_studies_cache_keeps_a_bounded_number_of_laws():
     last = [studies.compiled_acceleration(law) for law in others][-1]
     assert studies.compiled_acceleration(others[-1]) is last
     assert studies.compiled_acceleration(first) is not kept
+
+
+def test_a_crowded_process_lets_its_compiled_programs_go():
+    """Each compiled program holds memory maps; past the given share of the system's limit
+    JAX's caches are cleared and the maps come back; a function used again compiles again
+    and gives the same numbers.  The count is checked against maps the test adds itself."""
+    import mmap
+
+    import jax
+    import jax.numpy as jnp
+
+    counted = caches.memory_maps()
+    if counted is None:
+        pytest.skip("this system does not count a process's memory maps")
+    before, limit = counted
+    assert limit > before > 0
+    regions = [mmap.mmap(-1, 2 * mmap.PAGESIZE) for _ in range(200)]
+    assert caches.memory_maps()[0] >= before + 100  # separate anonymous regions, counted
+    del regions
+
+    programs = [jax.jit(lambda x, k=k: jnp.sin(x) ** k + jnp.cumsum(x)) for k in range(1, 21)]
+    x = jnp.linspace(0.0, 1.0, 7)
+    first = [np.asarray(f(x)) for f in programs]
+    compiled = caches.memory_maps()[0]
+    assert not caches.relieve_memory_maps(fraction=1.0)  # a process never holds more than the limit
+    assert all(f._cache_size() == 1 for f in programs)
+
+    assert caches.relieve_memory_maps(fraction=0.0)  # any count is crowded at 0
+    assert all(f._cache_size() == 0 for f in programs)
+    let_go = compiled - caches.memory_maps()[0]
+    assert let_go > 20, f"20 programs let go gave back only {let_go} maps"
+    np.testing.assert_array_equal([np.asarray(f(x)) for f in programs], first)
+    assert all(f._cache_size() == 1 for f in programs)

@@ -32,7 +32,6 @@ import numpy as np
 
 from ..caches import carried
 from ._workbench import (
-    COMPILING_STACK_BYTES,
     DEFAULT_RPM,
     Busy,
     FileAccess,
@@ -43,7 +42,6 @@ from ._workbench import (
     parse_json_program,
     parse_toml,
     program_files,
-    start_compiling_threads,
 )
 
 STATIC = Path(__file__).parent / "static"
@@ -177,7 +175,8 @@ class Studio:
             self.ready.set()
 
         self.ready.clear()
-        start_compiling_threads(*threads)
+        for thread in threads:
+            thread.start()
         threading.Thread(target=wait, name="camjax-studio-warm", daemon=True).start()
         return self
 
@@ -228,15 +227,6 @@ class _Server(ThreadingHTTPServer):
     context: contextvars.Context | None = None
     """The context of the ``Studio`` that made the server (the command's cache setting,
     ``camjax._cache_dir``): each request's thread runs in a copy of it."""
-
-    def process_request(self, request, client_address):
-        """Each request on a thread of its own, with a stack deep enough to compile on
-        (``COMPILING_STACK_BYTES``)."""
-        before = threading.stack_size(COMPILING_STACK_BYTES)
-        try:
-            ThreadingHTTPServer.process_request(self, request, client_address)
-        finally:
-            threading.stack_size(before)
 
     def process_request_thread(self, request, client_address):
         if self.context is None:

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .._plain import DEFAULT_SPEED_FLUCTUATION, json_ready, plot_speed
-from ..caches import carried
+from ..caches import carried, relieve_memory_maps
 from ..checks import MAX_SPEEDS as MAX_SPEEDS
 
 DEFAULT_RPM = "200:1400:101"
@@ -32,24 +32,6 @@ TURN_POINTS = 721
 """Cam angles over the turn for the kinematic curves (every half degree)."""
 PROFILE_POINTS = 720
 """Profile points the page draws."""
-COMPILING_STACK_BYTES = 64 * 2**20
-"""The stack of every thread of the studio that may compile or load a compiled program (a
-request, the warm-up, a design): XLA's compiler and its compilation cache recurse deeper
-on a large program (a chain of many modes) than a default thread's stack holds, which
-crashed a worker in CI; the main thread has the process's own."""
-
-
-def start_compiling_threads(*threads: threading.Thread) -> None:
-    """Start ``threads`` with stacks of ``COMPILING_STACK_BYTES`` (``threading.stack_size``
-    is read when a thread starts, so it is set around the starts only)."""
-    before = threading.stack_size(COMPILING_STACK_BYTES)
-    try:
-        for thread in threads:
-            thread.start()
-    finally:
-        threading.stack_size(before)
-
-
 CACHED_REPORTS = 16
 """Analyses a studio keeps (oldest dropped first), shared by its workbenches."""
 DESIGN_STEPS = 60
@@ -336,6 +318,7 @@ class Workbench:
                self.speed_fluctuation, str(self.base), outputs)
 
         def compute():
+            relieve_memory_maps()  # a studio open all day compiles many programs
             steady = SteadyState(program, rpm)  # a chain of bodies' too (the one compiled cycle)
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
                                         speed_fluctuation=self.speed_fluctuation, outputs=outputs))
@@ -427,8 +410,8 @@ class Workbench:
         segment_band(self.program, segment, rpm_lo, rpm_hi)  # its one-line error names what is wrong
         job = self.job = DesignJob(segment, objective, float(rpm_lo), float(rpm_hi), steps, knots,
                                    data=self.data, rpm=self.rpm, before=self.report)
-        start_compiling_threads(threading.Thread(target=carried(self._design), args=(job, self.program),
-                                                 name="camjax-studio-design", daemon=True))
+        threading.Thread(target=carried(self._design), args=(job, self.program), name="camjax-studio-design",
+                         daemon=True).start()
         return job.as_dict()
 
     def _design(self, job: DesignJob, program) -> None:
