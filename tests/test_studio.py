@@ -265,8 +265,11 @@ def test_cli_refuses_bad_arguments(capsys):
 def test_cli_serves_the_page_and_stops_on_ctrl_c():
     """``camjax studio`` prints its address, serves the page and its script, and Ctrl-C
     stops it with status 0 and no traceback."""
+    # Ctrl-C as a terminal gives it, whatever this runner's own disposition (a shell's
+    # background job starts with SIGINT ignored, and a child inherits that).
     server = subprocess.Popen([sys.executable, "-m", "camjax", "studio", "indexer", "--no-browser", "--port", "0"],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         line = server.stdout.readline()
         assert line.startswith("camjax studio: indexer.toml at http://127.0.0.1:"), line
