@@ -173,6 +173,30 @@ def peak_search(bound, hermite_of, largest_sample, tolerance: float = 0.0):
     return jnp.maximum(jnp.abs(found), largest_sample)
 
 
+def bounded_peak(values, widths, left, right):
+    """``refined_peak``'s answer (within ``PEAK_TOLERANCE``) by ``peak_search``: only the
+    intervals whose Bernstein bound can beat the best value found are refined.  For a
+    program run many times over long grids (a cam's turn at every speed of an edit), where
+    the dense refinement of every interval costs more than the propagation."""
+    bound = bernstein_bound(values, widths, tuple(left.T), tuple(right.T))
+    data = hermite_data(values, widths, left, right)
+    return peak_search(bound, lambda index: data[index], jnp.max(jnp.abs(values)), PEAK_TOLERANCE)
+
+
+def bounded_max(values, widths, left, right):
+    """``max f`` (signed) between the nodes, by ``bounded_peak`` of the signal shifted below
+    its smallest node value (so that ``|f - shift| = f - shift``)."""
+    low = jnp.min(values)
+    shift = low - (jnp.max(values) - low) - 1.0
+    return bounded_peak(values - shift, widths, left, right) + shift
+
+
+def bounded_extremes(values, widths, left, right):
+    """``(min f, max f)`` between the nodes by ``bounded_max``: ``refined_extremes``'s
+    answer, refining only the intervals that can hold an extreme."""
+    return -bounded_max(-values, widths, -left, -right), bounded_max(values, widths, left, right)
+
+
 def bernstein_bound(value, widths, left, right):
     """``(K,)`` bounds of ``|p|`` over each interval for its septic Hermite interpolant
     ``p``: the largest of its Bernstein coefficients, in whose convex hull the polynomial

@@ -13,6 +13,8 @@ from camjax.metrics import (
     PEAK_GROUP,
     PEAK_TOLERANCE,
     bernstein_bound,
+    bounded_extremes,
+    bounded_peak,
     hermite_data,
     interval_peaks,
     peak_search,
@@ -34,16 +36,6 @@ def sampled(f, t):
 def dense_peak(value, widths, left, right):
     """Every interval's septic refined: what the search must reproduce."""
     return jnp.max(interval_peaks(septic_coefficients(value, widths, left, right)))
-
-
-def bounded_peak(value, widths, left, right):
-    """``peak_search`` on the arguments of ``refined_peak``."""
-    def hermite_of(index):
-        return hermite_data(value[index], widths[index], left[index], right[index],
-                            value[index + 1])
-
-    return peak_search(bernstein_bound(value, widths, left.T, right.T), hermite_of,
-                       jnp.max(jnp.abs(value)))
 
 
 @pytest.mark.parametrize("amplitude, omega, phase", [(1.7, 7.0, 0.4), (-0.3, 23.0, 2.9), (2.5, 61.0, -1.1)])
@@ -98,6 +90,19 @@ def test_search_equals_refining_every_interval(name, intervals):
     args = sampled(SIGNALS[name], t)
     np.testing.assert_allclose(bounded_peak(*args), dense_peak(*args), rtol=1e-12, atol=0)
     np.testing.assert_allclose(jax.jit(bounded_peak)(*args), dense_peak(*args), rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("name", sorted(SIGNALS))
+def test_bounded_extremes_equal_refining_every_interval(name):
+    """``bounded_extremes`` (the signed least and largest value by the search, as a cam
+    turn's contact force and torque take them) against ``refined_extremes`` (dense)."""
+    from camjax.sdof import refined_extremes
+
+    t = jnp.linspace(0.0, 1.0, 3 * PEAK_GROUP + 6) ** 1.1
+    args = sampled(SIGNALS[name], t)
+    scale = float(jnp.max(jnp.abs(args[0])))
+    for got, want in zip(jax.jit(bounded_extremes)(*args), refined_extremes(*args)):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * scale)
 
 
 def test_search_under_vmap_rows_needing_different_rounds():

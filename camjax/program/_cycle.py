@@ -12,13 +12,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..metrics import PEAK_TOLERANCE, bernstein_bound, hermite_data, peak_search, refined_peak
-from ..sdof import (
-    periodic_propagate,
-    propagate,
-    refined_extremes,
-    series_kicks,
-)
+from ..metrics import bounded_extremes, bounded_peak
+from ..sdof import periodic_propagate, propagate, series_kicks
 from ._contact import NodeContact, contact_stress_squared
 from ._cycle_grid import CycleGrid
 from ._oscillator import (
@@ -131,29 +126,33 @@ def _cycle(grid: CycleGrid, oscillator: Oscillator, rpm, q_start=None, periodic=
     y_nodes = jnp.stack([y, ys, jnp.concatenate([lift_left[:, 0], lift_right[-1:, 0]])])
     values = _real_product(gain, q) + direct @ y_nodes + jnp.asarray(oscillator.static)[:, None]
     gains = jax.lax.optimization_barrier([gain * lam**p for p in range(4)])  # (O, S) each
+    # the modes' part of every output's derivatives, once at every node (the modes are
+    # continuous there; only the forcing's terms differ between an interval's two ends)
+    modal = [_real_product(gains[p], q) for p in (1, 2, 3)]  # (O, K + 1) each
+    a_weights = [_real_product(gains[k], weights[:, 1]) for k in range(3)]  # (O,)
+    b_weights = [_real_product(gains[k], weights[:, 0]) * period**2 for k in range(3)]
 
-    def jets(q_end, ys_end, acc_end, lift_end):
-        """``(O, K, 3)``: every output's first three derivatives at one end of each interval:
-        ``d^p Re(G q) = Re(G lam^p q) + sum_i Re(G lam^(p-1-i)) F^(i)`` with each mode's
-        forcing ``F = a y_ss + b T^2 y``, and the direct terms' ``y^(p)`` to ``y^(p+2)``."""
-        a_weights = [_real_product(gains[k], weights[:, 1]) for k in range(3)]  # (O,)
-        b_weights = [_real_product(gains[k], weights[:, 0]) * period**2 for k in range(3)]
+    def jets(nodes, ys_end, acc_end, lift_end):
+        """``(O, K, 3)``: every output's first three derivatives at one end of each interval
+        (``nodes``, a slice of the nodes): ``d^p Re(G q) = Re(G lam^p q) + sum_i
+        Re(G lam^(p-1-i)) F^(i)`` with each mode's forcing ``F = a y_ss + b T^2 y``, and the
+        direct terms' ``y^(p)`` to ``y^(p+2)``."""
         y_jet = jnp.concatenate([ys_end[:, None], acc_end], axis=1)  # y^(1..5)
         out = []
         for p in (1, 2, 3):
-            value = _real_product(gains[p], q_end)
+            value = modal[p - 1][:, nodes]
             for i in range(p):
                 value = (value + a_weights[p - 1 - i][:, None] * acc_end[None, :, i]
                          + b_weights[p - 1 - i][:, None] * lift_end[None, :, i])
             out.append(value + direct @ y_jet[:, p - 1 : p + 2].T)
         return jnp.stack(out, axis=-1)
 
-    left = jets(q[:, :-1], ys[:-1], lift_left, raw_left)
-    right = jets(q[:, 1:], ys[1:], lift_right, raw_right)
+    left = jets(slice(None, -1), ys[:-1], lift_left, raw_left)
+    right = jets(slice(1, None), ys[1:], lift_right, raw_right)
     force, accel = values[CONTACT_FORCE], values[PAYLOAD_ACCELERATION]
     force_left, force_right = left[CONTACT_FORCE], right[CONTACT_FORCE]
-    max_accel = refined_peak(accel, widths, left[PAYLOAD_ACCELERATION], right[PAYLOAD_ACCELERATION])
-    min_force, max_force = refined_extremes(force, widths, force_left, force_right)
+    max_accel = bounded_peak(accel, widths, left[PAYLOAD_ACCELERATION], right[PAYLOAD_ACCELERATION])
+    min_force, max_force = bounded_extremes(force, widths, force_left, force_right)
     torque = torque_jets(force, force_left, force_right, ys, lift_left[:, :3], lift_right[:, :3])
     figures = torque_figures(torque[0], widths, *torque[1:])
     if contact is None:
@@ -172,33 +171,17 @@ def _cycle(grid: CycleGrid, oscillator: Oscillator, rpm, q_start=None, periodic=
 
 
 def _train_peaks(values, left, right, widths, bodies: int) -> TrainPeaks:
-    """A train's figures from its rows (``output_rows``): the bounded peak search
-    (``camjax.metrics.peak_search``), which refines only the intervals that can hold the
+    """A train's figures from its rows (``output_rows``), each by the bounded peak search
+    (``camjax.metrics.bounded_peak``), which refines only the intervals that can hold the
     peak (the dense refinement of every row cost a chain ten times its propagation)."""
     rows = output_rows(bodies)
     accelerations = np.arange(rows["acceleration_m_s2"].start, rows["acceleration_m_s2"].stop)
     peaks = np.concatenate([accelerations, [rows["surge_n"]]])
-    peak = jax.vmap(_bounded_peak, in_axes=(0, None, 0, 0))(values[peaks], widths, left[peaks], right[peaks])
+    peak = jax.vmap(bounded_peak, in_axes=(0, None, 0, 0))(values[peaks], widths, left[peaks], right[peaks])
     seat = rows["seat_force_n"]
-    high = _bounded_max(values[seat], widths, left[seat], right[seat])
-    low = -_bounded_max(-values[seat], widths, -left[seat], -right[seat])
+    low, high = bounded_extremes(values[seat], widths, left[seat], right[seat])
     lift_error = jnp.max(jnp.abs(values[rows["lift_error_mm"]]))
     return TrainPeaks(peak[:bodies], low, high, peak[bodies], lift_error)
-
-
-def _bounded_peak(values, widths, left, right):
-    """``max |f|`` between the nodes, refining only the intervals whose Bernstein bound can
-    beat the best found (``camjax.metrics.peak_search``)."""
-    bound = bernstein_bound(values, widths, tuple(left.T), tuple(right.T))
-    data = hermite_data(values, widths, left, right)
-    return peak_search(bound, lambda index: data[index], jnp.max(jnp.abs(values)), PEAK_TOLERANCE)
-
-
-def _bounded_max(values, widths, left, right):
-    """``max f`` (signed) between the nodes, by ``_bounded_peak`` of the shifted signal."""
-    low = jnp.min(values)
-    shift = low - (jnp.max(values) - low) - 1.0
-    return _bounded_peak(values - shift, widths, left, right) + shift
 
 
 def residual_modes(grid: CycleGrid, oscillator: Oscillator, q, rpm):

@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._plain import DEFAULT_SPEED_FLUCTUATION as DEFAULT_SPEED_FLUCTUATION
-from ..metrics import interval_peaks, septic_coefficients
+from ..metrics import bounded_extremes, bounded_peak, septic_coefficients
 
 TORQUE_PER_FORCE_VELOCITY = 1e-3 / (2 * math.pi)
 """N m of drive torque per N of contact force and mm per turn of lift velocity."""
@@ -58,8 +58,8 @@ def torque_figures(values, widths, left, right) -> TorqueFigures:
     Mean and RMS integrate the septic interpolant exactly; ``W(s) = 2 pi int (T - mean) ds``
     is its running integral at the nodes, with ``W' = T - mean``, ``W'' = T'``, ``W''' = T''``
     at both ends of every interval.  ``max |T|``, ``max W`` and ``min W`` are refined between
-    nodes as ``refined_peak`` does, in one pass over the three signals' intervals (``W``
-    shifted below its smallest node value for its maximum, above its largest for its minimum).
+    nodes by the bounded search (``camjax.metrics.bounded_peak``): only the intervals that can
+    hold them (refining every interval of the three signals was most of a cam turn's cost).
     """
     c = septic_coefficients(values, widths, left, right)
     integrals = widths * (c @ jnp.asarray(1.0 / np.arange(1, 9)))
@@ -70,15 +70,8 @@ def torque_figures(values, widths, left, right) -> TorqueFigures:
     def work_ends(t, d):
         return jnp.stack([t - mean, d[:, 0], d[:, 1]], axis=1)
 
-    w = septic_coefficients(work, widths, work_ends(values[:-1], left), work_ends(values[1:], right))
-    span = jnp.max(work) - jnp.min(work) + 1.0
-    below, above = jnp.min(work) - span, jnp.max(work) + span
-    constant = jnp.zeros(8).at[0].set(1.0)
-    peaks = interval_peaks(jnp.concatenate([c, w - below * constant, w - above * constant]))
-    k = values.shape[0] - 1
-    high = jnp.max(peaks[k:2 * k]) + below
-    low = above - jnp.max(peaks[2 * k:])
-    return TorqueFigures(jnp.max(peaks[:k]), rms, mean, 2 * math.pi * (high - low))
+    low, high = bounded_extremes(work, widths, work_ends(values[:-1], left), work_ends(values[1:], right))
+    return TorqueFigures(bounded_peak(values, widths, left, right), rms, mean, 2 * math.pi * (high - low))
 
 
 def flywheel_inertia_kg_m2(energy_fluctuation_j, rpm, speed_fluctuation: float):
