@@ -281,16 +281,16 @@ function showError(message, from = "program") {
     b ? document.querySelector(`#train tr[data-body="${b[1]}"]`) : null;
   if (row) row.classList.add("bad");
   const field = lastField && document.body.contains(lastField) ? lastField : null;
-  const named = namedField(message);
-  if (field) field.insertAdjacentElement("afterend", span);
+  const named = namedField(message);  // the field the message names, before the one edited last
+  if (named) named.insertAdjacentElement("afterend", span);
+  else if (field) field.insertAdjacentElement("afterend", span);
   else if (row) row.querySelector(".notes").appendChild(span);
-  else if (named) named.insertAdjacentElement("afterend", span);
   else if (/^\[arm\]/.test(message) && !$("arm-box").hidden) $("arm-notes").appendChild(span);
   else $("headline").insertAdjacentElement("beforebegin", span);
 }
 
 // The input of the field a message names first (`[arm] needs bending_stiffness_n_m2`,
-// `[follower] mass_kg, ...: ...`), where the page shows that table; else null.
+// `[follower] mass_kg, ...: ...`) where the page shows it; else null.
 function namedField(message) {
   const m = /^\[(follower|arm|spring|seat|materials)\]:? (?:needs )?(\w+)/.exec(message);
   return m ? document.querySelector(`#${m[1]} [data-key="${m[2]}"]`) : null;
@@ -979,11 +979,14 @@ function drawArm(a) {
     {label: "max |bending|", y: rows.map((s) => s.max_bending_mm)},
     ...a.orders.map((n, j) => ({label: `order ${n}`, y: rows.map((s) => s.bending_harmonics_mm[j]), dash: [4, 3]}))],
   {xlabel: "speed (rpm)", points: true});
-  plot("c-arm-orders", `its cam orders at ${fmt(near.rpm, 5)} rpm (mm)`, a.orders,
-    [{label: "amplitude", y: near.bending_harmonics_mm}], {xlabel: "cam order", points: true, lines: false});
+  plot("c-arm-orders", `its cam orders at ${fmt(near.rpm, 5)} rpm (mm)`, a.orders.map((_, i) => i + 1),
+    [{label: "amplitude", y: near.bending_harmonics_mm}],
+    {xlabel: "cam order", points: true, lines: false, xticks: a.orders.map(String)});
   const table = $("arm-speeds");
-  table.querySelector("thead").innerHTML = `<tr><th>rpm</th><th>first mode in cam orders</th><th>max |bending| mm</th>` +
-    a.orders.map((n) => `<th>order ${n} mm</th>`).join("") + "</tr>";
+  table.querySelector("thead").innerHTML =
+    `<tr><th rowspan="2">rpm</th><th rowspan="2">first mode, cam orders</th><th rowspan="2">max |bending| mm</th>` +
+    `<th colspan="${a.orders.length}">amplitude of each cam order, mm</th></tr>` +
+    `<tr>${a.orders.map((n) => `<th>${n}</th>`).join("")}</tr>`;
   table.querySelector("tbody").innerHTML = rows.map((s) => `<tr data-rpm="${s.rpm}"><td>${fmt(s.rpm, 5)}</td>` +
     `<td>${fmt(s.fundamental_orders, 4)}</td><td>${fmt(s.max_bending_mm, 4)}</td>` +
     s.bending_harmonics_mm.map((v) => `<td>${fmt(v, 3)}</td>`).join("") + "</tr>").join("");
