@@ -814,3 +814,91 @@ def test_page_edits_a_flexible_arm_and_draws_its_report(tmp_path):
             browser.close()
     finally:
         running.stop()
+
+
+def test_page_adds_a_flexible_arm_to_a_one_body_swinging_follower():
+    """*+ flexible arm* on a one-body swinging roller (the indexer's cam): an empty ``[arm]``
+    and a chain whose first body is the roller; the library then names, one at a time and
+    at the field or row it names, the one-body ``[follower]`` fields the chain replaces, the
+    roller's mass, the arm's stiffness and its damping (the steady state needs it).  Given them, the page's held frequencies are
+    ``Chain.natural_frequencies`` of the program the studio holds (1e-12), the first within
+    1e-4 of the pinned Rayleigh beam's closed form (the roller held, nothing else on the
+    arm), and the studio's TOML reads back to that program."""
+    sync_playwright = _browser()
+    indexer = cp.Program.load(cp.example_path("indexer"))
+    swinging = dataclasses.replace(indexer, follower=dataclasses.replace(
+        indexer.follower, kind="swinging-roller", arm_mm=98.0, pivot_mm=110.0))
+    rod = tomllib.loads(cp.example_path("swinging_arm").read_text())["arm"]
+    running = studio(swinging, rpm="2000:3200:2")
+    idle = "document.body.dataset.busy === '0'"
+    clean = f"document.querySelector('#status').textContent === 'ready' && {idle} && !document.querySelector('.err')"
+    failed = f"!!document.querySelector('.err') && {idle}"
+    posted = lambda r: "/api/program" in r.url and r.request.method == "POST"  # noqa: E731
+    before_error = "document.querySelector('.err').previousElementSibling"
+
+    def message_of(data) -> str:
+        with pytest.raises(ValueError) as error:
+            cp.Program.from_dict(data)
+        return str(error.value)
+
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            page = browser.new_page(viewport={"width": 1600, "height": 1250})
+            errors = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(running.url)
+            page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
+            page.wait_for_function(clean, timeout=REDRAW_MS)
+            session = page.evaluate("SESSION")
+            assert page.is_visible("#add-arm") and not page.is_visible("#arm-box")
+            assert not page.is_visible("#chain-box") and not page.is_visible("#train-box")
+            data = call(running.url + f"api/program?session={session}")[1]["program"]
+            classic = [key for key in cp.CLASSIC_FIELDS if key in data["follower"]]
+            assert classic == list(cp.CLASSIC_FIELDS)  # the indexer gives all five
+            # added: the chain's fields replace the one-body ones, which the library names
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.click("#add-arm")
+            page.wait_for_function(failed, timeout=REDRAW_MS)
+            data.update(arm={}, train=[{"name": "roller"}])
+            assert page.inner_text(".err") == message_of(dict(data))
+            assert page.inner_text(".err").startswith(f"[follower] {', '.join(classic)}: a file with a [[train]]")
+            assert page.evaluate(f"{before_error}.closest('#follower') !== null && {before_error}.dataset.key") == "mass_kg"
+            with page.expect_response(posted, timeout=REDRAW_MS):  # one edit, typed within the debounce
+                for key in classic:
+                    page.fill(f'#follower input[data-key="{key}"]', "")
+            page.wait_for_function(failed, timeout=REDRAW_MS)
+            for key in classic:
+                del data["follower"][key]
+            assert page.inner_text('#train tr[data-body="1"] .err') == message_of(dict(data))
+            assert message_of(dict(data)) == "[[train]] body 1 (roller): needs mass_kg"
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill('#train input[data-body="1"][data-key="mass_kg"]', "0.025")
+            page.wait_for_function(failed, timeout=REDRAW_MS)
+            assert page.inner_text("#arm .err") == "[arm] needs bending_stiffness_n_m2"
+            assert page.evaluate(f"{before_error}.dataset.key") == "bending_stiffness_n_m2"
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                for key in ("bending_stiffness_n_m2", "mass_per_length_kg_per_m"):
+                    page.fill(f'#arm input[data-key="{key}"]', repr(rod[key]))
+            page.wait_for_function(failed, timeout=REDRAW_MS)  # the steady state needs the arm damped
+            assert page.inner_text("#arm .err").startswith("[arm] damping_ratio: the arm's modes have no damping")
+            assert page.evaluate(f"{before_error}.dataset.key") == "damping_ratio"
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill('#arm input[data-key="damping_ratio"]', repr(rod["damping_ratio"]))
+            page.wait_for_function(clean, timeout=REDRAW_MS)
+            state = call(running.url + f"api/program?session={session}")[1]
+            program = cp.Program.from_dict(state["program"])
+            assert state["program"]["train"] == [{"name": "roller", "mass_kg": 0.025}]
+            given = ("bending_stiffness_n_m2", "mass_per_length_kg_per_m", "damping_ratio")
+            assert state["program"]["arm"] == {k: rod[k] for k in given}
+            assert cp.Program.from_dict(tomllib.loads(state["toml"])) == program
+            held, _ = program.chain.natural_frequencies(contact=True)
+            np.testing.assert_allclose(json.loads(page.get_attribute("#train-held", "data-hz")), held, rtol=1e-12)
+            assert float(page.get_attribute("#arm-fundamental", "data-hz")) == held[0]
+            closed = program.chain.arm.pinned_frequencies_hz(1)[0]  # an Euler-Bernoulli beam here
+            assert abs(held[0] / closed - 1) < 1e-4, (held[0], closed)
+            assert page.locator("#arm-speeds tbody tr").count() == 2
+            assert not errors, errors
+            browser.close()
+    finally:
+        running.stop()

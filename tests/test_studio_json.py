@@ -234,6 +234,17 @@ def test_a_bad_arm_is_a_400_with_the_library_message(running, edit):
     assert "\n" not in answer["error"] and "arm" in answer["error"], answer
 
 
+def test_an_undamped_arm_is_a_400_naming_its_damping_ratio(running):
+    """The steady state of an arm without damping does not exist: the analysis's one line
+    names the ``[arm]`` field to give (the page shows it there)."""
+    data = _arm_data(lambda d: d["arm"].pop("damping_ratio"))
+    status, answer = call(running, f"api/program?session=bad-arm&rpm={ARM_RPM}", data)
+    assert status == 400 and answer["error"].startswith(
+        "[arm] damping_ratio: the arm's modes have no damping"
+    )
+    assert "\n" not in answer["error"]
+
+
 def test_the_report_names_the_residual_segments(running):
     """Which segments each speed's residual vibrations belong to is the program's rule
     (``Program.residual_segments``), served in the report, not re-derived by the page."""

@@ -281,9 +281,11 @@ function showError(message, from = "program") {
     b ? document.querySelector(`#train tr[data-body="${b[1]}"]`) : null;
   if (row) row.classList.add("bad");
   const field = lastField && document.body.contains(lastField) ? lastField : null;
-  const named = namedField(message);  // the field the message names, before the one edited last
+  // the field the message names, else the one edited last unless the message names a row
+  // it is not in (a segment's or a body's)
+  const named = namedField(message);
   if (named) named.insertAdjacentElement("afterend", span);
-  else if (field) field.insertAdjacentElement("afterend", span);
+  else if (field && (!row || row.contains(field))) field.insertAdjacentElement("afterend", span);
   else if (row) row.querySelector(".notes").appendChild(span);
   else if (/^\[arm\]/.test(message) && !$("arm-box").hidden) $("arm-notes").appendChild(span);
   else $("headline").insertAdjacentElement("beforebegin", span);
