@@ -695,3 +695,210 @@ def test_page_edits_a_chain_and_draws_its_modes(tmp_path):
             browser.close()
     finally:
         running.stop()
+
+
+def test_page_edits_a_flexible_arm_and_draws_its_report(tmp_path):
+    """The swinging arm example: its ``[arm]`` fields (the library's ``ARM_FIELDS``) with the
+    file's values; a bad bending stiffness (the library's one-line message at the field);
+    four times the stiffness (every held frequency doubles: the arm's masses are the beam's,
+    the roller held); the arm removed (the library names the body still placed on it) and
+    added again empty (its message at the field it names), then given the file's values
+    (the starting report again).  Each time the page's frequencies are
+    ``Chain.natural_frequencies`` of the program the studio holds, to 1e-12, and the
+    report's arm section is drawn: its first bending mode, a row per speed, its plots."""
+    sync_playwright = _browser()
+    shots = Path(os.environ.get("CAMJAX_STUDIO_SCREENSHOTS") or tmp_path)
+    rpm = "2000:3200:3"
+    running = studio("swinging_arm", rpm=rpm)
+    file_arm = tomllib.loads(cp.example_path("swinging_arm").read_text())["arm"]
+    idle = "document.body.dataset.busy === '0'"
+    ready = f"document.querySelector('#status').textContent === 'ready' && {idle}"
+    clean = f"{ready} && !document.querySelector('.err')"
+    posted = lambda r: "/api/program" in r.url and r.request.method == "POST"  # noqa: E731
+    arm_input = lambda key: f'#arm input[data-key="{key}"]'  # noqa: E731
+
+    def arm_drawn(session):
+        """The page's frequencies and arm section against the program the studio holds."""
+        state = call(running.url + f"api/program?session={session}")[1]
+        chain = cp.Program.from_dict(state["program"]).chain
+        held, _ = chain.natural_frequencies(contact=True)
+        free, _ = chain.natural_frequencies(contact=False)
+        np.testing.assert_allclose(json.loads(page.get_attribute("#train-held", "data-hz")), held, rtol=1e-12)
+        np.testing.assert_allclose(json.loads(page.get_attribute("#train-free", "data-hz")), free,
+                                   rtol=1e-12, atol=1e-9)  # the free chain's first: the rigid swing, 0 Hz
+        fundamental = float(page.get_attribute("#arm-fundamental", "data-hz"))
+        assert abs(fundamental / held[0] - 1) < 1e-12
+        assert f"{held[0]:.6g}" in page.inner_text("#arm-facts")
+        for key, value in state["program"]["arm"].items():  # the table shows the program's fields
+            assert float(page.input_value(arm_input(key))) == value
+        assert page.locator("#arm-speeds tbody tr").count() == 3
+        assert page.locator("#c-arm-speeds canvas").count() == page.locator("#c-arm-orders canvas").count() == 1
+        return held
+
+    def message_of(edit) -> str:
+        """The library's message for the studio's program changed by ``edit``."""
+        data = call(running.url + f"api/program?session={session}")[1]["program"]
+        edit(data)
+        with pytest.raises(ValueError) as error:
+            cp.Program.from_dict(data)
+        return str(error.value)
+
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            page = browser.new_page(viewport={"width": 1600, "height": 1300})
+            errors = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(running.url)
+            page.wait_for_selector("#arm-fundamental", timeout=2 * REDRAW_MS)
+            page.wait_for_function(ready, timeout=REDRAW_MS)
+            session = page.evaluate("SESSION")
+            assert page.is_visible("#arm-box") and not page.is_visible("#add-arm")
+            assert page.locator("#arm input").count() == len(cp.ARM_FIELDS)
+            assert "the roller sits 98 mm from the pivot" in page.inner_text("#arm-notes")
+            assert f"empty: {cp.DEFAULT_ELEMENTS} over the length" in page.inner_text("#arm")
+            start = arm_drawn(session)
+            closed = cp.Program.load(cp.example_path("swinging_arm")).chain.arm.pinned_frequencies_hz(1)[0]
+            assert abs(start[0] / closed - 1) < 1e-4  # the pinned Rayleigh beam's closed form
+            page.screenshot(path=str(shots / "studio-arm-start.png"), full_page=True)
+
+            # a bad stiffness: the library's message at the field, the views stale
+            stiffness = arm_input("bending_stiffness_n_m2")
+            expected = message_of(lambda d: d["arm"].update(bending_stiffness_n_m2=-1))
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill(stiffness, "-1")
+            page.wait_for_function(f"!!document.querySelector('#arm .err') && {idle}", timeout=REDRAW_MS)
+            assert page.inner_text("#arm .err") == expected == "[arm] bending_stiffness_n_m2 must be positive, got -1"
+            key = "document.querySelector('#arm .err').previousElementSibling.dataset.key"
+            assert page.evaluate(key) == "bending_stiffness_n_m2"
+            assert page.evaluate("document.body.dataset.stale") == "1"
+            # four times as stiff: every held frequency twice
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill(stiffness, repr(4 * file_arm["bending_stiffness_n_m2"]))
+            page.wait_for_function(clean, timeout=REDRAW_MS)
+            stiffer = arm_drawn(session)
+            np.testing.assert_allclose(stiffer, 2 * start, rtol=1e-12)
+            page.locator("#arm-report").screenshot(path=str(shots / "studio-arm.png"))
+
+            # removed: the library names the body still placed on the arm, at its row
+            expected = message_of(lambda d: d.pop("arm"))
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.click("#remove-arm")
+            page.wait_for_function(f"!!document.querySelector('.err') && {idle}", timeout=REDRAW_MS)
+            assert page.inner_text('#train tr[data-body="2"] .err') == expected
+            assert expected == "[[train]] body 2 (mid-rod) at_mm: a place on the arm needs an [arm] table"
+            assert not page.is_visible("#arm-box") and page.is_visible("#add-arm")
+            # added again, empty: the library's message at the field it names
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.click("#add-arm")
+            page.wait_for_function(f"!!document.querySelector('#arm .err') && {idle}", timeout=REDRAW_MS)
+            assert page.inner_text("#arm .err") == "[arm] needs bending_stiffness_n_m2"
+            assert page.evaluate(key) == "bending_stiffness_n_m2"
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill(stiffness, repr(file_arm["bending_stiffness_n_m2"]))
+            page.wait_for_function(f"!!document.querySelector('#arm .err') && {idle}", timeout=REDRAW_MS)
+            assert page.inner_text("#arm .err") == "[arm] needs mass_per_length_kg_per_m"  # at its field
+            assert page.evaluate(key) == "mass_per_length_kg_per_m"
+            with page.expect_response(posted, timeout=REDRAW_MS):  # one edit, typed within the debounce
+                for name in ("mass_per_length_kg_per_m", "rotary_inertia_kg_m", "damping_ratio"):
+                    page.fill(arm_input(name), repr(file_arm[name]))
+            page.wait_for_function(clean, timeout=REDRAW_MS)
+            state = call(running.url + f"api/program?session={session}")[1]
+            assert state["program"]["arm"] == file_arm
+            assert cp.Program.from_dict(state["program"]) == cp.Program.load(cp.example_path("swinging_arm"))
+            np.testing.assert_allclose(arm_drawn(session), start, rtol=1e-12)
+            assert "[arm]\n" in state["toml"]  # the one writer's
+            page.locator("#arm-box").screenshot(path=str(shots / "studio-arm-editor.png"))
+            page.screenshot(path=str(shots / "studio-arm-end.png"), full_page=True)
+            assert not errors, errors
+            browser.close()
+    finally:
+        running.stop()
+
+
+def test_page_adds_a_flexible_arm_to_a_one_body_swinging_follower():
+    """*+ flexible arm* on a one-body swinging roller (the indexer's cam): an empty ``[arm]``
+    and a chain whose first body is the roller; the library then names, one at a time and
+    at the field or row it names, the one-body ``[follower]`` fields the chain replaces, the
+    roller's mass, the arm's stiffness and its damping (the steady state needs it).  Given them, the page's held frequencies are
+    ``Chain.natural_frequencies`` of the program the studio holds (1e-12), the first within
+    1e-4 of the pinned Rayleigh beam's closed form (the roller held, nothing else on the
+    arm), and the studio's TOML reads back to that program."""
+    sync_playwright = _browser()
+    indexer = cp.Program.load(cp.example_path("indexer"))
+    swinging = dataclasses.replace(indexer, follower=dataclasses.replace(
+        indexer.follower, kind="swinging-roller", arm_mm=98.0, pivot_mm=110.0))
+    rod = tomllib.loads(cp.example_path("swinging_arm").read_text())["arm"]
+    running = studio(swinging, rpm="2000:3200:2")
+    idle = "document.body.dataset.busy === '0'"
+    clean = f"document.querySelector('#status').textContent === 'ready' && {idle} && !document.querySelector('.err')"
+    failed = f"!!document.querySelector('.err') && {idle}"
+    posted = lambda r: "/api/program" in r.url and r.request.method == "POST"  # noqa: E731
+    before_error = "document.querySelector('.err').previousElementSibling"
+
+    def message_of(data) -> str:
+        with pytest.raises(ValueError) as error:
+            cp.Program.from_dict(data)
+        return str(error.value)
+
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+            page = browser.new_page(viewport={"width": 1600, "height": 1250})
+            errors = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(running.url)
+            page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
+            page.wait_for_function(clean, timeout=REDRAW_MS)
+            session = page.evaluate("SESSION")
+            assert page.is_visible("#add-arm") and not page.is_visible("#arm-box")
+            assert not page.is_visible("#chain-box") and not page.is_visible("#train-box")
+            data = call(running.url + f"api/program?session={session}")[1]["program"]
+            classic = [key for key in cp.CLASSIC_FIELDS if key in data["follower"]]
+            assert classic == list(cp.CLASSIC_FIELDS)  # the indexer gives all five
+            # added: the chain's fields replace the one-body ones, which the library names
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.click("#add-arm")
+            page.wait_for_function(failed, timeout=REDRAW_MS)
+            data.update(arm={}, train=[{"name": "roller"}])
+            assert page.inner_text(".err") == message_of(dict(data))
+            assert page.inner_text(".err").startswith(f"[follower] {', '.join(classic)}: a file with a [[train]]")
+            assert page.evaluate(f"{before_error}.closest('#follower') !== null && {before_error}.dataset.key") == "mass_kg"
+            with page.expect_response(posted, timeout=REDRAW_MS):  # one edit, typed within the debounce
+                for key in classic:
+                    page.fill(f'#follower input[data-key="{key}"]', "")
+            page.wait_for_function(failed, timeout=REDRAW_MS)
+            for key in classic:
+                del data["follower"][key]
+            assert page.inner_text('#train tr[data-body="1"] .err') == message_of(dict(data))
+            assert message_of(dict(data)) == "[[train]] body 1 (roller): needs mass_kg"
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill('#train input[data-body="1"][data-key="mass_kg"]', "0.025")
+            page.wait_for_function(failed, timeout=REDRAW_MS)
+            assert page.inner_text("#arm .err") == "[arm] needs bending_stiffness_n_m2"
+            assert page.evaluate(f"{before_error}.dataset.key") == "bending_stiffness_n_m2"
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                for key in ("bending_stiffness_n_m2", "mass_per_length_kg_per_m"):
+                    page.fill(f'#arm input[data-key="{key}"]', repr(rod[key]))
+            page.wait_for_function(failed, timeout=REDRAW_MS)  # the steady state needs the arm damped
+            assert page.inner_text("#arm .err").startswith("[arm] damping_ratio: the arm's modes have no damping")
+            assert page.evaluate(f"{before_error}.dataset.key") == "damping_ratio"
+            with page.expect_response(posted, timeout=REDRAW_MS):
+                page.fill('#arm input[data-key="damping_ratio"]', repr(rod["damping_ratio"]))
+            page.wait_for_function(clean, timeout=REDRAW_MS)
+            state = call(running.url + f"api/program?session={session}")[1]
+            program = cp.Program.from_dict(state["program"])
+            assert state["program"]["train"] == [{"name": "roller", "mass_kg": 0.025}]
+            given = ("bending_stiffness_n_m2", "mass_per_length_kg_per_m", "damping_ratio")
+            assert state["program"]["arm"] == {k: rod[k] for k in given}
+            assert cp.Program.from_dict(tomllib.loads(state["toml"])) == program
+            held, _ = program.chain.natural_frequencies(contact=True)
+            np.testing.assert_allclose(json.loads(page.get_attribute("#train-held", "data-hz")), held, rtol=1e-12)
+            assert float(page.get_attribute("#arm-fundamental", "data-hz")) == held[0]
+            closed = program.chain.arm.pinned_frequencies_hz(1)[0]  # an Euler-Bernoulli beam here
+            assert abs(held[0] / closed - 1) < 1e-4, (held[0], closed)
+            assert page.locator("#arm-speeds tbody tr").count() == 2
+            assert not errors, errors
+            browser.close()
+    finally:
+        running.stop()

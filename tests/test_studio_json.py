@@ -3,19 +3,24 @@ server writes TOML with ``Program.to_toml``, the one writer: every built-in prog
 chain posted as JSON are the ``Program`` read from their file, and the studio's TOML is that
 program's ``to_toml``.  No browser: the JSON interface as the page calls it."""
 
+import copy
+import dataclasses
 import json
 import tomllib
 import urllib.error
 import urllib.parse
 import urllib.request
 
+import numpy as np
 import pytest
 
 from camjax import program as cp
+from camjax.cli import dump_json
 from camjax.studio import Studio
 
 RPM = "600"  # one speed: the round trip is about the program, not the analysis
 CHAIN_RPM = "2000"  # a chain's grid resolves its highest mode at the speed: a lighter one here
+ARM_RPM = "3055.7749"  # the flexible arm's paper's 320 rad/s
 BUILT_IN = ["feed", "indexer", "servo", "valve"]
 CHAIN = """
 [program]
@@ -156,6 +161,88 @@ def test_a_chain_posted_as_json_is_its_file(running, tmp_path):
         "translating-flat",
         "swinging-flat",
     ]
+
+
+def test_a_flexible_arm_posted_as_json_is_its_file(running):
+    """The swinging arm example posted as JSON: its ``[arm]`` is the file's, the studio's TOML
+    is ``to_toml``'s (with the ``[arm]``), the page's arm fields are the library's
+    ``ARM_FIELDS`` in ``Arm``'s order, and the report's arm section is ``analyse``'s: its
+    first bending mode (cam held) within 1e-4 of the pinned Rayleigh beam's closed form."""
+    path = cp.example_path("swinging_arm")
+    expected = cp.Program.load(path)
+    program, toml, state, report = _round_trip(
+        running, "arm", path.read_text(), path.parent, ARM_RPM
+    )
+    assert program == expected and program.chain.arm == expected.chain.arm is not None
+    assert toml == expected.to_toml() and "\n[arm]\n" in toml
+    assert cp.Program.from_dict(tomllib.loads(toml)) == expected
+    assert state["program"]["arm"] == tomllib.loads(path.read_text())["arm"]
+    arm_fields = state["fields"]["arm"]
+    names = [f.name for f in dataclasses.fields(cp.Arm) if f.name in cp.ARM_FIELDS]
+    assert [f["name"] for f in arm_fields] == names and set(names) == cp.ARM_FIELDS
+    assert [f["name"] for f in arm_fields if f["required"]] == [
+        "bending_stiffness_n_m2",
+        "mass_per_length_kg_per_m",
+    ]
+    by_name = {f["name"]: f for f in arm_fields}
+    assert (
+        by_name["modes"]["default"] == cp.Arm.modes and by_name["damping_ratio"]["default"] == 0.0
+    )
+    assert by_name["elements"]["empty"].startswith(f"{cp.DEFAULT_ELEMENTS} ")
+    # the report's arm section: camjax.program.analyse's, as the CLI writes it
+    arm = report["train"]["arm"]
+    reference = json.loads(dump_json(cp.analyse(expected, [float(ARM_RPM)]).as_dict()))["train"][
+        "arm"
+    ]
+    assert arm["body"] == reference["body"] == "mid-rod" and arm["orders"] == reference["orders"]
+    assert arm["fundamental_hz"] == reference["fundamental_hz"]
+    (row,), (ref,) = arm["speeds"], reference["speeds"]
+    np.testing.assert_allclose(
+        row["bending_harmonics_mm"], ref["bending_harmonics_mm"], rtol=1e-9, atol=1e-12
+    )
+    np.testing.assert_allclose(row["max_bending_mm"], ref["max_bending_mm"], rtol=1e-9)
+    closed = expected.chain.arm.pinned_frequencies_hz(1)[0]
+    assert abs(arm["fundamental_hz"] / closed - 1) < 1e-4
+    assert arm["fundamental_hz"] == report["train"]["natural_frequencies_held_hz"][0]
+
+
+def _arm_data(edit) -> dict:
+    data = tomllib.loads(cp.example_path("swinging_arm").read_text())
+    edit(data)
+    return data
+
+
+@pytest.mark.parametrize(
+    "edit",
+    [
+        lambda d: d["arm"].update(damping_ratio=1.5),
+        lambda d: d["arm"].update(bending_stiffness_n_m2=-1),
+        lambda d: d.update(arm={}),  # added by the page: empty
+        lambda d: d.pop("arm"),  # removed: a body still placed on it
+        lambda d: d["arm"].update(width_mm=5),
+        lambda d: d["follower"].update(kind="translating-roller"),
+        lambda d: d.pop("train"),
+    ],
+    ids=["damping", "negative", "empty", "removed", "unknown", "translating", "no-train"],
+)
+def test_a_bad_arm_is_a_400_with_the_library_message(running, edit):
+    data = _arm_data(edit)
+    with pytest.raises(ValueError) as expected:
+        cp.Program.from_dict(copy.deepcopy(data))
+    status, answer = call(running, f"api/program?session=bad-arm&rpm={ARM_RPM}", data)
+    assert status == 400 and answer == {"error": str(expected.value)}
+    assert "\n" not in answer["error"] and "arm" in answer["error"], answer
+
+
+def test_an_undamped_arm_is_a_400_naming_its_damping_ratio(running):
+    """The steady state of an arm without damping does not exist: the analysis's one line
+    names the ``[arm]`` field to give (the page shows it there)."""
+    data = _arm_data(lambda d: d["arm"].pop("damping_ratio"))
+    status, answer = call(running, f"api/program?session=bad-arm&rpm={ARM_RPM}", data)
+    assert status == 400 and answer["error"].startswith(
+        "[arm] damping_ratio: the arm's modes have no damping"
+    )
+    assert "\n" not in answer["error"]
 
 
 def test_the_report_names_the_residual_segments(running):

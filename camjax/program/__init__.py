@@ -23,6 +23,8 @@ docs/machine.md, docs/valve-trains.md and docs/servo.md.
 
 from typing import TYPE_CHECKING
 
+from ._arm import ARM_FIELDS as ARM_FIELDS
+from ._arm import DEFAULT_ELEMENTS as DEFAULT_ELEMENTS
 from ._arm import Arm as Arm
 from ._arm_report import arm_bending as arm_bending
 from ._chain_contacts import ChainContacts as ChainContacts

@@ -42,6 +42,10 @@ CONTACT_FORCE = 0  # N, at the cam
 PAYLOAD_ACCELERATION = 1  # m/s^2, the last body's
 PAYLOAD_DISPLACEMENT = 2  # mm, the last body's, from its static position
 TRAIN_ROWS = 3  # a train's rows start here: each body's acceleration, seat force, surge, lift error
+UNDAMPED_RATIO = 1e-12
+"""A chain's mode whose damping ratio (``-Re(lambda) / |lambda|``) is not above this is
+undamped: an undamped arm's modes come out of the eigensolver with ratios of about 1e-24
+either side of zero, round-off that would otherwise pass for damping."""
 
 
 def output_rows(bodies: int) -> dict[str, int | slice]:
@@ -190,7 +194,12 @@ class Oscillator(NamedTuple):
         b0 = np.concatenate([np.zeros(n), Minv @ (Kff @ G - a.K[free, 0])])
         b1 = np.concatenate([np.zeros(n), Minv @ (Cff @ G - a.C[free, 0])])
         lam, V = np.linalg.eig(A)
-        if not np.all(lam.real < 0):
+        if not np.all(-lam.real > UNDAMPED_RATIO * np.abs(lam)):  # round-off is not damping
+            if chain.arm is not None and not chain.arm.damping_ratio:  # the arm's modes: its own
+                raise ValueError(
+                    "[arm] damping_ratio: the arm's modes have no damping (give the first mode's "
+                    "ratio, e.g. 0.01): its periodic steady state does not exist"
+                )
             raise ValueError(
                 "the chain has a mode without damping (give the elements damping_n_s_per_m "
                 "or the spring damping_ratio): its periodic steady state does not exist"

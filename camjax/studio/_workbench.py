@@ -479,24 +479,43 @@ def designed_data(data: dict, program, segment: int, law_path: Path, base: Path 
     return parse_toml(program.to_toml(law_files={**files, segment: law_path.as_posix()}))
 
 
+ARM_EMPTY = {"length_mm": "the follower's arm_mm (the arm ends at the roller)"}
+"""What an empty ``[arm]`` field whose default is ``None`` stands for, beside the library's
+own defaults (``elements``: ``camjax.program.DEFAULT_ELEMENTS``)."""
+
+
 def program_fields() -> dict:
     """The fields the page edits, from the program's own types: the follower's kinds
     (``camjax.program.follower_kinds``: each with its keys, whether it has a roller and
     whether it swings) and fields, the chain's
-    body, spring and seat fields with their defaults (``required``: none), and the
-    ``[follower]`` fields a chain replaces."""
-    from ..program import CLASSIC_FIELDS, Body, Follower, Seat, Spring, follower_kinds
+    body, spring and seat fields with their defaults (``required``: none), the
+    ``[follower]`` fields a chain replaces, and the ``[arm]`` table's fields
+    (``camjax.program.ARM_FIELDS``, in the order of ``Arm``'s; ``empty``: what an empty
+    one stands for where its default is ``None``)."""
+    from ..program import (
+        ARM_FIELDS,
+        CLASSIC_FIELDS,
+        DEFAULT_ELEMENTS,
+        Arm,
+        Body,
+        Follower,
+        Seat,
+        Spring,
+        follower_kinds,
+    )
 
-    def fields(record) -> list[dict]:
+    def fields(record, names=None) -> list[dict]:
         return [{"name": f.name, "required": f.default is dataclasses.MISSING,
                  "default": None if f.default is dataclasses.MISSING else f.default}
-                for f in dataclasses.fields(record)]
+                for f in dataclasses.fields(record) if names is None or f.name in names]
 
     follower = [f.name for f in dataclasses.fields(Follower)]
+    empty = {**ARM_EMPTY, "elements": f"{DEFAULT_ELEMENTS} over the length"}
+    arm = [{**f, **({"empty": empty[f["name"]]} if f["name"] in empty else {})} for f in fields(Arm, ARM_FIELDS)]
     return {"follower_kinds": follower_kinds(),
             "follower": ["kind", *(name for name in follower if name != "kind")],
             "body": fields(Body), "spring": fields(Spring), "seat": fields(Seat),
-            "chain_replaces": list(CLASSIC_FIELDS)}
+            "chain_replaces": list(CLASSIC_FIELDS), "arm": arm}
 
 
 def _file_name(name: str) -> str:

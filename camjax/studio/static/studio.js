@@ -14,7 +14,7 @@ let model = null;        // {program: {name}, segment: [...], follower: {...}, m
 let bundle = false;      // the program holds a designed law: saved as a zip with its law files
 let designDefaults = {steps: 60};   // the server's (GET /api/program)
 let followerDefaults = {};          // what an empty follower field stands for (GET /api/program)
-let fields = {follower: [], follower_kinds: [], body: [], spring: [], seat: [], chain_replaces: []};  // the server's
+let fields = {follower: [], follower_kinds: [], body: [], spring: [], seat: [], chain_replaces: [], arm: []};  // the server's
 const dwellLift = new WeakMap();    // a segment's lift while it is a dwell, restored with a law
 let rollerCleared = false;
 let errorFrom = null;               // what the standing error came from: "program" or "chosen" (the speed)
@@ -212,7 +212,8 @@ function renderEditor() {
   const f = model.follower = model.follower || {};
   const chained = Array.isArray(model.train);  // a chain gives these fields in its own tables
   for (const key of fields.follower) {
-    if (chained && fields.chain_replaces.includes(key)) continue;
+    // (one still set shows, so that the library's message naming it can be acted on)
+    if (chained && fields.chain_replaces.includes(key) && f[key] === undefined) continue;
     const label = document.createElement("label");
     label.textContent = key + " ";
     if (key === "kind") {
@@ -235,6 +236,7 @@ function renderEditor() {
   }
   renderFollowerNotes();
   renderChain();
+  renderArm();
   renderMaterials();
   rollerCleared = false;
   renderNotes();
@@ -279,9 +281,21 @@ function showError(message, from = "program") {
     b ? document.querySelector(`#train tr[data-body="${b[1]}"]`) : null;
   if (row) row.classList.add("bad");
   const field = lastField && document.body.contains(lastField) ? lastField : null;
-  if (field) field.insertAdjacentElement("afterend", span);
+  // the field the message names, else the one edited last unless the message names a row
+  // it is not in (a segment's or a body's)
+  const named = namedField(message);
+  if (named) named.insertAdjacentElement("afterend", span);
+  else if (field && (!row || row.contains(field))) field.insertAdjacentElement("afterend", span);
   else if (row) row.querySelector(".notes").appendChild(span);
+  else if (/^\[arm\]/.test(message) && !$("arm-box").hidden) $("arm-notes").appendChild(span);
   else $("headline").insertAdjacentElement("beforebegin", span);
+}
+
+// The input of the field a message names first (`[arm] needs bending_stiffness_n_m2`,
+// `[follower] mass_kg, ...: ...`) where the page shows it; else null.
+function namedField(message) {
+  const m = /^\[(follower|arm|spring|seat|materials)\]:? (?:needs )?(\w+)/.exec(message);
+  return m ? document.querySelector(`#${m[1]} [data-key="${m[2]}"]`) : null;
 }
 
 function edited() {
@@ -462,7 +476,8 @@ function plot(id, title, x, series, opts = {}) {
   const given = series.filter((s) => (s.y || []).some((v) => v !== null && v !== undefined));
   if (!given.length) { el.textContent = `${title}: not in the report for this program`; return; }
   series = given;
-  const colors = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b"];
+  const colors = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
+    "#bcbd22", "#17becf"];
   const width = Math.max(300, el.clientWidth - 8);
   charts[id] = new uPlot({
     title, width, height: opts.height || 200,
@@ -825,21 +840,23 @@ function renderChain() {
   for (const table of ["spring", "seat"]) renderRecord(table, fields[table]);
 }
 
-// The fields of one table ([spring] or [seat]); every field empty: no such table.
-function renderRecord(table, spec) {
+// The fields of one table ([spring], [seat] or [arm]); every field empty: no such table,
+// unless `keep` (the [arm], which its own button adds and removes).
+function renderRecord(table, spec, keep = false) {
   const box = $(table);
   box.innerHTML = "";
-  for (const {name, required, default: d} of spec) {
+  for (const {name, required, default: d, empty} of spec) {
     const label = document.createElement("label");
     label.textContent = name + " ";
     label.appendChild(input((model[table] || {})[name], (t) => {
       const v = parseCell(t), rec = model[table] = model[table] || {};
       if (v === undefined) delete rec[name]; else rec[name] = v;
-      if (!Object.keys(rec).length) delete model[table];
+      if (!keep && !Object.keys(rec).length) delete model[table];
     }, {table, key: name}));
     const note = document.createElement("span");
     note.className = "fnote";
-    note.textContent = (model[table] || {})[name] !== undefined ? "" : !required ? `empty: ${d === null ? "the library's choice" : d}` :
+    note.textContent = (model[table] || {})[name] !== undefined ? "" :
+      !required ? `empty: ${empty !== undefined ? empty : d === null ? "the library's choice" : d}` :
       model[table] ? "empty: required" : `empty: no [${table}]`;
     label.appendChild(note);
     box.appendChild(label);
@@ -854,17 +871,20 @@ function drawTrain() {
   box.hidden = !t;
   if (!t) return;
   $("train-note").textContent = t.note || "";
-  const shown = new Set(["note", "bodies", "speeds", "harmonic_check", "one_body"]);
+  const shown = new Set(["note", "bodies", "speeds", "harmonic_check", "one_body", "arm"]);
   const facts = Object.entries(t).filter(([k, v]) => !shown.has(k) && !k.startsWith("mode_shapes_") &&
     !k.startsWith("natural_frequencies_"));
   const freq = (key) => (t[key] || []).map((f) => fmt(f, 5)).join(", ");
   $("train-facts").innerHTML =
-    `<div>natural frequencies, cam contact held: <b id="train-held">${freq("natural_frequencies_held_hz")}</b> Hz</div>` +
-    `<div>free (in flight): ${freq("natural_frequencies_free_hz")} Hz</div>` +
+    `<div>natural frequencies, cam contact held: <b id="train-held" data-hz="${JSON.stringify(t.natural_frequencies_held_hz || [])}">` +
+    `${freq("natural_frequencies_held_hz")}</b> Hz</div>` +
+    `<div>free (in flight): <b id="train-free" data-hz="${JSON.stringify(t.natural_frequencies_free_hz || [])}">` +
+    `${freq("natural_frequencies_free_hz")}</b> Hz</div>` +
     facts.map(([k, v]) => `<div>${k}: ${typeof v === "number" ? fmt(v, 6) : v === null ? "none" : JSON.stringify(v)}</div>`).join("");
   drawModes(t);
   drawHarmonics(t);
   drawTrainSpeeds(t);
+  drawArm(t.arm);
 }
 
 function drawModes(t) {
@@ -913,6 +933,65 @@ function drawTrainSpeeds(t) {
     const v = value(row, c);
     return `<td>${typeof v === "number" ? fmt(v, 5) : v === null || v === undefined ? "-" : JSON.stringify(v)}</td>`;
   }).join("")}</tr>`).join("");
+}
+
+// ---- the flexible arm: [arm] -----------------------------------------------------------
+// A swinging roller follower's arm as a beam (camjax.program.Arm), its bodies the chain's.
+// Its fields come from the server (GET /api/program's `fields.arm`: the library's
+// ARM_FIELDS); an empty one is left out (the library's default, said beside it), and the
+// table stays until removed, so the library names what it lacks.
+
+const armable = () => { const k = kindOf((model.follower || {}).kind); return k.swinging && k.roller; };
+
+function renderArm() {
+  const has = model.arm !== undefined;
+  $("arm-box").hidden = !has;
+  $("add-arm").hidden = has || !armable();
+  if (!has) return;
+  renderRecord("arm", fields.arm, true);
+  const at = (model.follower || {}).arm_mm;
+  $("arm-notes").textContent = `the roller sits ${at === undefined ? "at the follower's arm_mm (empty)" :
+    `${at} mm from the pivot (the follower's arm_mm)`}`;
+}
+
+// Added: an empty [arm] (the library names its first missing field); a program without a
+// chain gets one, its first body the roller (the library names what it lacks, and any
+// one-body [follower] field the chain replaces).
+function addArm() {
+  model.arm = {};
+  if (!Array.isArray(model.train)) model.train = [{name: "roller"}];
+}
+
+// The report's arm section (camjax.program's arm_section): the first bending mode with the
+// cam held, the last body's bending over the speeds (its largest, each cam order's
+// amplitude), the cam orders at the range speed nearest the chosen one, and a row per speed.
+function drawArm(a) {
+  $("arm-report").hidden = !a;
+  if (!a) {
+    for (const id of ["c-arm-speeds", "c-arm-orders"]) if (charts[id]) { charts[id].destroy(); delete charts[id]; }
+    return;
+  }
+  const rows = a.speeds, rpm = rows.map((s) => s.rpm);
+  const near = rows.reduce((best, s) => Math.abs(s.rpm - curves.rpm) < Math.abs(best.rpm - curves.rpm) ? s : best);
+  $("arm-facts").innerHTML =
+    `<div>first bending mode, cam held: <b id="arm-fundamental" data-hz="${a.fundamental_hz}">${fmt(a.fundamental_hz, 6)}</b> Hz ` +
+    `= ${fmt(a.fundamental_rad_s, 6)} rad/s</div>` +
+    `<div>bending of <b>${a.body}</b>: its displacement less the rigid swing's</div>`;
+  plot("c-arm-speeds", `bending of ${a.body} (mm) vs speed`, rpm, [
+    {label: "max |bending|", y: rows.map((s) => s.max_bending_mm)},
+    ...a.orders.map((n, j) => ({label: `order ${n}`, y: rows.map((s) => s.bending_harmonics_mm[j]), dash: [4, 3]}))],
+  {xlabel: "speed (rpm)", points: true});
+  plot("c-arm-orders", `its cam orders at ${fmt(near.rpm, 5)} rpm (mm)`, a.orders.map((_, i) => i + 1),
+    [{label: "amplitude", y: near.bending_harmonics_mm}],
+    {xlabel: "cam order", points: true, lines: false, xticks: a.orders.map(String)});
+  const table = $("arm-speeds");
+  table.querySelector("thead").innerHTML =
+    `<tr><th rowspan="2">rpm</th><th rowspan="2">first mode, cam orders</th><th rowspan="2">max |bending| mm</th>` +
+    `<th colspan="${a.orders.length}">amplitude of each cam order, mm</th></tr>` +
+    `<tr>${a.orders.map((n) => `<th>${n}</th>`).join("")}</tr>`;
+  table.querySelector("tbody").innerHTML = rows.map((s) => `<tr data-rpm="${s.rpm}"><td>${fmt(s.rpm, 5)}</td>` +
+    `<td>${fmt(s.fundamental_orders, 4)}</td><td>${fmt(s.max_bending_mm, 4)}</td>` +
+    s.bending_harmonics_mm.map((v) => `<td>${fmt(v, 3)}</td>`).join("") + "</tr>").join("");
 }
 
 // ---- undo: the last edits, the program as the page holds it ------------------------------
@@ -976,6 +1055,9 @@ document.addEventListener("keydown", (e) => {
 $("add").addEventListener("click", () => { lastField = null; model.segment.push({angle_deg: 10}); renderEditor(); edited(); });
 // a new body at the chain's end, its fields empty: the library names what it needs
 $("add-body").addEventListener("click", () => { lastField = null; model.train.push({}); renderEditor(); edited(); });
+$("add-arm").addEventListener("click", () => { lastField = null; addArm(); renderEditor(); edited(); });
+// removed: a rigid arm; a body still placed on it (at_mm) is named by the library
+$("remove-arm").addEventListener("click", () => { lastField = null; delete model.arm; renderEditor(); edited(); });
 $("name").addEventListener("input", (e) => { lastField = e.target; model.program = {...(model.program || {}), name: e.target.value}; edited(); });
 $("range").addEventListener("input", (e) => { lastField = e.target; rpmText = e.target.value; edited(); });
 $("chosen").addEventListener("change", async (e) => {
