@@ -59,10 +59,21 @@ def test_chain_response_columns(written):
     histories = read_response(written / "response.csv")
     assert list(histories) == list(SPEEDS)
     keys = list(histories[SPEEDS[0]])
-    bodies = [f"{name}_{what}" for name in ("tappet", "valve")
-              for what in ("displacement_mm", "velocity_m_s", "acceleration_m_s2")]
-    assert keys[:8] == ["theta_deg", "lift_mm", "payload_displacement_mm", "kinematic_acceleration_m_s2",
-                        "payload_acceleration_m_s2", "contact_force_n", "drive_torque_n_m", "contact_stress_mpa"]
+    bodies = [
+        f"{name}_{what}"
+        for name in ("tappet", "valve")
+        for what in ("displacement_mm", "velocity_m_s", "acceleration_m_s2")
+    ]
+    assert keys[:8] == [
+        "theta_deg",
+        "lift_mm",
+        "payload_displacement_mm",
+        "kinematic_acceleration_m_s2",
+        "payload_acceleration_m_s2",
+        "contact_force_n",
+        "drive_torque_n_m",
+        "contact_stress_mpa",
+    ]
     assert keys[8:] == [*bodies, "seat_force_n", "surge_n", "lift_error_mm"]
     for name in ("svaj.png", "contact_force.png", "sweep.png", "profile.png", *TRAIN_FIGURES):
         assert (written / name).stat().st_size > 10_000, name
@@ -85,26 +96,45 @@ def test_chain_response_against_the_chain_equations(written):
         np.testing.assert_allclose(h["theta_deg"], theta, rtol=1e-9, atol=0)
         omega = 360.0 * rpm / 60.0  # deg/s
         np.testing.assert_allclose(h["tappet_displacement_mm"], y, rtol=0, atol=1e-9 * np.ptp(y))
-        np.testing.assert_allclose(h["tappet_velocity_m_s"], 1e-3 * dy * omega, rtol=0,
-                                   atol=1e-9 * np.max(np.abs(1e-3 * dy * omega)))
-        np.testing.assert_allclose(h["tappet_acceleration_m_s2"], 1e-3 * ddy * omega**2, rtol=0,
-                                   atol=1e-9 * np.max(np.abs(1e-3 * ddy * omega**2)))
+        np.testing.assert_allclose(
+            h["tappet_velocity_m_s"],
+            1e-3 * dy * omega,
+            rtol=0,
+            atol=1e-9 * np.max(np.abs(1e-3 * dy * omega)),
+        )
+        np.testing.assert_allclose(
+            h["tappet_acceleration_m_s2"],
+            1e-3 * ddy * omega**2,
+            rtol=0,
+            atol=1e-9 * np.max(np.abs(1e-3 * ddy * omega**2)),
+        )
         x_t, x_v = 1e-3 * h["tappet_displacement_mm"], 1e-3 * h["valve_displacement_mm"]
         v_t, v_v = h["tappet_velocity_m_s"], h["valve_velocity_m_s"]
         element = k * (x_t - x_v) + c * (v_t - v_v)
         scale = np.max(np.abs(element)) + k_s * np.max(np.abs(x_v))
-        np.testing.assert_allclose(m_v * h["valve_acceleration_m_s2"], element - k_s * x_v, rtol=0,
-                                   atol=1e-7 * scale)
-        np.testing.assert_allclose(h["contact_force_n"], preload + m_t * h["tappet_acceleration_m_s2"] + element,
-                                   rtol=0, atol=1e-7 * scale)
-        np.testing.assert_allclose(h["seat_force_n"], preload + k_s * x_v, rtol=0, atol=1e-9 * scale)
+        np.testing.assert_allclose(
+            m_v * h["valve_acceleration_m_s2"], element - k_s * x_v, rtol=0, atol=1e-7 * scale
+        )
+        np.testing.assert_allclose(
+            h["contact_force_n"],
+            preload + m_t * h["tappet_acceleration_m_s2"] + element,
+            rtol=0,
+            atol=1e-7 * scale,
+        )
+        np.testing.assert_allclose(
+            h["seat_force_n"], preload + k_s * x_v, rtol=0, atol=1e-9 * scale
+        )
         np.testing.assert_allclose(h["surge_n"], 0.0, rtol=0, atol=1e-9 * scale)
-        np.testing.assert_allclose(h["lift_error_mm"], h["valve_displacement_mm"] - y, rtol=0, atol=1e-9 * np.ptp(y))
+        np.testing.assert_allclose(
+            h["lift_error_mm"], h["valve_displacement_mm"] - y, rtol=0, atol=1e-9 * np.ptp(y)
+        )
         np.testing.assert_array_equal(h["payload_displacement_mm"], h["valve_displacement_mm"])
         np.testing.assert_array_equal(h["payload_acceleration_m_s2"], h["valve_acceleration_m_s2"])
         cycle = steady.cycle(rpm)
         force = np.asarray(cycle.contact_force_n)
-        np.testing.assert_allclose(h["contact_force_n"], force, rtol=0, atol=1e-9 * np.max(np.abs(force)))
+        np.testing.assert_allclose(
+            h["contact_force_n"], force, rtol=0, atol=1e-9 * np.max(np.abs(force))
+        )
 
 
 def test_last_body_at_the_dwell_is_static(written):
@@ -120,14 +150,19 @@ def test_last_body_at_the_dwell_is_static(written):
     zeta = c / (2 * m_v * omega)
     damped = omega * math.sqrt(1 - zeta**2)
     theta = h["theta_deg"]
-    start, end = np.flatnonzero(np.isclose(theta, 100.0))[0], np.flatnonzero(np.isclose(theta, 180.0))[0]
+    start, end = (
+        np.flatnonzero(np.isclose(theta, 100.0))[0],
+        np.flatnonzero(np.isclose(theta, 180.0))[0],
+    )
     e0 = h["valve_displacement_mm"][start] - static
     rate0 = 1e3 * h["valve_velocity_m_s"][start]  # mm/s
     amplitude = math.hypot(e0, (rate0 + zeta * omega * e0) / damped)
     dwell_s = 80.0 / 360.0 * 60.0 / SPEEDS[0]
     bound = amplitude * math.exp(-zeta * omega * dwell_s)
-    print(f"dwell: amplitude at its start {amplitude:.3g} mm, bound at its end {bound:.3g} mm, "
-          f"off static {h['valve_displacement_mm'][end] - static:.3g} mm")
+    print(
+        f"dwell: amplitude at its start {amplitude:.3g} mm, bound at its end {bound:.3g} mm, "
+        f"off static {h['valve_displacement_mm'][end] - static:.3g} mm"
+    )
     assert 0 < bound < 1e-6 * lift  # a test with teeth: settled far below the lift
     assert abs(h["valve_displacement_mm"][end] - static) <= bound
     assert abs(h["valve_velocity_m_s"][end]) <= 1e-3 * omega * (1 + zeta) * bound
@@ -166,23 +201,37 @@ def test_contact_chain_files_are_its_simulation(tmp_path):
     h = read_response(tmp_path / "response.csv")[rpm]
     assert "drive_torque_n_m" not in h and "contact_stress_mpa" not in h
     turn = ChainContacts(program, program.chain, rpm).turns([rpm])[0]
-    pairs = {"theta_deg": turn.theta_deg, "lift_mm": turn.lift_mm, "contact_force_n": turn.cam_force_n,
-             "seat_force_n": turn.spring_seat_force_n, "surge_n": turn.surge_n,
-             "seat_contact_force_n": turn.seat_contact_force_n, "payload_displacement_mm": turn.last_mm}
+    pairs = {
+        "theta_deg": turn.theta_deg,
+        "lift_mm": turn.lift_mm,
+        "contact_force_n": turn.cam_force_n,
+        "seat_force_n": turn.spring_seat_force_n,
+        "surge_n": turn.surge_n,
+        "seat_contact_force_n": turn.seat_contact_force_n,
+        "payload_displacement_mm": turn.last_mm,
+    }
     for j, name in enumerate(program.chain.names):
         pairs[f"{name}_displacement_mm"] = turn.displacement_mm[j]
         pairs[f"{name}_velocity_m_s"] = turn.velocity_m_s[j]
         pairs[f"{name}_acceleration_m_s2"] = turn.acceleration_m_s2[j]
     for key, expected in pairs.items():
-        np.testing.assert_allclose(h[key], expected, rtol=1e-9, atol=1e-9 * np.max(np.abs(expected)), err_msg=key)
+        np.testing.assert_allclose(
+            h[key], expected, rtol=1e-9, atol=1e-9 * np.max(np.abs(expected)), err_msg=key
+        )
     np.testing.assert_array_equal(h["valve_displacement_mm"], h["payload_displacement_mm"])
     pushed = h["contact_force_n"] > 1.0
     assert pushed.sum() > 100
-    np.testing.assert_allclose(h["tappet_displacement_mm"][pushed], program.lift(h["theta_deg"][pushed])[0],
-                               rtol=0, atol=1e-6)
+    np.testing.assert_allclose(
+        h["tappet_displacement_mm"][pushed],
+        program.lift(h["theta_deg"][pushed])[0],
+        rtol=0,
+        atol=1e-6,
+    )
     # on the base circle the valve sits on its seat, which carries the preload
     base = h["theta_deg"] > 250.0
-    np.testing.assert_allclose(h["seat_contact_force_n"][base], program.chain.spring.preload_n, rtol=1e-3)
+    np.testing.assert_allclose(
+        h["seat_contact_force_n"][base], program.chain.spring.preload_n, rtol=1e-3
+    )
     for name in ("contact_force.png", "svaj.png", "train.png", "modes.png", "seat_force.png"):
         assert (tmp_path / name).exists(), name
 
