@@ -233,7 +233,7 @@ def modes(program: Program, shown: int = 4) -> plt.Figure:
         else:
             hz, shapes = chain.natural_frequencies(contact=contact)
             ticks = dict(enumerate(chain.names))
-            ax.set_xlabel("body (from the cam)")
+            ax.set_xlabel("body (from the cam; the arm's own bending between them is not drawn)", fontsize=9)
         for i in range(min(shown, hz.size)):
             ax.plot(np.arange(shapes.shape[0]), shapes[:, i], marker="o", ms=3, lw=1,
                     label=f"mode {i + 1}: {hz[i]:.4g} Hz")
