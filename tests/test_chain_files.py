@@ -255,3 +255,39 @@ def test_response_of_a_chain_needs_its_train_rows():
     with pytest.raises(ValueError, match="train rows") as error:
         response(program, 600.0, steady=steady)
     assert "\n" not in str(error.value)
+
+
+def test_one_body_train_response_is_the_classic_one():
+    """A one-body train spelled as the classic follower: its response is the classic
+    follower's, and its body's columns are the payload's (its velocity the derivative of
+    the displacement ``y - e`` written by hand from the deflection's state), its seat force
+    the massless spring's ``F_0 + k_s x``."""
+    from helpers import two_cycloids
+    from test_train_program import one_body_train
+
+    classic = two_cycloids()
+    train = Program.from_dict(one_body_train(classic))
+    rpm = 120.0
+    a, b = response(classic, rpm), response(train, rpm)
+    for key, values in a.items():
+        np.testing.assert_allclose(
+            b[key], values, rtol=0, atol=1e-12 * np.max(np.abs(values)) + 1e-300
+        )
+    np.testing.assert_array_equal(b["follower_displacement_mm"], b["payload_displacement_mm"])
+    accel = b["payload_acceleration_m_s2"]  # the compiled turn's; the body's read on the host
+    np.testing.assert_allclose(
+        b["follower_acceleration_m_s2"], accel, rtol=0, atol=1e-12 * np.max(np.abs(accel))
+    )
+    steady = SteadyState(classic, rpm)
+    e, e_rate = steady.oscillator.state(np.asarray(steady.cycle(rpm).q) / (60.0 / rpm))
+    dy = classic.lift(a["theta_deg"])[1] * 360.0 * rpm / 60.0  # mm/s
+    velocity = 1e-3 * (dy - e_rate)
+    np.testing.assert_allclose(
+        b["follower_velocity_m_s"], velocity, rtol=0, atol=1e-10 * np.max(np.abs(velocity))
+    )
+    f = classic.follower
+    np.testing.assert_allclose(
+        b["seat_force_n"],
+        f.preload_n + f.spring_rate_n_per_mm * b["payload_displacement_mm"],
+        rtol=1e-12,
+    )
