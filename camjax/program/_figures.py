@@ -225,7 +225,7 @@ def modes(program: Program, shown: int = 4) -> plt.Figure:
     for ax, contact, what in ((axes[0], True, "cam held"), (axes[1], False, "cam free (in flight)")):
         if chain.arm is None:
             hz, shapes, a = chain.coordinate_modes(contact=contact)
-            ticks = {0: "cam", **dict(zip(a.body_index.tolist(), chain.names)), a.seat: "seat"}
+            ticks = {0: "cam", **dict(zip(a.body_index.tolist(), chain.names)), a.seat: "spring seat"}
             coils = a.seat - 1 - int(a.body_index[-1])
             ax.set_xlabel("along the chain" + (f" (the spring's {coils} inner coil nodes between "
                                                 f"{chain.names[-1]} and its seat)" if coils else ""),
@@ -239,20 +239,35 @@ def modes(program: Program, shown: int = 4) -> plt.Figure:
                     label=f"mode {i + 1}: {hz[i]:.4g} Hz")
         ax.axhline(0.0, color="k", lw=0.8)
         ax.set_xticks(list(ticks), list(ticks.values()))
-        ax.set_title(f"{what}: {hz.size} modes" + (f", first {shown} shown" if hz.size > shown else ""),
+        ax.set_title(f"{what}: {hz.size} mode{'s' if hz.size != 1 else ''}"
+                     + (f", first {shown} shown" if hz.size > shown else ""),
                      fontsize=10)
         ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)  # below: the shapes fill the axes
         ax.grid(True, alpha=0.3)
     axes[0].set_ylabel("mode shape (largest motion 1)")
-    fig.suptitle(f"{program.name}: the train's natural modes")
+    closed = " (the closed chain: lash taken up, off its seat)" if chain.has_contacts else ""
+    fig.suptitle(f"{program.name}: the train's natural modes{closed}")
     return fig
 
 
 def seat_force(program: Program, rpm: float, history: dict, histories: list[tuple[float, dict]]) -> plt.Figure:
     """The return spring's force at its seat over the turn at ``rpm`` with its static force
     ``F_0 + k_s x_N``, and its surge (the difference) at ``rpm`` and up to three of the
-    fastest other ``histories``."""
+    fastest other ``histories``; a spring without mass does not surge: its force at those
+    speeds alone."""
     theta = history["theta_deg"]
+    others = sorted((item for item in histories if item[0] != rpm), key=lambda item: item[0])[-3:]
+    shown = sorted([*others, (rpm, history)], key=lambda item: item[0])
+    if not program.chain.spring.surges:
+        fig, a = plt.subplots(figsize=(8, 4), constrained_layout=True)
+        for r, h in shown:
+            a.plot(h["theta_deg"], h["seat_force_n"], lw=1.4 if r == rpm else 0.8, label=f"{r:g} rpm")
+        a.set_ylabel("spring force at its seat (N)")
+        a.set_xlabel("cam angle (deg)")
+        a.set_title(f"{program.name}: the return spring at its seat (without mass: F_0 + k_s x, no surge)")
+        a.legend(fontsize=8)
+        a.grid(True, alpha=0.3)
+        return fig
     fig, (a, b) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, constrained_layout=True)
     force = np.asarray(history["seat_force_n"])
     a.plot(theta, force - np.asarray(history["surge_n"]), lw=0.8, ls="--", color="0.4",
@@ -261,8 +276,7 @@ def seat_force(program: Program, rpm: float, history: dict, histories: list[tupl
     a.set_ylabel("spring force at its seat (N)")
     a.set_title(f"{program.name}: the return spring at its seat")
     a.legend(fontsize=8)
-    others = sorted((item for item in histories if item[0] != rpm), key=lambda item: item[0])[-3:]
-    for r, h in sorted([*others, (rpm, history)], key=lambda item: item[0]):
+    for r, h in shown:
         b.plot(h["theta_deg"], h["surge_n"], lw=1.4 if r == rpm else 0.8, label=f"{r:g} rpm")
     b.axhline(0.0, color="k", lw=0.8)
     b.set_ylabel("surge: dynamic less static (N)")
@@ -275,10 +289,13 @@ def seat_force(program: Program, rpm: float, history: dict, histories: list[tupl
 
 def train_sweep(program: Program, train: dict) -> plt.Figure:
     """Against speed (the report's ``train`` section): each body's peak acceleration, the
-    spring's least and largest seat force and its largest surge."""
+    spring's least and largest seat force and its largest surge (a spring with mass)."""
     speeds = train["speeds"]
     rpm = [s["rpm"] for s in speeds]
-    fig, (a, b, c) = plt.subplots(3, 1, figsize=(8, 8), sharex=True, constrained_layout=True)
+    surges = program.chain.spring is not None and program.chain.spring.surges
+    fig, axes = plt.subplots(3 if surges else 2, 1, figsize=(8, 8 if surges else 6), sharex=True,
+                             constrained_layout=True)
+    a, b = axes[:2]
     for name in train["bodies"]:
         a.plot(rpm, [s["max_acceleration_m_s2"][name] for s in speeds], marker=".", label=name)
     a.set_ylabel("max |acceleration| (m/s^2)")
@@ -288,10 +305,11 @@ def train_sweep(program: Program, train: dict) -> plt.Figure:
     b.plot(rpm, [s["min_seat_force_n"] for s in speeds], marker=".", label="min seat force")
     b.set_ylabel("spring force at its seat (N)")
     b.legend(fontsize=8)
-    c.plot(rpm, [s["max_surge_n"] for s in speeds], marker=".", color="C2")
-    c.set_ylabel("max |surge| (N)")
-    c.set_xlabel("speed (rpm)")
-    for ax in (a, b, c):
+    if surges:
+        axes[2].plot(rpm, [s["max_surge_n"] for s in speeds], marker=".", color="C2")
+        axes[2].set_ylabel("max |surge| (N)")
+    axes[-1].set_xlabel("speed (rpm)")
+    for ax in axes:
         ax.grid(True, alpha=0.3)
         if train["jump_speed_rpm"] is not None:
             ax.axvline(train["jump_speed_rpm"], color="C3", lw=0.8)
