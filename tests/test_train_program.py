@@ -212,12 +212,6 @@ def test_bad_train_program_is_one_line(tmp_path, edit, message):
     assert "\n" not in str(error.value) and str(path) in str(error.value)
 
 
-def test_cli_refuses_out_for_a_chain(tmp_path, capsys):
-    assert main(["program", "valve", "--rpm", "1000", "--out", str(tmp_path)]) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "--out" in err and "train" in err
-
-
 def test_design_over_a_train_at_its_last_body(tmp_path, capsys):
     """``design --program`` of a chain: the residual objective is the last body's through
     the chain, its gradient matches central finite differences, and the designed program

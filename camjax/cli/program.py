@@ -52,7 +52,10 @@ def register(subparsers) -> None:
                         help="output format on standard output (default table; not with --drive-table, "
                         "which writes its own format to --out)")
     parser.add_argument("--out", metavar="DIR", help="write profile.csv, profile.dxf, response.csv, "
-                        "summary.json and figures here (response.csv at up to 10 speeds)")
+                        "summary.json and figures here (response.csv at up to 10 speeds and the figures' "
+                        "speed; with a [[train]], every body's displacement, velocity and acceleration, the "
+                        "spring's seat force and surge, and the train's figures: train.png, modes.png, "
+                        "seat_force.png, train_sweep.png)")
     parser.add_argument("--drive-table", metavar="FORMAT", help="instead of the analysis, write the "
                         "motion as a servo drive loads it to --out (csv, xyva, codesys or twincat; "
                         "docs/drive-tables.md); the analysis's options (--rpm, --format, --plot-rpm, "
@@ -298,7 +301,15 @@ def program_path(text: str | None, default: str = "indexer") -> Path:
 
 
 def run(args) -> int:
-    from ..program import MAX_PROFILE_POINTS, Program, Speeds, SteadyState, analyse, write_report
+    from ..program import (
+        MAX_PROFILE_POINTS,
+        ChainContacts,
+        Program,
+        Speeds,
+        SteadyState,
+        analyse,
+        write_report,
+    )
 
     if args.drive_table is not None:
         return _drive_table(args)
@@ -328,16 +339,14 @@ def run(args) -> int:
     with file_named(path), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # the library's speed warnings, shown below
         program = Program.load(path)
-        if args.out is not None and not program.one_body:
-            raise CliError("--out: the files of a report (histories over the turn, figures) are the one-body "
-                           "follower's; a train's are not written yet: use --format json")
         motors = _motors(args, program)  # before the analysis: a bad motor file fails at once
         out = output_dir(args.out)
         simulated = program.chain is not None and program.chain.has_contacts  # lash or a seat
         if simulated and (motors or args.compensate is not None):
             raise CliError("--motor and --compensate: a chain with lash or a seat is simulated, and its "
                            "drive torque and compensation are not computed yet")
-        steady = None if simulated else SteadyState(program, rpm)
+        # a chain with contacts: its simulation, which keeps the turns for --out's files
+        steady = ChainContacts(program, program.chain, rpm.min()) if simulated else SteadyState(program, rpm)
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
                          speed_fluctuation=args.speed_fluctuation)
         if out is not None:

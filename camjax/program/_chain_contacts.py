@@ -331,6 +331,8 @@ def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: Co
                 f,
                 signal,
                 acc[system.body_rows],
+                1e3 * u[system.body_rows],
+                v[system.body_rows],
             ]
         )
 
@@ -412,6 +414,8 @@ class ContactTurn:
     seat_contact_force_n: np.ndarray
     element_force_n: np.ndarray  # (elements, samples)
     acceleration_m_s2: np.ndarray  # (bodies, samples)
+    displacement_mm: np.ndarray  # (bodies, samples): each body's from rest
+    velocity_m_s: np.ndarray  # (bodies, samples)
     spring_seat_force_n: np.ndarray
     surge_n: np.ndarray
     seating_velocity_m_s: float | None
@@ -488,6 +492,8 @@ class ChainContacts:
             max(float(np.ptp(lift)), 1e-3) * max(self.kinematic_ratio, 1.0),
             max(float(np.max(np.abs(grid.velocity_nodes))), 1e-3) * max(self.kinematic_ratio, 1.0),
         )
+        self._kept: dict[float, ContactTurn] = {}
+        """The last batch of ``turns``, by speed: ``turn`` reads them (the report's files)."""
 
     def _block(self, rpm: np.ndarray):
         """Turns from rest at the speeds ``rpm`` (one block) until settled: the last
@@ -547,7 +553,14 @@ class ChainContacts:
                 self._read(float(r), samples[i], turns, float(change[i]))
                 for i, r in enumerate(block)
             ]
+        self._kept = {t.rpm: t for t in out}
         return out
+
+    def turn(self, rpm: float) -> ContactTurn:
+        """The settled turn at one speed: read from the last batch of ``turns`` where it was
+        computed there, else simulated."""
+        rpm = Speeds.of(rpm)[0]
+        return self._kept[rpm] if rpm in self._kept else self.turns([rpm])[0]
 
     def _read(self, rpm: float, x: np.ndarray, turns: int, change: float) -> ContactTurn:
         """What the samples ``x`` (samples + 1, outputs) of one settled turn say."""
@@ -558,7 +571,11 @@ class ChainContacts:
         E = s.k.size
         forces = x[:, len(_COLUMNS) : len(_COLUMNS) + E].T
         signals = x[:, len(_COLUMNS) + E : len(_COLUMNS) + 2 * E].T
-        acc = x[:, len(_COLUMNS) + 2 * E :].T
+        B = len(chain.bodies)
+        acc, displacement, velocity = (
+            x[:, len(_COLUMNS) + 2 * E + b * B : len(_COLUMNS) + 2 * E + (b + 1) * B].T
+            for b in range(3)
+        )
         theta = np.linspace(0.0, 360.0, x.shape[0])
         step = theta[1] - theta[0]
         period = 60.0 / rpm
@@ -621,6 +638,8 @@ class ChainContacts:
             seat_contact_force_n=col["seat"],
             element_force_n=forces,
             acceleration_m_s2=acc,
+            displacement_mm=displacement,
+            velocity_m_s=velocity,
             spring_seat_force_n=col["spring"],
             surge_n=col["surge"],
             seating_velocity_m_s=seating,
@@ -701,13 +720,21 @@ CONTACTS_NOTE = (
 )
 
 
-def simulated_train(program, chain: Chain, rpm: np.ndarray, options: ContactOptions | None = None):
+def simulated_train(
+    program,
+    chain: Chain,
+    rpm: np.ndarray,
+    options: ContactOptions | None = None,
+    simulation: ChainContacts | None = None,
+):
     """``train_section``'s figures for a chain with contacts: the ``ContactSummary``, the
     ``contacts`` part of the section (``contact_section``), the jump speed (the lowest speed of
     ``rpm`` at which the cam separates; ``None`` where it holds at every one, or at the lowest
-    already: then ``below`` is true)."""
+    already: then ``below`` is true).  ``simulation``: the ``ChainContacts`` to run (default:
+    one built for ``rpm`` with ``options``), which keeps the turns for the report's files."""
     rpm = np.asarray(rpm, dtype=float)
-    summary, turns = ChainContacts(program, chain, float(rpm.min()), options).summary(rpm)
+    simulation = simulation or ChainContacts(program, chain, float(rpm.min()), options)
+    summary, turns = simulation.summary(rpm)
     contacts = {"note": CONTACTS_NOTE, **contact_section(chain, turns)}
     cam = np.array([t.separates.get("cam", False) for t in turns])
     below = bool(cam[np.argmin(rpm)])

@@ -106,6 +106,28 @@ def _real_product(gain, q):
     return jnp.real(gain) @ jnp.real(q) - jnp.imag(gain) @ jnp.imag(q)
 
 
+def _turn_time(gain, direct, period):
+    """Rows of an ``Oscillator`` (physical time) as rows of the turn-time modes and of
+    ``y``, ``y_s``, ``y_ss`` (turn time)."""
+    d = jnp.asarray(direct)
+    return (jnp.asarray(gain) / period,
+            jnp.stack([d[:, 0], d[:, 1] / period, d[:, 2] / period**2], axis=1))
+
+
+def node_outputs(grid: CycleGrid, q, rpm, gain, direct, static=None):
+    """Outputs of the form ``Re(g q) + d0 y + d1 y' + d2 y'' + static`` (rows of an
+    ``Oscillator``: ``gain``, ``direct``, ``static``, physical time) at the nodes of one
+    turn at ``rpm`` from its turn-time modes ``q`` (``Cycle.q``): ``(O, K + 1)``; ``y''``
+    at a node is the value of the interval that starts there (the last node's, of the
+    one that ends there).  The compiled turn's outputs and ``response``'s histories."""
+    gain, direct = _turn_time(gain, direct, 60.0 / rpm)
+    lift_left, lift_right = grid.motion.one_sided(1)
+    y_nodes = jnp.stack([jnp.asarray(grid.lift_nodes), jnp.asarray(grid.velocity_nodes),
+                         jnp.concatenate([lift_left[:, 0], lift_right[-1:, 0]])])
+    values = _real_product(gain, q) + direct @ y_nodes
+    return values if static is None else values + jnp.asarray(static)[:, None]
+
+
 def _cycle(grid: CycleGrid, oscillator: Oscillator, rpm, q_start=None, periodic=True,
            contact: NodeContact | None = None) -> Cycle:
     """The response over one turn at ``rpm`` (jittable, vmappable in ``rpm``): the program's
@@ -115,16 +137,12 @@ def _cycle(grid: CycleGrid, oscillator: Oscillator, rpm, q_start=None, periodic=
     lam = period * jnp.asarray(oscillator.lam)  # per turn
     weights = jnp.asarray(oscillator.forcing)
     q = _modes(grid, oscillator, rpm, q_start, periodic)
-    gain = jnp.asarray(oscillator.gain) / period  # of the turn-time modes
-    d = jnp.asarray(oscillator.direct)
-    direct = jnp.stack([d[:, 0], d[:, 1] / period, d[:, 2] / period**2], axis=1)  # per y, y_s, y_ss
-    y = jnp.asarray(grid.lift_nodes)
+    gain, direct = _turn_time(oscillator.gain, oscillator.direct, period)
     ys = jnp.asarray(grid.velocity_nodes)
     lift_left, lift_right = grid.motion.one_sided(4)  # y_ss and three derivatives
     raw_left, raw_right = grid.with_forcing(jnp.asarray(grid.lift)).one_sided(3)  # y, y_s, y_ss
     widths = grid.motion.widths
-    y_nodes = jnp.stack([y, ys, jnp.concatenate([lift_left[:, 0], lift_right[-1:, 0]])])
-    values = _real_product(gain, q) + direct @ y_nodes + jnp.asarray(oscillator.static)[:, None]
+    values = node_outputs(grid, q, rpm, oscillator.gain, oscillator.direct, oscillator.static)
     gains = jax.lax.optimization_barrier([gain * lam**p for p in range(4)])  # (O, S) each
     # the modes' part of every output's derivatives, once at every node (the modes are
     # continuous there; only the forcing's terms differ between an interval's two ends)

@@ -23,6 +23,9 @@ then, for a train (``train=True``), each body's acceleration, the spring's force
 seat, its surge and the last body's distance from its kinematic lift.  ``state`` and
 ``modes`` convert between the modes and the physical state of the free coordinates (the
 classic's: the deflection ``e`` and ``e'``), the one conversion every user reads.
+``motion_gain`` and ``motion_direct`` are each body's displacement and velocity as rows of
+the same form, read on the host over a turn (``camjax.program.response``), outside the
+compiled turn's outputs (whose cost grows with their number).
 
 A pytree of arrays: the compiled turn takes it as an argument, so another follower of the
 same shape (the number of modes and of outputs) compiles nothing.
@@ -76,6 +79,10 @@ class Oscillator(NamedTuple):
             velocities (mm/s) of a free vibration of the modes (``state``).
         state_inverse: ``(2 S, 2 N)`` real: the modes' real and imaginary parts of a
             free vibration's state (``modes``).
+        motion_gain: ``(2 B, S)`` complex: each body's displacement (mm, from rest), then
+            each body's velocity (m/s), as a row of ``gain`` (``B`` bodies, the classic's 1).
+        motion_direct: ``(2 B, 3)`` real: those rows' terms in ``y``, ``y'``, ``y''`` (their
+            static terms are zero).
     """
 
     lam: np.ndarray
@@ -85,6 +92,8 @@ class Oscillator(NamedTuple):
     static: np.ndarray
     state_gain: np.ndarray
     state_inverse: np.ndarray
+    motion_gain: np.ndarray
+    motion_direct: np.ndarray
 
     @property
     def modes_count(self) -> int:
@@ -152,12 +161,20 @@ class Oscillator(NamedTuple):
                 (-e_gain, (0.0, 0.0, 0.0), 0.0),
             ]
         state_gain = np.array([[e_gain], [e_rate_gain]])
+        motion, motion_direct, _ = _rows(
+            [
+                (-e_gain, (1.0, 0.0, 0.0), 0.0),  # x = y - e (mm)
+                (-1e-3 * e_rate_gain, (0.0, 1e-3, 0.0), 0.0),
+            ]
+        )  # x' (m/s)
         return cls(
             np.array([lam]),
             np.array([[ks / m, 1.0]]),
             *_rows(rows),
             state_gain,
             _state_inverse(state_gain),
+            motion_gain=motion,
+            motion_direct=motion_direct,
         )
 
     @classmethod
@@ -211,18 +228,19 @@ class Oscillator(NamedTuple):
             )
         Vinv = np.linalg.inv(V)
         u, v = Vinv @ b0, Vinv @ b1
-        rows = []
+        rows, motion = [], []
 
-        def output(aK, aC, aM, static=0.0, scale=1.0):
+        def output(aK, aC, aM, static=0.0, scale=1.0, into=rows):
             """An output ``aK x + aC x' + aM x''`` over the coordinates (SI, lift in m),
-            as ``(gain of xi, direct terms, static)`` per mm of lift, times ``scale``."""
+            as ``(gain of xi, direct terms, static)`` per mm of lift, times ``scale``,
+            appended to ``into``."""
             c_z = np.concatenate([aK[free], aC[free]]) + aM[free] @ A[n:, :]
             e0 = aK[0] - aK[free] @ G + aM[free] @ b0[n:]
             e1 = aC[0] - aC[free] @ G + aM[free] @ b1[n:]
             e2 = aM[0] - aM[free] @ G
             g = c_z @ V
             direct = np.array([e0 + float(np.real(g @ v)), e1, e2])
-            rows.append((scale * g, 1e-3 * scale * direct, static))
+            into.append((scale * g, 1e-3 * scale * direct, static))
 
         zero = np.zeros(a.seat + 1)
 
@@ -243,6 +261,10 @@ class Oscillator(NamedTuple):
         output(-a.K[a.seat] - rate * unit(last), -a.C[a.seat], -a.M[a.seat])  # surge
         output(unit(last), zero, zero, scale=1e3)  # the lift error: less the kinematic lift, below
         rows[-1] = (rows[-1][0], rows[-1][1] - np.array([chain.lever_ratio, 0.0, 0.0]), 0.0)
+        for i in a.body_index:  # each body's displacement (mm), then its velocity (m/s)
+            output(unit(i), zero, zero, scale=1e3, into=motion)
+        for i in a.body_index:
+            output(zero, unit(i), zero, into=motion)
         # A real system's modes come in conjugate pairs (LAPACK returns them exactly
         # conjugate): keep one of each pair, doubled, and every real (overdamped) mode once.
         keep = lam.imag >= 0
@@ -250,6 +272,7 @@ class Oscillator(NamedTuple):
         # xi_j = f_j q_j with q_j' = lam_j q_j + y (mm): f_j, per m of lift, folded into the gains
         scale = 1e-3 * (u + lam * v)[keep] * weight
         gain, direct, static = _rows(rows)
+        motion_gain, motion_direct, _ = _rows(motion)
         state_gain = (
             1e3 * V[:, keep] * scale
         )  # mm and mm/s of the free coordinates (shifted by G y)
@@ -261,6 +284,8 @@ class Oscillator(NamedTuple):
             static,
             state_gain,
             _state_inverse(state_gain),
+            motion_gain=motion_gain[:, keep] * scale,
+            motion_direct=motion_direct,
         )
 
 

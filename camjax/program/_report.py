@@ -11,13 +11,14 @@ import numpy as np
 
 from .._plain import json_ready, plot_speed
 from ._arm_report import arm_section
-from ._chain_contacts import simulated_train
+from ._chain_contacts import ChainContacts, simulated_train
 from ._contact import Geometry, RefinedStress, cam_geometry, refined_contact_stress
+from ._cycle import node_outputs
 from ._dynamics import SteadyState
 from ._groove import Impact, groove_turns
 from ._jump import Flight, _Turns, flights_at, jump_speed_rpm
 from ._motion import Join, segment_kinematics
-from ._oscillator import PAYLOAD_DISPLACEMENT
+from ._oscillator import PAYLOAD_DISPLACEMENT, output_rows
 from ._outputs import Outputs, Probe, ProbeContext, kinematic_peak_m_s2
 from ._program import Program
 from ._speeds import Speeds
@@ -160,7 +161,8 @@ def _blank(value):
     return "" if value is None else value
 
 
-def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadyState | None = None,
+def analyse(program: Program, rpm, *, with_flight: bool = True,
+            steady: SteadyState | ChainContacts | None = None,
             devices=None, speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION, outputs=None) -> Report:
     """The steady-state report at every speed in ``rpm`` (see docs/program.md).
 
@@ -177,14 +179,16 @@ def analyse(program: Program, rpm, *, with_flight: bool = True, steady: SteadySt
     angles over the turn (a flat face over a cusp is a ``ValueError`` naming the angles).
     ``rpm``: ``Speeds`` or what one is built from; an implausible speed is warned of
     (in the report's warnings).  ``outputs``: the per-speed outputs (``Outputs``, or a list of
-    ``probe``s beside the built-in ones; default ``default_outputs()``).
+    ``probe``s beside the built-in ones; default ``default_outputs()``).  A chain with lash
+    or a seat is simulated (``ChainContacts``; ``steady``, where given, is that simulation,
+    which keeps its turns for ``response``).
     """
     speeds = Speeds.of(rpm)  # an implausible speed is said in the report's warnings
     rpm = speeds.rpm
     outputs = Outputs.of(outputs)
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
     if program.chain is not None and program.chain.has_contacts:  # lash or a seat: simulated
-        return _contacts_analysis(program, speeds, outputs, speed_fluctuation)
+        return _contacts_analysis(program, speeds, outputs, speed_fluctuation, steady)
     steady = steady or SteadyState(program, speeds, devices=devices)
     out = steady.summary(speeds, outputs)
     closed = program.follower.form_closed
@@ -281,7 +285,8 @@ def _train_modes(chain, rpm: np.ndarray) -> dict:
     }
 
 
-def _contacts_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed_fluctuation: float) -> Report:
+def _contacts_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed_fluctuation: float,
+                       simulation: ChainContacts | None = None) -> Report:
     """``analyse`` of a chain with lash or a seat (``Chain.has_contacts``), simulated
     (``simulated_train``): the rows hold the contact force at the cam, jump (the cam
     separates), the last body's peak acceleration and the cam's own; no other output
@@ -289,7 +294,7 @@ def _contacts_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed
     zero by design); the train section adds the ``contacts``."""
     rpm = speeds.rpm
     chain = program.chain
-    summary, contacts, jump, below = simulated_train(program, chain, rpm)
+    summary, contacts, jump, below = simulated_train(program, chain, rpm, simulation=simulation)
     cam = np.array([s["separates"].get("cam", False) for s in contacts["speeds"]])
     known = {
         "max_payload_acceleration_m_s2": summary.max_acceleration_m_s2[:, -1],
@@ -341,31 +346,88 @@ def max_contact_stress(steady: SteadyState, rpm) -> RefinedStress:
                                   lambda rows, s: held.contact_force(rows, s * held.period[rows]))
 
 
-def response(program: Program, rpm: float, *, steady: SteadyState | None = None) -> dict[str, np.ndarray]:
-    """Steady state over one turn at ``rpm``, at the grid nodes (law breakpoints included).
+def response(program: Program, rpm: float, *, steady: SteadyState | ChainContacts | None = None
+             ) -> dict[str, np.ndarray]:
+    """Steady state over one turn at ``rpm``: every history of the follower, the one place
+    that computes them (``camjax program --out``'s ``response.csv`` and figures, the studio).
 
     Keys: ``theta_deg``, ``lift_mm``, ``payload_displacement_mm``, ``kinematic_acceleration_m_s2``
-    (``y''``), ``payload_acceleration_m_s2`` (``x''``), ``contact_force_n``,
+    (``y''``), ``payload_acceleration_m_s2`` (``x''``, the last body's), ``contact_force_n``,
     ``drive_torque_n_m`` (``F_c dy/dtheta``) and ``contact_stress_mpa`` (Hertz, zero without
-    ``follower.contact_width_mm`` and where contact is lost).
+    ``follower.contact_width_mm`` and where contact is lost), at the grid's nodes (law
+    breakpoints included).  A program with a chain (``Program.chain``) adds every body's
+    ``<name>_displacement_mm`` (from rest), ``<name>_velocity_m_s`` and
+    ``<name>_acceleration_m_s2``, the return spring's force at its seat ``seat_force_n``, its
+    surge ``surge_n`` (that force less the static ``F_0 + k_s x_N``) and the last body's
+    distance from its kinematic lift ``lift_error_mm``.  A chain with lash or a seat is
+    simulated (``steady``: its ``ChainContacts``, default one for ``rpm``): its histories
+    are the settled turn's samples, with the valve's seat contact force
+    ``seat_contact_force_n`` where it has a seat and no drive torque or contact stress.
     """
     rpm = Speeds.of(rpm)[0]
+    chain = program.chain
+    if chain is not None and chain.has_contacts:
+        return _simulated_response(program, rpm, steady or ChainContacts(program, chain, rpm))
     steady = steady or SteadyState(program, rpm)
     cycle = steady.cycle(rpm)
     g = steady.grid
     theta = 360.0 * g.nodes
     y, _, ddy = program.lift(theta)
     osc = steady.oscillator
-    period = 60.0 / rpm
-    displacement = (np.real(np.asarray(osc.gain)[PAYLOAD_DISPLACEMENT] / period @ cycle.q)
-                    + np.asarray(osc.direct)[PAYLOAD_DISPLACEMENT, 0] * np.asarray(g.lift_nodes))
-    return {
+    values = np.asarray(node_outputs(g, cycle.q, rpm, osc.gain, osc.direct, osc.static))
+    out = {
         "theta_deg": theta,
         "lift_mm": y,
-        "payload_displacement_mm": displacement,
+        "payload_displacement_mm": values[PAYLOAD_DISPLACEMENT],
         "kinematic_acceleration_m_s2": 1e-3 * ddy * (360.0 * rpm / 60.0) ** 2,
         "payload_acceleration_m_s2": cycle.payload_acceleration_m_s2,
         "contact_force_n": cycle.contact_force_n,
         "drive_torque_n_m": cycle.drive_torque_n_m,
         "contact_stress_mpa": cycle.contact_stress_mpa,
     }
+    if chain is None:
+        return out
+    if osc.bodies != len(chain.bodies):
+        raise ValueError("response: the steady state's oscillator has no train rows for the program's chain "
+                         f"of {len(chain.bodies)} bodies (Oscillator.of(program) has them)")
+    motion = np.asarray(node_outputs(g, cycle.q, rpm, osc.motion_gain, osc.motion_direct))
+    rows = output_rows(osc.bodies)
+    return _with_bodies(out, chain, motion[: osc.bodies], motion[osc.bodies :], values[rows["acceleration_m_s2"]],
+                        seat_force_n=values[rows["seat_force_n"]], surge_n=values[rows["surge_n"]],
+                        lift_error_mm=values[rows["lift_error_mm"]])
+
+
+def _with_bodies(out: dict, chain, displacement, velocity, acceleration, **more) -> dict:
+    """``out`` with every body's displacement, velocity and acceleration (rows over the
+    bodies) under its name, then ``more``; a body's name that would repeat a key is a
+    ``ValueError``."""
+    for j, name in enumerate(chain.names):
+        for what, rows in (("displacement_mm", displacement), ("velocity_m_s", velocity),
+                           ("acceleration_m_s2", acceleration)):
+            key = f"{name}_{what}"
+            if key in out:
+                raise ValueError(f"[[train]] body {j + 1} ({name}): its history {key!r} would repeat a "
+                                 "column of the response: rename the body")
+            out[key] = np.asarray(rows[j])
+    return {**out, **more}
+
+
+def _simulated_response(program: Program, rpm: float, simulation: ChainContacts) -> dict[str, np.ndarray]:
+    """``response`` of a chain with lash or a seat: its settled turn's samples."""
+    turn = simulation.turn(rpm)
+    theta = turn.theta_deg
+    ddy = program.lift(theta)[2]
+    out = {
+        "theta_deg": theta,
+        "lift_mm": turn.lift_mm,
+        "payload_displacement_mm": turn.last_mm,
+        "kinematic_acceleration_m_s2": 1e-3 * ddy * (360.0 * rpm / 60.0) ** 2,
+        "payload_acceleration_m_s2": turn.acceleration_m_s2[-1],
+        "contact_force_n": turn.cam_force_n,
+    }
+    more = {"seat_force_n": turn.spring_seat_force_n, "surge_n": turn.surge_n,
+            "lift_error_mm": turn.last_mm - simulation.kinematic_ratio * turn.lift_mm}
+    if program.chain.seat is not None:
+        more["seat_contact_force_n"] = turn.seat_contact_force_n
+    return _with_bodies(out, program.chain, turn.displacement_mm, turn.velocity_m_s, turn.acceleration_m_s2,
+                        **more)

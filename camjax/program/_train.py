@@ -358,6 +358,16 @@ class Chain:
         """Undamped natural frequencies (Hz, ascending) and mode shapes (columns over the
         bodies, each scaled to its largest body motion 1) with the cam contact held
         (``contact=True``: the cam's coordinate fixed) or free (in flight)."""
+        hz, shapes, a = self.coordinate_modes(contact=contact)
+        shapes = shapes[a.body_index]
+        scale = shapes[np.argmax(np.abs(shapes), axis=0), np.arange(hz.size)]
+        return hz, shapes / np.where(scale == 0, 1.0, scale)
+
+    def coordinate_modes(self, *, contact: bool = True) -> tuple[np.ndarray, np.ndarray, Assembly]:
+        """``natural_frequencies`` with the mode shapes over every coordinate of
+        ``matrices`` (rows; the held cam's and the seat's zero), each scaled to its largest
+        motion 1, and the ``Assembly`` that says which row is which (the bodies' and the
+        spring's coils along the chain; an arm's are its reduced coordinates)."""
         import scipy.linalg  # the generalised symmetric eigenproblem
 
         a = self.matrices(contact=contact)
@@ -368,12 +378,10 @@ class Chain:
             a.K[np.ix_(moving, moving)], a.M[np.ix_(moving, moving)]
         )
         hz = np.sqrt(np.maximum(values, 0.0)) / (2 * math.pi)
-        rows = np.searchsorted(moving, a.body_index)
-        shapes = np.zeros((len(self.bodies), hz.size))
-        inside = (rows < moving.size) & (moving[np.minimum(rows, moving.size - 1)] == a.body_index)
-        shapes[inside] = vectors[rows[inside]]
+        shapes = np.zeros((a.seat + 1, hz.size))
+        shapes[moving] = vectors
         scale = shapes[np.argmax(np.abs(shapes), axis=0), np.arange(hz.size)]
-        return hz, shapes / np.where(scale == 0, 1.0, scale)
+        return hz, shapes / scale, a
 
     def highest_frequency_hz(self) -> float:
         """The highest natural frequency with the cam held (Hz; 0 where nothing moves)."""
