@@ -56,9 +56,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._shapes import bucket
+from ._contact import RefinedStress, contact_stress_squared, node_contact
 from ._cycle_grid import cycle_grid
 from ._dynamics import SPEED_BLOCK
 from ._speeds import Speeds
+from ._torque import TorqueFigures, torque_figures, torque_jets
 from ._train import Chain
 
 RIDER_CONTACT_HZ = 8.0
@@ -249,8 +251,8 @@ def _lift_at(nodes, lift, acceleration, s):
     i = jnp.clip(jnp.searchsorted(nodes, s, side="right") - 1, 0, nodes.size - 2)
     h = nodes[i + 1] - nodes[i]
     sigma = (s - nodes[i]) / jnp.where(h > 0, h, 1.0)
-    powers = sigma ** jnp.arange(6)
-    y = lift[i] @ powers
+    powers = jnp.cumprod(jnp.concatenate([jnp.ones(1), jnp.full(5, sigma)]))  # not sigma**k: its
+    y = lift[i] @ powers  # derivative at sigma = 0 is 0 * inf (the jets differentiate it)
     dy = (lift[i, 1:] * jnp.arange(1, 6)) @ powers[:5] / h
     return y, dy, acceleration[i] @ powers
 
@@ -286,6 +288,59 @@ class _Grid(NamedTuple):
     jumps: jax.Array
 
 
+def _equations(rpm, system: ContactSystem, grid: _Grid):
+    """The chain's equations at ``rpm`` in turn time (state ``z``: mm and mm per turn): the
+    cam's jet (SI), the field ``dz/ds`` and the sampled ``signals`` (``_SIGNALS``)."""
+    period = 60.0 / rpm
+    n = system.Minv.shape[0]
+
+    def jet(s):
+        y, ys, yss = _lift_at(grid.nodes, grid.lift, grid.acceleration, s)
+        return 1e-3 * y, 1e-3 * ys / period, 1e-3 * yss / period**2
+
+    def field(s, z, args=None):
+        y, yd, ydd = jet(s)
+        u, v = 1e-3 * z[:n], 1e-3 * z[n:] / period
+        acc = _state_forces(system, y, yd, ydd, u, v)[0]
+        return jnp.concatenate([z[n:], 1e3 * period**2 * acc])
+
+    def signals(s, z):
+        """The signals whose extremes and integrals are reported (``_SIGNALS``)."""
+        y, yd, ydd = jet(s)
+        u, v = 1e-3 * z[:n], 1e-3 * z[n:] / period
+        acc, f, _, _, _, lam, _ = _state_forces(system, y, yd, ydd, u, v)
+        last = system.body_rows[-1]
+        spring = system.preload - system.spring_K @ u - system.spring_C @ v - system.spring_M @ acc
+        surge = spring - system.preload - system.rate * u[last]
+        head = jnp.stack([lam + system.g_cam @ f, 1e3 * yd * period, spring, surge])
+        return jnp.concatenate([head, acc[system.body_rows]])
+
+    return jet, field, signals
+
+
+_SIGNALS = ("cam", "lift_rate", "spring", "surge")
+"""The leading rows of ``_equations``' signals (the cam's contact force N, the lift's rate
+mm per turn, the spring's force at its seat N and its surge N), then each body's
+acceleration (m/s^2)."""
+
+
+def _signal_jets(z, rpm, system: ContactSystem, grid: _Grid):
+    """``(signals, 4)``: every signal of ``_equations`` at turn time ``s`` and its first three
+    derivatives in turn time along the trajectory through the state ``z`` (``D g = dg/ds +
+    dg/dz . dz/ds``, nested: exact given the state, one-sided where a contact switches)."""
+    s, z = z[0], z[1:]
+    system, grid = jax.tree.map(jnp.asarray, (system, grid))
+    _, field, signals = _equations(rpm, system, grid)
+
+    def along(g):
+        return lambda s, z: jax.jvp(g, (s, z), (jnp.ones_like(s), field(s, z)))[1]
+
+    d1 = along(signals)
+    d2 = along(d1)
+    d3 = along(d2)
+    return jnp.stack([signals(s, z), d1(s, z), d2(s, z), d3(s, z)], axis=-1)
+
+
 def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: ContactOptions):
     """One turn from state ``z0`` (mm, mm per turn) at ``rpm``: the end state, the samples
     ``(samples + 1, outputs)`` and whether the integration succeeded (jittable, vmappable)."""
@@ -294,16 +349,7 @@ def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: Co
     system, grid = jax.tree.map(jnp.asarray, (system, grid))
     period = 60.0 / rpm
     n = z0.size // 2
-
-    def jet(s):
-        y, ys, yss = _lift_at(grid.nodes, grid.lift, grid.acceleration, s)
-        return 1e-3 * y, 1e-3 * ys / period, 1e-3 * yss / period**2
-
-    def field(s, z, args):
-        y, yd, ydd = jet(s)
-        u, v = 1e-3 * z[:n], 1e-3 * z[n:] / period
-        acc = _state_forces(system, y, yd, ydd, u, v)[0]
-        return jnp.concatenate([z[n:], 1e3 * period**2 * acc])
+    jet, field, _ = _equations(rpm, system, grid)
 
     def sample(s, z, args):
         y, yd, ydd = jet(s)
@@ -331,6 +377,7 @@ def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: Co
                 f,
                 signal,
                 acc[system.body_rows],
+                jnp.concatenate([s[None], z]),  # the state, for the jets (_signal_jets)
             ]
         )
 
@@ -377,6 +424,29 @@ def _turns_compiled():
 
 
 _turns = _turns_compiled()
+_jets = jax.jit(
+    jax.vmap(jax.vmap(_signal_jets, in_axes=(0, None, None, None)), in_axes=(0, 0, None, None))
+)
+
+
+def _torque_of(jets, widths):
+    """The drive torque at the samples and its ``TorqueFigures`` from the signals' jets
+    ``(samples + 1, signals, 4)`` of one turn (``torque_jets``, ``torque_figures``: the
+    rules of the exact steady state, on the samples' septic interpolants)."""
+    cam, rate = _SIGNALS.index("cam"), _SIGNALS.index("lift_rate")
+    force, velocity = jets[:, cam, 0], jets[:, rate, 0]
+    values, left, right = torque_jets(
+        force,
+        jets[:-1, cam, 1:],
+        jets[1:, cam, 1:],
+        velocity,
+        jets[:-1, rate, 1:],
+        jets[1:, rate, 1:],
+    )
+    return values, torque_figures(values, widths, left, right)
+
+
+_torques = jax.jit(jax.vmap(_torque_of, in_axes=(0, None)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -420,6 +490,9 @@ class ContactTurn:
     separates: dict
     turns: int
     change: float
+    drive_torque_n_m: np.ndarray  # T = F_c dy/dtheta at the samples (torque_jets)
+    torque: TorqueFigures  # its peak, RMS, mean and energy fluctuation (torque_figures)
+    jets: np.ndarray  # (samples, signals, 4): _SIGNALS and each body's acceleration, 3 derivatives
 
 
 def _crossings(closed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -452,6 +525,11 @@ class ContactSummary(NamedTuple):
     min_seat_force_n: np.ndarray  # the spring's force at its seat
     max_seat_force_n: np.ndarray
     max_surge_n: np.ndarray  # the seat force's largest distance from the spring's static force
+    max_drive_torque_n_m: np.ndarray  # the drive torque's figures (TorqueFigures)
+    rms_drive_torque_n_m: np.ndarray
+    mean_drive_torque_n_m: np.ndarray
+    energy_fluctuation_j: np.ndarray
+    stress: RefinedStress | None  # the largest Hertz stress (with follower.contact_width_mm)
 
 
 class ChainContacts:
@@ -543,14 +621,38 @@ class ChainContacts:
             block = rpm[start : start + SPEED_BLOCK]
             padded = np.pad(block, (0, SPEED_BLOCK - block.size), mode="edge")
             samples, turns, change = self._block(padded)
+            states = samples[:, :, -(1 + self.system.Minv.shape[0] * 2) :]
+            jets = _jets(jnp.asarray(states), jnp.asarray(padded), self.system, self._grid)
+            widths = jnp.full(self.samples, 1.0 / self.samples)
+            torque, figures = _torques(jets, widths)
+            jets, torque = np.asarray(jets), np.asarray(torque)
+            figures = TorqueFigures(*(np.asarray(x) for x in figures))
             out += [
-                self._read(float(r), samples[i], turns, float(change[i]))
+                self._read(
+                    float(r),
+                    samples[i],
+                    turns,
+                    float(change[i]),
+                    jets[i],
+                    torque[i],
+                    TorqueFigures(*(float(x[i]) for x in figures)),
+                )
                 for i, r in enumerate(block)
             ]
         return out
 
-    def _read(self, rpm: float, x: np.ndarray, turns: int, change: float) -> ContactTurn:
-        """What the samples ``x`` (samples + 1, outputs) of one settled turn say."""
+    def _read(
+        self,
+        rpm: float,
+        x: np.ndarray,
+        turns: int,
+        change: float,
+        jets: np.ndarray,
+        torque: np.ndarray,
+        figures: TorqueFigures,
+    ) -> ContactTurn:
+        """What the samples ``x`` (samples + 1, outputs) of one settled turn say, with the
+        signals' ``jets`` and the drive torque there and its figures."""
         if not np.all(np.isfinite(x)):
             raise ValueError(f"[[train]]: the chain's simulation at {rpm:g} rpm is not finite")
         chain, s = self.chain, self.system
@@ -558,7 +660,7 @@ class ChainContacts:
         E = s.k.size
         forces = x[:, len(_COLUMNS) : len(_COLUMNS) + E].T
         signals = x[:, len(_COLUMNS) + E : len(_COLUMNS) + 2 * E].T
-        acc = x[:, len(_COLUMNS) + 2 * E :].T
+        acc = x[:, len(_COLUMNS) + 2 * E : len(_COLUMNS) + 2 * E + s.body_rows.size].T
         theta = np.linspace(0.0, 360.0, x.shape[0])
         step = theta[1] - theta[0]
         period = 60.0 / rpm
@@ -629,6 +731,9 @@ class ChainContacts:
             separates=separates,
             turns=turns,
             change=change,
+            drive_torque_n_m=torque,
+            torque=figures,
+            jets=jets,
         )
 
     def summary(self, rpm) -> tuple[ContactSummary, list[ContactTurn]]:
@@ -648,7 +753,29 @@ class ChainContacts:
             each(lambda t: t.spring_seat_force_n.min()),
             each(lambda t: t.spring_seat_force_n.max()),
             each(lambda t: np.max(np.abs(t.surge_n))),
+            each(lambda t: t.torque.max_abs),
+            each(lambda t: t.torque.rms),
+            each(lambda t: t.torque.mean),
+            each(lambda t: t.torque.energy_fluctuation),
+            self.contact_stress(turns),
         ), turns
+
+    def contact_stress(self, turns: list[ContactTurn]) -> RefinedStress | None:
+        """The largest Hertz stress of each turn (``None`` without
+        ``follower.contact_width_mm``): ``p_max^2 = F_c * factor`` at the samples
+        (``contact_stress_squared`` with ``node_contact``'s factors at the samples' angles)."""
+        if self.program.follower.contact_width_mm is None or not turns:
+            return None
+        contact = node_contact(self.program, turns[0].theta_deg)
+        stress, angle, radius = [], [], []
+        for t in turns:
+            squared = np.asarray(contact_stress_squared(t.cam_force_n, contact))[:-1]
+            i = int(np.argmax(squared))
+            stress.append(math.sqrt(max(squared[i], 0.0)))
+            angle.append(float(t.theta_deg[i]))
+            inner = t.cam_force_n[i] >= 0
+            radius.append(float((contact.radius_inner if inner else contact.radius_outer)[i]))
+        return RefinedStress(np.asarray(stress), np.asarray(angle), np.asarray(radius))
 
 
 def _first_root(gap0: float, rate: float, accel: float, dt: float) -> float:
