@@ -234,7 +234,8 @@ def test_torque_and_hertz_against_the_simulated_force_samples(example, example_t
     (``camjax.geometry``): the torque as the normal force ``F_c / cos(phi)`` times its lever
     about the cam's centre, ``(R_p + y) |sin(phi)|`` (a centred translating roller), its mean,
     RMS and energy fluctuation by the trapezoidal rule over the samples; the Hertz stress in
-    closed form, ``p^2 = F_n E* / (pi L R')`` with ``1/R' = 1/rho_cam + 1/r_roller``."""
+    closed form, ``p^2 = F_n E* / (pi L R')`` with ``1/R' = 1/rho_cam + 1/r_roller``, at the
+    samples (the reported peak is refined between them)."""
     wide = _wide(example)
     contacts = ChainContacts(wide, wide.chain, 1000.0)
     stress = contacts.contact_stress(example_turns)
@@ -267,9 +268,11 @@ def test_torque_and_hertz_against_the_simulated_force_samples(example, example_t
         assert turn.torque.mean == pytest.approx(mean, abs=1e-5 * peak)
         assert turn.torque.energy_fluctuation == pytest.approx(np.ptp(work), rel=1e-5)
         p = np.sqrt(np.maximum(normal, 0.0) * modulus / (math.pi * 10.0 * radius))[:-1]
-        assert stress.stress_mpa[i] == pytest.approx(p.max(), rel=1e-9)
-        assert stress.angle_deg[i] == pytest.approx(theta[np.argmax(p)], abs=1e-9)
-        assert stress.radius_mm[i] == pytest.approx(radius[np.argmax(p)], rel=1e-9)
+        # refined between the samples: at least their largest, a sample step from it at most
+        k = np.argmax(p)
+        assert p[k] * (1 - 1e-12) <= stress.stress_mpa[i] <= p[k] * (1 + 1e-5)
+        assert abs(stress.angle_deg[i] - theta[k]) <= theta[1]
+        assert stress.radius_mm[i] == pytest.approx(radius[k], rel=1e-4)
 
 
 def test_a_closed_chain_simulated_gives_the_exact_torque_and_stress():
@@ -292,3 +295,36 @@ def test_a_closed_chain_simulated_gives_the_exact_torque_and_stress():
     assert summary.energy_fluctuation_j[0] == pytest.approx(exact.energy_fluctuation_j, rel=1e-6)
     assert summary.stress.stress_mpa[0] == pytest.approx(exact.max_contact_stress_mpa, rel=1e-4)
     assert summary.stress.angle_deg[0] == pytest.approx(exact.max_contact_stress_deg, abs=0.2)
+
+
+def test_extremes_refined_between_samples_against_a_finer_simulation(example):
+    """The extremes of a coarse simulation (1024 samples a turn, 20 on the seat's half period
+    at 3000 rpm) refined between its samples equal those of a simulation sampled 16 times
+    finer within 1e-6 of their scale, where the coarse samples alone miss the valve's peak
+    acceleration (its seat landing) by more than 1%; no finer sample exceeds them."""
+    wide = _wide(example)
+    rpm = [3000.0]
+    runs = {}
+    for samples in (1024, 16384):
+        contacts = ChainContacts(wide, wide.chain, rpm[0], ContactOptions(samples=samples))
+        runs[samples] = contacts.summary(rpm)
+    (coarse, (coarse_turn,)), (fine, (fine_turn,)) = runs[1024], runs[16384]
+    pairs = {
+        "max_contact_force_n": fine_turn.cam_force_n.max(),
+        "max_seat_force_n": fine_turn.spring_seat_force_n.max(),
+        "max_drive_torque_n_m": np.abs(fine_turn.drive_torque_n_m).max(),
+    }
+    for name, sampled in pairs.items():
+        a, b = getattr(coarse, name)[0], getattr(fine, name)[0]
+        assert a == pytest.approx(b, rel=1e-6), name
+        assert sampled <= a * (1 + 1e-6), name
+    low = coarse.min_seat_force_n[0]
+    assert low == pytest.approx(fine.min_seat_force_n[0], rel=1e-6)
+    assert fine_turn.spring_seat_force_n.min() >= low * (1 - 1e-6)
+    peaks, finest = coarse.max_acceleration_m_s2[0], np.abs(fine_turn.acceleration_m_s2).max(axis=1)
+    np.testing.assert_allclose(peaks, fine.max_acceleration_m_s2[0], rtol=1e-6)
+    assert np.all(finest <= peaks * (1 + 1e-6))
+    missed = 1 - np.abs(coarse_turn.acceleration_m_s2[-1]).max() / peaks[-1]
+    assert missed > 0.01
+    assert coarse.stress.stress_mpa[0] == pytest.approx(fine.stress.stress_mpa[0], rel=1e-6)
+    assert coarse.stress.angle_deg[0] == pytest.approx(fine.stress.angle_deg[0], abs=1e-3)

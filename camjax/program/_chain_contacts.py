@@ -56,7 +56,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._shapes import bucket
-from ._contact import RefinedStress, contact_stress_squared, node_contact
+from ..metrics import interval_peaks, septic_coefficients
+from ..sdof import narrowed_crossing
+from ._contact import RefinedStress, contact_stress_squared, node_contact, refined_contact_stress
 from ._cycle_grid import cycle_grid
 from ._dynamics import SPEED_BLOCK
 from ._speeds import Speeds
@@ -91,7 +93,8 @@ class ContactOptions:
     relative to the lift and to its largest rate, of a settled run; ``max_turns`` turns
     at most; ``samples``: points of the reported turn (default: ``SAMPLES_PER_CONTACT``
     per half period of the stiffest contact at the slowest speed, at least 4096);
-    ``max_steps``: integrator steps per turn at most."""
+    ``max_steps``: integrator steps per turn at most; ``jump_tolerance_rpm``: the width of
+    the bracket to which the jump speed is searched between the speeds given."""
 
     rtol: float = 1e-8
     atol: float = 1e-8
@@ -99,6 +102,25 @@ class ContactOptions:
     max_turns: int = 40
     samples: int | None = None
     max_steps: int = 200_000
+    jump_tolerance_rpm: float = 0.1
+
+    def __post_init__(self):
+        if self.samples is not None and (
+            isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 16
+        ):
+            raise ValueError(
+                f"ContactOptions.samples must be a whole number of at least 16, got {self.samples!r}"
+            )
+        tolerance = self.jump_tolerance_rpm
+        if (
+            isinstance(tolerance, bool)
+            or not isinstance(tolerance, int | float)
+            or not math.isfinite(tolerance)
+            or tolerance <= 0
+        ):
+            raise ValueError(
+                f"ContactOptions.jump_tolerance_rpm must be a positive number, got {tolerance!r}"
+            )
 
 
 class ContactSystem(NamedTuple):
@@ -429,13 +451,43 @@ _jets = jax.jit(
 )
 
 
-def _torque_of(jets, widths):
-    """The drive torque at the samples and its ``TorqueFigures`` from the signals' jets
-    ``(samples + 1, signals, 4)`` of one turn (``torque_jets``, ``torque_figures``: the
-    rules of the exact steady state, on the samples' septic interpolants)."""
+def _septics(values, left, right, widths, switched):
+    """``(samples, 8)``: each sample interval's septic Hermite interpolant of a signal
+    (``septic_coefficients``), linear between its ends where a contact switches or the
+    motion's acceleration jumps inside it (``switched``: there the one-sided derivatives at
+    its ends belong to different equations)."""
+    septic = septic_coefficients(values, widths, left, right)
+    linear = jnp.zeros_like(septic).at[:, 0].set(values[:-1]).at[:, 1].set(values[1:] - values[:-1])
+    return jnp.where(switched[:, None], linear, septic)
+
+
+def _extremes(septic):
+    """``(min, max)`` of the interpolants ``septic`` (``interval_peaks`` of the signal
+    shifted below its least end, then above its largest, as ``torque_figures`` does)."""
+    ends = jnp.concatenate([septic[:, 0], jnp.sum(septic, axis=1)])
+    span = jnp.max(ends) - jnp.min(ends) + 1.0
+    below, above = jnp.min(ends) - span, jnp.max(ends) + span
+    constant = jnp.zeros(septic.shape[1]).at[0].set(1.0)
+    high = jnp.max(interval_peaks(septic - below * constant)) + below
+    low = above - jnp.max(interval_peaks(septic - above * constant))
+    return jnp.stack([low, high])
+
+
+def _turn_figures(jets, switched, widths):
+    """One turn's figures from the signals' jets ``(samples + 1, signals, 4)``: the drive
+    torque at the samples and its ``TorqueFigures`` (``torque_jets``, ``torque_figures``:
+    the exact path's rules, its peak refined as the other signals'), every signal's
+    ``(min, max)`` refined between the samples ``(signals, 2)``, and the contact force's
+    interpolants (``_septics``)."""
     cam, rate = _SIGNALS.index("cam"), _SIGNALS.index("lift_rate")
+
+    def septics(values, left, right):
+        return _septics(values, left, right, widths, switched)
+
+    signals = jax.vmap(septics, in_axes=(1, 1, 1))(jets[:, :, 0], jets[:-1, :, 1:], jets[1:, :, 1:])
+    extremes = jax.vmap(_extremes)(signals)
     force, velocity = jets[:, cam, 0], jets[:, rate, 0]
-    values, left, right = torque_jets(
+    torque = torque_jets(
         force,
         jets[:-1, cam, 1:],
         jets[1:, cam, 1:],
@@ -443,10 +495,12 @@ def _torque_of(jets, widths):
         jets[:-1, rate, 1:],
         jets[1:, rate, 1:],
     )
-    return values, torque_figures(values, widths, left, right)
+    figures = torque_figures(*torque[:1], widths, *torque[1:])
+    low, high = _extremes(septics(*torque))
+    return torque[0], figures._replace(max_abs=jnp.maximum(-low, high)), extremes, signals[cam]
 
 
-_torques = jax.jit(jax.vmap(_torque_of, in_axes=(0, None)))
+_figures = jax.jit(jax.vmap(_turn_figures, in_axes=(0, 0, None)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -458,6 +512,23 @@ class Impact:
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
+
+
+class Refined(NamedTuple):
+    """One settled turn's figures between its samples (``_turn_figures``): ``jets``
+    ``(samples + 1, signals, 4)``, each signal (``_SIGNALS``, then each body's acceleration)
+    and its first three derivatives in turn time; the drive torque at the samples and its
+    figures; ``extremes`` ``(signals, 2)``, each signal's least and largest value over the
+    turn; ``switched`` the sample intervals where a contact switches or the motion's
+    acceleration jumps (their interpolants linear); ``force_septic`` ``(samples, 8)`` the
+    contact force's interpolants (``_septics``)."""
+
+    jets: np.ndarray
+    drive_torque_n_m: np.ndarray
+    torque: TorqueFigures
+    extremes: np.ndarray
+    switched: np.ndarray
+    force_septic: np.ndarray
 
 
 @dataclasses.dataclass(frozen=True)
@@ -490,9 +561,17 @@ class ContactTurn:
     separates: dict
     turns: int
     change: float
-    drive_torque_n_m: np.ndarray  # T = F_c dy/dtheta at the samples (torque_jets)
-    torque: TorqueFigures  # its peak, RMS, mean and energy fluctuation (torque_figures)
-    jets: np.ndarray  # (samples, signals, 4): _SIGNALS and each body's acceleration, 3 derivatives
+    refined: Refined | None  # the drive torque and the extremes refined between the samples
+
+    @property
+    def drive_torque_n_m(self) -> np.ndarray:
+        """``T = F_c dy/dtheta`` (N m) at the samples (``torque_jets``)."""
+        return self.refined.drive_torque_n_m
+
+    @property
+    def torque(self) -> TorqueFigures:
+        """The drive torque's peak, RMS, mean and energy fluctuation (``torque_figures``)."""
+        return self.refined.torque
 
 
 def _crossings(closed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -549,6 +628,7 @@ class ChainContacts:
         nodes = np.concatenate([np.asarray(grid.nodes), np.ones(size - grid.intervals)])
         pad = np.zeros((size - grid.intervals, 6))
         jumps = program.turn.breakpoints_deg() / 360.0
+        self._breaks = np.unique(np.mod(jumps, 1.0))  # where the motion's acceleration may jump
         jumps = jumps[(jumps > 0) & (jumps < 1)]
         jumps = np.concatenate([jumps, np.full(bucket(jumps.size + 1, 8) - jumps.size, 0.5)])
         self._grid = _Grid(
@@ -609,8 +689,9 @@ class ChainContacts:
                 return f"[[train]] body {j} ({body.name}) damping_n_s_per_m"
         return "[[train]] damping_n_s_per_m"
 
-    def turns(self, rpm) -> list[ContactTurn]:
-        """The settled turn at every speed of ``rpm``."""
+    def turns(self, rpm, figures: bool = True) -> list[ContactTurn]:
+        """The settled turn at every speed of ``rpm`` (without ``figures``: its ``refined``
+        is ``None``, for a search that reads only the contacts)."""
         rpm = np.asarray(Speeds.of(rpm), dtype=float)
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(
@@ -621,38 +702,85 @@ class ChainContacts:
             block = rpm[start : start + SPEED_BLOCK]
             padded = np.pad(block, (0, SPEED_BLOCK - block.size), mode="edge")
             samples, turns, change = self._block(padded)
+            if not figures:
+                out += [
+                    self._read(float(r), samples[i], turns, float(change[i]), None)
+                    for i, r in enumerate(block)
+                ]
+                continue
             states = samples[:, :, -(1 + self.system.Minv.shape[0] * 2) :]
             jets = _jets(jnp.asarray(states), jnp.asarray(padded), self.system, self._grid)
+            switched = self._switched(samples)
             widths = jnp.full(self.samples, 1.0 / self.samples)
-            torque, figures = _torques(jets, widths)
-            jets, torque = np.asarray(jets), np.asarray(torque)
-            figures = TorqueFigures(*(np.asarray(x) for x in figures))
+            torque, figures, extremes, septic = (
+                jax.tree.map(np.asarray, x) for x in _figures(jets, jnp.asarray(switched), widths)
+            )
+            jets = np.asarray(jets)
             out += [
                 self._read(
                     float(r),
                     samples[i],
                     turns,
                     float(change[i]),
-                    jets[i],
-                    torque[i],
-                    TorqueFigures(*(float(x[i]) for x in figures)),
+                    Refined(
+                        jets[i],
+                        torque[i],
+                        TorqueFigures(*(float(x[i]) for x in figures)),
+                        extremes[i],
+                        switched[i],
+                        septic[i],
+                    ),
                 )
                 for i, r in enumerate(block)
             ]
         return out
 
+    def jump_speed(self, rpm, separates) -> float:
+        """The lowest speed at which the cam separates, between the highest speed of ``rpm``
+        where it holds below the lowest where it separates (``separates``, per speed) and
+        that one: ``narrowed_crossing`` with a block of ``SPEED_BLOCK`` simulated speeds a
+        round (33-fold narrower a round), to ``ContactOptions.jump_tolerance_rpm`` (the middle
+        of the last bracket: within half of it of the first separation found)."""
+        rpm, separates = np.asarray(rpm, dtype=float), np.asarray(separates, bool)
+        hi = float(rpm[separates].min())
+        held = rpm[~separates & (rpm < hi)]
+        if not held.size:
+            raise ValueError(
+                f"the cam separates at the lowest speed given ({hi:g} rpm): no jump to search"
+            )
+        lo = float(held.max())
+
+        def cam_separates(trial: np.ndarray) -> np.ndarray:
+            turns = self.turns(trial, figures=False)
+            return np.array([t.separates.get("cam", False) for t in turns])
+
+        return float(
+            narrowed_crossing(cam_separates, lo, hi, self.options.jump_tolerance_rpm, SPEED_BLOCK)
+        )
+
+    def _switched(self, samples: np.ndarray) -> np.ndarray:
+        """``(speeds, samples)``: whether a contact switches (the cam's, a one-sided
+        element's, the seat's force starts or stops) or the motion's acceleration jumps
+        inside each sample interval of the block's turns."""
+        E = self.system.k.size
+        col = {name: samples[:, :, i] for i, name in enumerate(_COLUMNS)}
+        signals = samples[:, :, len(_COLUMNS) + E : len(_COLUMNS) + 2 * E]
+        states = [col["cam"] > 0, col["seat_signal"] > 0]
+        states += [signals[:, :, e] > 0 for e in np.flatnonzero(self.system.one_sided > 0)]
+        switched = np.zeros(samples[:, :-1, 0].shape, bool)
+        for closed in states:
+            switched |= closed[:, 1:] != closed[:, :-1]
+        for jump in self._breaks:  # a jump at a sample: both intervals beside it
+            k = jump * self.samples
+            switched[:, int(np.ceil(k) - 1) % self.samples] = True
+            switched[:, int(np.floor(k)) % self.samples] = True
+        return switched
+
     def _read(
-        self,
-        rpm: float,
-        x: np.ndarray,
-        turns: int,
-        change: float,
-        jets: np.ndarray,
-        torque: np.ndarray,
-        figures: TorqueFigures,
+        self, rpm: float, x: np.ndarray, turns: int, change: float, refined: Refined | None
     ) -> ContactTurn:
         """What the samples ``x`` (samples + 1, outputs) of one settled turn say, with the
-        signals' ``jets`` and the drive torque there and its figures."""
+        figures ``refined`` between them."""
         if not np.all(np.isfinite(x)):
             raise ValueError(f"[[train]]: the chain's simulation at {rpm:g} rpm is not finite")
         chain, s = self.chain, self.system
@@ -731,28 +859,28 @@ class ChainContacts:
             separates=separates,
             turns=turns,
             change=change,
-            drive_torque_n_m=torque,
-            torque=figures,
-            jets=jets,
+            refined=refined,
         )
 
     def summary(self, rpm) -> tuple[ContactSummary, list[ContactTurn]]:
-        """The ``ContactSummary`` of the simulated turns (extremes over the samples) and the
-        turns themselves."""
+        """The ``ContactSummary`` of the simulated turns (extremes refined between the
+        samples, ``Refined``; the lift error at the samples) and the turns themselves."""
         turns = self.turns(rpm)
+        cam, spring, surge = (_SIGNALS.index(name) for name in ("cam", "spring", "surge"))
+        body = len(_SIGNALS)
 
         def each(f):
             return np.asarray([f(t) for t in turns])
 
         return ContactSummary(
             np.asarray([t.rpm for t in turns]),
-            each(lambda t: t.cam_force_n.min()),
-            each(lambda t: t.cam_force_n.max()),
-            each(lambda t: np.max(np.abs(t.acceleration_m_s2), axis=1)),
+            each(lambda t: t.refined.extremes[cam, 0]),
+            each(lambda t: t.refined.extremes[cam, 1]),
+            each(lambda t: np.max(np.abs(t.refined.extremes[body:]), axis=1)),
             each(lambda t: np.max(np.abs(t.last_mm - self.kinematic_ratio * t.lift_mm))),
-            each(lambda t: t.spring_seat_force_n.min()),
-            each(lambda t: t.spring_seat_force_n.max()),
-            each(lambda t: np.max(np.abs(t.surge_n))),
+            each(lambda t: t.refined.extremes[spring, 0]),
+            each(lambda t: t.refined.extremes[spring, 1]),
+            each(lambda t: np.max(np.abs(t.refined.extremes[surge]))),
             each(lambda t: t.torque.max_abs),
             each(lambda t: t.torque.rms),
             each(lambda t: t.torque.mean),
@@ -762,20 +890,42 @@ class ChainContacts:
 
     def contact_stress(self, turns: list[ContactTurn]) -> RefinedStress | None:
         """The largest Hertz stress of each turn (``None`` without
-        ``follower.contact_width_mm``): ``p_max^2 = F_c * factor`` at the samples
-        (``contact_stress_squared`` with ``node_contact``'s factors at the samples' angles)."""
+        ``follower.contact_width_mm``): ``p_max^2 = F_c * factor`` (``contact_stress_squared``
+        with ``node_contact``'s factors) at the samples, refined between them by
+        ``refined_contact_stress`` on the contact force's interpolants (``Refined``); where
+        the peak falls in an interval where a contact switches or the motion's acceleration
+        jumps (the cam's curvature with it), the largest sample's."""
         if self.program.follower.contact_width_mm is None or not turns:
             return None
         contact = node_contact(self.program, turns[0].theta_deg)
-        stress, angle, radius = [], [], []
-        for t in turns:
-            squared = np.asarray(contact_stress_squared(t.cam_force_n, contact))[:-1]
-            i = int(np.argmax(squared))
-            stress.append(math.sqrt(max(squared[i], 0.0)))
-            angle.append(float(t.theta_deg[i]))
-            inner = t.cam_force_n[i] >= 0
-            radius.append(float((contact.radius_inner if inner else contact.radius_outer)[i]))
-        return RefinedStress(np.asarray(stress), np.asarray(angle), np.asarray(radius))
+        squared = np.stack(
+            [np.asarray(contact_stress_squared(t.cam_force_n, contact)) for t in turns]
+        )
+        septic = np.stack([t.refined.force_septic for t in turns])
+        m = self.samples
+
+        def force_at(rows, s):
+            k = np.clip(np.floor(s * m).astype(int), 0, m - 1)
+            sigma = s * m - k
+            c = septic[rows, k]
+            value = np.zeros_like(sigma)
+            for j in range(c.shape[-1] - 1, -1, -1):  # Horner
+                value = value * sigma + c[..., j]
+            return value
+
+        refined = refined_contact_stress(
+            self.program, np.linspace(0.0, 1.0, m + 1), np.sqrt(np.maximum(squared, 0.0)), force_at
+        )
+        best = np.argmax(squared[:, :-1], axis=1)
+        rows = np.arange(len(turns))
+        force = np.array([t.cam_force_n[i] for t, i in zip(turns, best)])
+        radius = np.where(force >= 0, contact.radius_inner[best], contact.radius_outer[best])
+        sampled = RefinedStress(
+            np.sqrt(np.maximum(squared[rows, best], 0.0)), turns[0].theta_deg[best], radius
+        )
+        where = np.clip(np.floor(refined.angle_deg / 360.0 * m).astype(int), 0, m - 1)
+        switched = np.array([t.refined.switched[k] for t, k in zip(turns, where)])
+        return RefinedStress(*(np.where(switched, a, b) for a, b in zip(sampled, refined)))
 
 
 def _first_root(gap0: float, rate: float, accel: float, dt: float) -> float:
@@ -822,23 +972,25 @@ def contact_section(chain: Chain, turns: list[ContactTurn]) -> dict:
 CONTACTS_NOTE = (
     "lash or a seat: the chain's periodic steady state is simulated (diffrax) with its one-sided "
     "contacts; the rest state has the valve on its seat carrying the spring's preload, the lash open; "
-    "extremes are over the samples of the settled turn; a contact separates where it opens while the "
-    "valve is off its seat (anywhere without a seat), the seat where the valve bounces; jump speed: the "
-    "lowest speed given at which the cam separates"
+    "extremes are refined between the samples of the settled turn; a contact separates where it opens "
+    "while the valve is off its seat (anywhere without a seat), the seat where the valve bounces; jump "
+    "speed: the lowest speed at which the cam separates, searched between the speeds given to "
+    "ContactOptions.jump_tolerance_rpm; lowest_separation_rpm: the lowest speed given"
 )
 
 
 def simulated_train(program, chain: Chain, rpm: np.ndarray, options: ContactOptions | None = None):
     """``train_section``'s figures for a chain with contacts: the ``ContactSummary``, the
-    ``contacts`` part of the section (``contact_section``), the jump speed (the lowest speed of
-    ``rpm`` at which the cam separates; ``None`` where it holds at every one, or at the lowest
-    already: then ``below`` is true)."""
+    ``contacts`` part of the section (``contact_section``), the jump speed (the lowest speed at
+    which the cam separates, searched between the speeds of ``rpm``: ``ChainContacts.jump_speed``;
+    ``None`` where it holds at every one, or at the lowest already: then ``below`` is true)."""
     rpm = np.asarray(rpm, dtype=float)
-    summary, turns = ChainContacts(program, chain, float(rpm.min()), options).summary(rpm)
+    simulation = ChainContacts(program, chain, float(rpm.min()), options)
+    summary, turns = simulation.summary(rpm)
     contacts = {"note": CONTACTS_NOTE, **contact_section(chain, turns)}
     cam = np.array([t.separates.get("cam", False) for t in turns])
     below = bool(cam[np.argmin(rpm)])
     jump = None
     if not below and cam.any():
-        jump = float(rpm[cam].min())
+        jump = simulation.jump_speed(rpm, cam)
     return summary, contacts, jump, below
