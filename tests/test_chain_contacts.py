@@ -328,3 +328,40 @@ def test_extremes_refined_between_samples_against_a_finer_simulation(example):
     assert missed > 0.01
     assert coarse.stress.stress_mpa[0] == pytest.approx(fine.stress.stress_mpa[0], rel=1e-6)
     assert coarse.stress.angle_deg[0] == pytest.approx(fine.stress.angle_deg[0], abs=1e-3)
+
+
+def test_bad_options_of_the_report_are_one_line(example):
+    for options, text in (
+        (dict(samples=8), r"ContactOptions.samples must be a whole number of at least 16, got 8"),
+        (dict(samples=2048.0), r"ContactOptions.samples must be a whole number"),
+        (
+            dict(jump_tolerance_rpm=0.0),
+            r"ContactOptions.jump_tolerance_rpm must be a positive number",
+        ),
+        (
+            dict(jump_tolerance_rpm=math.nan),
+            r"jump_tolerance_rpm must be a positive number, got nan",
+        ),
+    ):
+        with pytest.raises(ValueError, match=text) as error:
+            ContactOptions(**options)
+        assert "\n" not in str(error.value)
+    with pytest.raises(
+        ValueError, match=r"the cam separates at the lowest speed given \(3500 rpm\)"
+    ):
+        ChainContacts(example, example.chain, 3500.0).jump_speed([3500.0, 4500.0], [True, True])
+
+
+def test_jump_speed_searched_between_the_speeds_against_a_fine_scan(example):
+    """With a 60 N preload the tappet leaves the cam between 3500 and 4500 rpm: the jump
+    speed searched there (to 0.1 rpm) against a scan 0.1 rpm apart around it, in the same
+    block as the two speeds given (the cam holds at 3500 and separates at 4500): every
+    speed of the scan below the answer holds, every one above separates."""
+    chain = dataclasses.replace(example.chain, spring=Spring(40.0, 60.0))
+    contacts = ChainContacts(example, chain, 3500.0)
+    found = contacts.jump_speed([3500.0, 4500.0], [False, True])
+    scan = found + 0.1 * (np.arange(30) - 14.5)
+    speeds = np.concatenate([[3500.0, 4500.0], scan])
+    cam = np.array([t.separates["cam"] for t in contacts.turns(speeds, figures=False)])
+    assert list(cam[:2]) == [False, True]
+    assert not cam[2:][scan < found].any() and cam[2:][scan > found].all()
