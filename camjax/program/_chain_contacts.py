@@ -43,6 +43,17 @@ The last turn is sampled at ``samples`` points, dense enough for a seat contact
 at its first seat contact of the closing, extrapolated from the sample before with its
 acceleration), the bounces (every later re-impact, with its velocity), each lash's openings
 and the separations.
+
+**Figures between the samples.**  The samples also keep the state, from which each reported
+signal (the cam's contact force, each body's acceleration, the spring's seat force and
+surge, the lift's rate) gets its first three derivatives in turn time along the trajectory
+(``_signal_jets``: nested forward derivatives of the chain's equations, exact given the
+state).  Each sample interval then has the septic Hermite interpolant the exact path refines
+on (``camjax.metrics``), straight where a contact switches or the motion's acceleration
+jumps inside it; the extremes, the drive torque's figures (``torque_jets``,
+``torque_figures``) and the Hertz peak (``refined_contact_stress``) are read from those, by
+the exact path's own rules.  The jump speed is searched between the speeds given
+(``ChainContacts.jump_speed``, ``narrowed_crossing``).
 """
 
 from __future__ import annotations
@@ -593,8 +604,9 @@ def _interval_lengths(closed: np.ndarray, closings: np.ndarray, openings: np.nda
 
 
 class ContactSummary(NamedTuple):
-    """The simulated chain's figures at every speed (``ChainContacts.summary``): extremes
-    over the settled turn's samples, as the closed chain's train section gives them."""
+    """The simulated chain's figures at every speed (``ChainContacts.summary``): the
+    settled turn's extremes refined between its samples (``Refined``), as the closed chain's
+    train section gives them, the drive torque's figures and the largest Hertz stress."""
 
     rpm: np.ndarray
     min_contact_force_n: np.ndarray
