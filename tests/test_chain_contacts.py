@@ -378,6 +378,6 @@ def test_jump_speed_searched_between_the_speeds_against_a_fine_scan(example):
     found = contacts.jump_speed([3500.0, 4500.0], [False, True])
     scan = found + 0.1 * (np.arange(30) - 14.5)
     speeds = np.concatenate([[3500.0, 4500.0], scan])
-    cam = np.array([t.separates["cam"] for t in contacts.turns(speeds, figures=False)])
+    cam = np.array([t.separates["cam"] for t in contacts.turns(speeds, refine=False)])
     assert list(cam[:2]) == [False, True]
     assert not cam[2:][scan < found].any() and cam[2:][scan > found].all()

@@ -701,8 +701,8 @@ class ChainContacts:
                 return f"[[train]] body {j} ({body.name}) damping_n_s_per_m"
         return "[[train]] damping_n_s_per_m"
 
-    def turns(self, rpm, figures: bool = True) -> list[ContactTurn]:
-        """The settled turn at every speed of ``rpm`` (without ``figures``: its ``refined``
+    def turns(self, rpm, refine: bool = True) -> list[ContactTurn]:
+        """The settled turn at every speed of ``rpm`` (without ``refine``: its ``refined``
         is ``None``, for a search that reads only the contacts)."""
         rpm = np.asarray(Speeds.of(rpm), dtype=float)
         if rpm.min() < self.rpm_min * (1 - 1e-12):
@@ -714,7 +714,7 @@ class ChainContacts:
             block = rpm[start : start + SPEED_BLOCK]
             padded = np.pad(block, (0, SPEED_BLOCK - block.size), mode="edge")
             samples, turns, change = self._block(padded)
-            if not figures:
+            if not refine:
                 out += [
                     self._read(float(r), samples[i], turns, float(change[i]), None)
                     for i, r in enumerate(block)
@@ -763,7 +763,7 @@ class ChainContacts:
         lo = float(held.max())
 
         def cam_separates(trial: np.ndarray) -> np.ndarray:
-            turns = self.turns(trial, figures=False)
+            turns = self.turns(trial, refine=False)
             return np.array([t.separates.get("cam", False) for t in turns])
 
         return float(

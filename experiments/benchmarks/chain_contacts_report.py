@@ -65,7 +65,7 @@ def jump(program):
     )
     scan = found + 0.1 * (np.arange(32) - 15.5)
     start = time.perf_counter()
-    turns = ChainContacts(program, chain, 3500.0).turns(scan, figures=False)
+    turns = ChainContacts(program, chain, 3500.0).turns(scan, refine=False)
     cam = np.array([t.separates["cam"] for t in turns])
     first = scan[np.argmax(cam)] if cam.any() else None
     print(f"scan {scan[0]:.2f} to {scan[-1]:.2f} rpm by 0.1: separates {cam.astype(int).tolist()}")
