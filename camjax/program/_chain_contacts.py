@@ -50,9 +50,9 @@ surge, the lift's rate) gets its first three derivatives in turn time along the 
 (``_signal_jets``: nested forward derivatives of the chain's equations, exact given the
 state).  Each sample interval then has the septic Hermite interpolant the exact path refines
 on (``camjax.metrics``), straight where a contact switches or the motion's acceleration
-jumps inside it; the extremes, the drive torque's figures (``torque_jets``,
-``torque_figures``) and the Hertz peak (``refined_contact_stress``) are read from those, by
-the exact path's own rules.  The jump speed is searched between the speeds given
+jumps inside it; the extremes (the bounded peak search of the closed chain's own figures),
+the drive torque's figures (``torque_jets``, ``torque_figures``) and the Hertz peak
+(``refined_contact_stress``) are read from those, by the exact path's own rules.  The jump speed is searched between the speeds given
 (``ChainContacts.jump_speed``, ``narrowed_crossing``).
 """
 
@@ -67,9 +67,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._shapes import bucket
-from ..metrics import interval_peaks, septic_coefficients
+from ..metrics import septic_coefficients
 from ..sdof import narrowed_crossing
 from ._contact import RefinedStress, contact_stress_squared, node_contact, refined_contact_stress
+from ._cycle import _bounded_max
 from ._cycle_grid import cycle_grid
 from ._dynamics import SPEED_BLOCK
 from ._speeds import Speeds
@@ -462,53 +463,46 @@ _jets = jax.jit(
 )
 
 
-def _septics(values, left, right, widths, switched):
-    """``(samples, 8)``: each sample interval's septic Hermite interpolant of a signal
-    (``septic_coefficients``), linear between its ends where a contact switches or the
-    motion's acceleration jumps inside it (``switched``: there the one-sided derivatives at
-    its ends belong to different equations)."""
-    septic = septic_coefficients(values, widths, left, right)
-    linear = jnp.zeros_like(septic).at[:, 0].set(values[:-1]).at[:, 1].set(values[1:] - values[:-1])
-    return jnp.where(switched[:, None], linear, septic)
+def _straightened(values, left, right, widths, switched):
+    """The derivatives ``left``/``right`` ``(samples, 3)`` of a signal at the ends of each
+    sample interval, those of the straight line between its ends where a contact switches or
+    the motion's acceleration jumps inside it (``switched``: there the one-sided derivatives
+    belong to different equations): that interval's septic Hermite interpolant is then the
+    line, its extremes at its ends."""
+    slope = (values[1:] - values[:-1]) / widths
+    line = jnp.stack([slope, jnp.zeros_like(slope), jnp.zeros_like(slope)], axis=1)
+    return jnp.where(switched[:, None], line, left), jnp.where(switched[:, None], line, right)
 
 
-def _extremes(septic):
-    """``(min, max)`` of the interpolants ``septic`` (``interval_peaks`` of the signal
-    shifted below its least end, then above its largest, as ``torque_figures`` does)."""
-    ends = jnp.concatenate([septic[:, 0], jnp.sum(septic, axis=1)])
-    span = jnp.max(ends) - jnp.min(ends) + 1.0
-    below, above = jnp.min(ends) - span, jnp.max(ends) + span
-    constant = jnp.zeros(septic.shape[1]).at[0].set(1.0)
-    high = jnp.max(interval_peaks(septic - below * constant)) + below
-    low = above - jnp.max(interval_peaks(septic - above * constant))
+def _extremes(values, left, right, widths):
+    """``(min, max)`` of a signal between its samples: the exact path's bounded search of its
+    septic interpolants (``_bounded_max``, which refines only the intervals that can hold
+    the peak)."""
+    high = _bounded_max(values, widths, left, right)
+    low = -_bounded_max(-values, widths, -left, -right)
     return jnp.stack([low, high])
 
 
 def _turn_figures(jets, switched, widths):
     """One turn's figures from the signals' jets ``(samples + 1, signals, 4)``: the drive
     torque at the samples and its ``TorqueFigures`` (``torque_jets``, ``torque_figures``:
-    the exact path's rules, its peak refined as the other signals'), every signal's
-    ``(min, max)`` refined between the samples ``(signals, 2)``, and the contact force's
-    interpolants (``_septics``)."""
+    the exact path's rules), every signal's ``(min, max)`` refined between the samples
+    ``(signals, 2)`` and the contact force's interpolants ``(samples, 8)``, each interval
+    straight where a contact switches or the acceleration jumps (``_straightened``)."""
     cam, rate = _SIGNALS.index("cam"), _SIGNALS.index("lift_rate")
 
-    def septics(values, left, right):
-        return _septics(values, left, right, widths, switched)
+    def straightened(values, left, right):
+        return _straightened(values, left, right, widths, switched)
 
-    signals = jax.vmap(septics, in_axes=(1, 1, 1))(jets[:, :, 0], jets[:-1, :, 1:], jets[1:, :, 1:])
-    extremes = jax.vmap(_extremes)(signals)
-    force, velocity = jets[:, cam, 0], jets[:, rate, 0]
-    torque = torque_jets(
-        force,
-        jets[:-1, cam, 1:],
-        jets[1:, cam, 1:],
-        velocity,
-        jets[:-1, rate, 1:],
-        jets[1:, rate, 1:],
+    values = jets[:, :, 0].T
+    left, right = jax.vmap(straightened, in_axes=(0, 1, 1))(
+        values, jets[:-1, :, 1:], jets[1:, :, 1:]
     )
-    figures = torque_figures(*torque[:1], widths, *torque[1:])
-    low, high = _extremes(septics(*torque))
-    return torque[0], figures._replace(max_abs=jnp.maximum(-low, high)), extremes, signals[cam]
+    extremes = jax.vmap(_extremes, in_axes=(0, 0, 0, None))(values, left, right, widths)
+    torque = torque_jets(values[cam], left[cam], right[cam], values[rate], left[rate], right[rate])
+    figures = torque_figures(torque[0], widths, *straightened(*torque))
+    septic = septic_coefficients(values[cam], widths, left[cam], right[cam])
+    return torque[0], figures, extremes, septic
 
 
 _figures = jax.jit(jax.vmap(_turn_figures, in_axes=(0, 0, None)))
@@ -532,7 +526,7 @@ class Refined(NamedTuple):
     figures; ``extremes`` ``(signals, 2)``, each signal's least and largest value over the
     turn; ``switched`` the sample intervals where a contact switches or the motion's
     acceleration jumps (their interpolants linear); ``force_septic`` ``(samples, 8)`` the
-    contact force's interpolants (``_septics``)."""
+    contact force's interpolants (``septic_coefficients``)."""
 
     jets: np.ndarray
     drive_torque_n_m: np.ndarray
