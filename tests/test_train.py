@@ -260,8 +260,7 @@ THREE = dict(
 )
 
 
-def three_body_chain(stiffen=1.0):
-    t = THREE
+def three_body_chain(stiffen=1.0, t=THREE):
     bodies = (
         Body("a", t["m"][0], 1e-3 * t["k"][0], t["c"][0]),
         Body("b", t["m"][1], stiffen * 1e-3 * t["k"][1], t["c"][1], ratio=t["ratio"]),
@@ -270,10 +269,9 @@ def three_body_chain(stiffen=1.0):
     return Chain(bodies, Spring(1e-3 * t["ks"], t["preload"]))
 
 
-def frequency_domain(rpm, samples=2**17):
+def frequency_domain(rpm, samples=2**17, t=THREE):
     """Contact force (N) and the last body's acceleration (m/s^2) at ``samples`` times of
     the turn: each harmonic of the lift through the chain's exact response, by hand."""
-    t = THREE
     s = np.arange(samples) / samples
     Y = np.fft.rfft(1e-3 * cycloid_lift(s)) / samples
     w = 2 * np.pi * np.arange(Y.size) * rpm / 60.0
@@ -306,6 +304,32 @@ def test_three_body_chain_against_the_frequency_domain():
         assert abs(summary.max_contact_force_n[i] - force.max()) < 1e-6 * scale
         peak = np.max(np.abs(accel))
         assert abs(summary.max_acceleration_m_s2[i, 2] - peak) < 1e-6 * peak
+
+
+def test_an_overdamped_fast_mode_sets_the_grid_and_the_steady_state_holds():
+    """A 2000 N s/m damper on the middle element makes an overdamped mode about four times
+    faster than the highest natural frequency (|lam| / 2 pi 2710 Hz against 675 Hz): the
+    grid resolves it (the propagation's series is exact only within ``MAX_PHASE_STEP`` per
+    interval), and the steady state still equals the frequency-domain solution; an
+    oscillator faster than a program's grid is refused in one line."""
+    damped = dict(THREE, c=(60.0, 2000.0, 50.0))
+    chain = three_body_chain(t=damped)
+    lam = Oscillator.of_chain(chain).lam
+    assert np.max(np.abs(lam)) > 3.5 * 2 * np.pi * chain.highest_frequency_hz()
+    steady = chain_steady(two_cycloids(), chain, 400.0)
+    widest = np.max(steady.grid.piece_width) * 60.0 / 400.0  # seconds
+    assert np.max(np.abs(lam)) * widest <= 0.5 + 1e-12  # every mode at the grid's target step
+    rpm = np.array([600.0, 1100.0])
+    summary = Summary(steady, rpm)
+    for i, r in enumerate(rpm):
+        force, accel = frequency_domain(r, t=damped)
+        scale = np.max(np.abs(force))
+        assert abs(summary.min_contact_force_n[i] - force.min()) < 1e-6 * scale
+        assert abs(summary.max_contact_force_n[i] - force.max()) < 1e-6 * scale
+        peak = np.max(np.abs(accel))
+        assert abs(summary.max_acceleration_m_s2[i, 2] - peak) < 1e-6 * peak
+    with pytest.raises(ValueError, match="^oscillator: its fastest mode turns too far per interval"):
+        SteadyState(two_cycloids(), 400.0, oscillator=Oscillator.of_chain(chain))  # the classic's grid
 
 
 def test_three_body_jump_speed_against_the_frequency_domain():

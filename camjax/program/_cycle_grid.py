@@ -14,6 +14,7 @@ import numpy as np
 from ..sdof import (
     GAUSS_POINTS,
     MAX_GRID_INTERVALS,
+    MAX_PHASE_STEP,
     TARGET_PHASE_STEP,
     GridSegment,
     MotionGrid,
@@ -22,6 +23,7 @@ from ..sdof import (
     segment_layout,
     to_monomial,
 )
+from ._oscillator import Oscillator
 from ._program import Program
 
 
@@ -122,11 +124,26 @@ def _segment_samples(turn, k: int, gauss, left, law=None):
             y[n:], 360.0 * dy[n:])
 
 
-def program_grid(program: Program, rpm_min: float) -> CycleGrid:
-    """``cycle_grid`` for the program's follower: a chain's resolves its highest mode with
-    the cam held (``Chain.highest_frequency_hz``), the classic's its one."""
-    chain = None if program.one_body else program.chain
-    return cycle_grid(program, rpm_min, None if chain is None else chain.highest_frequency_hz())
+def program_grid(program: Program, rpm_min: float, lam=None) -> CycleGrid:
+    """``cycle_grid`` for the program's follower: the classic's resolves its one mode; a
+    chain's its fastest, the highest natural frequency with the cam held
+    (``Chain.highest_frequency_hz``) or the largest ``|lam|`` of its modes (1/s; an
+    overdamped mode may be faster), ``lam`` its ``Oscillator``'s where given.  Every mode
+    then turns by at most ``TARGET_PHASE_STEP`` per interval at ``rpm_min``, within the
+    reach of the propagation's series (``camjax.sdof.series_kicks``)."""
+    if program.one_body:
+        return cycle_grid(program, rpm_min)
+    if lam is None:
+        lam = Oscillator.of_chain(program.chain).lam
+    fastest = max(program.chain.highest_frequency_hz(), float(np.max(np.abs(lam), initial=0.0)) / (2 * math.pi))
+    return cycle_grid(program, rpm_min, fastest)
+
+
+def resolves(grid: CycleGrid, lam, rpm_min: float) -> bool:
+    """Whether every mode of eigenvalues ``lam`` (1/s) turns by at most ``MAX_PHASE_STEP``
+    per interval of ``grid`` at ``rpm_min`` and above (the propagation's series is exact)."""
+    widest = float(np.max(grid.piece_width))
+    return float(np.max(np.abs(lam), initial=0.0)) * 60.0 / rpm_min * widest <= MAX_PHASE_STEP
 
 
 def with_segment_law(grid: CycleGrid, program: Program, index: int, law) -> CycleGrid:

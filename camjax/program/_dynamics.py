@@ -34,7 +34,7 @@ from ..sdof import (
 from ..sharding import resolve_devices, shard_batch
 from ._contact import NodeContact, node_contact
 from ._cycle import Cycle, TrainPeaks, _cycle
-from ._cycle_grid import CycleGrid, program_grid, with_segment_law
+from ._cycle_grid import CycleGrid, program_grid, resolves, with_segment_law
 from ._oscillator import (
     Oscillator,
 )
@@ -179,7 +179,10 @@ class SteadyState:
         self.oscillator = Oscillator.of(program) if oscillator is None else oscillator
         self.rpm_min = Speeds.of(rpm_min, "rpm_min").min()  # an entry point's speeds: their slowest
         self.devices = resolve_devices(devices)
-        self.grid = program_grid(program, self.rpm_min)
+        self.grid = program_grid(program, self.rpm_min, self.oscillator.lam)
+        if not resolves(self.grid, self.oscillator.lam, self.rpm_min):
+            raise ValueError("oscillator: its fastest mode turns too far per interval of the program's grid "
+                             "(give SteadyState an oscillator of the program's own follower)")
         self.contact = node_contact(program, 360.0 * self.grid.nodes)
         self.turn = PaddedTurn.of(self.grid, self.oscillator, self.contact)
         self._kept: tuple[dict[float, int], Cycle | None] = ({}, None)
@@ -325,9 +328,9 @@ def node_contact_force(program: Program, rpm, laws: dict | None = None, *, rpm_m
         if rpm.ndim != 1 or rpm.size == 0:
             raise ValueError("rpm must be one speed or a 1-D list of speeds")
         rpm = checks.ensure(rpm, lambda v: (v > 0) & (v < np.inf), "rpm must be positive and finite")
+    oscillator = Oscillator.of(program)
     with jax.ensure_compile_time_eval():
-        grid = program_grid(program, rpm_min)
+        grid = program_grid(program, rpm_min, oscillator.lam)
     for segment, law in (laws or {}).items():
         grid = with_segment_law(grid, program, segment - 1, law)
-    oscillator = Oscillator.of(program)
     return jax.vmap(lambda r: _cycle(grid, oscillator, r).contact_force_n)(rpm)

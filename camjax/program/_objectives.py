@@ -45,9 +45,10 @@ def _segment_grid(objective, law):
     # Concrete leaves (a corrected polynomial's base) stay: the program must keep its joins.
     placeholder = jax.tree.map(lambda x: np.zeros(np.shape(x)) if isinstance(x, jax.core.Tracer) else x, law)
     program = with_law(objective.program, objective.segment, placeholder)
+    oscillator = Oscillator.of(program)
     with jax.ensure_compile_time_eval():
-        grid = _same_points(program_grid(program, objective.rpm_lo), objective.program)
-    return program, with_segment_law(grid, program, objective.segment - 1, law), Oscillator.of(program)
+        grid = _same_points(program_grid(program, objective.rpm_lo, oscillator.lam), objective.program)
+    return program, with_segment_law(grid, program, objective.segment - 1, law), oscillator
 
 
 def _same_points(grid, original: Program):

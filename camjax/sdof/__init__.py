@@ -81,5 +81,6 @@ from ._step import periodic_propagate as periodic_propagate
 from ._step import propagate as propagate
 from ._step import psi as psi
 from ._step import psi_host as psi_host
+from ._step import series_kicks as series_kicks
 from ._step import step_within_host as step_within_host
 from ._step import steps_within as steps_within

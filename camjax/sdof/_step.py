@@ -15,7 +15,7 @@ septic by septic keep ``|z| = w h`` at most 0.5, so the series is the path that 
 is the propagation's largest cost per period ratio, hence the short radius (18 terms
 instead of the 25 a radius of 2 needs made the kernel 1.08x faster over n <= 30).  The SDOF
 path's grid (``w h <= MAX_PHASE_STEP``, 1.5) takes its kicks from one law-only matrix of
-the same series instead (``_series_kicks``).
+the same series instead (``series_kicks``).
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ _SERIES_RADIUS = 1.0
 _SERIES = _series_table(_SERIES_TERMS)
 _KICK_TERMS = next(k for k in range(1, 100)
                    if MAX_PHASE_STEP ** (k + 1) / math.factorial(k + 1) < 1e-17)
-"""Terms of the kicks' series (``_series_kicks``): truncation below 1e-17 at ``|z| =
+"""Terms of the kicks' series (``series_kicks``): truncation below 1e-17 at ``|z| =
 MAX_PHASE_STEP`` (21 at 1.5)."""
 _KICK_SERIES = _series_table(_KICK_TERMS)
 
@@ -110,16 +110,20 @@ _DENSE_PIECES = 64  # above this many pieces, gather each interval's weights
 
 
 def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = None,
-              resolved: bool = False, lam=None) -> jax.Array:
+              resolved: bool = False, lam=None, kick=None) -> jax.Array:
     """Complex mode ``q`` at every node of ``grid``, starting from rest (or from ``q0``
     at the first node).  ``gather`` picks how each interval finds its piece's step factor
     and weights (``None``: up to 64 pieces without a gather, the factors by a chain of
     selects and the weights by a matrix product; a gather above; the same numbers).
     ``resolved``: the caller guarantees ``w h <= MAX_PHASE_STEP`` on every interval (the
     SDOF's exact path refuses coarser grids); the kicks then come from one law-only
-    matrix (``_series_kicks``), with no per-piece ``psi``.  ``lam`` (complex, in the grid's
+    matrix (``series_kicks``), with no per-piece ``psi``.  ``lam`` (complex, in the grid's
     time unit) replaces ``eigenvalue(omega, zeta)``: any mode of a linear chain, overdamped
-    ones included (``omega`` and ``zeta`` are then unused).
+    ones included (``omega`` and ``zeta`` are then unused).  ``kick`` (``(K,)`` complex)
+    replaces the intervals' kicks computed from ``grid.forcing``: a caller whose forcing is
+    a sum of law-only forcings with weights per mode adds their ``series_kicks`` (one
+    product each for all modes and speeds, where the per-mode forcing would be built and
+    integrated mode by mode).
 
     The recurrence ``q_(k+1) = E_k q_k + F_k`` runs in blocks of a few intervals: inside a
     block, ``q = G cumsum(F / G)`` with ``G`` the running product of the step factors
@@ -138,8 +142,10 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     if gather is None:
         gather = grid.piece_width.shape[0] > _DENSE_PIECES
     factor = step[grid.piece] if gather else _by_piece(grid.piece, step)
-    if resolved:
-        kick = _series_kicks(grid.forcing, grid.widths, jnp.max(grid.piece_width), lam)
+    if kick is not None:
+        kick = jnp.asarray(kick)
+    elif resolved:
+        kick = series_kicks(grid.forcing, grid.widths, jnp.max(grid.piece_width), lam)
     elif not gather:
         # Real and imaginary parts side by side in one product each: XLA would otherwise
         # evaluate psi's series once for each part.
@@ -171,7 +177,7 @@ def propagate(grid: MotionGrid, omega, zeta, q0=None, *, gather: bool | None = N
     return q
 
 
-def _series_kicks(forcing, widths, widest, lam) -> jax.Array:
+def series_kicks(forcing, widths, widest, lam) -> jax.Array:
     """Kicks ``h sum_m c_m psi_m(lam h)`` of intervals of ``widths`` with forcing rows
     ``forcing``, through ``psi``'s series reassociated: ``sum_t (lam H)^t D_t`` with
     ``H = widest`` and the law-only ``D_t = h (h / H)^t sum_m c_m s_(m,t)``.  One real
@@ -197,7 +203,7 @@ def steps_within(q_start, forcing, widths, widest, lam, fraction: float) -> jax.
     widest <= MAX_PHASE_STEP``).  The forcing on the part, in its own ``sigma``, has the
     coefficients ``c_m fraction^m``."""
     powers = fraction ** np.arange(INTERPOLATION_DEGREE + 1)
-    kicks = _series_kicks(forcing * powers, widths * fraction, widest, lam)
+    kicks = series_kicks(forcing * powers, widths * fraction, widest, lam)
     return jnp.exp(lam * (widths * fraction)) * q_start + kicks
 
 
@@ -218,13 +224,13 @@ def _complex_product(real_matrix, vector):
     return jax.lax.complex(parts[..., 0], parts[..., 1])
 
 
-def periodic_propagate(grid: MotionGrid, omega, zeta, *, lam=None) -> jax.Array:
+def periodic_propagate(grid: MotionGrid, omega, zeta, *, lam=None, kick=None) -> jax.Array:
     """Complex mode at every node of the periodic steady state of a forcing that repeats
     with the grid's span (a cam's turn): the start is the fixed point of the span's map
     ``q(end) = E q(start) + F``, ``q0 = F / (1 - E)``, exactly (needs ``zeta > 0``, or
-    ``Re lam < 0`` where ``lam`` is given as in ``propagate``)."""
+    ``Re lam < 0`` where ``lam`` is given; ``lam`` and ``kick`` as in ``propagate``)."""
     lam = eigenvalue(omega, zeta) if lam is None else lam
-    from_rest = propagate(grid, omega, zeta, lam=lam)
+    from_rest = propagate(grid, omega, zeta, lam=lam, kick=kick)
     span = grid.nodes[-1] - grid.nodes[0]
     q0 = from_rest[-1] / (1.0 - jnp.exp(lam * span))
     return from_rest + q0 * jnp.exp(lam * (grid.nodes - grid.nodes[0]))
