@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 import scipy.integrate
 
+import camjax.geometry
 from camjax.program import (
     Body,
     Chain,
@@ -218,3 +219,165 @@ def test_the_report_carries_the_contacts(example, example_turns):
     )
     assert all(s.values["min_preload_n"] is None for s in report.speeds)
     assert math.isfinite(report.train["speeds"][0]["max_contact_force_n"])
+
+
+def _wide(program, width_mm: float = 10.0):
+    """``program`` with a line contact of ``width_mm`` (for the Hertz stress)."""
+    return dataclasses.replace(
+        program, follower=dataclasses.replace(program.follower, contact_width_mm=width_mm)
+    )
+
+
+def test_torque_and_hertz_against_the_simulated_force_samples(example, example_turns):
+    """The drive torque's figures and the largest Hertz stress of a chain with lash and a
+    seat, against the simulation's own contact-force samples through the cam's geometry
+    (``camjax.geometry``): the torque as the normal force ``F_c / cos(phi)`` times its lever
+    about the cam's centre, ``(R_p + y) |sin(phi)|`` (a centred translating roller), its mean,
+    RMS and energy fluctuation by the trapezoidal rule over the samples; the Hertz stress in
+    closed form, ``p^2 = F_n E* / (pi L R')`` with ``1/R' = 1/rho_cam + 1/r_roller``, at the
+    samples (the reported peak is refined between them)."""
+    wide = _wide(example)
+    contacts = ChainContacts(wide, wide.chain, 1000.0)
+    stress = contacts.contact_stress(example_turns)
+    f = example.follower
+    theta = example_turns[0].theta_deg
+    y, dy, ddy, _ = example.turn.jet(theta)
+    per_rad = 180.0 / math.pi
+    profile = camjax.geometry.cam_profile_from_jet(
+        f.geometry, np.radians(theta), y, dy * per_rad, ddy * per_rad**2
+    )
+    phi = np.asarray(profile.pressure_angle)
+    # the lever of the normal force about the cam's centre (phi is signed against the turn)
+    lever_mm = -(f.base_radius_mm + f.roller_radius_mm + y) * np.sin(phi)
+    rho = np.asarray(profile.pitch_radius_of_curvature) - f.roller_radius_mm
+    radius = 1.0 / (1.0 / rho + 1.0 / f.roller_radius_mm)
+    modulus = wide.materials.contact_modulus_mpa
+    for i, turn in enumerate(example_turns):
+        normal = turn.cam_force_n / np.cos(phi)
+        torque = 1e-3 * normal * lever_mm
+        assert np.max(np.abs(turn.drive_torque_n_m - torque)) < 1e-9 * np.max(np.abs(torque))
+        t = torque[:-1]  # periodic samples: the last is the first a turn later
+        mean = t.mean()
+        work = (
+            2 * math.pi * np.concatenate([[0.0], np.cumsum(0.5 * (t + torque[1:]) - mean)]) / t.size
+        )
+        peak = np.max(np.abs(t))
+        assert turn.torque.max_abs == pytest.approx(peak, rel=1e-5)
+        assert turn.torque.max_abs >= peak * (1 - 1e-12)
+        assert turn.torque.rms == pytest.approx(np.sqrt(np.mean(t**2)), rel=1e-5)
+        assert turn.torque.mean == pytest.approx(mean, abs=1e-5 * peak)
+        assert turn.torque.energy_fluctuation == pytest.approx(np.ptp(work), rel=1e-5)
+        p = np.sqrt(np.maximum(normal, 0.0) * modulus / (math.pi * 10.0 * radius))[:-1]
+        # refined between the samples: at least their largest, a sample step from it at most
+        k = np.argmax(p)
+        assert p[k] * (1 - 1e-12) <= stress.stress_mpa[i] <= p[k] * (1 + 1e-5)
+        assert abs(stress.angle_deg[i] - theta[k]) <= theta[1]
+        assert stress.radius_mm[i] == pytest.approx(radius[k], rel=1e-4)
+
+
+def test_a_lash_that_never_opens_reports_the_linear_chain():
+    """A lash without a seat is closed at rest and opens only where the force would pull: where
+    it never does, the report (``analyse``, routed to the simulation) gives the linear chain's
+    numbers (the exact path's ``analyse``) within the simulation's tolerance: every peak
+    (contact force, payload acceleration, drive torque, Hertz stress), refined between samples
+    against refined between nodes, and every integral (RMS and mean torque, energy
+    fluctuation, flywheel) within 1e-7 (measured 2026-11-29: 8e-9 at most)."""
+    program = _wide(Program.load("camjax/program/examples/trains/valve.toml"))
+    valve = Body("valve", 0.05, 200.0, 20.0)
+    linear = Chain((Body("tappet", 0.03), valve), Spring(52.0, 250.0))
+    lash = dataclasses.replace(
+        linear, bodies=(linear.bodies[0], dataclasses.replace(valve, lash_mm=0.1))
+    )
+    rpm = [1200.0]
+    (exact,) = analyse(dataclasses.replace(program, chain=linear), rpm).speeds
+    report = analyse(dataclasses.replace(program, chain=lash), rpm)
+    (row,) = report.speeds
+    assert report.train["contacts"]["speeds"][0]["separates"] == {"valve": False, "cam": False}
+    for name in (
+        "max_payload_acceleration_m_s2",
+        "min_contact_force_n",
+        "max_contact_force_n",
+        "max_drive_torque_n_m",
+        "rms_drive_torque_n_m",
+        "energy_fluctuation_j",
+        "flywheel_inertia_kg_m2",
+        "max_contact_stress_mpa",
+        "contact_half_width_mm",
+    ):
+        assert row.values[name] == pytest.approx(exact.values[name], rel=1e-7), name
+    torque = exact.max_drive_torque_n_m
+    assert row.mean_drive_torque_n_m == pytest.approx(
+        exact.mean_drive_torque_n_m, abs=1e-7 * torque
+    )
+    assert row.max_contact_stress_deg == pytest.approx(exact.max_contact_stress_deg, abs=1e-4)
+    assert row.min_preload_n is None and not row.jump
+
+
+def test_extremes_refined_between_samples_against_a_finer_simulation(example):
+    """The extremes of a coarse simulation (1024 samples a turn, 20 on the seat's half period
+    at 3000 rpm) refined between its samples equal those of a simulation sampled 16 times
+    finer within 1e-6 of their scale, where the coarse samples alone miss the valve's peak
+    acceleration (its seat landing) by more than 1%; no finer sample exceeds them."""
+    wide = _wide(example)
+    rpm = [3000.0]
+    runs = {}
+    for samples in (1024, 16384):
+        contacts = ChainContacts(wide, wide.chain, rpm[0], ContactOptions(samples=samples))
+        runs[samples] = contacts.summary(rpm)
+    (coarse, (coarse_turn,)), (fine, (fine_turn,)) = runs[1024], runs[16384]
+    pairs = {
+        "max_contact_force_n": fine_turn.cam_force_n.max(),
+        "max_seat_force_n": fine_turn.spring_seat_force_n.max(),
+        "max_drive_torque_n_m": np.abs(fine_turn.drive_torque_n_m).max(),
+    }
+    for name, sampled in pairs.items():
+        a, b = getattr(coarse, name)[0], getattr(fine, name)[0]
+        assert a == pytest.approx(b, rel=1e-6), name
+        assert sampled <= a * (1 + 1e-6), name
+    low = coarse.min_seat_force_n[0]
+    assert low == pytest.approx(fine.min_seat_force_n[0], rel=1e-6)
+    assert fine_turn.spring_seat_force_n.min() >= low * (1 - 1e-6)
+    peaks, finest = coarse.max_acceleration_m_s2[0], np.abs(fine_turn.acceleration_m_s2).max(axis=1)
+    np.testing.assert_allclose(peaks, fine.max_acceleration_m_s2[0], rtol=1e-6)
+    assert np.all(finest <= peaks * (1 + 1e-6))
+    missed = 1 - np.abs(coarse_turn.acceleration_m_s2[-1]).max() / peaks[-1]
+    assert missed > 0.01
+    assert coarse.stress.stress_mpa[0] == pytest.approx(fine.stress.stress_mpa[0], rel=1e-6)
+    assert coarse.stress.angle_deg[0] == pytest.approx(fine.stress.angle_deg[0], abs=1e-3)
+
+
+def test_bad_options_of_the_report_are_one_line(example):
+    for options, text in (
+        (dict(samples=8), r"ContactOptions.samples must be a whole number of at least 16, got 8"),
+        (dict(samples=2048.0), r"ContactOptions.samples must be a whole number"),
+        (
+            dict(jump_tolerance_rpm=0.0),
+            r"ContactOptions.jump_tolerance_rpm must be a positive number",
+        ),
+        (
+            dict(jump_tolerance_rpm=math.nan),
+            r"jump_tolerance_rpm must be a positive number, got nan",
+        ),
+    ):
+        with pytest.raises(ValueError, match=text) as error:
+            ContactOptions(**options)
+        assert "\n" not in str(error.value)
+    with pytest.raises(
+        ValueError, match=r"the cam separates at the lowest speed given \(3500 rpm\)"
+    ):
+        ChainContacts(example, example.chain, 3500.0).jump_speed([3500.0, 4500.0], [True, True])
+
+
+def test_jump_speed_searched_between_the_speeds_against_a_fine_scan(example):
+    """With a 60 N preload the tappet leaves the cam between 3500 and 4500 rpm: the jump
+    speed searched there (to 0.1 rpm) against a scan 0.1 rpm apart around it, in the same
+    block as the two speeds given (the cam holds at 3500 and separates at 4500): every
+    speed of the scan below the answer holds, every one above separates."""
+    chain = dataclasses.replace(example.chain, spring=Spring(40.0, 60.0))
+    contacts = ChainContacts(example, chain, 3500.0)
+    found = contacts.jump_speed([3500.0, 4500.0], [False, True])
+    scan = found + 0.1 * (np.arange(30) - 14.5)
+    speeds = np.concatenate([[3500.0, 4500.0], scan])
+    cam = np.array([t.separates["cam"] for t in contacts.turns(speeds, refine=False)])
+    assert list(cam[:2]) == [False, True]
+    assert not cam[2:][scan < found].any() and cam[2:][scan > found].all()

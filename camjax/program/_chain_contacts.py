@@ -43,6 +43,17 @@ The last turn is sampled at ``samples`` points, dense enough for a seat contact
 at its first seat contact of the closing, extrapolated from the sample before with its
 acceleration), the bounces (every later re-impact, with its velocity), each lash's openings
 and the separations.
+
+**Figures between the samples.**  The samples also keep the state, from which each reported
+signal (the cam's contact force, each body's acceleration, the spring's seat force and
+surge, the lift's rate) gets its first three derivatives in turn time along the trajectory
+(``_signal_jets``: nested forward derivatives of the chain's equations, exact given the
+state).  Each sample interval then has the septic Hermite interpolant the exact path refines
+on (``camjax.metrics``), straight where a contact switches or the motion's acceleration
+jumps inside it; the extremes (the bounded peak search of the closed chain's own figures),
+the drive torque's figures (``torque_jets``, ``torque_figures``) and the Hertz peak
+(``refined_contact_stress``) are read from those, by the exact path's own rules.  The jump speed is searched between the speeds given
+(``ChainContacts.jump_speed``, ``narrowed_crossing``).
 """
 
 from __future__ import annotations
@@ -56,9 +67,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._shapes import bucket
+from ..metrics import bounded_extremes, septic_coefficients
+from ..sdof import narrowed_crossing
+from ._contact import RefinedStress, contact_stress_squared, node_contact, refined_contact_stress
 from ._cycle_grid import cycle_grid
 from ._dynamics import SPEED_BLOCK
 from ._speeds import Speeds
+from ._torque import TorqueFigures, torque_figures, torque_jets
 from ._train import Chain
 
 RIDER_CONTACT_HZ = 8.0
@@ -89,7 +104,8 @@ class ContactOptions:
     relative to the lift and to its largest rate, of a settled run; ``max_turns`` turns
     at most; ``samples``: points of the reported turn (default: ``SAMPLES_PER_CONTACT``
     per half period of the stiffest contact at the slowest speed, at least 4096);
-    ``max_steps``: integrator steps per turn at most."""
+    ``max_steps``: integrator steps per turn at most; ``jump_tolerance_rpm``: the width of
+    the bracket to which the jump speed is searched between the speeds given."""
 
     rtol: float = 1e-8
     atol: float = 1e-8
@@ -97,6 +113,25 @@ class ContactOptions:
     max_turns: int = 40
     samples: int | None = None
     max_steps: int = 200_000
+    jump_tolerance_rpm: float = 0.1
+
+    def __post_init__(self):
+        if self.samples is not None and (
+            isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 16
+        ):
+            raise ValueError(
+                f"ContactOptions.samples must be a whole number of at least 16, got {self.samples!r}"
+            )
+        tolerance = self.jump_tolerance_rpm
+        if (
+            isinstance(tolerance, bool)
+            or not isinstance(tolerance, int | float)
+            or not math.isfinite(tolerance)
+            or tolerance <= 0
+        ):
+            raise ValueError(
+                f"ContactOptions.jump_tolerance_rpm must be a positive number, got {tolerance!r}"
+            )
 
 
 class ContactSystem(NamedTuple):
@@ -249,8 +284,8 @@ def _lift_at(nodes, lift, acceleration, s):
     i = jnp.clip(jnp.searchsorted(nodes, s, side="right") - 1, 0, nodes.size - 2)
     h = nodes[i + 1] - nodes[i]
     sigma = (s - nodes[i]) / jnp.where(h > 0, h, 1.0)
-    powers = sigma ** jnp.arange(6)
-    y = lift[i] @ powers
+    powers = jnp.cumprod(jnp.concatenate([jnp.ones(1), jnp.full(5, sigma)]))  # not sigma**k: its
+    y = lift[i] @ powers  # derivative at sigma = 0 is 0 * inf (the jets differentiate it)
     dy = (lift[i, 1:] * jnp.arange(1, 6)) @ powers[:5] / h
     return y, dy, acceleration[i] @ powers
 
@@ -286,6 +321,59 @@ class _Grid(NamedTuple):
     jumps: jax.Array
 
 
+def _equations(rpm, system: ContactSystem, grid: _Grid):
+    """The chain's equations at ``rpm`` in turn time (state ``z``: mm and mm per turn): the
+    cam's jet (SI), the field ``dz/ds`` and the sampled ``signals`` (``_SIGNALS``)."""
+    period = 60.0 / rpm
+    n = system.Minv.shape[0]
+
+    def jet(s):
+        y, ys, yss = _lift_at(grid.nodes, grid.lift, grid.acceleration, s)
+        return 1e-3 * y, 1e-3 * ys / period, 1e-3 * yss / period**2
+
+    def field(s, z, args=None):
+        y, yd, ydd = jet(s)
+        u, v = 1e-3 * z[:n], 1e-3 * z[n:] / period
+        acc = _state_forces(system, y, yd, ydd, u, v)[0]
+        return jnp.concatenate([z[n:], 1e3 * period**2 * acc])
+
+    def signals(s, z):
+        """The signals whose extremes and integrals are reported (``_SIGNALS``)."""
+        y, yd, ydd = jet(s)
+        u, v = 1e-3 * z[:n], 1e-3 * z[n:] / period
+        acc, f, _, _, _, lam, _ = _state_forces(system, y, yd, ydd, u, v)
+        last = system.body_rows[-1]
+        spring = system.preload - system.spring_K @ u - system.spring_C @ v - system.spring_M @ acc
+        surge = spring - system.preload - system.rate * u[last]
+        head = jnp.stack([lam + system.g_cam @ f, 1e3 * yd * period, spring, surge])
+        return jnp.concatenate([head, acc[system.body_rows]])
+
+    return jet, field, signals
+
+
+_SIGNALS = ("cam", "lift_rate", "spring", "surge")
+"""The leading rows of ``_equations``' signals (the cam's contact force N, the lift's rate
+mm per turn, the spring's force at its seat N and its surge N), then each body's
+acceleration (m/s^2)."""
+
+
+def _signal_jets(z, rpm, system: ContactSystem, grid: _Grid):
+    """``(signals, 4)``: every signal of ``_equations`` at turn time ``s`` and its first three
+    derivatives in turn time along the trajectory through the state ``z`` (``D g = dg/ds +
+    dg/dz . dz/ds``, nested: exact given the state, one-sided where a contact switches)."""
+    s, z = z[0], z[1:]
+    system, grid = jax.tree.map(jnp.asarray, (system, grid))
+    _, field, signals = _equations(rpm, system, grid)
+
+    def along(g):
+        return lambda s, z: jax.jvp(g, (s, z), (jnp.ones_like(s), field(s, z)))[1]
+
+    d1 = along(signals)
+    d2 = along(d1)
+    d3 = along(d2)
+    return jnp.stack([signals(s, z), d1(s, z), d2(s, z), d3(s, z)], axis=-1)
+
+
 def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: ContactOptions):
     """One turn from state ``z0`` (mm, mm per turn) at ``rpm``: the end state, the samples
     ``(samples + 1, outputs)`` and whether the integration succeeded (jittable, vmappable)."""
@@ -294,16 +382,7 @@ def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: Co
     system, grid = jax.tree.map(jnp.asarray, (system, grid))
     period = 60.0 / rpm
     n = z0.size // 2
-
-    def jet(s):
-        y, ys, yss = _lift_at(grid.nodes, grid.lift, grid.acceleration, s)
-        return 1e-3 * y, 1e-3 * ys / period, 1e-3 * yss / period**2
-
-    def field(s, z, args):
-        y, yd, ydd = jet(s)
-        u, v = 1e-3 * z[:n], 1e-3 * z[n:] / period
-        acc = _state_forces(system, y, yd, ydd, u, v)[0]
-        return jnp.concatenate([z[n:], 1e3 * period**2 * acc])
+    jet, field, _ = _equations(rpm, system, grid)
 
     def sample(s, z, args):
         y, yd, ydd = jet(s)
@@ -333,6 +412,7 @@ def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: Co
                 acc[system.body_rows],
                 1e3 * u[system.body_rows],
                 v[system.body_rows],
+                jnp.concatenate([s[None], z]),  # the state, for the jets (_signal_jets)
             ]
         )
 
@@ -379,6 +459,52 @@ def _turns_compiled():
 
 
 _turns = _turns_compiled()
+_jets = jax.jit(
+    jax.vmap(jax.vmap(_signal_jets, in_axes=(0, None, None, None)), in_axes=(0, 0, None, None))
+)
+
+
+def _straightened(values, left, right, widths, switched):
+    """The derivatives ``left``/``right`` ``(samples, 3)`` of a signal at the ends of each
+    sample interval, those of the straight line between its ends where a contact switches or
+    the motion's acceleration jumps inside it (``switched``: there the one-sided derivatives
+    belong to different equations): that interval's septic Hermite interpolant is then the
+    line, its extremes at its ends."""
+    slope = (values[1:] - values[:-1]) / widths
+    line = jnp.stack([slope, jnp.zeros_like(slope), jnp.zeros_like(slope)], axis=1)
+    return jnp.where(switched[:, None], line, left), jnp.where(switched[:, None], line, right)
+
+
+def _extremes(values, left, right, widths):
+    """``(min, max)`` of a signal between its samples: the exact path's bounded search of its
+    septic interpolants (``camjax.metrics.bounded_extremes``, which refines only the
+    intervals that can hold an extreme)."""
+    return jnp.stack(bounded_extremes(values, widths, left, right))
+
+
+def _turn_figures(jets, switched, widths):
+    """One turn's figures from the signals' jets ``(samples + 1, signals, 4)``: the drive
+    torque at the samples and its ``TorqueFigures`` (``torque_jets``, ``torque_figures``:
+    the exact path's rules), every signal's ``(min, max)`` refined between the samples
+    ``(signals, 2)`` and the contact force's interpolants ``(samples, 8)``, each interval
+    straight where a contact switches or the acceleration jumps (``_straightened``)."""
+    cam, rate = _SIGNALS.index("cam"), _SIGNALS.index("lift_rate")
+
+    def straightened(values, left, right):
+        return _straightened(values, left, right, widths, switched)
+
+    values = jets[:, :, 0].T
+    left, right = jax.vmap(straightened, in_axes=(0, 1, 1))(
+        values, jets[:-1, :, 1:], jets[1:, :, 1:]
+    )
+    extremes = jax.vmap(_extremes, in_axes=(0, 0, 0, None))(values, left, right, widths)
+    torque = torque_jets(values[cam], left[cam], right[cam], values[rate], left[rate], right[rate])
+    figures = torque_figures(torque[0], widths, *straightened(*torque))
+    septic = septic_coefficients(values[cam], widths, left[cam], right[cam])
+    return torque[0], figures, extremes, septic
+
+
+_figures = jax.jit(jax.vmap(_turn_figures, in_axes=(0, 0, None)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -390,6 +516,23 @@ class Impact:
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
+
+
+class Refined(NamedTuple):
+    """One settled turn's figures between its samples (``_turn_figures``): ``jets``
+    ``(samples + 1, signals, 4)``, each signal (``_SIGNALS``, then each body's acceleration)
+    and its first three derivatives in turn time; the drive torque at the samples and its
+    figures; ``extremes`` ``(signals, 2)``, each signal's least and largest value over the
+    turn; ``switched`` the sample intervals where a contact switches or the motion's
+    acceleration jumps (their interpolants linear); ``force_septic`` ``(samples, 8)`` the
+    contact force's interpolants (``septic_coefficients``)."""
+
+    jets: np.ndarray
+    drive_torque_n_m: np.ndarray
+    torque: TorqueFigures
+    extremes: np.ndarray
+    switched: np.ndarray
+    force_septic: np.ndarray
 
 
 @dataclasses.dataclass(frozen=True)
@@ -424,6 +567,17 @@ class ContactTurn:
     separates: dict
     turns: int
     change: float
+    refined: Refined | None  # the drive torque and the extremes refined between the samples
+
+    @property
+    def drive_torque_n_m(self) -> np.ndarray:
+        """``T = F_c dy/dtheta`` (N m) at the samples (``torque_jets``)."""
+        return self.refined.drive_torque_n_m
+
+    @property
+    def torque(self) -> TorqueFigures:
+        """The drive torque's peak, RMS, mean and energy fluctuation (``torque_figures``)."""
+        return self.refined.torque
 
 
 def _crossings(closed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -445,8 +599,9 @@ def _interval_lengths(closed: np.ndarray, closings: np.ndarray, openings: np.nda
 
 
 class ContactSummary(NamedTuple):
-    """The simulated chain's figures at every speed (``ChainContacts.summary``): extremes
-    over the settled turn's samples, as the closed chain's train section gives them."""
+    """The simulated chain's figures at every speed (``ChainContacts.summary``): the
+    settled turn's extremes refined between its samples (``Refined``), as the closed chain's
+    train section gives them, the drive torque's figures and the largest Hertz stress."""
 
     rpm: np.ndarray
     min_contact_force_n: np.ndarray
@@ -456,6 +611,11 @@ class ContactSummary(NamedTuple):
     min_seat_force_n: np.ndarray  # the spring's force at its seat
     max_seat_force_n: np.ndarray
     max_surge_n: np.ndarray  # the seat force's largest distance from the spring's static force
+    max_drive_torque_n_m: np.ndarray  # the drive torque's figures (TorqueFigures)
+    rms_drive_torque_n_m: np.ndarray
+    mean_drive_torque_n_m: np.ndarray
+    energy_fluctuation_j: np.ndarray
+    stress: RefinedStress | None  # the largest Hertz stress (with follower.contact_width_mm)
 
 
 class ChainContacts:
@@ -475,6 +635,7 @@ class ChainContacts:
         nodes = np.concatenate([np.asarray(grid.nodes), np.ones(size - grid.intervals)])
         pad = np.zeros((size - grid.intervals, 6))
         jumps = program.turn.breakpoints_deg() / 360.0
+        self._breaks = np.unique(np.mod(jumps, 1.0))  # where the motion's acceleration may jump
         jumps = jumps[(jumps > 0) & (jumps < 1)]
         jumps = np.concatenate([jumps, np.full(bucket(jumps.size + 1, 8) - jumps.size, 0.5)])
         self._grid = _Grid(
@@ -537,8 +698,9 @@ class ChainContacts:
                 return f"[[train]] body {j} ({body.name}) damping_n_s_per_m"
         return "[[train]] damping_n_s_per_m"
 
-    def turns(self, rpm) -> list[ContactTurn]:
-        """The settled turn at every speed of ``rpm``."""
+    def turns(self, rpm, refine: bool = True) -> list[ContactTurn]:
+        """The settled turn at every speed of ``rpm`` (without ``refine``: its ``refined``
+        is ``None``, for a search that reads only the contacts)."""
         rpm = np.asarray(Speeds.of(rpm), dtype=float)
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(
@@ -549,11 +711,39 @@ class ChainContacts:
             block = rpm[start : start + SPEED_BLOCK]
             padded = np.pad(block, (0, SPEED_BLOCK - block.size), mode="edge")
             samples, turns, change = self._block(padded)
+            if not refine:
+                out += [
+                    self._read(float(r), samples[i], turns, float(change[i]), None)
+                    for i, r in enumerate(block)
+                ]
+                continue
+            states = samples[:, :, -(1 + self.system.Minv.shape[0] * 2) :]
+            jets = _jets(jnp.asarray(states), jnp.asarray(padded), self.system, self._grid)
+            switched = self._switched(samples)
+            widths = jnp.full(self.samples, 1.0 / self.samples)
+            torque, figures, extremes, septic = (
+                jax.tree.map(np.asarray, x) for x in _figures(jets, jnp.asarray(switched), widths)
+            )
+            jets = np.asarray(jets)
             out += [
-                self._read(float(r), samples[i], turns, float(change[i]))
+                self._read(
+                    float(r),
+                    samples[i],
+                    turns,
+                    float(change[i]),
+                    Refined(
+                        jets[i],
+                        torque[i],
+                        TorqueFigures(*(float(x[i]) for x in figures)),
+                        extremes[i],
+                        switched[i],
+                        septic[i],
+                    ),
+                )
                 for i, r in enumerate(block)
             ]
-        self._kept = {t.rpm: t for t in out}
+        if refine:  # the report's turns, kept for its files (a search's are not)
+            self._kept = {t.rpm: t for t in out}
         return out
 
     def turn(self, rpm: float) -> ContactTurn:
@@ -562,8 +752,52 @@ class ChainContacts:
         rpm = Speeds.of(rpm)[0]
         return self._kept[rpm] if rpm in self._kept else self.turns([rpm])[0]
 
-    def _read(self, rpm: float, x: np.ndarray, turns: int, change: float) -> ContactTurn:
-        """What the samples ``x`` (samples + 1, outputs) of one settled turn say."""
+    def jump_speed(self, rpm, separates) -> float:
+        """The lowest speed at which the cam separates, between the highest speed of ``rpm``
+        where it holds below the lowest where it separates (``separates``, per speed) and
+        that one: ``narrowed_crossing`` with a block of ``SPEED_BLOCK`` simulated speeds a
+        round (33-fold narrower a round), to ``ContactOptions.jump_tolerance_rpm`` (the middle
+        of the last bracket: within half of it of the first separation found)."""
+        rpm, separates = np.asarray(rpm, dtype=float), np.asarray(separates, bool)
+        hi = float(rpm[separates].min())
+        held = rpm[~separates & (rpm < hi)]
+        if not held.size:
+            raise ValueError(
+                f"the cam separates at the lowest speed given ({hi:g} rpm): no jump to search"
+            )
+        lo = float(held.max())
+
+        def cam_separates(trial: np.ndarray) -> np.ndarray:
+            turns = self.turns(trial, refine=False)
+            return np.array([t.separates.get("cam", False) for t in turns])
+
+        return float(
+            narrowed_crossing(cam_separates, lo, hi, self.options.jump_tolerance_rpm, SPEED_BLOCK)
+        )
+
+    def _switched(self, samples: np.ndarray) -> np.ndarray:
+        """``(speeds, samples)``: whether a contact switches (the cam's, a one-sided
+        element's, the seat's force starts or stops) or the motion's acceleration jumps
+        inside each sample interval of the block's turns."""
+        E = self.system.k.size
+        col = {name: samples[:, :, i] for i, name in enumerate(_COLUMNS)}
+        signals = samples[:, :, len(_COLUMNS) + E : len(_COLUMNS) + 2 * E]
+        states = [col["cam"] > 0, col["seat_signal"] > 0]
+        states += [signals[:, :, e] > 0 for e in np.flatnonzero(self.system.one_sided > 0)]
+        switched = np.zeros(samples[:, :-1, 0].shape, bool)
+        for closed in states:
+            switched |= closed[:, 1:] != closed[:, :-1]
+        for jump in self._breaks:  # a jump at a sample: both intervals beside it
+            k = jump * self.samples
+            switched[:, int(np.ceil(k) - 1) % self.samples] = True
+            switched[:, int(np.floor(k)) % self.samples] = True
+        return switched
+
+    def _read(
+        self, rpm: float, x: np.ndarray, turns: int, change: float, refined: Refined | None
+    ) -> ContactTurn:
+        """What the samples ``x`` (samples + 1, outputs) of one settled turn say, with the
+        figures ``refined`` between them."""
         if not np.all(np.isfinite(x)):
             raise ValueError(f"[[train]]: the chain's simulation at {rpm:g} rpm is not finite")
         chain, s = self.chain, self.system
@@ -648,26 +882,73 @@ class ChainContacts:
             separates=separates,
             turns=turns,
             change=change,
+            refined=refined,
         )
 
     def summary(self, rpm) -> tuple[ContactSummary, list[ContactTurn]]:
-        """The ``ContactSummary`` of the simulated turns (extremes over the samples) and the
-        turns themselves."""
+        """The ``ContactSummary`` of the simulated turns (extremes refined between the
+        samples, ``Refined``; the lift error at the samples) and the turns themselves."""
         turns = self.turns(rpm)
+        cam, spring, surge = (_SIGNALS.index(name) for name in ("cam", "spring", "surge"))
+        body = len(_SIGNALS)
 
         def each(f):
             return np.asarray([f(t) for t in turns])
 
         return ContactSummary(
             np.asarray([t.rpm for t in turns]),
-            each(lambda t: t.cam_force_n.min()),
-            each(lambda t: t.cam_force_n.max()),
-            each(lambda t: np.max(np.abs(t.acceleration_m_s2), axis=1)),
+            each(lambda t: t.refined.extremes[cam, 0]),
+            each(lambda t: t.refined.extremes[cam, 1]),
+            each(lambda t: np.max(np.abs(t.refined.extremes[body:]), axis=1)),
             each(lambda t: np.max(np.abs(t.last_mm - self.kinematic_ratio * t.lift_mm))),
-            each(lambda t: t.spring_seat_force_n.min()),
-            each(lambda t: t.spring_seat_force_n.max()),
-            each(lambda t: np.max(np.abs(t.surge_n))),
+            each(lambda t: t.refined.extremes[spring, 0]),
+            each(lambda t: t.refined.extremes[spring, 1]),
+            each(lambda t: np.max(np.abs(t.refined.extremes[surge]))),
+            each(lambda t: t.torque.max_abs),
+            each(lambda t: t.torque.rms),
+            each(lambda t: t.torque.mean),
+            each(lambda t: t.torque.energy_fluctuation),
+            self.contact_stress(turns),
         ), turns
+
+    def contact_stress(self, turns: list[ContactTurn]) -> RefinedStress | None:
+        """The largest Hertz stress of each turn (``None`` without
+        ``follower.contact_width_mm``): ``p_max^2 = F_c * factor`` (``contact_stress_squared``
+        with ``node_contact``'s factors) at the samples, refined between them by
+        ``refined_contact_stress`` on the contact force's interpolants (``Refined``); where
+        the peak falls in an interval where a contact switches or the motion's acceleration
+        jumps (the cam's curvature with it), the largest sample's."""
+        if self.program.follower.contact_width_mm is None or not turns:
+            return None
+        contact = node_contact(self.program, turns[0].theta_deg)
+        squared = np.stack(
+            [np.asarray(contact_stress_squared(t.cam_force_n, contact)) for t in turns]
+        )
+        septic = np.stack([t.refined.force_septic for t in turns])
+        m = self.samples
+
+        def force_at(rows, s):
+            k = np.clip(np.floor(s * m).astype(int), 0, m - 1)
+            sigma = s * m - k
+            c = septic[rows, k]
+            value = np.zeros_like(sigma)
+            for j in range(c.shape[-1] - 1, -1, -1):  # Horner
+                value = value * sigma + c[..., j]
+            return value
+
+        refined = refined_contact_stress(
+            self.program, np.linspace(0.0, 1.0, m + 1), np.sqrt(np.maximum(squared, 0.0)), force_at
+        )
+        best = np.argmax(squared[:, :-1], axis=1)
+        rows = np.arange(len(turns))
+        force = np.array([t.cam_force_n[i] for t, i in zip(turns, best)])
+        radius = np.where(force >= 0, contact.radius_inner[best], contact.radius_outer[best])
+        sampled = RefinedStress(
+            np.sqrt(np.maximum(squared[rows, best], 0.0)), turns[0].theta_deg[best], radius
+        )
+        where = np.clip(np.floor(refined.angle_deg / 360.0 * m).astype(int), 0, m - 1)
+        switched = np.array([t.refined.switched[k] for t, k in zip(turns, where)])
+        return RefinedStress(*(np.where(switched, a, b) for a, b in zip(sampled, refined)))
 
 
 def _first_root(gap0: float, rate: float, accel: float, dt: float) -> float:
@@ -714,9 +995,10 @@ def contact_section(chain: Chain, turns: list[ContactTurn]) -> dict:
 CONTACTS_NOTE = (
     "lash or a seat: the chain's periodic steady state is simulated (diffrax) with its one-sided "
     "contacts; the rest state has the valve on its seat carrying the spring's preload, the lash open; "
-    "extremes are over the samples of the settled turn; a contact separates where it opens while the "
-    "valve is off its seat (anywhere without a seat), the seat where the valve bounces; jump speed: the "
-    "lowest speed given at which the cam separates"
+    "extremes are refined between the samples of the settled turn; a contact separates where it opens "
+    "while the valve is off its seat (anywhere without a seat), the seat where the valve bounces; jump "
+    "speed: the lowest speed at which the cam separates, searched between the speeds given to "
+    "ContactOptions.jump_tolerance_rpm; lowest_separation_rpm: the lowest speed given"
 )
 
 
@@ -728,10 +1010,11 @@ def simulated_train(
     simulation: ChainContacts | None = None,
 ):
     """``train_section``'s figures for a chain with contacts: the ``ContactSummary``, the
-    ``contacts`` part of the section (``contact_section``), the jump speed (the lowest speed of
-    ``rpm`` at which the cam separates; ``None`` where it holds at every one, or at the lowest
-    already: then ``below`` is true).  ``simulation``: the ``ChainContacts`` to run (default:
-    one built for ``rpm`` with ``options``), which keeps the turns for the report's files."""
+    ``contacts`` part of the section (``contact_section``), the jump speed (the lowest speed at
+    which the cam separates, searched between the speeds of ``rpm``: ``ChainContacts.jump_speed``;
+    ``None`` where it holds at every one, or at the lowest already: then ``below`` is true).
+    ``simulation``: the ``ChainContacts`` to run (default: one built for ``rpm`` with
+    ``options``), which keeps the turns for the report's files."""
     rpm = np.asarray(rpm, dtype=float)
     simulation = simulation or ChainContacts(program, chain, float(rpm.min()), options)
     summary, turns = simulation.summary(rpm)
@@ -740,5 +1023,5 @@ def simulated_train(
     below = bool(cam[np.argmin(rpm)])
     jump = None
     if not below and cam.any():
-        jump = float(rpm[cam].min())
+        jump = simulation.jump_speed(rpm, cam)
     return summary, contacts, jump, below

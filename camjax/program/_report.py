@@ -289,28 +289,36 @@ def _contacts_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed
                        simulation: ChainContacts | None = None) -> Report:
     """``analyse`` of a chain with lash or a seat (``Chain.has_contacts``), simulated
     (``simulated_train``): the rows hold the contact force at the cam, jump (the cam
-    separates), the last body's peak acceleration and the cam's own; no other output
-    (``None``: the least preload is not given, the seated chain's base-circle force being
-    zero by design); the train section adds the ``contacts``."""
+    separates), the last body's peak acceleration, the cam's own, the drive torque's figures
+    with the flywheel and the Hertz stress, through the same output set as the exact path
+    (``Outputs.evaluate``); the least preload is ``None`` (the seated chain's base-circle
+    force is zero by design) and so is a compiled probe (it reads the exact ``Cycle``); the
+    train section adds the ``contacts``."""
     rpm = speeds.rpm
     chain = program.chain
     summary, contacts, jump, below = simulated_train(program, chain, rpm, simulation=simulation)
     cam = np.array([s["separates"].get("cam", False) for s in contacts["speeds"]])
-    known = {
+    simulated = {
         "max_payload_acceleration_m_s2": summary.max_acceleration_m_s2[:, -1],
-        "max_kinematic_acceleration_m_s2": kinematic_peak_m_s2(program, rpm),
         "min_contact_force_n": summary.min_contact_force_n,
         "max_contact_force_n": summary.max_contact_force_n,
-        "jump": cam,
+        "max_drive_torque_n_m": summary.max_drive_torque_n_m,
+        "rms_drive_torque_n_m": summary.rms_drive_torque_n_m,
+        "mean_drive_torque_n_m": summary.mean_drive_torque_n_m,
+        "energy_fluctuation_j": summary.energy_fluctuation_j,
     }
+    compiled = {p.name: simulated.get(p.name) for p in outputs.compiled}
+    context = ProbeContext(program, rpm, speed_fluctuation, None, None, summary.stress)
+    known = {**outputs.evaluate(compiled, context), "jump": cam, "min_preload_n": None}
     rows = tuple(SpeedReport(rpm=float(r), values={
         name: None if known.get(name) is None else np.asarray(known[name])[i].item() for name in outputs})
         for i, r in enumerate(rpm))
     section = {
         "one_body": False,
         "note": "a train with lash or a seat, simulated: the rows give the chain's contact force at the "
-                "cam, jump (the cam separates) and the last body's peak acceleration; the other outputs "
-                "are not computed and left empty",
+                "cam, jump (the cam separates), the last body's peak acceleration, the drive torque and the "
+                "Hertz stress from the simulated contact force; the least preload, the residual vibration "
+                "and user probes are not computed and left empty",
         **_train_modes(chain, rpm),
         "speeds": [
             {
