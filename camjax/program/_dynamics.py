@@ -16,6 +16,7 @@ compiles nothing.
 from __future__ import annotations
 
 import functools
+import os
 from typing import NamedTuple
 
 import jax
@@ -106,6 +107,43 @@ SPEED_BLOCK = 32
 """Speeds per compiled call: every batch of speeds runs in blocks of this width (the last
 padded), so a turn's shape compiles one program whatever the number of speeds."""
 
+BLOCK_BYTES = 170
+"""Memory of one compiled block of speeds per interval, speed and mode or output row: XLA's
+memory analysis of ``_cycles`` gave 120 to 166 bytes (the feed cam, a ten-body chain, the
+flexible arm; 2026-11-29)."""
+MEMORY_SHARE = 0.5
+"""The share of a device's memory (the machine's, on the CPU) one block may take."""
+
+
+def device_memory_bytes(device) -> int | None:
+    """The memory a block of speeds may use on ``device``: its own limit where it reports
+    one (an accelerator), else the machine's physical memory; None where neither is known."""
+    stats = getattr(device, "memory_stats", lambda: None)() or {}
+    if stats.get("bytes_limit"):
+        return int(stats["bytes_limit"])
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def check_block_memory(intervals: int, oscillator: Oscillator, rpm_min: float, devices) -> None:
+    """Refuse, before anything compiles, a turn whose block of ``SPEED_BLOCK`` speeds needs
+    more than ``MEMORY_SHARE`` of a device's memory (``BLOCK_BYTES`` per interval, speed and
+    mode or row), with the slowest speed that fits: the intervals grow as the slowest
+    speed falls."""
+    limit = device_memory_bytes(devices[0])
+    values = oscillator.modes_count + int(np.shape(oscillator.gain)[0])
+    need = BLOCK_BYTES * intervals * SPEED_BLOCK * values
+    if limit is None or need <= MEMORY_SHARE * limit:
+        return
+    slowest = rpm_min * need / (MEMORY_SHARE * limit)
+    raise ValueError(
+        f"a turn at {rpm_min:g} rpm: {intervals:,} intervals x {values} modes and outputs x "
+        f"{SPEED_BLOCK} speeds need about {need / 1e9:.1f} GB at once, more than "
+        f"{MEMORY_SHARE:.0%} of this device's {limit / 1e9:.0f} GB: run at {slowest:.3g} rpm or "
+        "faster, or with fewer modes (a spring's or an arm's elements)")
+
 
 def _node_arrays_cut(cycle: Cycle, intervals: int) -> Cycle:
     """A ``Cycle`` of a padded turn cut back to the turn's own nodes and intervals."""
@@ -180,6 +218,7 @@ class SteadyState:
         self.rpm_min = Speeds.of(rpm_min, "rpm_min").min()  # an entry point's speeds: their slowest
         self.devices = resolve_devices(devices)
         self.grid = program_grid(program, self.rpm_min, self.oscillator.lam)
+        check_block_memory(self.grid.intervals, self.oscillator, self.rpm_min, self.devices)
         if not resolves(self.grid, self.oscillator.lam, self.rpm_min):
             raise ValueError("oscillator: its fastest mode turns too far per interval of the program's grid "
                              "(give SteadyState an oscillator of the program's own follower)")
