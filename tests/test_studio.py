@@ -297,19 +297,30 @@ def _browser():
     return sync_playwright
 
 
+@contextlib.contextmanager
+def opened_page(url: str, *, height: int = 1250, **options):
+    """``(page, errors)``: Debian's Chromium on ``url`` in a 1600 x ``height`` viewport
+    (``options`` for ``new_page``), the page's JavaScript errors collected; closed after."""
+    sync_playwright = _browser()
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 1600, "height": height}, **options)
+            errors = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url)
+            yield page, errors
+        finally:
+            browser.close()
+
+
 REDRAW_MS = 180_000  # an analysis compiles today: tens of seconds on a busy machine
 
 
 def test_page_edits_saves_and_reloads(server, tmp_path):
-    sync_playwright = _browser()
     shots = os.environ.get("CAMJAX_STUDIO_SCREENSHOTS")
     idle = "document.body.dataset.busy === '0'"
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        page = browser.new_page(viewport={"width": 1600, "height": 1250}, accept_downloads=True)
-        errors = []
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.goto(server.url)
+    with opened_page(server.url, accept_downloads=True) as (page, errors):
         page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
         page.wait_for_function(idle, timeout=REDRAW_MS)
         first = float(page.get_attribute("#jump", "data-rpm"))
@@ -366,7 +377,6 @@ def test_page_edits_saves_and_reloads(server, tmp_path):
         assert page.input_value('input[data-seg="2"][data-key="law"]').endswith(".json")
         assert page.inner_text("#save") == "Save TOML + laws (zip)"
         assert not errors, errors
-        browser.close()
 
 
 def test_page_says_what_an_edit_does(server):
@@ -374,15 +384,9 @@ def test_page_says_what_an_edit_does(server):
     program stands the views are marked stale and Save says it saves the last good program; a parameterised law typed into the law cell reaches the library (its message
     shown) and keeps the lift; a flat face clears the roller's radius; an empty spring rate
     says the cam is grooved, whose rigid force has no preload (the preload warned of)."""
-    sync_playwright = _browser()
     idle = "document.body.dataset.busy === '0'"
     no_error = f"!document.querySelector('.err') && {idle}"
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        page = browser.new_page(viewport={"width": 1600, "height": 1250})
-        errors = []
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.goto(server.url)
+    with opened_page(server.url) as (page, errors):
         page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
         page.wait_for_function(idle, timeout=REDRAW_MS)
         for speed in ("fast", "700"):  # a bad chosen speed's message goes with a good one
@@ -439,13 +443,11 @@ def test_page_says_what_an_edit_does(server):
                                    1.5 * np.asarray(response["kinematic_acceleration_m_s2"]), rtol=1e-12, atol=1e-9)
         assert "follower.preload_n = 300 N does nothing on a grooved cam" in page.inner_text("#warnings")
         assert not errors, errors
-        browser.close()
 
 
 def test_page_shows_a_table_cam_read_only():
     """A whole cam from one lift table: its segments shown, not edited, with the note; the
     follower stays editable and the report follows it."""
-    sync_playwright = _browser()
     feed = parse_program(FEED)
     angle = np.arange(0.0, 360.0, 5.0)
     table = cp.Program.from_table("feed table", angle, feed.lift(angle)[0], feed.follower)
@@ -453,12 +455,7 @@ def test_page_shows_a_table_cam_read_only():
     running = studio(table, rpm=rpm)
     idle = "document.body.dataset.busy === '0'"
     try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-            page = browser.new_page(viewport={"width": 1600, "height": 1250})
-            errors = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(running.url)
+        with opened_page(running.url) as (page, errors):
             page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
             page.wait_for_function(idle, timeout=REDRAW_MS)
             assert page.is_visible("#table-note") and page.inner_text("#table-note") == "a table cam: edit its file"
@@ -479,7 +476,6 @@ def test_page_shows_a_table_cam_read_only():
             report = call(running.url + f"api/report?session={session}")[1]
             assert_same(report, json.loads(cp.analyse(expected, np.linspace(400, 1000, 3)).to_json()))
             assert not errors, errors
-            browser.close()
     finally:
         running.stop()
 
@@ -502,16 +498,10 @@ def test_page_shows_the_servo_motor_panel():
     """The servo example's page shows the motor panel: the picked motor, a row per speed, a
     row per check and the torque-speed plot drawn; an edit keeps the [drive] and [motor] (the
     panel is there after it, from the edited program's report)."""
-    sync_playwright = _browser()
     idle = "document.body.dataset.busy === '0'"
     running = studio("servo", rpm=SERVO_RPM)
     try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-            page = browser.new_page(viewport={"width": 1600, "height": 1250})
-            errors = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(running.url)
+        with opened_page(running.url) as (page, errors):
             page.wait_for_selector("#motor-box:not([hidden])", timeout=2 * REDRAW_MS)
             page.wait_for_function(idle, timeout=REDRAW_MS)
             report = call(running.url + "api/report")[1]["motor"]
@@ -536,7 +526,6 @@ def test_page_shows_the_servo_motor_panel():
                                    timeout=REDRAW_MS)
             assert page.is_visible("#motor-box")
             assert errors == []
-            browser.close()
     finally:
         running.stop()
 
@@ -545,7 +534,6 @@ def test_page_edits_materials_undoes_and_draws_the_swinging_arm():
     """A swinging roller: its arm and pivot drawn beyond the cam; a ``[materials]`` field
     edited scales the Hertz peak by the square root of the contact modulus (the force does
     not depend on it); Ctrl+Z and the Undo button give back the program before each edit."""
-    sync_playwright = _browser()
     indexer = cp.Program.load(cp.example_path("indexer"))
     swinging = dataclasses.replace(indexer, follower=dataclasses.replace(
         indexer.follower, kind="swinging-roller", arm_mm=98.0, pivot_mm=110.0, contact_width_mm=10.0))
@@ -555,12 +543,7 @@ def test_page_edits_materials_undoes_and_draws_the_swinging_arm():
     ready = f"document.querySelector('#status').textContent === 'ready' && {idle}"
     posted = lambda r: "/api/program" in r.url and r.request.method == "POST"  # noqa: E731
     try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-            page = browser.new_page(viewport={"width": 1600, "height": 1250})
-            errors = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(running.url)
+        with opened_page(running.url) as (page, errors):
             page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
             page.wait_for_function(ready, timeout=REDRAW_MS)
             session = page.evaluate("SESSION")
@@ -611,7 +594,6 @@ def test_page_edits_materials_undoes_and_draws_the_swinging_arm():
             assert page.input_value(field) == "" and page.is_disabled("#undo")
             np.testing.assert_allclose(stress(), before, rtol=1e-12)
             assert not errors, errors
-            browser.close()
     finally:
         running.stop()
 
@@ -622,7 +604,6 @@ def test_page_edits_a_chain_and_draws_its_modes(tmp_path):
     its mass and element, then moved toward the cam: each time the report's chain (bodies,
     natural frequencies) is the edited program's, and a plot per mode shape over the bodies
     with its frequency in the legend, and the harmonic check, are drawn."""
-    sync_playwright = _browser()
     shots = Path(os.environ.get("CAMJAX_STUDIO_SCREENSHOTS") or tmp_path)
     rpm = "400:1200:3"
     running = studio("valve", rpm=rpm)
@@ -648,12 +629,7 @@ def test_page_edits_a_chain_and_draws_its_modes(tmp_path):
         return state, report
 
     try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-            page = browser.new_page(viewport={"width": 1600, "height": 1250})
-            errors = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(running.url)
+        with opened_page(running.url) as (page, errors):
             page.wait_for_selector("#train-held", timeout=2 * REDRAW_MS)
             page.wait_for_function(ready, timeout=REDRAW_MS)
             session = page.evaluate("SESSION")
@@ -692,7 +668,6 @@ def test_page_edits_a_chain_and_draws_its_modes(tmp_path):
             page.locator("#chain-box").screenshot(path=str(shots / "studio-chain-editor.png"))
             page.locator("#train-box").screenshot(path=str(shots / "studio-chain.png"))
             assert not errors, errors
-            browser.close()
     finally:
         running.stop()
 
@@ -706,7 +681,6 @@ def test_page_edits_a_flexible_arm_and_draws_its_report(tmp_path):
     (the starting report again).  Each time the page's frequencies are
     ``Chain.natural_frequencies`` of the program the studio holds, to 1e-12, and the
     report's arm section is drawn: its first bending mode, a row per speed, its plots."""
-    sync_playwright = _browser()
     shots = Path(os.environ.get("CAMJAX_STUDIO_SCREENSHOTS") or tmp_path)
     rpm = "2000:3200:3"
     running = studio("swinging_arm", rpm=rpm)
@@ -744,12 +718,7 @@ def test_page_edits_a_flexible_arm_and_draws_its_report(tmp_path):
         return str(error.value)
 
     try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-            page = browser.new_page(viewport={"width": 1600, "height": 1300})
-            errors = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(running.url)
+        with opened_page(running.url, height=1300) as (page, errors):
             page.wait_for_selector("#arm-fundamental", timeout=2 * REDRAW_MS)
             page.wait_for_function(ready, timeout=REDRAW_MS)
             session = page.evaluate("SESSION")
@@ -811,7 +780,6 @@ def test_page_edits_a_flexible_arm_and_draws_its_report(tmp_path):
             page.locator("#arm-box").screenshot(path=str(shots / "studio-arm-editor.png"))
             page.screenshot(path=str(shots / "studio-arm-end.png"), full_page=True)
             assert not errors, errors
-            browser.close()
     finally:
         running.stop()
 
@@ -824,7 +792,6 @@ def test_page_adds_a_flexible_arm_to_a_one_body_swinging_follower():
     ``Chain.natural_frequencies`` of the program the studio holds (1e-12), the first within
     1e-4 of the pinned Rayleigh beam's closed form (the roller held, nothing else on the
     arm), and the studio's TOML reads back to that program."""
-    sync_playwright = _browser()
     indexer = cp.Program.load(cp.example_path("indexer"))
     swinging = dataclasses.replace(indexer, follower=dataclasses.replace(
         indexer.follower, kind="swinging-roller", arm_mm=98.0, pivot_mm=110.0))
@@ -842,12 +809,7 @@ def test_page_adds_a_flexible_arm_to_a_one_body_swinging_follower():
         return str(error.value)
 
     try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-            page = browser.new_page(viewport={"width": 1600, "height": 1250})
-            errors = []
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto(running.url)
+        with opened_page(running.url) as (page, errors):
             page.wait_for_selector("#jump", timeout=2 * REDRAW_MS)
             page.wait_for_function(clean, timeout=REDRAW_MS)
             session = page.evaluate("SESSION")
@@ -899,6 +861,5 @@ def test_page_adds_a_flexible_arm_to_a_one_body_swinging_follower():
             assert abs(held[0] / closed - 1) < 1e-4, (held[0], closed)
             assert page.locator("#arm-speeds tbody tr").count() == 2
             assert not errors, errors
-            browser.close()
     finally:
         running.stop()
