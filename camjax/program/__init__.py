@@ -61,6 +61,7 @@ from ._dxf_import import lift_from_dxf as lift_from_dxf
 from ._dxf_import import read_dxf_profile as read_dxf_profile
 from ._dynamics import SpeedSummary as SpeedSummary
 from ._dynamics import SteadyState as SteadyState
+from ._dynamics import block_memory_bytes as block_memory_bytes
 from ._dynamics import node_contact_force as node_contact_force
 from ._dynamics import startup as startup
 from ._export import MAX_PROFILE_POINTS as MAX_PROFILE_POINTS

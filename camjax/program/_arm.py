@@ -127,6 +127,7 @@ class Arm:
 
 
 ARM_FIELDS = {f.name for f in dataclasses.fields(Arm)} - {"roller_mm"}
+"""The keys of a program file's ``[arm]`` table (the studio's fields of an arm)."""
 
 
 def arm_from_dict(table, follower: dict | None) -> Arm:

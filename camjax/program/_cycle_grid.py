@@ -75,16 +75,21 @@ def _grid_refusal(program: Program, rpm_min: float, cycles: float) -> str:
     return f"the follower vibrates {cycles:,.0f} times per turn; " + "; or ".join(remedies)
 
 
+def _layout(program: Program, rpm_min: float, vibration_hz: float | None):
+    """The turn's ``SegmentLayout`` and the vibrations per turn it resolves."""
+    cycles = (program.follower.vibrations_per_turn(rpm_min) if vibration_hz is None
+              else vibration_hz * 60.0 / rpm_min)
+    return segment_layout([GridSegment(start_deg / 360.0, seg.angle_deg / 360.0,
+                                       tuple(seg.law.breakpoints()) if seg.moving else None)
+                           for seg, start_deg in zip(program.segments, program.start_deg)], cycles), cycles
+
+
 def cycle_grid(program: Program, rpm_min: float, vibration_hz: float | None = None) -> CycleGrid:
     """Sample the program's lift and acceleration on the engine's grid for speeds from
     ``rpm_min`` up (``camjax.sdof.segment_layout``: ``w h <= TARGET_PHASE_STEP`` at
     ``rpm_min``, ``w`` the follower's or ``2 pi vibration_hz`` where given, a chain's
     highest mode); a grid past the limit is refused before it is built (``check_grid_size``)."""
-    cycles = (program.follower.vibrations_per_turn(rpm_min) if vibration_hz is None
-              else vibration_hz * 60.0 / rpm_min)
-    layout = segment_layout([GridSegment(start_deg / 360.0, seg.angle_deg / 360.0,
-                                         tuple(seg.law.breakpoints()) if seg.moving else None)
-                             for seg, start_deg in zip(program.segments, program.start_deg)], cycles)
+    layout, cycles = _layout(program, rpm_min, vibration_hz)
     total = layout.intervals
     check_grid_size(total, f"a turn at {rpm_min:g} rpm", lambda: _grid_refusal(program, rpm_min, cycles))
     motion, times = layout.grid()
@@ -131,12 +136,22 @@ def program_grid(program: Program, rpm_min: float, lam=None) -> CycleGrid:
     overdamped mode may be faster), ``lam`` its ``Oscillator``'s where given.  Every mode
     then turns by at most ``TARGET_PHASE_STEP`` per interval at ``rpm_min``, within the
     reach of the propagation's series (``camjax.sdof.series_kicks``)."""
+    return cycle_grid(program, rpm_min, _fastest_hz(program, lam))
+
+
+def grid_intervals(program: Program, rpm_min: float, lam=None) -> int:
+    """The intervals of ``program_grid(program, rpm_min, lam)``, without sampling the turn."""
+    return _layout(program, rpm_min, _fastest_hz(program, lam))[0].intervals
+
+
+def _fastest_hz(program: Program, lam) -> float | None:
+    """The frequency a program's grid resolves (``program_grid``): None for the classic
+    follower's own."""
     if program.one_body:
-        return cycle_grid(program, rpm_min)
+        return None
     if lam is None:
         lam = Oscillator.of_chain(program.chain).lam
-    fastest = max(program.chain.highest_frequency_hz(), float(np.max(np.abs(lam), initial=0.0)) / (2 * math.pi))
-    return cycle_grid(program, rpm_min, fastest)
+    return max(program.chain.highest_frequency_hz(), float(np.max(np.abs(lam), initial=0.0)) / (2 * math.pi))
 
 
 def resolves(grid: CycleGrid, lam, rpm_min: float) -> bool:

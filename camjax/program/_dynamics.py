@@ -16,6 +16,7 @@ compiles nothing.
 from __future__ import annotations
 
 import functools
+import math
 import os
 from typing import NamedTuple
 
@@ -35,7 +36,7 @@ from ..sdof import (
 from ..sharding import resolve_devices, shard_batch
 from ._contact import NodeContact, node_contact
 from ._cycle import Cycle, TrainPeaks, _cycle
-from ._cycle_grid import CycleGrid, program_grid, resolves, with_segment_law
+from ._cycle_grid import CycleGrid, grid_intervals, program_grid, resolves, with_segment_law
 from ._oscillator import (
     Oscillator,
 )
@@ -127,22 +128,36 @@ def device_memory_bytes(device) -> int | None:
         return None
 
 
-def check_block_memory(intervals: int, oscillator: Oscillator, rpm_min: float, devices) -> None:
-    """Refuse, before anything compiles, a turn whose block of ``SPEED_BLOCK`` speeds needs
-    more than ``MEMORY_SHARE`` of a device's memory (``BLOCK_BYTES`` per interval, speed and
-    mode or row), with the slowest speed that fits: the intervals grow as the slowest
-    speed falls."""
-    limit = device_memory_bytes(devices[0])
+def block_memory_bytes(intervals: int, oscillator: Oscillator) -> int:
+    """The memory one compiled block of ``SPEED_BLOCK`` speeds of a turn of ``intervals``
+    takes, about: ``BLOCK_BYTES`` per interval, speed and mode or output row."""
     values = oscillator.modes_count + int(np.shape(oscillator.gain)[0])
-    need = BLOCK_BYTES * intervals * SPEED_BLOCK * values
-    if limit is None or need <= MEMORY_SHARE * limit:
+    return BLOCK_BYTES * intervals * SPEED_BLOCK * values
+
+
+def check_block_memory(program: Program, oscillator: Oscillator, rpm_min: float, budget: float | None) -> None:
+    """Refuse, before anything compiles, a turn whose block of speeds needs more than
+    ``budget`` bytes (``block_memory_bytes``), with the slowest speed that fits (the
+    intervals grow as the slowest speed falls; found on the grid's layout alone), or none
+    where the segments' least intervals alone do not fit."""
+    def need(rpm):
+        return block_memory_bytes(grid_intervals(program, rpm, oscillator.lam), oscillator)
+
+    asked = need(rpm_min)
+    if budget is None or asked <= budget:
         return
-    slowest = rpm_min * need / (MEMORY_SHARE * limit)
+    values = oscillator.modes_count + int(np.shape(oscillator.gain)[0])
+    speed, remedy = rpm_min, "with fewer segments"
+    for _ in range(8):  # the intervals fall about as 1 / rpm, to the segments' least
+        speed = math.ceil(speed * max(need(speed) / budget, 1.0001))
+        if need(speed) <= budget:
+            remedy = f"at {speed:,} rpm or faster"
+            break
     raise ValueError(
-        f"a turn at {rpm_min:g} rpm: {intervals:,} intervals x {values} modes and outputs x "
-        f"{SPEED_BLOCK} speeds need about {need / 1e9:.1f} GB at once, more than "
-        f"{MEMORY_SHARE:.0%} of this device's {limit / 1e9:.0f} GB: run at {slowest:.3g} rpm or "
-        "faster, or with fewer modes (a spring's or an arm's elements)")
+        f"a turn at {rpm_min:g} rpm: {asked / (BLOCK_BYTES * SPEED_BLOCK * values):,.0f} intervals x "
+        f"{values} modes and outputs x {SPEED_BLOCK} speeds need about {asked / 1e9:.1f} GB at once, "
+        f"more than the {budget / 1e9:.1f} GB a block may take ({MEMORY_SHARE:.0%} of the device's memory "
+        f"unless memory_bytes says): run {remedy}, or with fewer modes (a spring's or an arm's elements)")
 
 
 def _node_arrays_cut(cycle: Cycle, intervals: int) -> Cycle:
@@ -204,11 +219,13 @@ class SteadyState:
     results equal to one device's.  A response that is not finite is a ``SolverError``
     (``RESULTS.nonfinite``).  The follower is ``Oscillator.of(program)`` unless
     ``oscillator`` is given (another realisation of the same follower, or an edit of its
-    values: the same shape compiles nothing).
+    values: the same shape compiles nothing).  A turn whose block of speeds needs more than
+    ``memory_bytes`` (default: ``MEMORY_SHARE`` of the device's memory) is refused before
+    anything compiles (``block_memory_bytes``), with the slowest speed that fits.
     """
 
     def __init__(self, program: Program, rpm_min: float | Speeds, *, devices=None,
-                 oscillator: Oscillator | None = None):
+                 oscillator: Oscillator | None = None, memory_bytes: float | None = None):
         if program.one_body and not program.follower.damping_ratio > 0:
             raise ValueError("the periodic steady state needs follower.damping_ratio > 0 "
                              "(without damping the start-up never settles)")
@@ -218,7 +235,10 @@ class SteadyState:
         self.rpm_min = Speeds.of(rpm_min, "rpm_min").min()  # an entry point's speeds: their slowest
         self.devices = resolve_devices(devices)
         self.grid = program_grid(program, self.rpm_min, self.oscillator.lam)
-        check_block_memory(self.grid.intervals, self.oscillator, self.rpm_min, self.devices)
+        if memory_bytes is None:
+            limit = device_memory_bytes(self.devices[0])
+            memory_bytes = None if limit is None else MEMORY_SHARE * limit
+        check_block_memory(program, self.oscillator, self.rpm_min, memory_bytes)
         if not resolves(self.grid, self.oscillator.lam, self.rpm_min):
             raise ValueError("oscillator: its fastest mode turns too far per interval of the program's grid "
                              "(give SteadyState an oscillator of the program's own follower)")
