@@ -770,6 +770,10 @@ class ChainContacts:
         where the cam holds and reads one period from its first separation.  ``2 samples``
         points over the run, in blocks of ``SPEED_BLOCK`` speeds."""
         rpm = np.asarray(Speeds.of(rpm), dtype=float)
+        if rpm.min() < self.rpm_min * (1 - 1e-12):
+            raise ValueError(
+                f"rpm {rpm.min():g} below the simulation's slowest speed {self.rpm_min:g}"
+            )
         start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
         until = np.asarray(until, dtype=float)
         state = np.asarray(state, dtype=float)

@@ -350,6 +350,11 @@ def flights_at(steady: SteadyState, rpm, *, simulation=None) -> list[list[Flight
     speeds' events are searched together, flight by flight.
     """
     rpm = Speeds.of(rpm)
+    chain = steady.program.chain
+    if chain is not None and chain.arm is not None:
+        raise ValueError(
+            f"program {steady.program.name!r}: the flights of a follower on a flexible [arm] are not simulated"
+        )
     out = [[] for _ in rpm]
     if steady.program.follower.form_closed:
         return out
@@ -407,9 +412,8 @@ def _chain_flights(steady: SteadyState, rpm: Speeds, lost: np.ndarray, out: list
 
     program = steady.program
     chain = program.chain
-    if chain is None or chain.arm is not None:
-        raise ValueError(f"program {program.name!r}: the flights of a follower on a flexible [arm] are not "
-                         "simulated")
+    if chain is None:
+        raise ValueError(f"program {program.name!r} has no [[train]]: its flights are not simulated")
     speeds = Speeds.of(np.asarray(rpm, dtype=float)[lost])
     turns = _Turns(steady, speeds)
     times, table = turns.sampled_force()
