@@ -25,7 +25,6 @@ from camjax.program import (
     Spring,
     SteadyState,
     analyse,
-    flights,
     flights_at,
 )
 
