@@ -466,9 +466,16 @@ def _turns_compiled():
 
 
 _turns = _turns_compiled()
-_jets = jax.jit(
-    jax.vmap(jax.vmap(_signal_jets, in_axes=(0, None, None, None)), in_axes=(0, 0, None, None))
-)
+_sample_jets = jax.jit(jax.vmap(_signal_jets, in_axes=(0, None, None, None)))
+_jets = jax.jit(jax.vmap(_sample_jets, in_axes=(0, 0, None, None)))
+
+
+def _cam_jets(states, indices: np.ndarray, rpm: float, system: ContactSystem, grid: _Grid):
+    """The contact force's jets ``(indices, 4)`` (``_signal_jets``) at the samples
+    ``indices`` of one run's ``states``, computed in a bucketed block of 64 (one compile)."""
+    padded = np.pad(indices, (0, bucket(max(indices.size, 1), 64) - indices.size))
+    jets = _sample_jets(states[padded], rpm, system, grid)
+    return np.asarray(jets)[: indices.size, _SIGNALS.index("cam")]
 
 
 def _straightened(values, left, right, widths, switched):
@@ -801,15 +808,23 @@ class ChainContacts:
                     f"{self.options.max_steps:,} steps (ContactOptions.max_steps)"
                 )
             states = samples[:, :, -(1 + self.system.Minv.shape[0] * 2) :]
-            cam = _jets(states, jnp.asarray(rpm[padded]), self.system, self._grid)[:, :, 0]
             lift = np.asarray(
                 lift_at(grid.nodes, grid.lift, grid.acceleration, states[:, :, 0].ravel())
             )
             lift = lift.reshape(3, padded.size, count + 1)
-            samples, cam = np.asarray(samples), np.asarray(cam)
+            samples = np.asarray(samples)
+
             out += [
                 cam_flights(
-                    self.chain, self.system, float(rpm[r]), samples[i], cam[i], lift[:, i], until[r]
+                    self.chain,
+                    self.system,
+                    float(rpm[r]),
+                    samples[i],
+                    lambda indices, z=states[i], r=float(rpm[r]): _cam_jets(
+                        z, indices, r, self.system, self._grid
+                    ),
+                    lift[:, i],
+                    until[r],
                 )
                 for i, r in enumerate(rows)
             ]
@@ -1032,14 +1047,14 @@ def cam_flights(
     system: ContactSystem,
     rpm: float,
     x: np.ndarray,
-    jets: np.ndarray,
+    jets_at,
     lift,
     until: float,
 ) -> list[Flight]:
     """Every flight of the cam's contact that starts before turn time ``until`` in one run
-    (``ChainContacts.flights``): ``x`` its samples ``(count + 1, outputs)``, ``jets`` the
-    contact force's and its first three derivatives in turn time at them, ``lift`` the cam's
-    ``y``, ``y_s``, ``y_ss`` (mm, turns).
+    (``ChainContacts.flights``): ``x`` its samples ``(count + 1, outputs)``, ``jets_at`` the
+    contact force and its first three derivatives in turn time at the samples of some
+    indices ``(indices, 4)``, ``lift`` the cam's ``y``, ``y_s``, ``y_ss`` (mm, turns).
 
     The cam holds where its contact force is positive.  **Separation**: the zero of the
     force's cubic Taylor polynomial from the last held sample (the held equations'
@@ -1078,6 +1093,22 @@ def cam_flights(
 
     opens = np.flatnonzero(held[:-1] & ~held[1:])
     closes = np.flatnonzero(~held[:-1] & held[1:])
+
+    def landing(i):  # the last sample in flight, the next separation's and the largest force's
+        later = closes[closes > i]
+        if not later.size:
+            return None
+        j = int(later[0])
+        nxt = opens[opens > j]
+        stop = int(nxt[0]) if nxt.size else count
+        return j, stop, j + 1 + int(np.argmax(force[j + 1 : stop + 1]))
+
+    needed = set(opens.tolist())
+    for i in opens:
+        if (found := landing(i)) is not None:
+            needed |= {found[2] - 1, found[2]}
+    needed = np.array(sorted(needed), dtype=int)
+    jets = dict(zip(needed.tolist(), jets_at(needed)))
     flights = []
     for i in opens:
         roots = np.roots((jets[i] / [1.0, 1.0, 2.0, 6.0])[::-1])  # the cubic, in turns from i
@@ -1087,11 +1118,10 @@ def cam_flights(
         if turn_time[i] + tau >= until:
             break
         separation = angle(i, tau)
-        later = closes[closes > i]
-        if not later.size:
+        if (found := landing(i)) is None:
             flights.append(Flight(separation, None, None, None))
             break
-        j = int(later[0])  # the last sample in flight
+        j, stop, best = found
         dt = h * period
         if rider or approach[j] < 0:
             t = _first_root(approach[j], rate[j], accel[j], dt)
@@ -1099,9 +1129,6 @@ def cam_flights(
             k0, c0 = float(system.k[0]), float(system.c[0])
             a, b = (k0 * approach[n] + c0 * rate[n] for n in (j, j + 1))
             t = dt * (0.0 if a == b else -a / (b - a))
-        nxt = opens[opens > j]
-        stop = int(nxt[0]) if nxt.size else count
-        best = j + 1 + int(np.argmax(force[j + 1 : stop + 1]))
         peak = float(force[best])
         sigma = np.linspace(0.0, h, 65)
         for n in (best - 1, best):
