@@ -54,6 +54,11 @@ jumps inside it; the extremes (the bounded peak search of the closed chain's own
 the drive torque's figures (``torque_jets``, ``torque_figures``) and the Hertz peak
 (``refined_contact_stress``) are read from those, by the exact path's own rules.  The jump speed is searched between the speeds given
 (``ChainContacts.jump_speed``, ``narrowed_crossing``).
+
+**Flights.**  A chain without lash or seat whose exact steady state loses contact runs here
+too, its cam's contact the only one-sided one: from a state of that steady state where the
+cam holds, two turns (``ChainContacts.flights``), whose flights ``cam_flights`` reads
+(``flights_at``).
 """
 
 from __future__ import annotations

@@ -11,6 +11,8 @@ form (the steady state by exact propagation), so the events are found by bracket
 bisection on exact values.  The turn is taken to be on the contact-held steady state up
 to its first separation (the linear answer is exact until then); from there every flight
 of the following period is simulated (after a re-impact the roller may take off again).
+A chain's flights are its simulation with the cam's contact one-sided (``ChainContacts``),
+started on the same steady state.
 """
 
 from __future__ import annotations
