@@ -437,6 +437,17 @@ def test_a_chains_flights_start_at_the_exact_steady_states_first_zero(valve_stea
         assert 0 < (f.reimpact_deg - f.separation_deg) % 360 < 360
 
 
+def test_the_report_gives_a_chains_flights(valve_steady):
+    """The report's rows (and their JSON) carry the chain's flights where its steady state
+    loses contact, ``flights_at``'s, and none where it holds."""
+    report = analyse(valve_steady.program, FLIGHT_RPM, steady=valve_steady)
+    held, lost = report.speeds
+    assert held.flights is None and not held.jump
+    assert lost.jump and list(lost.flights) == flights_at(valve_steady, [FLIGHT_RPM[1]])[0]
+    row = json.loads(json.dumps(report.as_dict()))["speeds"][1]
+    assert row["flight"] == row["flights"][0] == lost.flights[0].as_dict()
+
+
 def test_a_one_body_chain_flies_as_the_classic_follower():
     """The classic follower spelled as a train (one body on its element) simulated with the
     cam's contact one-sided (``ChainContacts``) against the classic's closed-form flights
