@@ -18,6 +18,7 @@ from camjax.program import (
     SteadyState,
     analyse,
     example_path,
+    flights_at,
     program_path,
 )
 
@@ -124,7 +125,10 @@ def test_two_body_report_is_the_chain_steady_state():
         assert row.jump == (direct.min_contact_force_n[i] < 0)
         assert row.max_drive_torque_n_m > 0 and len(row.residual_vibration_mm) == 2
         assert len(row.period_ratios) == 2
-        assert row.flights is None  # a chain's flight is not simulated
+        # where the steady state loses contact, the chain's simulated flights (flights_at)
+        assert (row.flights is not None) == bool(row.jump)
+        if row.jump:
+            assert list(row.flights) == flights_at(steady, [rpm[i]])[0] and row.flights
     held = train["natural_frequencies_held_hz"][0]  # the cam orders meeting it from 600 to 1500 rpm
     assert train["harmonic_check"][0]["orders"] == [
         k for k in range(1, 500) if 600 <= 60 * held / k <= 1500

@@ -54,6 +54,11 @@ jumps inside it; the extremes (the bounded peak search of the closed chain's own
 the drive torque's figures (``torque_jets``, ``torque_figures``) and the Hertz peak
 (``refined_contact_stress``) are read from those, by the exact path's own rules.  The jump speed is searched between the speeds given
 (``ChainContacts.jump_speed``, ``narrowed_crossing``).
+
+**Flights.**  A chain without lash or seat whose exact steady state loses contact runs here
+too, its cam's contact the only one-sided one: from a state of that steady state where the
+cam holds, two turns (``ChainContacts.flights``), whose flights ``cam_flights`` reads
+(``flights_at``).
 """
 
 from __future__ import annotations
@@ -72,6 +77,7 @@ from ..sdof import narrowed_crossing
 from ._contact import RefinedStress, contact_stress_squared, node_contact, refined_contact_stress
 from ._cycle_grid import cycle_grid
 from ._dynamics import SPEED_BLOCK
+from ._jump import Flight
 from ._speeds import Speeds
 from ._torque import TorqueFigures, torque_figures, torque_jets
 from ._train import Chain
@@ -374,9 +380,12 @@ def _signal_jets(z, rpm, system: ContactSystem, grid: _Grid):
     return jnp.stack([signals(s, z), d1(s, z), d2(s, z), d3(s, z)], axis=-1)
 
 
-def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: ContactOptions):
-    """One turn from state ``z0`` (mm, mm per turn) at ``rpm``: the end state, the samples
-    ``(samples + 1, outputs)`` and whether the integration succeeded (jittable, vmappable)."""
+def _turn(
+    z0, rpm, t0, t1, system: ContactSystem, grid: _Grid, samples: int, options: ContactOptions
+):
+    """From state ``z0`` (mm, mm per turn) at turn time ``t0`` to ``t1`` (one turn from 0 to 1
+    to settle; at most two) at ``rpm``: the end state, the samples ``(samples + 1, outputs)``
+    evenly over ``[t0, t1]`` and whether the integration succeeded (jittable, vmappable)."""
     import diffrax
 
     system, grid = jax.tree.map(jnp.asarray, (system, grid))
@@ -417,19 +426,20 @@ def _turn(z0, rpm, system: ContactSystem, grid: _Grid, samples: int, options: Co
         )
 
     controller = diffrax.ClipStepSizeController(
-        diffrax.PIDController(rtol=options.rtol, atol=options.atol), jump_ts=grid.jumps
+        diffrax.PIDController(rtol=options.rtol, atol=options.atol),
+        jump_ts=jnp.concatenate([grid.jumps, grid.jumps + 1.0]),  # the turn's and the next one's
     )
     solution = diffrax.diffeqsolve(
         diffrax.ODETerm(field),
         diffrax.Tsit5(),
-        0.0,
-        1.0,
+        t0,
+        t1,
         None,
         z0,
         saveat=diffrax.SaveAt(
             subs=[
                 diffrax.SubSaveAt(t1=True),
-                diffrax.SubSaveAt(ts=jnp.linspace(0.0, 1.0, samples + 1), fn=sample),
+                diffrax.SubSaveAt(ts=jnp.linspace(t0, t1, samples + 1), fn=sample),
             ]
         ),
         stepsize_controller=controller,
@@ -455,13 +465,22 @@ _COLUMNS = (
 
 
 def _turns_compiled():
-    return jax.jit(jax.vmap(_turn, in_axes=(0, 0, None, None, None, None)), static_argnums=(4, 5))
+    return jax.jit(
+        jax.vmap(_turn, in_axes=(0, 0, 0, 0, None, None, None, None)), static_argnums=(6, 7)
+    )
 
 
 _turns = _turns_compiled()
-_jets = jax.jit(
-    jax.vmap(jax.vmap(_signal_jets, in_axes=(0, None, None, None)), in_axes=(0, 0, None, None))
-)
+_sample_jets = jax.jit(jax.vmap(_signal_jets, in_axes=(0, None, None, None)))
+_jets = jax.jit(jax.vmap(_sample_jets, in_axes=(0, 0, None, None)))
+
+
+def _cam_jets(states, indices: np.ndarray, rpm: float, system: ContactSystem, grid: _Grid):
+    """The contact force's jets ``(indices, 4)`` (``_signal_jets``) at the samples
+    ``indices`` of one run's ``states``, computed in a bucketed block of 64 (one compile)."""
+    padded = np.pad(indices, (0, bucket(max(indices.size, 1), 64) - indices.size))
+    jets = _sample_jets(states[padded], rpm, system, grid)
+    return np.asarray(jets)[: indices.size, _SIGNALS.index("cam")]
 
 
 def _straightened(values, left, right, widths, switched):
@@ -663,9 +682,12 @@ class ChainContacts:
         n = self.system.Minv.shape[0]
         z = jnp.zeros((rpm.size, 2 * n))
         speeds = jnp.asarray(rpm)
+        zeros = jnp.zeros(rpm.size)
         change = np.full(rpm.size, np.inf)
         for turn in range(1, o.max_turns + 1):
-            end, samples, ok = _turns(z, speeds, self.system, self._grid, self.samples, o)
+            end, samples, ok = _turns(
+                z, speeds, zeros, zeros + 1.0, self.system, self._grid, self.samples, o
+            )
             ok = np.asarray(ok)
             if not ok.all():
                 bad = float(rpm[np.argmin(ok)])
@@ -751,6 +773,67 @@ class ChainContacts:
         computed there, else simulated."""
         rpm = Speeds.of(rpm)[0]
         return self._kept[rpm] if rpm in self._kept else self.turns([rpm])[0]
+
+    def flights(self, rpm, start, end, state, until) -> list[list[Flight]]:
+        """Every flight of the cam's contact that starts before turn time ``until`` at each
+        speed of ``rpm``, simulated from turn time ``start`` (the state ``state``, ``(speeds,
+        2 N)``: mm and mm per turn) to ``end`` (at most two turns later) with the cam's
+        contact one-sided (``cam_flights``): ``flights_at`` starts on the exact steady state
+        where the cam holds and reads one period from its first separation.  ``2 samples``
+        points over the run, in blocks of ``SPEED_BLOCK`` speeds."""
+        rpm = np.asarray(Speeds.of(rpm), dtype=float)
+        if rpm.min() < self.rpm_min * (1 - 1e-12):
+            raise ValueError(
+                f"rpm {rpm.min():g} below the simulation's slowest speed {self.rpm_min:g}"
+            )
+        start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+        until = np.asarray(until, dtype=float)
+        state = np.asarray(state, dtype=float)
+        count = 2 * self.samples
+        grid = jax.tree.map(jnp.asarray, self._grid)
+        lift_at = jax.vmap(_lift_at, in_axes=(None, None, None, 0))
+        out = []
+        for first in range(0, rpm.size, SPEED_BLOCK):
+            rows = np.arange(first, min(first + SPEED_BLOCK, rpm.size))
+            padded = np.pad(rows, (0, SPEED_BLOCK - rows.size), mode="edge")
+            _, samples, ok = _turns(
+                jnp.asarray(state[padded]),
+                jnp.asarray(rpm[padded]),
+                jnp.asarray(start[padded]),
+                jnp.asarray(end[padded]),
+                self.system,
+                self._grid,
+                count,
+                self.options,
+            )
+            if not np.asarray(ok).all():
+                bad = float(rpm[padded][np.argmin(np.asarray(ok))])
+                raise ValueError(
+                    f"[[train]]: the chain's flights at {bad:g} rpm could not be followed within "
+                    f"{self.options.max_steps:,} steps (ContactOptions.max_steps)"
+                )
+            states = samples[:, :, -(1 + self.system.Minv.shape[0] * 2) :]
+            lift = np.asarray(
+                lift_at(grid.nodes, grid.lift, grid.acceleration, states[:, :, 0].ravel())
+            )
+            lift = lift.reshape(3, padded.size, count + 1)
+            samples = np.asarray(samples)
+
+            out += [
+                cam_flights(
+                    self.chain,
+                    self.system,
+                    float(rpm[r]),
+                    samples[i],
+                    lambda indices, z=states[i], r=float(rpm[r]): _cam_jets(
+                        z, indices, r, self.system, self._grid
+                    ),
+                    lift[:, i],
+                    until[r],
+                )
+                for i, r in enumerate(rows)
+            ]
+        return out
 
     def jump_speed(self, rpm, separates) -> float:
         """The lowest speed at which the cam separates, between the highest speed of ``rpm``
@@ -962,6 +1045,109 @@ def _first_root(gap0: float, rate: float, accel: float, dt: float) -> float:
     roots = [(-rate + sign * math.sqrt(disc)) / accel for sign in (-1.0, 1.0)]
     inside = [t for t in roots if -1e-15 <= t <= dt * (1 + 1e-9)]
     return float(max(min(inside), 0.0)) if inside else dt
+
+
+def cam_flights(
+    chain: Chain,
+    system: ContactSystem,
+    rpm: float,
+    x: np.ndarray,
+    jets_at,
+    lift,
+    until: float,
+) -> list[Flight]:
+    """Every flight of the cam's contact that starts before turn time ``until`` in one run
+    (``ChainContacts.flights``): ``x`` its samples ``(count + 1, outputs)``, ``jets_at`` the
+    contact force and its first three derivatives in turn time at the samples of some
+    indices ``(indices, 4)``, ``lift`` the cam's ``y``, ``y_s``, ``y_ss`` (mm, turns).
+
+    The cam holds where its contact force is positive.  **Separation**: the zero of the
+    force's cubic Taylor polynomial from the last held sample (the held equations'
+    derivatives, exact given the state).  **Re-impact**: the cam's approach ``a = d_0 + r y -
+    x_1`` (m; a riding body's ``y - x_1``) reaching zero, on its quadratic in time from the
+    last sample in flight (``_first_root``; where the approach stays positive, the element's
+    force only unloading and loading again, the zero of ``k a + c a'`` between the samples);
+    the **impact velocity** is ``a'`` there over ``r``: the cam's surface against the
+    follower's end at the cam (m/s, closing).  **Peak force**: the largest contact force
+    from the landing to the next separation (or the run's end), on the cubic Taylor
+    polynomials of the intervals beside the largest sample.  The landing is the
+    simulation's: on an element the Kelvin-Voigt contact (the classic follower's), a riding
+    body the critically damped one (``RIDER_CONTACT_HZ``), whose peak is that model's."""
+    force = x[:, 0]
+    held = force > 0
+    count = force.size - 1
+    turn_time = x[:, -(1 + system.Minv.shape[0] * 2)]
+    h = (turn_time[-1] - turn_time[0]) / count  # turns between samples
+    period = 60.0 / rpm
+    rider = chain.bodies[0].rides
+    ratio = 1.0 if rider else chain.bodies[0].ratio
+    d0 = 0.0 if rider else float(system.d0[0])
+    E, B = system.k.size, len(chain.bodies)
+    body = len(_COLUMNS) + 2 * E  # the first body's acceleration, then displacement, velocity
+    y, y_s, y_ss = (np.asarray(v) for v in lift)
+    approach = d0 + 1e-3 * (ratio * y - x[:, body + B])
+    rate = 1e-3 * ratio * y_s / period - x[:, body + 2 * B]
+    accel = 1e-3 * ratio * y_ss / period**2 - x[:, body]
+
+    def angle(i, tau):  # tau turns after sample i
+        return float(np.mod(360.0 * (turn_time[i] + tau), 360.0))
+
+    def taylor(i, tau):
+        f = jets[i]
+        return f[0] + tau * (f[1] + tau * (f[2] / 2 + tau * f[3] / 6))
+
+    opens = np.flatnonzero(held[:-1] & ~held[1:])
+    closes = np.flatnonzero(~held[:-1] & held[1:])
+
+    def landing(i):  # the last sample in flight, the next separation's and the largest force's
+        later = closes[closes > i]
+        if not later.size:
+            return None
+        j = int(later[0])
+        nxt = opens[opens > j]
+        stop = int(nxt[0]) if nxt.size else count
+        return j, stop, j + 1 + int(np.argmax(force[j + 1 : stop + 1]))
+
+    needed = set(opens.tolist())
+    for i in opens:
+        if (found := landing(i)) is not None:
+            needed |= {found[2] - 1, found[2]}
+    needed = np.array(sorted(needed), dtype=int)
+    jets = dict(zip(needed.tolist(), jets_at(needed)))
+    flights = []
+    for i in opens:
+        roots = np.roots((jets[i] / [1.0, 1.0, 2.0, 6.0])[::-1])  # the cubic, in turns from i
+        tau = [r.real for r in roots if abs(r.imag) <= 1e-6 * h]
+        tau = [t for t in tau if 0 <= t <= h]
+        tau = min(tau) if tau else h / 2
+        if turn_time[i] + tau >= until:
+            break
+        separation = angle(i, tau)
+        if (found := landing(i)) is None:
+            flights.append(Flight(separation, None, None, None))
+            break
+        j, stop, best = found
+        dt = h * period
+        if rider or approach[j] < 0:
+            t = _first_root(approach[j], rate[j], accel[j], dt)
+        else:  # the element unloads and loads again without a gap: the zero of k a + c a'
+            k0, c0 = float(system.k[0]), float(system.c[0])
+            a, b = (k0 * approach[n] + c0 * rate[n] for n in (j, j + 1))
+            t = dt * (0.0 if a == b else -a / (b - a))
+        peak = float(force[best])
+        sigma = np.linspace(0.0, h, 65)
+        for n in (best - 1, best):
+            if j + 1 <= n < stop:  # held at both ends
+                peak = max(peak, float(np.max(taylor(n, sigma))))
+        flights.append(
+            Flight(
+                separation,
+                angle(j, t / period),
+                float((rate[j] + accel[j] * t) / ratio),
+                peak,
+            )
+        )
+    return flights
 
 
 def contact_section(chain: Chain, turns: list[ContactTurn]) -> dict:

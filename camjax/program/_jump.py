@@ -11,6 +11,8 @@ form (the steady state by exact propagation), so the events are found by bracket
 bisection on exact values.  The turn is taken to be on the contact-held steady state up
 to its first separation (the linear answer is exact until then); from there every flight
 of the following period is simulated (after a re-impact the roller may take off again).
+A chain's flights are its simulation with the cam's contact one-sided (``ChainContacts``),
+started on the same steady state.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ import numpy as np
 
 from ..sdof import first_roots, narrowed_crossing, polished_maxima, psi_host, step_within_host
 from ._dynamics import SPEED_BLOCK, SteadyState
-from ._oscillator import CONTACT_FORCE
+from ._oscillator import CONTACT_FORCE, chain_coordinates
 from ._outputs import min_preload_n as min_preload_n
 from ._speeds import Speeds
 
@@ -334,8 +336,14 @@ def flights(steady: SteadyState, rpm: float) -> list[Flight]:
     return flights_at(steady, Speeds.of(rpm)[:1])[0]
 
 
-def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
+def flights_at(steady: SteadyState, rpm, *, simulation=None) -> list[list[Flight]]:
     """Every flight in one turn at each speed of ``rpm`` (empty where contact holds).
+
+    A chain's (``Program.chain``): where its exact steady state loses contact, the flights of
+    its simulated periodic steady state with the cam's contact one-sided
+    (``ChainContacts.flights``; ``simulation``: that ``ChainContacts``, default one built for
+    the speeds that lose contact; given, a one-body chain's are simulated too).  The classic
+    follower's:
 
     The turn starts at the steady state's first separation (the linear answer is exact
     until then) and runs for one period: after each re-impact contact holds (steady state
@@ -344,15 +352,19 @@ def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
     speeds' events are searched together, flight by flight.
     """
     rpm = Speeds.of(rpm)
-    if not steady.program.one_body:
-        raise ValueError(f"program {steady.program.name!r} drives a chain of bodies: its flights are not "
-                         "simulated (the chain's free flight is not modelled)")
+    chain = steady.program.chain
+    if chain is not None and chain.arm is not None:
+        raise ValueError(
+            f"program {steady.program.name!r}: the flights of a follower on a flexible [arm] are not simulated"
+        )
     out = [[] for _ in rpm]
     if steady.program.follower.form_closed:
         return out
     lost = np.flatnonzero(steady.cycles_at(rpm).min_contact_force_n < 0)
     if lost.size == 0:
         return out
+    if not steady.program.one_body or simulation is not None:
+        return _chain_flights(steady, rpm, lost, out, simulation)
     turns = _Turns(steady, rpm[lost])
     times, table = turns.sampled_force()
     period = turns.period
@@ -389,6 +401,42 @@ def flights_at(steady: SteadyState, rpm) -> list[list[Flight]]:
         t_sep[rows] = t_i[sub] + tau
         x[rows], v[rows], e[rows] = contact.state(sub, tau)
         rows = rows[t_sep[rows] < t_end[rows]]
+    return out
+
+
+def _chain_flights(steady: SteadyState, rpm: Speeds, lost: np.ndarray, out: list, simulation) -> list:
+    """``flights_at`` of a chain at the speeds ``lost``: its simulation with the cam's
+    contact one-sided (``ChainContacts.flights``), started on the exact steady state at its
+    largest contact force (``_Turns``; the chain's coordinates from its modes,
+    ``chain_coordinates``) and run to one period after the steady state's first separation
+    (``_first_separations``), the classic follower's turn."""
+    from ._chain_contacts import ChainContacts  # it reads ``Flight`` from here
+
+    program = steady.program
+    chain = program.chain
+    if chain is None:
+        raise ValueError(f"program {program.name!r} has no [[train]]: its flights are not simulated")
+    speeds = Speeds.of(np.asarray(rpm, dtype=float)[lost])
+    turns = _Turns(steady, speeds)
+    times, table = turns.sampled_force()
+    period = turns.period
+    rows = np.arange(lost.size)
+    start = times[table.argmax(axis=1)]  # turns: the largest force, the cam held
+    separation = _first_separations(turns, times, table) / period
+    separation = separation + np.ceil(start - separation)  # the first after the start
+    modes = turns.modes(rows, start * period)
+    y, dy, _ = turns._lift_jet(rows, start * period)
+    state = steady.oscillator.state(modes)
+    if program.one_body:  # the classic's oscillator: its state is the deflection e = y - x
+        x, v = y - state[:1], dy - state[1:]
+    else:
+        x, v = chain_coordinates(chain, state, y, dy)
+    if chain.bodies[0].rides:  # the riding body is a coordinate of the simulation: on the cam
+        x, v = np.concatenate([y[None], x]), np.concatenate([dy[None], v])
+    state = np.concatenate([x, v * period], axis=0).T  # mm, mm per turn
+    simulation = simulation or ChainContacts(program, chain, float(speeds.min()))
+    for i, found in zip(lost, simulation.flights(speeds, start, start + 2.0, state, separation + 1.0)):
+        out[i] = found
     return out
 
 

@@ -205,11 +205,11 @@ class Oscillator(NamedTuple):
                 "(stiffness_n_per_mm) or use the classic follower"
             )
         Mff, Cff, Kff = (x[np.ix_(free, free)] for x in (a.M, a.C, a.K))
-        G = np.linalg.solve(Mff, a.M[free, 0])
         Minv = np.linalg.inv(Mff)
+        G, b1_rate = _lift_shift(a)
         A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ Kff, -Minv @ Cff]])
         b0 = np.concatenate([np.zeros(n), Minv @ (Kff @ G - a.K[free, 0])])
-        b1 = np.concatenate([np.zeros(n), Minv @ (Cff @ G - a.C[free, 0])])
+        b1 = np.concatenate([np.zeros(n), b1_rate])
         lam, V = np.linalg.eig(A)
         if not np.all(-lam.real > UNDAMPED_RATIO * np.abs(lam)):  # round-off is not damping
             if chain.arm is not None and not chain.arm.damping_ratio:  # the arm's modes: its own
@@ -287,6 +287,29 @@ class Oscillator(NamedTuple):
             motion_gain=motion_gain[:, keep] * scale,
             motion_direct=motion_direct,
         )
+
+
+def _lift_shift(a) -> tuple[np.ndarray, np.ndarray]:
+    """``(G, b1)`` of a chain's assembly ``a`` (``Chain.matrices``) with the cam's coordinate
+    held: its state ``z = (x + G y, x' + G y')`` over the free coordinates, ``G =
+    M_ff^-1 M_f0`` (so that ``y''`` drops out), and the weight ``b1 = M_ff^-1 (C_ff G - C_f0)``
+    of ``y'`` in ``z_v'`` (its modes are ``V^-1 (z - b1 y)``, ``Oscillator.of_chain``)."""
+    free = np.arange(1, a.seat)
+    Mff, Cff = a.M[np.ix_(free, free)], a.C[np.ix_(free, free)]
+    G = np.linalg.solve(Mff, a.M[free, 0])
+    return G, np.linalg.solve(Mff, Cff @ G - a.C[free, 0])
+
+
+def chain_coordinates(chain, state, y_mm, y_rate_mm_s) -> tuple[np.ndarray, np.ndarray]:
+    """The free coordinates' displacements (mm) and velocities (mm/s) of the closed chain
+    (``Chain.matrices``, from its rest) whose modes have the state ``state`` (``(2 N, ...)``,
+    ``Oscillator.state``) at a lift ``y_mm`` rising at ``y_rate_mm_s``: ``x = z_x - G y``,
+    ``x' = z_v + b1 y - G y'`` (``_lift_shift``)."""
+    G, b1 = _lift_shift(chain.matrices())
+    n = G.size
+    state = np.asarray(state, dtype=float)
+    G, b1 = G.reshape((n,) + (1,) * (state.ndim - 1)), b1.reshape((n,) + (1,) * (state.ndim - 1))
+    return state[:n] - G * y_mm, state[n:] + b1 * y_mm - G * y_rate_mm_s
 
 
 def _rows(rows):

@@ -200,7 +200,7 @@ def analyse(program: Program, rpm, *, with_flight: bool = True,
     ratios = _period_ratios(program, rpm)
     grooved = closed and bool(program.follower.groove_clearance_mm) and with_flight
     turns = groove_turns(program, speeds) if grooved else [None] * rpm.size
-    simulated = with_flight and not closed and program.one_body  # a chain's flight is not modelled
+    simulated = with_flight and not closed and (program.chain is None or program.chain.arm is None)
     lost = np.flatnonzero(values["jump"]) if simulated else np.zeros(0, int)
     found = dict(zip(lost.tolist(), flights_at(steady, speeds[lost]) if lost.size else []))
     rows = []
@@ -231,8 +231,9 @@ CHAIN_NOTE = (
     "a train: the rows are the chain's, through the same steady state as the one-body follower's "
     "(contact force, drive torque and Hertz stress at the cam; payload acceleration and residual "
     "vibration the last body's, the residual the envelope sum_j |g_j (xi_j - xi_j,static)| of its "
-    "modes; period ratios at the first mode with the cam held); flights are not simulated for a "
-    "chain (its free flight is not modelled)"
+    "modes; period ratios at the first mode with the cam held); flights: where the steady state "
+    "loses contact, the chain simulated with the cam's contact one-sided (ChainContacts) from the "
+    "steady state, one period from its first separation (not on a flexible arm)"
 )
 ONE_BODY_NOTE = "a one-body train: the classic follower's rows are this chain's (the same numbers)"
 
