@@ -77,7 +77,7 @@ from ..sdof import narrowed_crossing
 from ._contact import RefinedStress, contact_stress_squared, node_contact, refined_contact_stress
 from ._cycle_grid import cycle_grid
 from ._dynamics import SPEED_BLOCK
-from ._jump import Flight
+from ._flight import Flight
 from ._speeds import Speeds
 from ._torque import TorqueFigures, torque_figures, torque_jets
 from ._train import Chain

@@ -17,13 +17,14 @@ started on the same steady state.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 
 from ..sdof import first_roots, narrowed_crossing, polished_maxima, psi_host, step_within_host
+from ._chain_contacts import ChainContacts
 from ._dynamics import SPEED_BLOCK, SteadyState
+from ._flight import Flight as Flight
 from ._oscillator import CONTACT_FORCE, chain_coordinates
 from ._outputs import min_preload_n as min_preload_n
 from ._speeds import Speeds
@@ -207,20 +208,6 @@ def _falling(m, n):
     for j in range(n):
         out = out * (m - j)
     return out
-
-
-@dataclasses.dataclass(frozen=True)
-class Flight:
-    """One loss of contact: separation and re-impact angles (degrees), impact velocity (m/s),
-    peak contact force from the impact to the next separation (N)."""
-
-    separation_deg: float
-    reimpact_deg: float | None
-    impact_velocity_m_s: float | None
-    peak_impact_force_n: float | None
-
-    def as_dict(self) -> dict:
-        return dataclasses.asdict(self)
 
 
 class _Turns:
@@ -410,8 +397,6 @@ def _chain_flights(steady: SteadyState, rpm: Speeds, lost: np.ndarray, out: list
     largest contact force (``_Turns``; the chain's coordinates from its modes,
     ``chain_coordinates``) and run to one period after the steady state's first separation
     (``_first_separations``), the classic follower's turn."""
-    from ._chain_contacts import ChainContacts  # it reads ``Flight`` from here
-
     program = steady.program
     chain = program.chain
     if chain is None:
