@@ -266,10 +266,13 @@ def test_cli_serves_the_page_and_stops_on_ctrl_c():
     """``camjax studio`` prints its address, serves the page and its script, and Ctrl-C
     stops it with status 0 and no traceback."""
     # Ctrl-C as a terminal gives it, whatever this runner's own disposition (a shell's
-    # background job starts with SIGINT ignored, and a child inherits that).
-    server = subprocess.Popen([sys.executable, "-m", "camjax", "studio", "indexer", "--no-browser", "--port", "0"],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    # background job starts with SIGINT ignored, and a child inherits that): the child
+    # takes SIGINT's default handler itself (a preexec_fn would run Python in a fork of
+    # this multithreaded process)
+    start = ("import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+             "sys.argv = ['camjax'] + sys.argv[1:]; runpy.run_module('camjax', run_name='__main__')")
+    server = subprocess.Popen([sys.executable, "-c", start, "studio", "indexer", "--no-browser", "--port", "0"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         line = server.stdout.readline()
         assert line.startswith("camjax studio: indexer.toml at http://127.0.0.1:"), line
