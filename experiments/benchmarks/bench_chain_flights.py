@@ -15,23 +15,11 @@ from __future__ import annotations
 
 import argparse
 import os
-import time
 
 import numpy as np
+from bench_chain_contacts import timed  # cold, then the best of the warm runs
 
 from camjax.program import ChainContacts, Program, SteadyState, flights_at
-
-
-def timed(run, repeats: int) -> tuple[float, float]:
-    start = time.perf_counter()
-    run()
-    cold = time.perf_counter() - start
-    warm = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run()
-        warm.append(time.perf_counter() - start)
-    return cold, min(warm)
 
 
 def main() -> None:
