@@ -75,6 +75,7 @@ from .._shapes import bucket
 from ..metrics import bounded_extremes, septic_coefficients
 from ..sdof import narrowed_crossing
 from ._contact import RefinedStress, contact_stress_squared, node_contact, refined_contact_stress
+from ._contact_residual import contact_residual_mm
 from ._cycle_grid import cycle_grid
 from ._dynamics import SPEED_BLOCK
 from ._flight import Flight
@@ -471,6 +472,31 @@ def _turns_compiled():
 
 
 _turns = _turns_compiled()
+
+
+def _state_before(z_after, s_target, rpm, system: ContactSystem, grid: _Grid, steps: int = 8):
+    """The state (mm, mm per turn) at turn time ``s_target`` from a sample's ``(s, z)`` just
+    after it (at most one sample interval): classic Runge-Kutta steps back along the chain's
+    equations, all on the segment's side of its start (where the motion's acceleration may
+    jump), so the error is the steps' (``(w h)^5``, about 1e-10 at 4096 samples a turn)."""
+    system, grid = jax.tree.map(jnp.asarray, (system, grid))
+    _, field, _ = _equations(rpm, system, grid)
+    s, z = z_after[0], z_after[1:]
+    h = (s_target - s) / steps
+    for _ in range(steps):
+        k1 = field(s, z)
+        k2 = field(s + h / 2, z + h / 2 * k1)
+        k3 = field(s + h / 2, z + h / 2 * k2)
+        k4 = field(s + h, z + h * k3)
+        z, s = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), s + h
+    return z
+
+
+_states_before = jax.jit(
+    jax.vmap(
+        jax.vmap(_state_before, in_axes=(0, 0, None, None, None)), in_axes=(0, None, 0, None, None)
+    )
+)
 _sample_jets = jax.jit(jax.vmap(_signal_jets, in_axes=(0, None, None, None)))
 _jets = jax.jit(jax.vmap(_sample_jets, in_axes=(0, 0, None, None)))
 
@@ -565,7 +591,9 @@ class ContactTurn:
     (by body name) the angles at which it opens; ``separates``: per contact (``cam``, each
     lash element's body, ``seat``) whether it separates: the cam or a lash opening while
     the valve is off its seat (anywhere without a seat), the seat bouncing; ``turns`` run and
-    the ``change`` that remained (relative, ``ContactOptions.settle_tolerance``)."""
+    the ``change`` that remained (relative, ``ContactOptions.settle_tolerance``);
+    ``residual_vibration_mm``: the last body's residual vibration at the start of each dwell
+    and constant-velocity segment (``contact_residual_mm``; empty where not refined)."""
 
     rpm: float
     theta_deg: np.ndarray
@@ -587,6 +615,7 @@ class ContactTurn:
     turns: int
     change: float
     refined: Refined | None  # the drive torque and the extremes refined between the samples
+    residual_vibration_mm: tuple[float, ...] = ()  # at each dwell's start (contact_residual_mm)
 
     @property
     def drive_torque_n_m(self) -> np.ndarray:
@@ -635,6 +664,7 @@ class ContactSummary(NamedTuple):
     mean_drive_torque_n_m: np.ndarray
     energy_fluctuation_j: np.ndarray
     stress: RefinedStress | None  # the largest Hertz stress (with follower.contact_width_mm)
+    residual_vibration_mm: np.ndarray  # (speeds, points): at each dwell's start
 
 
 class ChainContacts:
@@ -671,6 +701,12 @@ class ChainContacts:
         self._scale = (
             max(float(np.ptp(lift)), 1e-3) * max(self.kinematic_ratio, 1.0),
             max(float(np.max(np.abs(grid.velocity_nodes))), 1e-3) * max(self.kinematic_ratio, 1.0),
+        )
+        starts = np.asarray(grid.residual_start, dtype=int)
+        self._residual_at = np.asarray(grid.nodes, dtype=float)[starts]  # turn time
+        self._residual_lift = (  # the lift there (mm) and its rate (mm per turn)
+            np.asarray(grid.lift_nodes, dtype=float)[starts],
+            np.asarray(grid.velocity_nodes, dtype=float)[starts],
         )
         self._kept: dict[float, ContactTurn] = {}
         """The last batch of ``turns``, by speed: ``turn`` reads them (the report's files)."""
@@ -747,6 +783,7 @@ class ChainContacts:
                 jax.tree.map(np.asarray, x) for x in _figures(jets, jnp.asarray(switched), widths)
             )
             jets = np.asarray(jets)
+            residual = self._residual(samples, padded)
             out += [
                 self._read(
                     float(r),
@@ -761,6 +798,7 @@ class ChainContacts:
                         switched[i],
                         septic[i],
                     ),
+                    tuple(residual[i]),
                 )
                 for i, r in enumerate(block)
             ]
@@ -876,8 +914,43 @@ class ChainContacts:
             switched[:, int(np.floor(k)) % self.samples] = True
         return switched
 
+    def _residual(self, samples: np.ndarray, rpm: np.ndarray) -> np.ndarray:
+        """``(speeds, points)``: the residual vibration (mm) at the start of each dwell and
+        constant-velocity segment (``contact_residual_mm``) of the block's settled turns,
+        from the state there (``_state_before``: back from the first sample at or after it)."""
+        at = self._residual_at
+        if not at.size:
+            return np.zeros((rpm.size, 0))
+        n = self.system.Minv.shape[0]
+        after = np.minimum(np.ceil(at * self.samples - 1e-9).astype(int), self.samples)
+        states = samples[:, after, -(1 + 2 * n) :]
+        z = np.asarray(
+            _states_before(
+                jnp.asarray(states), jnp.asarray(at), jnp.asarray(rpm), self.system, self._grid
+            )
+        )
+        y0, ys = self._residual_lift
+        out = np.zeros((rpm.size, at.size))
+        for i, r in enumerate(rpm):
+            period = 60.0 / float(r)
+            for j in range(at.size):
+                out[i, j] = contact_residual_mm(
+                    self.system,
+                    1e-3 * z[i, j, :n],
+                    1e-3 * z[i, j, n:] / period,
+                    1e-3 * y0[j],
+                    1e-3 * ys[j] / period,
+                )
+        return out
+
     def _read(
-        self, rpm: float, x: np.ndarray, turns: int, change: float, refined: Refined | None
+        self,
+        rpm: float,
+        x: np.ndarray,
+        turns: int,
+        change: float,
+        refined: Refined | None,
+        residual: tuple[float, ...] = (),
     ) -> ContactTurn:
         """What the samples ``x`` (samples + 1, outputs) of one settled turn say, with the
         figures ``refined`` between them."""
@@ -966,6 +1039,7 @@ class ChainContacts:
             turns=turns,
             change=change,
             refined=refined,
+            residual_vibration_mm=residual,
         )
 
     def summary(self, rpm) -> tuple[ContactSummary, list[ContactTurn]]:
@@ -992,6 +1066,7 @@ class ChainContacts:
             each(lambda t: t.torque.mean),
             each(lambda t: t.torque.energy_fluctuation),
             self.contact_stress(turns),
+            np.asarray([t.residual_vibration_mm for t in turns]).reshape(len(turns), -1),
         ), turns
 
     def contact_stress(self, turns: list[ContactTurn]) -> RefinedStress | None:
