@@ -874,7 +874,12 @@ class ChainContacts:
         return out
 
     def jump_speed(self, rpm, separates) -> float:
-        """The lowest speed at which the cam separates, between the highest speed of ``rpm``
+        """The lowest speed at which the cam separates (``separation_speed`` of ``"cam"``)."""
+        return self.separation_speed(rpm, separates, "cam")
+
+    def separation_speed(self, rpm, separates, contact: str) -> float:
+        """The lowest speed at which ``contact`` separates (a key of ``ContactTurn.separates``:
+        ``"cam"``, a lash element's body, ``"seat"``), between the highest speed of ``rpm``
         where it holds below the lowest where it separates (``separates``, per speed) and
         that one: ``narrowed_crossing`` with a block of ``SPEED_BLOCK`` simulated speeds a
         round (33-fold narrower a round), to ``ContactOptions.jump_tolerance_rpm`` (the middle
@@ -883,17 +888,21 @@ class ChainContacts:
         hi = float(rpm[separates].min())
         held = rpm[~separates & (rpm < hi)]
         if not held.size:
+            what = "the cam" if contact == "cam" else f"the contact {contact!r}"
             raise ValueError(
-                f"the cam separates at the lowest speed given ({hi:g} rpm): no jump to search"
+                f"{what} separates at the lowest speed given ({hi:g} rpm): no "
+                f"{'jump' if contact == 'cam' else 'separation'} to search"
             )
         lo = float(held.max())
 
-        def cam_separates(trial: np.ndarray) -> np.ndarray:
+        def contact_separates(trial: np.ndarray) -> np.ndarray:
             turns = self.turns(trial, refine=False)
-            return np.array([t.separates.get("cam", False) for t in turns])
+            return np.array([t.separates.get(contact, False) for t in turns])
 
         return float(
-            narrowed_crossing(cam_separates, lo, hi, self.options.jump_tolerance_rpm, SPEED_BLOCK)
+            narrowed_crossing(
+                contact_separates, lo, hi, self.options.jump_tolerance_rpm, SPEED_BLOCK
+            )
         )
 
     def _switched(self, samples: np.ndarray) -> np.ndarray:
@@ -1228,7 +1237,8 @@ def cam_flights(
 def contact_section(chain: Chain, turns: list[ContactTurn]) -> dict:
     """The contacts' part of the report's ``train`` section: per speed (same order as the
     section's ``speeds``) the seating velocity, the bounces, the lash's openings and the
-    separations; per contact the lowest speed at which it separates."""
+    separations; per contact the lowest speed given at which it separates (``simulated_train``
+    searches it between the speeds)."""
     per_speed = []
     for t in turns:
         per_speed.append(
@@ -1259,7 +1269,9 @@ CONTACTS_NOTE = (
     "extremes are refined between the samples of the settled turn; a contact separates where it opens "
     "while the valve is off its seat (anywhere without a seat), the seat where the valve bounces; jump "
     "speed: the lowest speed at which the cam separates, searched between the speeds given to "
-    "ContactOptions.jump_tolerance_rpm; lowest_separation_rpm: the lowest speed given"
+    "ContactOptions.jump_tolerance_rpm; lowest_separation_rpm: the same for each contact (the cam's "
+    "is the jump speed), the lowest speed given where it separates there already "
+    "(separation_below_range true), none where it holds at every speed"
 )
 
 
@@ -1271,9 +1283,12 @@ def simulated_train(
     simulation: ChainContacts | None = None,
 ):
     """``train_section``'s figures for a chain with contacts: the ``ContactSummary``, the
-    ``contacts`` part of the section (``contact_section``), the jump speed (the lowest speed at
-    which the cam separates, searched between the speeds of ``rpm``: ``ChainContacts.jump_speed``;
-    ``None`` where it holds at every one, or at the lowest already: then ``below`` is true).
+    ``contacts`` part of the section (``contact_section``, its ``lowest_separation_rpm`` each
+    contact's lowest speed of separation searched between the speeds of ``rpm`` as the jump
+    speed is, the lowest given where it separates there already: ``separation_below_range``),
+    the jump speed (the lowest speed at which the cam separates, searched between the speeds
+    of ``rpm``: ``ChainContacts.jump_speed``; ``None`` where it holds at every one, or at the
+    lowest already: then ``below`` is true).
     ``simulation``: the ``ChainContacts`` to run (default: one built for ``rpm`` with
     ``options``), which keeps the turns for the report's files."""
     rpm = np.asarray(rpm, dtype=float)
@@ -1285,4 +1300,13 @@ def simulated_train(
     jump = None
     if not below and cam.any():
         jump = simulation.jump_speed(rpm, cam)
+    lowest, under = {}, {}
+    for name, given in contacts["lowest_separation_rpm"].items():
+        hit = np.array([t.separates.get(name, False) for t in turns])
+        under[name] = bool(hit[np.argmin(rpm)])
+        if not hit.any() or under[name]:
+            lowest[name] = given
+        else:
+            lowest[name] = jump if name == "cam" else simulation.separation_speed(rpm, hit, name)
+    contacts["lowest_separation_rpm"], contacts["separation_below_range"] = lowest, under
     return summary, contacts, jump, below
