@@ -221,9 +221,10 @@ def _contact_lines(train: dict, contacts: dict) -> list[str]:
         apart = [name for name, yes in c["separates"].items() if yes]
         parts.append("separates: " + (", ".join(apart) if apart else "none"))
         lines.append("; ".join(parts))
-    lowest = contacts["lowest_separation_rpm"]
+    lowest, below = contacts["lowest_separation_rpm"], contacts.get("separation_below_range", {})
     lines.append("lowest speed of separation: " + ", ".join(
-        f"{name} {'none' if r is None else f'{r:g} rpm'}" for name, r in lowest.items()))
+        f"{name} {'none' if r is None else f'{r:.1f} rpm' + (' or below' if below.get(name) else '')}"
+        for name, r in lowest.items()))
     return lines
 
 
