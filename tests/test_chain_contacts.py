@@ -648,3 +648,67 @@ def test_a_lashs_lowest_separation_searched_against_a_fine_scan():
         json.loads(report.to_json())["train"]["contacts"]["lowest_separation_rpm"]["valve"] == found
     )
 
+
+MOTORS = """name,maximum_speed_rpm,maximum_torque_n_m,continuous_stall_torque_n_m,rotor_inertia_kg_m2,envelope
+medium,6000,3.8,1.3,1.2e-4,0:3.8 3500:3.8 6000:1.8
+large,6000,24,8,6e-4,0:24 3500:24 6000:12
+"""
+
+
+@pytest.mark.slow
+def test_a_lash_that_never_opens_sizes_the_linear_chains_motor(tmp_path):
+    """Slow: both chains' steady states at two speeds (50 s on two shared cores, 2026-11-29).
+    Motor sizing of a chain with lash reads the simulated contact force over the settled
+    turn (``response`` of its ``ChainContacts``): where the lash never opens it gives the
+    linear chain's motor figures, the same motor picked.  The two sum over different points:
+    the exact path over its 260 nodes at 1200 rpm, the simulation over its 4096 samples (with
+    the motion's breakpoints), whose figures 16384 samples change by 1e-6 at most: the
+    difference is the nodes' trapezoid and sampling error, within 2e-3 (measured 2026-11-29:
+    7e-4 at most, the RMS torque of the motor with the largest rotor)."""
+    from camjax.program import Drive, program_motor_choice, read_motors
+
+    catalogue = tmp_path / "motors.csv"
+    catalogue.write_text(MOTORS)
+    motors = read_motors(catalogue)
+    drive = Drive(travel_mm_per_rev=40, transmission_efficiency=0.9)
+    program = dataclasses.replace(
+        Program.load("camjax/program/examples/trains/valve.toml"), drive=drive
+    )
+    valve = Body("valve", 0.05, 200.0, 20.0)
+    linear = Chain((Body("tappet", 0.03), valve), Spring(52.0, 250.0))
+    lash = dataclasses.replace(
+        linear, bodies=(linear.bodies[0], dataclasses.replace(valve, lash_mm=0.1))
+    )
+    rpm = [1200.0, 3000.0]
+    exact = program_motor_choice(dataclasses.replace(program, chain=linear), rpm, motors=motors)
+    simulated = dataclasses.replace(program, chain=lash)
+    steady = ChainContacts(simulated, lash, min(rpm))
+    report = analyse(simulated, rpm, steady=steady)
+    assert not any(s["separates"]["valve"] for s in report.train["contacts"]["speeds"])
+    choice = program_motor_choice(simulated, rpm, steady=steady, motors=motors)
+    assert choice.shown.name == exact.shown.name and choice.picked == exact.picked
+    tolerance = {"max_speed_rpm": 1e-6}
+    for per_speed, reference in zip(choice.sizings, exact.sizings):
+        for sizing, expected in zip(per_speed, reference):
+            assert sizing.inertia_ratio == pytest.approx(expected.inertia_ratio, rel=1e-12)
+            for name in (
+                "peak_torque_n_m",
+                "rms_torque_n_m",
+                "max_speed_rpm",
+                "regenerated_energy_j",
+                "thermal_use",
+                "envelope_use",
+            ):
+                a, b = getattr(sizing.dynamic, name), getattr(expected.dynamic, name)
+                assert a == pytest.approx(b, rel=tolerance.get(name, 2e-3)), name
+
+
+def test_compensating_a_chain_with_lash_is_refused_in_one_line(tmp_path, capsys):
+    """A chain with lash or a seat has no compensated lift: refused before the analysis,
+    in one line saying why."""
+    from camjax.cli import main
+
+    code = main(["program", EXAMPLE, "--compensate", "1000", "--out", str(tmp_path / "out")])
+    out, err = capsys.readouterr()
+    assert code != 0 and out == "" and len(err.strip().splitlines()) == 1
+    assert "--compensate: a chain with lash or a seat has no compensated lift" in err
