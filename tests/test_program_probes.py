@@ -214,3 +214,17 @@ def test_camjax_program_refuses_bad_probes_on_one_line(capsys, tmp_path, given, 
     assert main(["program", "indexer", "--probes", str(tmp_path / given)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and re.search(f"camjax program: error: --probes: .*{message}", err), err
+
+
+def test_a_machine_reports_each_cam_with_the_set_given():
+    """``analyse_machine(..., outputs=...)``: each cam's report holds the probe (its value the
+    mean lift's closed form, at that cam's own phase: a mean over the turn), the shaft's
+    totals only the built-in outputs they sum."""
+    program = cp.Program.load(cp.example_path("indexer"))
+    report = cp.analyse_machine([(program, 0.0), (program, 90.0)], [300.0], with_flight=False, outputs=PROBED)
+    for cam in report.cams:
+        assert cam.outputs == PROBED
+        assert cam.speeds[0].mean_contact_force_n == pytest.approx(_expected(program), rel=2e-5)
+    assert PROBE_NAME not in [p.name for p in report.columns()]
+    plain = cp.analyse_machine([(program, 0.0)], [300.0], with_flight=False)
+    assert PROBE_NAME not in plain.cams[0].speeds[0].values
