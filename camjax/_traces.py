@@ -127,7 +127,7 @@ class exported_jit:
     ``equinox.filter_jit`` takes them) are compiled in and part of the key.  Arguments
     holding anything else (a function, an object) run through ``equinox.filter_jit`` as
     they are, untouched by the cache.  The output may be any pytree: the kept program
-    returns its leaves, and a copy of the output with every leaf 0 (pickled beside the
+    returns its leaves, and a copy of the output with every leaf 0 (pickled with the
     program) gives back its structure.  ``compiler_options``: XLA's options for every
     compile of the program (``equinox.filter_jit``'s).
     """
