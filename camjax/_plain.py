@@ -1,7 +1,8 @@
 """Plain values that the library, the command line and the studio share, without JAX.
 
 ``json_ready`` turns a result into JSON's types, ``parse_range`` reads a speed range
-written as text, and ``DEFAULT_SPEED_FLUCTUATION`` is the flywheel's default coefficient.
+written as text, ``DEFAULT_SPEED_FLUCTUATION`` is the flywheel's default coefficient, and
+``example_names`` and ``example_file`` know the program files shipped with camjax.
 Nothing here imports JAX (nor NumPy at import time), so that the command line's ``--help``
 can show the defaults at once.  (Floor 1: imports nothing from the rest of camjax at import
 time.)
@@ -10,6 +11,7 @@ time.)
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 DEFAULT_SPEED_FLUCTUATION = 0.05
 """The coefficient of speed fluctuation ``Cs = (max - min speed) / mean`` the flywheel is
@@ -91,3 +93,21 @@ def plot_speed(report, chosen: float | None = None) -> float:
     if jump is not None:
         return min(speeds, key=lambda r: abs(r - jump))
     return max(speeds)
+
+
+EXAMPLES = Path(__file__).parent / "program" / "examples"
+"""The program files shipped with camjax (a chain's in its ``trains`` folder)."""
+
+
+def example_file(name: str) -> Path:
+    """The built-in example program ``name`` ('indexer', 'valve', ...): ``EXAMPLES`` or its
+    ``trains`` folder (the path where it would be if there is none such)."""
+    train = EXAMPLES / "trains" / f"{name}.toml"
+    return train if train.exists() and not (EXAMPLES / f"{name}.toml").exists() else EXAMPLES / f"{name}.toml"
+
+
+def example_names() -> list[str]:
+    """The built-in example programs' names, sorted: every TOML file of ``EXAMPLES`` and its
+    ``trains`` folder that holds a ``[follower]`` (a motor's record does not)."""
+    files = [*EXAMPLES.glob("*.toml"), *(EXAMPLES / "trains").glob("*.toml")]
+    return sorted({f.stem for f in files if "\n[follower]" in "\n" + f.read_text(encoding="utf-8")})

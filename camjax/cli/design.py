@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 
+from .._plain import example_names
 from ._common import (
     CliError,
     check_damping,
@@ -63,7 +64,7 @@ def register(subparsers) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--program", metavar="FILE", help="design one segment of this cam program "
-                        "(a file, or a built-in example: indexer, feed; with --segment and "
+                        f"(a file, or a built-in example: {', '.join(example_names())}; with --segment and "
                         "--rpm; writes DIR/program.toml and the law beside it)")
     parser.add_argument("--segment", type=int, help="segment number (1-based) to design, with --program")
     parser.add_argument("--rpm", metavar="LO:HI", help="speed range in rpm, with --program (maps to the segment's band)")

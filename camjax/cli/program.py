@@ -7,7 +7,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from .._plain import DEFAULT_SPEED_FLUCTUATION
+from .._plain import DEFAULT_SPEED_FLUCTUATION, example_names
 from ._common import CliError, add_probes_option, file_named, output_dir, outputs_of
 
 DEFAULT_RPM = "600"
@@ -32,7 +32,7 @@ def register(subparsers) -> None:
             "adds the train's table: natural frequencies, harmonic check, each body's peak "
             "acceleration, the spring's seat force and surge, the chain's jump speed.  "
             "Without FILE, the built-in 'indexer' example; FILE may also name a built-in "
-            "example ('indexer', 'feed', 'valve', 'swinging_arm')."
+            f"example ({', '.join(example_names())})."
         ),
     )
     parser.add_argument("file", nargs="?", metavar="FILE",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 
+from .._plain import example_names
 from ._common import CliError, add_probes_option, outputs_of
 
 DEFAULT_PORT = 8765
@@ -21,7 +22,7 @@ def register(subparsers) -> None:
             "torque, Hertz stress), redrawn after every edit; design a segment's law for a "
             "speed band and keep or discard it; open and save the program as "
             "TOML, export the profile (CSV, DXF).  FILE is a program TOML file or a built-in "
-            "example's name ('indexer', 'feed'; default feed).  Ctrl-C stops the server."
+            f"example's name ({', '.join(example_names())}; default feed).  Ctrl-C stops the server."
         ),
     )
     parser.add_argument("file", nargs="?", metavar="FILE",

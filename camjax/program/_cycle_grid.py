@@ -69,10 +69,13 @@ def _grid_refusal(program: Program, rpm_min: float, cycles: float) -> str:
     by_speed = 2 * math.pi * cycles / TARGET_PHASE_STEP > MAX_GRID_INTERVALS / 2
     slowest = rpm_min * cycles / period_ratio_reach(TARGET_PHASE_STEP)
     shortest = min(s.angle_deg for s in program.segments)
-    remedies = ([f"run at {slowest:.3g} rpm or faster, or lower follower.stiffness_n_per_mm"] if by_speed else [])
+    chain = program.chain
+    lower = "lower follower.stiffness_n_per_mm" if chain is None else chain.highest_mode_remedy()
+    remedies = ([f"run at {slowest:.3g} rpm or faster, or {lower}"] if by_speed else [])
     remedies.append(f"widen or merge the shortest segments ({len(program.segments)} segments, the shortest "
                     f"{shortest:g} degrees)")
-    return f"the follower vibrates {cycles:,.0f} times per turn; " + "; or ".join(remedies)
+    who = "the follower vibrates" if chain is None else "the chain's highest mode vibrates"
+    return f"{who} {cycles:,.0f} times per turn; " + "; or ".join(remedies)
 
 
 def _layout(program: Program, rpm_min: float, vibration_hz: float | None):

@@ -50,6 +50,12 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     from .. import law_design
     from ._objectives import MaxPreload, MaxProgramResidual  # import optax: only when designing
 
+    chain = program.chain
+    if chain is not None and chain.has_contacts and objective in ("residual", "preload"):
+        given = [f"[[train]] {b.name} lash_mm" for b in chain.bodies if b.lash_mm]
+        given += ["[seat]"] if chain.seat is not None else []
+        raise ValueError(f"objective {objective!r}: the residual and preload objectives design through the exact "
+                         f"steady state of a chain without lash or seat, and this chain has {', '.join(given)}")
     n1, n2 = segment_band(program, segment, rpm_lo, rpm_hi)
     f = program.follower
     zeta = f.damping_ratio * (f.stiffness / (f.stiffness + f.spring_rate)) ** 0.5

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import laws
+from .._plain import example_file, example_names
 from ..laws import AbstractMotionLaw, BoundaryPolynomial, TableLaw
 from ._follower import (
     FOLLOWER_KINDS,
@@ -359,18 +360,19 @@ def _law(i: int, name, base: Path | None) -> AbstractMotionLaw:
 
 def example_path(name: str = "indexer") -> Path:
     """Path of a program file shipped with camjax (``camjax/program/examples``, or its
-    ``trains`` folder: 'valve', 'swinging_arm')."""
-    examples = Path(__file__).parent / "examples"
-    train = examples / "trains" / f"{name}.toml"
-    return train if train.exists() and not (examples / f"{name}.toml").exists() else examples / f"{name}.toml"
+    ``trains`` folder; ``camjax._plain.example_names`` lists them)."""
+    return example_file(name)
 
 
 def program_path(text: str | None, default: str = "indexer") -> Path:
-    """The program file ``text`` names: a path, or a built-in example's name ('indexer',
-    'feed', 'valve', 'swinging_arm') where no such file exists; without ``text``, the example ``default``."""
+    """The program file ``text`` names: a path, or a built-in example's name
+    (``example_names``) where no such file exists; without ``text``, the example ``default``.
+    A ``ValueError`` names the built-in examples where neither exists."""
     if not text:
         return example_path(default)
     path = Path(text)
     if text.isidentifier() and not path.exists() and example_path(text).exists():
         return example_path(text)  # a built-in example by name
+    if not path.exists():
+        raise ValueError(f"{text}: no such program file, nor a built-in example ({', '.join(example_names())})")
     return path

@@ -387,14 +387,60 @@ class Chain:
         """The highest natural frequency with the cam held (Hz; 0 where nothing moves)."""
         return float(self.natural_frequencies(contact=True)[0].max(initial=0.0))
 
+    def highest_mode_remedy(self) -> str:
+        """The chain's own fields that set its highest held natural frequency (what a turn's
+        grid resolves), said as what to change to lower it: the body that moves most in that
+        mode and the elements beside it, or the spring's discretisation, or the arm's."""
+        if self.arm is not None:
+            return "lower [arm] modes or bending_stiffness_n_m2, or raise its mass_per_length_kg_per_m"
+        hz, shapes, a = self.coordinate_modes(contact=True)
+        if hz.size == 0:
+            return "lower the elements' stiffness_n_per_mm"
+        where = int(np.argmax(np.abs(shapes[:, -1])))
+        bodies = [int(i) for i in a.body_index]
+        if where not in bodies:
+            return (
+                f"give [spring] fewer elements (now {self.spring.element_count()}) or more mass_kg"
+            )
+        j = bodies.index(where)
+        elements = [
+            self.bodies[i].name
+            for i in (j, j + 1)
+            if i < len(self.bodies) and not self.bodies[i].rides
+        ]
+        said = " and ".join(f"[[train]] {name} stiffness_n_per_mm" for name in elements)
+        return f"raise [[train]] {self.bodies[j].name} mass_kg" + (f" or lower {said}" if said else "")
+
+    def sized_fields(self) -> list[tuple[str, float, str]]:
+        """``(key, value, unit)`` of the chain's masses, stiffnesses and spring forces as the
+        file names them (the absurd-size warnings read them in place of the follower's)."""
+        out = []
+        for body in self.bodies:
+            out.append((f"[[train]] {body.name} mass_kg", body.mass_kg, "kg"))
+            if body.stiffness_n_per_mm is not None:
+                out.append((f"[[train]] {body.name} stiffness_n_per_mm", body.stiffness_n_per_mm, "N/mm"))
+        if self.spring is not None:
+            out += [
+                ("[spring] rate_n_per_mm", self.spring.rate_n_per_mm, "N/mm"),
+                ("[spring] preload_n", self.spring.preload_n, "N"),
+                ("[spring] mass_kg", self.spring.mass_kg, "kg"),
+            ]
+        return out
+
     def harmonic_check(
         self, rpm_min: float, rpm_max: float, *, modes: int = 3
     ) -> list[tuple[float, list[int]]]:
         """For each of the first ``modes`` held frequencies: ``(f_n, cam orders k)`` with
         ``k rpm / 60 = f_n`` at a speed inside ``[rpm_min, rpm_max]``."""
+        low, high = (_number(v, f"harmonic_check {n}") for n, v in (("rpm_min", rpm_min), ("rpm_max", rpm_max)))
+        if not 0 < low <= high:
+            raise ValueError(
+                f"harmonic_check: the speed range must be positive and rising (0 < rpm_min <= "
+                f"rpm_max), got rpm_min = {low:g}, rpm_max = {high:g}"
+            )
         hz = self.natural_frequencies(contact=True)[0][:modes]
         return [
-            (float(f), list(range(math.ceil(60 * f / rpm_max), math.floor(60 * f / rpm_min) + 1)))
+            (float(f), list(range(math.ceil(60 * f / high), math.floor(60 * f / low) + 1)))
             for f in hz
         ]
 
@@ -415,6 +461,11 @@ def _check_chain(chain: Chain) -> None:
     names = set()
     for j, body in enumerate(chain.bodies, start=1):
         where = f"[[train]] body {j} ({body.name})"
+        if not isinstance(body.name, str) or not body.name.strip():
+            raise ValueError(
+                f"[[train]] body {j}: name must be a non-empty text (it heads the body's "
+                f"columns and rows), got {body.name!r}"
+            )
         if body.name in names:
             raise ValueError(f"{where}: name given twice")
         names.add(body.name)
@@ -480,10 +531,26 @@ def _check_chain(chain: Chain) -> None:
             raise ValueError(
                 "[seat]: a seat needs a [spring] with preload_n > 0 to close the valve onto it"
             )
-    if s is None and chain.bodies[-1].rides and chain.arm is None:
+    if (
+        chain.arm is None
+        and len(chain.bodies) == 1
+        and chain.bodies[0].rides
+        and (s is None or not s.surges)
+    ):
         raise ValueError(
-            "[[train]]: a single body riding on the cam needs a [spring] (nothing holds it)"
+            f"[[train]] body 1 ({chain.bodies[0].name}): a single body riding on the cam is rigid "
+            "and has nothing to vibrate (its contact force is m y'' + k_s y + preload); give it "
+            "stiffness_n_per_mm (its own stiffness against the cam: the classic one-body "
+            "follower), a body behind it on an element, or a [spring] mass_kg (its surge)"
         )
+    if s is None and chain.arm is None:
+        lashed = [(j, b.name) for j, b in enumerate(chain.bodies, start=1) if b.lash_mm]
+        if lashed:
+            raise ValueError(
+                "[[train]] body {} ({}) lash_mm: a chain".format(*lashed[0]) + " without a [spring] is form-closed "
+                "(grooved) and nothing closes a lash in it; give a [spring] (rate_n_per_mm, "
+                "preload_n)"
+            )
 
 
 def _check_arm_body(arm: Arm, body: Body, j: int, where: str) -> None:
@@ -591,7 +658,8 @@ def chain_from_dict(data: dict) -> Chain | None:
         unknown = sorted(set(table) - _BODY_FIELDS)
         if unknown:
             raise ValueError(
-                f"[[train]] body {j}: unknown field(s) {', '.join(unknown)}; expected "
+                f"[[train]] body {j} ({table.get('name', j)}): unknown field(s) "
+                f"{', '.join(unknown)}; expected "
                 f"{', '.join(sorted(_BODY_FIELDS))}"
             )
         if "mass_kg" not in table:

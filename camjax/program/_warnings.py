@@ -10,6 +10,7 @@ import numpy as np
 
 from ._program import Program
 from ._speeds import speed_warnings
+from ._train import CLASSIC_FIELDS
 
 MODULUS_RANGE_GPA = (1.0, 1000.0)
 """Young's moduli of engineering solids, polymers to diamond: a value outside is taken for
@@ -34,8 +35,11 @@ def size_warnings(program: Program) -> list[str]:
     """A line for each follower field and segment lift past ``ABSURD_SIZES``, naming the key
     and its value."""
     f = program.follower
+    chain = program.chain
     given = [(f"follower.{name}", getattr(f, name), unit) for name, unit in _SIZED_FIELDS
-             if getattr(f, name) is not None and not (name == "roller_radius_mm" and f.flat_face)]
+             if getattr(f, name) is not None and not (name == "roller_radius_mm" and f.flat_face)
+             and not (chain is not None and name in CLASSIC_FIELDS)]  # a chain's stand-in: its own below
+    given += [] if chain is None else chain.sized_fields()
     given += [(f"segment {i}: lift_mm", s.lift_mm, "mm") for i, s in enumerate(program.segments, 1)]
     return [f"{key} = {value:g} is more than {ABSURD_SIZES[unit]:,.0f} {unit}, larger than any cam machine's: "
             f"check its unit ({unit})" for key, value, unit in given if abs(value) > ABSURD_SIZES[unit]]
