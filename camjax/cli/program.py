@@ -192,7 +192,7 @@ def _train_lines(train: dict) -> list[str]:
     for s in train["speeds"]:
         cells = [s["min_contact_force_n"], s["max_contact_force_n"], *s["max_acceleration_m_s2"].values(),
                  s["max_lift_error_mm"], s["min_seat_force_n"], s["max_seat_force_n"], s["max_surge_n"]]
-        lines.append(f"{s['rpm']:>16.6g}" + "".join(f"{v:>16.6g}" for v in cells))
+        lines.append(f"{s['rpm']:>16.6g}" + "".join(f"{'-':>16}" if v is None else f"{v:>16.6g}" for v in cells))
     lines.append("max|a|: each body's peak acceleration (m/s2); lift err: the last body's largest distance "
                  "from its kinematic lift; seat: the spring's force at its seat; surge: that force's largest "
                  "distance from the static spring force")

@@ -292,19 +292,24 @@ def train_sweep(program: Program, train: dict) -> plt.Figure:
     spring's least and largest seat force and its largest surge (a spring with mass)."""
     speeds = train["speeds"]
     rpm = [s["rpm"] for s in speeds]
-    surges = program.chain.spring is not None and program.chain.spring.surges
-    fig, axes = plt.subplots(3 if surges else 2, 1, figsize=(8, 8 if surges else 6), sharex=True,
-                             constrained_layout=True)
-    a, b = axes[:2]
+    sprung = program.chain.spring is not None  # form-closed without: no seat force to draw
+    surges = sprung and program.chain.spring.surges
+    panels = 1 + sprung + surges
+    fig, axes = plt.subplots(panels, 1, figsize=(8, 2 + 2 * panels), sharex=True, constrained_layout=True,
+                             squeeze=False)
+    axes = axes[:, 0]
+    a = axes[0]
     for name in train["bodies"]:
         a.plot(rpm, [s["max_acceleration_m_s2"][name] for s in speeds], marker=".", label=name)
     a.set_ylabel("max |acceleration| (m/s^2)")
     a.set_title(f"{program.name}: the train against speed")
     a.legend(fontsize=8)
-    b.plot(rpm, [s["max_seat_force_n"] for s in speeds], marker=".", label="max seat force")
-    b.plot(rpm, [s["min_seat_force_n"] for s in speeds], marker=".", label="min seat force")
-    b.set_ylabel("spring force at its seat (N)")
-    b.legend(fontsize=8)
+    if sprung:
+        b = axes[1]
+        b.plot(rpm, [s["max_seat_force_n"] for s in speeds], marker=".", label="max seat force")
+        b.plot(rpm, [s["min_seat_force_n"] for s in speeds], marker=".", label="min seat force")
+        b.set_ylabel("spring force at its seat (N)")
+        b.legend(fontsize=8)
     if surges:
         axes[2].plot(rpm, [s["max_surge_n"] for s in speeds], marker=".", color="C2")
         axes[2].set_ylabel("max |surge| (N)")

@@ -239,6 +239,10 @@ CHAIN_NOTE = (
 ONE_BODY_NOTE = "a one-body train: the classic follower's rows are this chain's (the same numbers)"
 
 
+SPRING_KEYS = ("min_seat_force_n", "max_seat_force_n", "max_surge_n")
+"""The train rows' return-spring figures: ``None`` for a chain without one (form-closed)."""
+
+
 def train_section(program: Program, summary, rpm: np.ndarray, jump: float | None, below: bool) -> dict:
     """The report's ``train`` section over the speeds ``rpm``: the natural frequencies held
     and free with their mode shapes, the harmonic check over the speed range, and per
@@ -253,9 +257,11 @@ def train_section(program: Program, summary, rpm: np.ndarray, jump: float | None
             "max_contact_force_n": float(summary.cycles.max_contact_force_n[i]),
             "max_acceleration_m_s2": dict(zip(chain.names, np.asarray(peaks.max_acceleration_m_s2[i]).tolist())),
             "max_lift_error_mm": float(peaks.max_lift_error_mm[i]),
-            "min_seat_force_n": float(peaks.min_seat_force_n[i]),
-            "max_seat_force_n": float(peaks.max_seat_force_n[i]),
-            "max_surge_n": float(peaks.max_surge_n[i]),
+            **({key: None for key in SPRING_KEYS} if chain.spring is None else {  # form-closed: no spring
+                "min_seat_force_n": float(peaks.min_seat_force_n[i]),
+                "max_seat_force_n": float(peaks.max_seat_force_n[i]),
+                "max_surge_n": float(peaks.max_surge_n[i]),
+            }),
         }
         for i, r in enumerate(rpm)
     ]
@@ -405,9 +411,10 @@ def response(program: Program, rpm: float, *, steady: SteadyState | ChainContact
                          f"of {len(chain.bodies)} bodies (Oscillator.of(program) has them)")
     motion = np.asarray(node_outputs(g, cycle.q, rpm, osc.motion_gain, osc.motion_direct))
     rows = output_rows(osc.bodies)
+    spring = {} if chain.spring is None else {  # form-closed: no spring, no seat force
+        "seat_force_n": values[rows["seat_force_n"]], "surge_n": values[rows["surge_n"]]}
     return _with_bodies(out, chain, motion[: osc.bodies], motion[osc.bodies :], values[rows["acceleration_m_s2"]],
-                        seat_force_n=values[rows["seat_force_n"]], surge_n=values[rows["surge_n"]],
-                        lift_error_mm=values[rows["lift_error_mm"]])
+                        **spring, lift_error_mm=values[rows["lift_error_mm"]])
 
 
 def _with_bodies(out: dict, chain, displacement, velocity, acceleration, **more) -> dict:

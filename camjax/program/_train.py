@@ -339,7 +339,13 @@ class Chain:
 
     def check_follower(self, follower: Follower) -> None:
         """A chain with an arm needs the swinging roller follower whose ``arm_mm`` is the
-        arm's roller place (one line naming the field otherwise)."""
+        arm's roller place; a groove's strikes are the one-body follower's alone (one line
+        naming the field otherwise)."""
+        if follower.groove_clearance_mm is not None and not self.spells_follower:
+            raise ValueError(
+                "follower.groove_clearance_mm: a groove's strikes are simulated for the one-body "
+                "follower only; a chain without a [spring] runs in a tight groove (leave it out)"
+            )
         if self.arm is None:
             return
         if not isinstance(follower.geometry, SwingingRollerFollower):
@@ -377,7 +383,10 @@ class Chain:
         values, vectors = scipy.linalg.eigh(
             a.K[np.ix_(moving, moving)], a.M[np.ix_(moving, moving)]
         )
-        hz = np.sqrt(np.maximum(values, 0.0)) / (2 * math.pi)
+        # a chain that nothing holds once the cam lets go (no spring) moves as one rigid
+        # body: its eigenvalue is zero but for rounding
+        values = np.where(values <= 1e3 * np.finfo(float).eps * values.max(initial=0.0), 0.0, values)
+        hz = np.sqrt(values) / (2 * math.pi)
         shapes = np.zeros((a.seat + 1, hz.size))
         shapes[moving] = vectors
         scale = shapes[np.argmax(np.abs(shapes), axis=0), np.arange(hz.size)]
