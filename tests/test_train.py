@@ -108,6 +108,44 @@ def test_harmonic_check_orders():
     assert hz == f1 and orders == [k for k in range(1, 100) if 1000 <= 60 * f1 / k <= 3000]
 
 
+@pytest.mark.parametrize("rpm", [(3000.0, 1000.0), (-5.0, 1000.0), (0.0, 1000.0), (1000.0, math.inf)])
+def test_harmonic_check_refuses_a_bad_speed_range(rpm):
+    with pytest.raises(ValueError, match=r"harmonic_check") as error:
+        surging_chain().harmonic_check(*rpm)
+    assert "\n" not in str(error.value)
+
+
+def test_a_chain_without_a_spring_moves_freely_off_the_cam():
+    """Form-closed (no [spring]): let go of the cam, the chain is one free rigid body, its
+    lowest free frequency exactly 0; the other is the two masses on their element,
+    sqrt(k (m1 + m2) / (m1 m2)) / 2 pi."""
+    chain = Chain((Body("tappet", 0.1), Body("valve", 0.1, 1000.0, 20.0)))
+    hz = chain.natural_frequencies(contact=False)[0]
+    assert hz[0] == 0.0
+    assert hz[1] == pytest.approx(math.sqrt(1e6 * 0.2 / 0.01) / (2 * math.pi), rel=1e-12)
+
+
+def test_a_rider_on_a_surging_spring_is_rayleighs_effective_mass():
+    """One rigid body riding on the cam (no element) on a spring with mass: the coils are
+    what vibrates.  Far below the surge, the force at the cam is the rigid body's and the
+    spring's with a third of its mass (Rayleigh) and its strain-rate damping (``tau k_s``,
+    ``tau = 2 zeta / w_1`` at the continuous spring's first surge):
+    (m + m_s / 3) y'' + tau k_s y' + k_s y + F_0, within 1% of the inertial part (the surge
+    the rise's jerk leaves is 1e-3 of it)."""
+    from camjax.program import response
+
+    m, k_s, m_s, preload = 0.1, 50.0, 0.005, 300.0
+    chain = Chain((Body("valve", m),), Spring(k_s, preload, m_s, damping_ratio=0.05))
+    program = dataclasses.replace(two_cycloids(), chain=chain)
+    out = response(program, 300.0, steady=SteadyState(program, 300.0))
+    ddy = out["kinematic_acceleration_m_s2"]
+    tau = 2 * 0.05 / (2 * math.pi * 0.5 * math.sqrt(1e3 * k_s / m_s))
+    dy = out["valve_velocity_m_s"]
+    rigid = (m + m_s / 3) * ddy + tau * 1e3 * k_s * dy + k_s * out["lift_mm"] + preload
+    assert np.max(np.abs(out["contact_force_n"] - rigid)) < 1e-2 * (m + m_s / 3) * np.max(np.abs(ddy))
+    assert np.max(np.abs(out["payload_acceleration_m_s2"] - ddy)) < 1e-9 * np.max(np.abs(ddy))
+
+
 def toml_tables(**spring):
     return {
         "follower": {"kind": "translating-roller", "base_radius_mm": 30, "roller_radius_mm": 10},
@@ -155,7 +193,23 @@ def test_program_file_tables_give_the_python_chain():
             lambda d: d["follower"].update(mass_kg=1.0),
             r"\[follower\] mass_kg: a file with a \[\[train\]\]",
         ),
-        (lambda d: d["train"][1].update(rato=1.6), r"body 2: unknown field\(s\) rato"),
+        (lambda d: d["train"][1].update(rato=1.6), r"body 2 \(valve\): unknown field\(s\) rato"),
+        (
+            lambda d: (d["train"].pop(1), d["spring"].pop("mass_kg")),
+            r"body 1 \(tappet\): a single body riding on the cam is rigid .* give it "
+            r"stiffness_n_per_mm",
+        ),
+        (
+            lambda d: (d["train"].pop(1), d.pop("spring")),
+            r"body 1 \(tappet\): a single body riding on the cam is rigid",
+        ),
+        (lambda d: d["train"][1].update(name=""), r"body 2: name must be a non-empty text"),
+        (lambda d: d["train"][1].update(name="  "), r"body 2: name must be a non-empty text"),
+        (lambda d: d["train"][1].update(name="tappet"), r"body 2 \(tappet\): name given twice"),
+        (
+            lambda d: (d.pop("spring"), d["train"][1].update(lash_mm=0.1)),
+            r"body 2 \(valve\) lash_mm: a chain without a \[spring\] is form-closed",
+        ),
     ],
 )
 def test_bad_train_input_is_one_line(edit, message):

@@ -17,6 +17,8 @@ from camjax.program import (
     Program,
     SteadyState,
     analyse,
+    design_warnings,
+    example_names,
     example_path,
     flights_at,
     program_path,
@@ -197,6 +199,11 @@ def test_cli_json_carries_the_train(capsys):
         (lambda d: d.pop("train"), r"\[spring\] belongs to a \[\[train\]\]"),
         (lambda d: d["train"][1].update(ratio=0.0), r"body 2 \(valve\) ratio must be positive"),
         (lambda d: d.update(gears=1), "top level: unknown field"),
+        (
+            lambda d: d["train"].pop(1),
+            r"body 1 \(tappet\): a single body riding on the cam is rigid .* give it stiffness_n_per_mm",
+        ),
+        (lambda d: d["train"][0].update(name=""), r"body 1: name must be a non-empty text"),
     ],
 )
 def test_bad_train_program_is_one_line(tmp_path, edit, message):
@@ -273,3 +280,75 @@ def test_design_over_a_train_at_its_last_body(tmp_path, capsys):
         )
     with pytest.raises(ValueError, match="a chain of bodies .* residual or preload"):
         design_segment(program, 1, 900.0, 1100.0, objective="ca-ct")
+
+
+def test_chain_messages_name_the_chains_own_fields():
+    """A chain file has no follower.mass_kg or follower.stiffness_n_per_mm: the grid's
+    refusal names the body and element that set the highest mode, or the spring's
+    elements; the size warning names each body's mass as written, not their sum."""
+    with pytest.raises(ValueError, match=r"raise \[\[train\]\] valve mass_kg or lower \[\[train\]\] valve "
+                       r"stiffness_n_per_mm") as error:
+        SteadyState(two_body(valve=1e-9), 1000.0)
+    assert "follower." not in str(error.value) and "\n" not in str(error.value)
+    data = tables(two_body())
+    data["spring"].update(mass_kg=0.05, damping_ratio=0.05, elements=400)
+    with pytest.raises(ValueError, match=r"give \[spring\] fewer elements \(now 400\)") as error:
+        SteadyState(Program.from_dict(data), 1000.0)
+    assert "follower." not in str(error.value)
+    warnings = design_warnings(two_body(tappet=2e4, valve=2e4))
+    heavy = [w for w in warnings if "10,000 kg" in w]
+    assert [w.split(" is more")[0] for w in heavy] == [
+        "[[train]] tappet mass_kg = 20000",
+        "[[train]] valve mass_kg = 20000",
+    ]
+
+
+def test_a_chain_without_a_spring_is_form_closed(tmp_path):
+    """No [spring]: a grooved chain, as the classic follower without spring_rate_n_per_mm
+    (no jump, no least preload); its rows have no seat force or surge (nothing there), a
+    groove clearance is refused (a groove's strikes are the one-body follower's)."""
+    data = tables(two_body())
+    data.pop("spring")
+    program = Program.from_dict(data)
+    assert program.follower.form_closed
+    report = analyse(program, [1000.0, 3000.0]).as_dict()
+    assert [s["jump"] for s in report["speeds"]] == [False, False]
+    assert all(s["min_preload_n"] is None for s in report["speeds"])
+    assert report["train"]["natural_frequencies_free_hz"][0] == 0.0
+    for row in report["train"]["speeds"]:
+        assert row["min_seat_force_n"] is row["max_seat_force_n"] is row["max_surge_n"] is None
+    data["follower"]["groove_clearance_mm"] = 0.05
+    with pytest.raises(ValueError, match=r"groove_clearance_mm: a groove's strikes are simulated for the "
+                       "one-body follower only"):
+        Program.from_dict(data)
+
+
+def test_design_of_a_chain_with_lash_or_a_seat_is_refused_plainly():
+    from camjax.program import design_segment
+
+    program = Program.load(example_path("valve_lash"))
+    for objective in ("residual", "preload"):
+        with pytest.raises(ValueError, match=r"the residual and preload objectives design through the exact "
+                           r"steady state of a chain without lash or seat, and this chain has "
+                           r"\[\[train\]\] valve lash_mm, \[seat\]") as error:
+            design_segment(program, 1, 1000.0, 3000.0, objective=objective)
+        assert "\n" not in str(error.value)
+
+
+def test_every_built_in_example_is_named_where_names_are_listed(capsys):
+    """The help texts and the missing file's error list every built-in example, each of
+    which loads by its name."""
+    names = example_names()
+    assert {"indexer", "feed", "servo", "valve", "valve_lash", "swinging_arm"} <= set(names)
+    for name in names:
+        assert program_path(name) == example_path(name)
+        Program.load(program_path(name))
+    listed = ", ".join(names)
+    for command in ("program", "design", "studio"):
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        assert listed in " ".join(capsys.readouterr().out.split())
+    assert main(["program", "valvee"]) != 0
+    assert f"valvee: no such program file, nor a built-in example ({listed})" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="nor a built-in example"):
+        program_path("no_such_dir/valvee.toml")

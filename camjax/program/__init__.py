@@ -122,6 +122,7 @@ from ._outputs import probe as probe
 from ._program import Program as Program
 from ._program import segment_band as segment_band
 from ._program import with_law as with_law
+from ._reader import example_names as example_names
 from ._reader import example_path as example_path
 from ._reader import program_path as program_path
 from ._report import Report as Report
