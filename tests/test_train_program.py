@@ -286,8 +286,11 @@ def test_chain_messages_name_the_chains_own_fields():
     """A chain file has no follower.mass_kg or follower.stiffness_n_per_mm: the grid's
     refusal names the body and element that set the highest mode, or the spring's
     elements; the size warning names each body's mass as written, not their sum."""
-    with pytest.raises(ValueError, match=r"raise \[\[train\]\] valve mass_kg or lower \[\[train\]\] valve "
-                       r"stiffness_n_per_mm") as error:
+    with pytest.raises(
+        ValueError,
+        match=r"raise \[\[train\]\] valve mass_kg or lower \[\[train\]\] valve "
+        r"stiffness_n_per_mm",
+    ) as error:
         SteadyState(two_body(valve=1e-9), 1000.0)
     assert "follower." not in str(error.value) and "\n" not in str(error.value)
     data = tables(two_body())
@@ -318,8 +321,11 @@ def test_a_chain_without_a_spring_is_form_closed(tmp_path):
     for row in report["train"]["speeds"]:
         assert row["min_seat_force_n"] is row["max_seat_force_n"] is row["max_surge_n"] is None
     data["follower"]["groove_clearance_mm"] = 0.05
-    with pytest.raises(ValueError, match=r"groove_clearance_mm: a groove's strikes are simulated for the "
-                       "one-body follower only"):
+    with pytest.raises(
+        ValueError,
+        match=r"groove_clearance_mm: a groove's strikes are simulated for the "
+        "one-body follower only",
+    ):
         Program.from_dict(data)
 
 
@@ -328,9 +334,12 @@ def test_design_of_a_chain_with_lash_or_a_seat_is_refused_plainly():
 
     program = Program.load(example_path("valve_lash"))
     for objective in ("residual", "preload"):
-        with pytest.raises(ValueError, match=r"the residual and preload objectives design through the exact "
-                           r"steady state of a chain without lash or seat, and this chain has "
-                           r"\[\[train\]\] valve lash_mm, \[seat\]") as error:
+        with pytest.raises(
+            ValueError,
+            match=r"the residual and preload objectives design through the exact "
+            r"steady state of a chain without lash or seat, and this chain has "
+            r"\[\[train\]\] valve lash_mm, \[seat\]",
+        ) as error:
             design_segment(program, 1, 1000.0, 3000.0, objective=objective)
         assert "\n" not in str(error.value)
 
@@ -349,6 +358,25 @@ def test_every_built_in_example_is_named_where_names_are_listed(capsys):
             main([command, "--help"])
         assert listed in " ".join(capsys.readouterr().out.split())
     assert main(["program", "valvee"]) != 0
-    assert f"valvee: no such program file, nor a built-in example ({listed})" in capsys.readouterr().err
+    assert (
+        f"valvee: no such program file, nor a built-in example ({listed})"
+        in capsys.readouterr().err
+    )
     with pytest.raises(ValueError, match="nor a built-in example"):
         program_path("no_such_dir/valvee.toml")
+
+
+def test_lash_on_the_first_element_is_the_cam_clearance(tmp_path, capsys):
+    """A bucket tappet: one body on its element with lash and a seat; its lash is the
+    clearance at the cam, and the text table says so."""
+    text = example_path("valve_lash").read_text()
+    head = text[: text.index("[[train]]")]
+    path = tmp_path / "bucket.toml"
+    path.write_text(
+        head + '[[train]]\nname = "valve"\nmass_kg = 0.08\nstiffness_n_per_mm = 3000\n'
+        "damping_n_s_per_m = 30\nlash_mm = 0.15\n\n[spring]\nrate_n_per_mm = 40\npreload_n = 250\n\n"
+        "[seat]\nstiffness_n_per_mm = 50000\ndamping_n_s_per_m = 500\n"
+    )
+    assert main(["program", str(path), "--rpm", "1000"]) == 0
+    out = capsys.readouterr().out
+    assert "cam clearance (valve) opens 1x" in out and "lash at valve" not in out

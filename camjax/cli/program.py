@@ -216,8 +216,9 @@ def _contact_lines(train: dict, contacts: dict) -> list[str]:
             parts.append(f"{c['bounce_count']} bounce(s)" + (
                 " (" + ", ".join(f"{b['velocity_m_s']:.3g} m/s at {b['angle_deg']:.2f} deg" for b in bounces[:3])
                 + (", ..." if len(bounces) > 3 else "") + ")" if bounces else ""))
-        for name, o in c["lash_openings"].items():
-            parts.append(f"lash at {name} opens {o['count']}x" + (
+        for name, o in c["lash_openings"].items():  # the first body's lash is the clearance at the cam
+            where = f"cam clearance ({name})" if name == train["bodies"][0] else f"lash at {name}"
+            parts.append(f"{where} opens {o['count']}x" + (
                 " at " + ", ".join(f"{a:.2f}" for a in o["angles_deg"][:4]) + " deg" if o["angles_deg"] else ""))
         apart = [name for name, yes in c["separates"].items() if yes]
         parts.append("separates: " + (", ".join(apart) if apart else "none"))

@@ -385,7 +385,9 @@ class Chain:
         )
         # a chain that nothing holds once the cam lets go (no spring) moves as one rigid
         # body: its eigenvalue is zero but for rounding
-        values = np.where(values <= 1e3 * np.finfo(float).eps * values.max(initial=0.0), 0.0, values)
+        values = np.where(
+            values <= 1e3 * np.finfo(float).eps * values.max(initial=0.0), 0.0, values
+        )
         hz = np.sqrt(values) / (2 * math.pi)
         shapes = np.zeros((a.seat + 1, hz.size))
         shapes[moving] = vectors
@@ -401,7 +403,9 @@ class Chain:
         grid resolves), said as what to change to lower it: the body that moves most in that
         mode and the elements beside it, or the spring's discretisation, or the arm's."""
         if self.arm is not None:
-            return "lower [arm] modes or bending_stiffness_n_m2, or raise its mass_per_length_kg_per_m"
+            return (
+                "lower [arm] modes or bending_stiffness_n_m2, or raise its mass_per_length_kg_per_m"
+            )
         hz, shapes, a = self.coordinate_modes(contact=True)
         if hz.size == 0:
             return "lower the elements' stiffness_n_per_mm"
@@ -418,7 +422,9 @@ class Chain:
             if i < len(self.bodies) and not self.bodies[i].rides
         ]
         said = " and ".join(f"[[train]] {name} stiffness_n_per_mm" for name in elements)
-        return f"raise [[train]] {self.bodies[j].name} mass_kg" + (f" or lower {said}" if said else "")
+        return f"raise [[train]] {self.bodies[j].name} mass_kg" + (
+            f" or lower {said}" if said else ""
+        )
 
     def sized_fields(self) -> list[tuple[str, float, str]]:
         """``(key, value, unit)`` of the chain's masses, stiffnesses and spring forces as the
@@ -427,7 +433,9 @@ class Chain:
         for body in self.bodies:
             out.append((f"[[train]] {body.name} mass_kg", body.mass_kg, "kg"))
             if body.stiffness_n_per_mm is not None:
-                out.append((f"[[train]] {body.name} stiffness_n_per_mm", body.stiffness_n_per_mm, "N/mm"))
+                out.append(
+                    (f"[[train]] {body.name} stiffness_n_per_mm", body.stiffness_n_per_mm, "N/mm")
+                )
         if self.spring is not None:
             out += [
                 ("[spring] rate_n_per_mm", self.spring.rate_n_per_mm, "N/mm"),
@@ -441,7 +449,10 @@ class Chain:
     ) -> list[tuple[float, list[int]]]:
         """For each of the first ``modes`` held frequencies: ``(f_n, cam orders k)`` with
         ``k rpm / 60 = f_n`` at a speed inside ``[rpm_min, rpm_max]``."""
-        low, high = (_number(v, f"harmonic_check {n}") for n, v in (("rpm_min", rpm_min), ("rpm_max", rpm_max)))
+        low, high = (
+            _number(v, f"harmonic_check {n}")
+            for n, v in (("rpm_min", rpm_min), ("rpm_max", rpm_max))
+        )
         if not 0 < low <= high:
             raise ValueError(
                 f"harmonic_check: the speed range must be positive and rising (0 < rpm_min <= "
@@ -556,7 +567,8 @@ def _check_chain(chain: Chain) -> None:
         lashed = [(j, b.name) for j, b in enumerate(chain.bodies, start=1) if b.lash_mm]
         if lashed:
             raise ValueError(
-                "[[train]] body {} ({}) lash_mm: a chain".format(*lashed[0]) + " without a [spring] is form-closed "
+                "[[train]] body {} ({}) lash_mm: a chain".format(*lashed[0])
+                + " without a [spring] is form-closed "
                 "(grooved) and nothing closes a lash in it; give a [spring] (rate_n_per_mm, "
                 "preload_n)"
             )
