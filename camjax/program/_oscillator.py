@@ -197,13 +197,7 @@ class Oscillator(NamedTuple):
             )
         a = chain.matrices()
         free = np.arange(1, a.seat)
-        n = free.size
-        if n == 0:
-            raise ValueError(
-                "[[train]]: one body riding on the cam on a spring without mass has nothing to "
-                "vibrate (its contact force is m y'' + k_s y + preload): give it an element "
-                "(stiffness_n_per_mm) or use the classic follower"
-            )
+        n = free.size  # at least one: a chain with nothing to vibrate is refused (Chain)
         Mff, Cff, Kff = (x[np.ix_(free, free)] for x in (a.M, a.C, a.K))
         Minv = np.linalg.inv(Mff)
         G, b1_rate = _lift_shift(a)
