@@ -32,14 +32,16 @@ def register(subparsers) -> None:
         description="Optimise a B-spline rise for a period-ratio band under caps; write the "
         "law (JSON, CSV), figures and a comparison with every standard law.",
     )
-    parser.add_argument("--objective", choices=("residual", "ca-ct", "rms-acceleration", "preload"),
+    parser.add_argument("--objective", choices=("residual", "ca-ct", "rms-acceleration", "preload", "seating"),
                         default="residual",
                         help="what to minimise: residual vibration R (units of Ca) or the peak "
                         "inertia load Ca*Ct (units of h/T^2), worst case over the band; "
                         "'rms-acceleration': Ca_rms, a servo's heating (no band; reported against "
                         "the floor 2 sqrt(3) no rest-to-rest law passes; give --max-jerk); with "
                         "--program also 'preload': the largest preload (N) the whole program "
-                        "needs over the speed range; for a --segment that starts or ends in "
+                        "needs over the speed range; 'seating': the valve's largest seating "
+                        "velocity (m/s) over the speed range, for a chain with a [seat], simulated "
+                        "with its contacts; for a --segment that starts or ends in "
                         "motion, 'residual' is the whole program's largest residual vibration (mm)")
     where = parser.add_mutually_exclusive_group()  # one is required unless --program (checked in run)
     where.add_argument("--band", metavar="N1:N2",
@@ -172,13 +174,13 @@ def run(args) -> int:
                        "band comes from --rpm)")
     if args.program and args.objective == "rms-acceleration":
         raise CliError("--objective rms-acceleration: not with --program (it designs a free "
-                       "rise; a segment's design takes residual, ca-ct or preload)")
+                       "rise; a segment's design takes residual, ca-ct, preload or seating)")
     out = output_dir(args.out)
     if args.program:
         return _run_program(args, out)
     sweep_options = sweep_options_for(args)
-    if args.objective == "preload":
-        raise CliError("--objective preload needs --program (a whole cam with its follower)")
+    if args.objective in ("preload", "seating"):
+        raise CliError(f"--objective {args.objective} needs --program (a whole cam with its follower)")
     if args.objective == "rms-acceleration":
         return _run_rms(args, out)
     if args.band is None and args.n is None:
