@@ -199,10 +199,10 @@ class _SeatingModel(AbstractObjective):
     kept only where the true seating velocity went down."""
 
     goal: MaxSeatingVelocity = eqx.field(static=True)
-    values: jax.Array
-    jacobian: jax.Array
-    center: jax.Array
-    weight_step: jax.Array
+    values: np.ndarray
+    jacobian: np.ndarray
+    center: np.ndarray
+    weight_step: np.ndarray
     reported: float = eqx.field(static=True)
     weight: float = eqx.field(static=True, default=1.0)
     damping: float = eqx.field(static=True, default=0.0)
@@ -213,7 +213,10 @@ class _SeatingModel(AbstractObjective):
 
     def value(self, features, ca, sharpness):
         seating, step = features
-        return _smooth_max(seating, sharpness) + 0.5 * self.weight_step * jnp.sum(step**2)
+        top = (
+            seating[0] if seating.size == 1 else _smooth_max(seating, sharpness)
+        )  # one speed: no spread
+        return top + 0.5 * self.weight_step * jnp.sum(step**2)
 
     def report(self, law, **sweep_options) -> float:
         if np.array_equal(np.asarray(law.coefficients), np.asarray(self.center)):
@@ -270,14 +273,18 @@ def seating_design(
             weight_step = float(np.max(np.linalg.norm(jacobian, axis=1))) / FIRST_STEP
         model = _SeatingModel(
             goal,
-            jnp.asarray(values),
-            jnp.asarray(jacobian),
-            jnp.asarray(law.coefficients),
-            jnp.asarray(weight_step),
+            np.asarray(values),
+            np.asarray(jacobian),
+            np.asarray(law.coefficients),
+            np.asarray(weight_step),
             float(np.max(reported)),
         )
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DesignNotImproved)
+            warnings.simplefilter(
+                "ignore", DesignNotImproved
+            )  # a round that does not improve: said below
+            # the round's result holds its model (arrays) as a static field: read here and dropped
+            warnings.filterwarnings("ignore", "A JAX array is being set as static", UserWarning)
             result = design(
                 model, caps=caps, initial=law, knots=knots, degree=degree, **design_options
             )
