@@ -119,20 +119,11 @@ class MaxSeatingVelocity(AbstractProgramObjective):
         """The seating velocity (m/s) at every speed of ``speeds()``, as the report reads it."""
         return np.array([t.seating_velocity_m_s for t in self._turns(law)[1]])
 
-    def linearised(self, law) -> Linearised:
-        """The seating velocity at every speed (m/s, as ``seating_velocity`` reads it from the
-        settled turn) and its derivatives ``(speeds, coefficients)`` in ``law.coefficients``.
-
-        Through the periodic steady state: the turn's map ``z -> Phi(z, c)`` and the seating
-        velocity ``v(z, c)`` are differentiated by reverse mode through the integration
-        (diffrax; its step sizes are held, so the derivative is the computed path's), and
-        the start state ``z = Phi(z, c)`` by the implicit function theorem:
-        ``dv/dc = v_c + v_z (I - Phi_z)^-1 Phi_c``.  The grid's samples are affine in the
-        coefficients (``with_segment_law``): their derivatives come apart, by forward mode."""
+    def _arguments(self, law):
+        """The settled turns of ``law`` at ``speeds()`` and ``_seating_row``'s arguments for
+        them: the grid's lift and acceleration recomputed from the law in JAX
+        (``with_segment_law``) with their derivatives in its coefficients (affine: exact)."""
         simulation, turns = self._turns(law)
-        z0 = jnp.asarray(np.stack([t.start_state for t in turns]))
-        rpm = jnp.asarray([t.rpm for t in turns])
-        sample = jnp.asarray([t.seating_sample for t in turns])
         program, index = simulation.program, self.segment - 1
 
         def padded(coefficients):
@@ -144,23 +135,46 @@ class MaxSeatingVelocity(AbstractProgramObjective):
             )
             return moved.lift, moved.acceleration
 
-        lift_map, acceleration_map = jax.jacfwd(padded)(jnp.asarray(law.coefficients))
-        step = jnp.zeros(lift_map.shape[-1])
-        args = (
-            z0,
-            step,
-            jax.tree.map(jnp.asarray, simulation._grid),
+        coefficients = jnp.asarray(law.coefficients)
+        lift, acceleration = padded(coefficients)
+        lift_map, acceleration_map = jax.jacfwd(padded)(coefficients)
+        grid = jax.tree.map(
+            jnp.asarray, simulation._grid._replace(lift=lift, acceleration=acceleration)
+        )
+        return turns, (
+            jnp.asarray(np.stack([t.start_state for t in turns])),
+            jnp.zeros(coefficients.size),
+            grid,
             lift_map,
             acceleration_map,
-            rpm,
-            sample,
+            jnp.asarray([t.rpm for t in turns]),
+            jnp.asarray([t.seating_sample for t in turns]),
             jax.tree.map(jnp.asarray, simulation.system),
             simulation.samples,
             simulation.options,
         )
-        values = np.asarray(_seating_rows(*args))
-        d_state, d_coefficients = (np.asarray(x) for x in _seating_jacobians(*args))
-        n = z0.shape[1]
+
+    def read(self, law) -> np.ndarray:
+        """The seating velocity (m/s) at every speed of ``speeds()`` as the objective computes
+        it in JAX (``seating_velocity`` on the law's own grid from the settled start state):
+        the simulation's reading (``seating_m_s``) to the integration's tolerance."""
+        _, arguments = self._arguments(law)
+        return np.asarray(_seating_rows(*arguments))[:, -1]
+
+    def linearised(self, law) -> Linearised:
+        """The seating velocity at every speed (m/s, ``read``) and its derivatives ``(speeds,
+        coefficients)`` in ``law.coefficients``.
+
+        Through the periodic steady state: the turn's map ``z -> Phi(z, c)`` and the seating
+        velocity ``v(z, c)`` are differentiated by forward mode through the integration
+        (diffrax's ``ForwardMode``; its step sizes are held, so the derivative is the computed
+        path's), and the start state ``z = Phi(z, c)`` by the implicit function theorem:
+        ``dv/dc = v_c + v_z (I - Phi_z)^-1 Phi_c``.  The landing's sample is held: the
+        derivative is that of the reading from it (``seating_velocity``)."""
+        turns, arguments = self._arguments(law)
+        values = np.asarray(_seating_rows(*arguments))
+        d_state, d_coefficients = (np.asarray(x) for x in _seating_jacobians(*arguments))
+        n = arguments[0].shape[1]
         jacobian = []
         for k in range(len(turns)):
             phi_z, v_z = d_state[k, :n], d_state[k, n]
