@@ -99,7 +99,9 @@ def test_a_short_seating_design_lowers_it_and_reports_what_it_is(example):
         return max(t.seating_velocity_m_s for t in turns)
 
     start = largest(example)
-    assert result.initial_values[label] == pytest.approx(start, rel=1e-6)  # its law as the design holds it
+    assert result.initial_values[label] == pytest.approx(
+        start, rel=1e-6
+    )  # its law as the design holds it
     if result.kept_initial:
         assert any("did not improve" in str(w.message) for w in caught)
         assert designed == example
@@ -141,3 +143,9 @@ def test_seating_needs_a_seat(example, tmp_path, capsys):
         != 0
     )
     assert "--objective seating needs --program" in capsys.readouterr().err
+    for option in ("--rounds", "--seating-speeds"):
+        assert main([*argv, option, "0"]) != 0
+        assert f"{option}: must be a whole number of at least 1" in capsys.readouterr().err
+        residual = [*("residual" if a == "seating" else a for a in argv), option, "2"]
+        assert main(residual) != 0
+        assert f"{option}: only with --objective seating" in capsys.readouterr().err
