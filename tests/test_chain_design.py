@@ -26,7 +26,7 @@ def example():
 
 
 def _goal(program, rpm_lo, rpm_hi, count):
-    from camjax.program._seating import MaxSeatingVelocity  # imports optax: only when designing
+    from camjax.program import MaxSeatingVelocity  # imports optax: only when designing
 
     return MaxSeatingVelocity(program, CLOSING, rpm_lo, rpm_hi, count=count)
 
