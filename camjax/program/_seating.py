@@ -20,7 +20,7 @@ import numpy as np
 
 from ..law_design import AbstractObjective, DesignNotImproved, DesignResult, design
 from ..laws import BoundaryPolynomial, BSplineLaw, CorrectedPolynomial
-from ._chain_contacts import ChainContacts, contact_grid, seating_velocity
+from ._chain_contacts import ChainContacts, ContactOptions, contact_grid, seating_velocity
 from ._cycle_grid import with_segment_law
 from ._jump import even_periods, scan_speeds
 from ._objectives import _SPEEDS_PER_CYCLE, AbstractProgramObjective, _smooth_max
@@ -72,7 +72,7 @@ class MaxSeatingVelocity(AbstractProgramObjective):
     """
 
     count: int | None = eqx.field(static=True, default=None)
-    options: object = eqx.field(static=True, default=None)  # ContactOptions
+    options: ContactOptions | None = eqx.field(static=True, default=None)
 
     what: ClassVar[str] = "seating"
 
@@ -82,6 +82,10 @@ class MaxSeatingVelocity(AbstractProgramObjective):
             raise ValueError(
                 "the seating objective needs a valve seat: give the program's chain of "
                 "bodies ([[train]]) a [seat] (the seating velocity is the last body's landing on it)"
+            )
+        if self.options is not None and not isinstance(self.options, ContactOptions):
+            raise ValueError(
+                f"the seating objective's options must be a ContactOptions, got {self.options!r}"
             )
         if self.count is not None and (
             isinstance(self.count, bool) or not isinstance(self.count, int) or self.count < 1
@@ -191,7 +195,9 @@ class MaxSeatingVelocity(AbstractProgramObjective):
         )
 
     def value(self, features, ca, sharpness):
-        return _smooth_max(features, sharpness)
+        """The smoothed maximum of the seating velocities ``features`` (one per speed; one
+        speed's own value: a single value has no spread to smooth over)."""
+        return features[0] if features.size == 1 else _smooth_max(features, sharpness)
 
     def report(self, law, **sweep_options) -> float:  # the simulation: no sweep options
         return float(np.max(self.seating_m_s(law)))
@@ -227,10 +233,7 @@ class _SeatingModel(AbstractObjective):
 
     def value(self, features, ca, sharpness):
         seating, step = features
-        top = (
-            seating[0] if seating.size == 1 else _smooth_max(seating, sharpness)
-        )  # one speed: no spread
-        return top + 0.5 * self.weight_step * jnp.sum(step**2)
+        return self.goal.value(seating, ca, sharpness) + 0.5 * self.weight_step * jnp.sum(step**2)
 
     def report(self, law, **sweep_options) -> float:
         if np.array_equal(np.asarray(law.coefficients), np.asarray(self.center)):
