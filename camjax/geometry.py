@@ -172,7 +172,9 @@ class SwingingRollerFollower(AbstractRollerFollower):
     def lift_from_polygon(self, polygon, theta):
         """The arm swung as far out as the polygon pushes the roller, at each angle: the
         least arm direction (about the pivot, above the pivot-centre line) whose roller
-        touches it (an endpoint circle or an edge's offset line, exactly)."""
+        touches it (an endpoint circle or an edge's offset line, exactly); a polygon that
+        reaches the pivot is refused."""
+        _check_pivot_outside(polygon, self.pivot_distance)
         d, l, r = self.pivot_distance, self.arm_length, self.roller_radius
         rp = self.base_radius + r
         gamma0 = math.acos((d * d + l * l - rp * rp) / (2 * d * l))
@@ -463,7 +465,9 @@ class SwingingFlatFollower(AbstractFlatFollower):
 
     def lift_from_polygon(self, polygon, theta):
         """The face through the pivot tangent to the polygon: its normal's angle is the
-        least direction of a vertex seen from the pivot, less 90 degrees."""
+        least direction of a vertex seen from the pivot, less 90 degrees; a polygon that
+        reaches the pivot is refused."""
+        _check_pivot_outside(polygon, self.pivot_distance)
         d = self.pivot_distance
 
         def one(x):
@@ -527,6 +531,15 @@ def polygon_edges(points: np.ndarray):
     step = np.roll(points, -1, axis=-2) - points
     length = np.hypot(step[..., 0], step[..., 1])
     return points, step / length[..., None], length
+
+
+def _check_pivot_outside(polygon: np.ndarray, pivot_distance) -> None:
+    """A swinging follower's pivot must lie beyond the polygon's largest radius: the
+    profile turns past it otherwise (a ``ValueError`` naming ``pivot_distance``)."""
+    largest = float(np.max(np.hypot(polygon[:, 0], polygon[:, 1])))
+    if pivot_distance <= largest:
+        raise ValueError(f"pivot_distance: the pivot ({pivot_distance:g}) lies within the profile's largest "
+                         f"radius ({largest:.6g}); move the pivot out")
 
 
 def _per_angle(polygon: np.ndarray, theta: np.ndarray, one) -> np.ndarray:

@@ -316,7 +316,8 @@ def test_a_step_too_coarse_for_the_motion_is_warned_of_with_its_rows(capsys, tmp
     assert err.startswith("warning: --drive-step 360 deg gives a table of 2 rows") and err.count("\n") == 1
 
 
-@pytest.mark.parametrize("option", [["--rpm", "600"], ["--format", "json"], ["--plot-rpm", "600"], ["--no-flight"]])
+@pytest.mark.parametrize("option", [["--rpm", "600"], ["--format", "json"], ["--plot-rpm", "600"], ["--no-flight"],
+                                    ["--probes", "probes.py:MEAN_FORCE"]])
 def test_the_analysis_options_are_refused_with_a_drive_table(option, capsys, tmp_path):
     assert main(["program", "--drive-table", "csv", "--out", str(tmp_path), *option]) == 2
     assert capsys.readouterr().err.strip() == (

@@ -199,8 +199,8 @@ def test_bad_drawings_are_one_line_errors_naming_the_file(tmp_path):
         assert "\n" not in str(caught.value), path
     ecc = _eccentric_drawing(tmp_path / "ecc.dxf", "CIRCLE")
     inside = dataclasses.replace(f, kind="swinging-flat", base_radius_mm=R - C, arm_mm=100.0, pivot_mm=45.0)
-    with pytest.raises(ValueError, match=r"ecc\.dxf: CIRCLE on layer '0': the pivot \(pivot_mm = 45\) lies within "
-                                         r"the profile's largest radius \(50 mm\); move the pivot out"):
+    with pytest.raises(ValueError, match=r"ecc\.dxf: CIRCLE on layer '0': follower\.pivot_mm: the pivot \(45\) lies "
+                                         r"within the profile's largest radius \(50\); move the pivot out"):
         lift_from_dxf(ecc, inside, points=72)
     # its base circle faces the follower (on +y) at 270 degrees, not at 0
     with pytest.raises(ValueError, match=r"ecc\.dxf: .*angle 0 must be on the base circle.*; in the drawing, the "

@@ -257,9 +257,11 @@ def test_jerk_is_the_derivative_of_the_acceleration():
 def test_cli_refuses_bad_arguments(capsys):
     assert main(["studio", "--port", "70000", "--no-browser"]) == 2
     assert main(["studio", "no-such-file.toml", "--no-browser", "--port", "0"]) == 2
+    assert main(["studio", "--probes", "no-such-probes.py:MEAN", "--no-browser", "--port", "0"]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert lines[0].startswith("camjax studio: error: --port")
     assert lines[1].startswith("camjax studio: error: ") and "no-such-file.toml" in lines[1]
+    assert lines[2] == "camjax studio: error: --probes: no file no-such-probes.py"
 
 
 def test_cli_serves_the_page_and_stops_on_ctrl_c():

@@ -246,3 +246,40 @@ def import_aside(module: str):
         return importlib.import_module(module)
 
     return finish
+
+
+PROBES_HELP = ("report these probes beside the built-in per-speed outputs: NAME in the Python file FILE.py "
+               "(run as a script), a camjax.program.Outputs, a probe or a list of probes (docs/extending.md)")
+
+
+def add_probes_option(parser: argparse.ArgumentParser) -> None:
+    """The ``--probes FILE.py:NAME`` of the commands that analyse a program."""
+    parser.add_argument("--probes", metavar="FILE.py:NAME", help=PROBES_HELP)
+
+
+def outputs_of(text: str | None):
+    """The per-speed outputs ``--probes FILE.py:NAME`` names (``camjax.program.Outputs``:
+    the built-in ones and NAME's probes), or the built-in ones alone without it."""
+    from ..program import BUILT_IN_OUTPUTS, Outputs, Probe
+
+    if text is None:
+        return BUILT_IN_OUTPUTS
+    file, _, name = text.rpartition(":")
+    if not file or not name.isidentifier():
+        raise CliError(f"--probes: expected FILE.py:NAME (a Python file and a name it defines), got {text!r}")
+    path = Path(file)
+    if not path.is_file():
+        raise CliError(f"--probes: no file {file}")
+    import runpy
+
+    try:
+        namespace = runpy.run_path(str(path), run_name=f"camjax_probes_{path.stem}")
+    except Exception as error:  # the user's script: its failure on one line, named
+        raise CliError(f"--probes: running {file} failed: {type(error).__name__}: {error}") from None
+    if name not in namespace:
+        raise CliError(f"--probes: {file} defines no {name!r}")
+    given = namespace[name]
+    try:
+        return Outputs.of([given] if isinstance(given, Probe) else given)
+    except ValueError as error:
+        raise CliError(f"--probes: {name} in {file}: {error}") from None

@@ -8,7 +8,7 @@ import warnings
 from pathlib import Path
 
 from .._plain import DEFAULT_SPEED_FLUCTUATION
-from ._common import CliError, file_named, output_dir
+from ._common import CliError, add_probes_option, file_named, output_dir, outputs_of
 
 DEFAULT_RPM = "600"
 
@@ -72,6 +72,7 @@ def register(subparsers) -> None:
     parser.add_argument("--compensate", type=float, metavar="RPM", help="write to --out the cam lift that makes "
                         "the payload follow the law exactly at RPM (compensated-lift.csv, a whole-cam table, and "
                         "its drive table), and report its residual vibration at the --rpm speeds (docs/servo.md)")
+    add_probes_option(parser)
     parser.set_defaults(func=run)
 
 
@@ -96,7 +97,7 @@ def _row(speed, columns) -> str:
 
 
 def _rows(speeds, columns) -> list[str]:
-    """A block of the table: ``rpm`` and ``columns`` (outputs of ``camjax.program.OUTPUTS``)."""
+    """A block of the table: ``rpm`` and ``columns`` (outputs of the report's set, ``Report.columns``)."""
     return [_header(columns)] + [_row(s, columns) for s in speeds]
 
 
@@ -129,7 +130,7 @@ def _geometry_lines(g: dict) -> list[str]:
 
 def _table(typed, grooved: bool = False) -> str:
     """The text table of a program's ``Report``: a block of rows per ``table`` of its outputs
-    (``camjax.program.OUTPUTS``), then the flights, strikes, motion, jump speed and geometry."""
+    (``Report.columns``), then the flights, strikes, motion, jump speed and geometry."""
     report = typed.as_dict()
     lines = [f"program {typed.program}"]
     columns = _block(typed, "speed")
@@ -331,11 +332,12 @@ def run(args) -> int:
         args.plot_rpm = next(r for r in rpm if math.isclose(args.plot_rpm, r, rel_tol=1e-9))
     if not 0 < args.speed_fluctuation < 2:
         raise CliError(f"--speed-fluctuation: must be in (0, 2), got {args.speed_fluctuation:g}")
+    outputs = outputs_of(args.probes)
     path = program_path(args.file)
     if is_machine(path):
         if args.motor is not None or args.compensate is not None:
             raise CliError("--motor and --compensate take a program file, not a machine file")
-        return _run_machine(args, path, rpm)
+        return _run_machine(args, path, rpm, outputs)
     with file_named(path), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # the library's speed warnings, shown below
         program = Program.load(path)
@@ -348,7 +350,7 @@ def run(args) -> int:
         # a chain with contacts: its simulation, which keeps the turns for --out's files
         steady = ChainContacts(program, program.chain, rpm.min()) if simulated else SteadyState(program, rpm)
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
-                         speed_fluctuation=args.speed_fluctuation)
+                         speed_fluctuation=args.speed_fluctuation, outputs=outputs)
         if out is not None:
             write_report(out, program, report, steady=steady, points=args.points, plot_rpm=args.plot_rpm)
         servo = _servo(args, program, motors, rpm, steady, report, out)
@@ -459,7 +461,8 @@ def _drive_table(args) -> int:
     )
 
     ignored = [option for option, given in (("--rpm", args.rpm is not None), ("--format", args.format is not None),
-                                            ("--plot-rpm", args.plot_rpm is not None), ("--no-flight", args.no_flight))
+                                            ("--plot-rpm", args.plot_rpm is not None), ("--no-flight", args.no_flight),
+                                            ("--probes", args.probes is not None))
                if given]
     if ignored:
         raise CliError(f"{ignored[0]}: not with --drive-table, which analyses nothing and writes the table to "
@@ -500,7 +503,7 @@ def is_machine(path: Path) -> bool:
         return False
 
 
-def _run_machine(args, path: Path, rpm) -> int:
+def _run_machine(args, path: Path, rpm, outputs) -> int:
     from ..program import Machine, analyse_machine, write_machine_report
 
     with file_named(path), warnings.catch_warnings(record=True) as caught:
@@ -508,7 +511,7 @@ def _run_machine(args, path: Path, rpm) -> int:
         machine = Machine.load(path)
         out = output_dir(args.out)
         report = analyse_machine(machine, rpm, with_flight=not args.no_flight,
-                                 speed_fluctuation=args.speed_fluctuation)
+                                 speed_fluctuation=args.speed_fluctuation, outputs=outputs)
         if out is not None:
             write_machine_report(out, machine, report, points=args.points)
     for line in _messages(caught):

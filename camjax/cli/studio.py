@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from ._common import CliError
+from ._common import CliError, add_probes_option, outputs_of
 
 DEFAULT_PORT = 8765
 DEFAULT_RPM = "200:1400:101"  # camjax.studio.DEFAULT_RPM (not imported: JAX loads late)
@@ -33,6 +33,7 @@ def register(subparsers) -> None:
                              "token the printed URL holds)")
     parser.add_argument("--port", type=int, default=DEFAULT_PORT, help="port to serve on (0: any free port)")
     parser.add_argument("--no-browser", action="store_true", help="do not open a browser")
+    add_probes_option(parser)
     parser.set_defaults(func=run)
 
 
@@ -47,6 +48,7 @@ def run(args) -> int:
         Speeds.parse(args.rpm, "--rpm")
     except ValueError as error:
         raise CliError(str(error)) from None
+    outputs = outputs_of(args.probes)
     path = program_path(args.file, default="feed")
     if is_machine(path):
         raise CliError(f"{path}: a machine file ([[cam]] tables); the studio edits one program file")
@@ -54,7 +56,7 @@ def run(args) -> int:
     toml = path.read_text()
     parse_program(toml, path.parent)
     try:
-        studio = Studio(toml, base=path.parent, rpm=args.rpm, host=args.host, port=args.port)
+        studio = Studio(toml, base=path.parent, rpm=args.rpm, host=args.host, port=args.port, outputs=outputs)
     except OSError as error:
         raise CliError(f"--host/--port: cannot serve on {args.host}:{args.port} "
                        f"({error.strerror or error})") from None

@@ -114,15 +114,11 @@ from ._motor import duty_cycle as duty_cycle
 from ._motor import read_motors as read_motors
 from ._motor import size_motor as size_motor
 from ._oscillator import Oscillator as Oscillator
-from ._outputs import BUILT_IN as BUILT_IN
-from ._outputs import OUTPUTS as OUTPUTS
+from ._outputs import BUILT_IN_OUTPUTS as BUILT_IN_OUTPUTS
 from ._outputs import Outputs as Outputs
 from ._outputs import Probe as Probe
 from ._outputs import ProbeContext as ProbeContext
-from ._outputs import default_outputs as default_outputs
 from ._outputs import probe as probe
-from ._outputs import register_probe as register_probe
-from ._outputs import unregister_probe as unregister_probe
 from ._program import Program as Program
 from ._program import segment_band as segment_band
 from ._program import with_law as with_law

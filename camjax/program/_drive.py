@@ -96,15 +96,9 @@ def check_drive_table_arguments(format: str, step_deg: float, tolerance: float, 
         raise ValueError(f"{what} must be positive, got {tolerance!r}")
 
 
-def _scale(program: Program) -> tuple[float, str]:
-    """Slave units per mm of lift: 1 (mm), or degrees of swing per mm of arc."""
-    f = program.follower
-    return (180.0 / (math.pi * f.arm_mm), "deg") if f.swinging else (1.0, "mm")
-
-
 def _segment_jet(program: Program, index: int, tau) -> tuple[np.ndarray, ...]:
     """Slave and its three derivatives per degree inside segment ``index`` at ``tau`` in [0, 1]."""
-    scale, _ = _scale(program)
+    scale, _ = program.follower.displacement_per_lift  # slave units per mm of lift
     tau = np.asarray(tau, dtype=float)
     # the jerk just after each angle (before it at the segment's end), the side the rows
     # take: at a law's breakpoint the jerk may step, and the law's own value there is
@@ -132,7 +126,7 @@ def _samples(program: Program, step_deg: float) -> DriveTable:
         if inside.any():
             for column, values in zip(out, _segment_jet(program, i, tau[inside])):
                 column[inside] = values
-    return DriveTable(master, *out, ("sample",) * master.size, _scale(program)[1])
+    return DriveTable(master, *out, ("sample",) * master.size, program.follower.displacement_per_lift[1])
 
 
 def _hermite(h, y0, v0, a0, y1, v1, a1, t):
@@ -177,14 +171,15 @@ def _segment_knots(program: Program, index: int, tolerance: float) -> np.ndarray
 
 
 def _knots(program: Program, tolerance: float) -> DriveTable:
-    floor = 1e-11 * _scale(program)[0] * max(1.0, float(np.max(np.abs(np.append(program.start_lift_mm, 0.0)))))
+    scale, unit = program.follower.displacement_per_lift  # slave units per mm of lift
+    floor = 1e-11 * scale * max(1.0, float(np.max(np.abs(np.append(program.start_lift_mm, 0.0)))))
     if tolerance < floor:  # below the float rounding of the slave: no bisection can meet it
         raise ValueError(f"tolerance = {tolerance:g} cannot be met: it is below the rounding of the "
-                         f"slave ({floor:.1g} {_scale(program)[1]}); raise it")
+                         f"slave ({floor:.1g} {unit}); raise it")
     rows = []  # (master, y, v, a, j, piece)
     # an acceleration this much apart either side of a join is rounding, not a step
     lifts = [abs(s.lift_mm) for s in program.segments]
-    same = 1e-9 * _scale(program)[0] * max(lifts) / min(s.angle_deg for s in program.segments) ** 2
+    same = 1e-9 * scale * max(lifts) / min(s.angle_deg for s in program.segments) ** 2
     for i, seg in enumerate(program.segments):
         tau = _segment_knots(program, i, tolerance)
         y, v, a, j = _segment_jet(program, i, tau)
@@ -198,7 +193,7 @@ def _knots(program: Program, tolerance: float) -> DriveTable:
         rows += [(master[k], y[k], v[k], a[k], j[k], kind) for k in range(tau.size)]
     rows[-1] = (*rows[-1][:5], "end")
     master, y, v, a, j = (np.array(c, dtype=float) for c in list(zip(*rows))[:5])
-    return DriveTable(master, y, v, a, j, tuple(r[5] for r in rows), _scale(program)[1])
+    return DriveTable(master, y, v, a, j, tuple(r[5] for r in rows), unit)
 
 
 def drive_table(program: Program, format: str = "csv", *, step_deg: float = DEFAULT_STEP_DEG,

@@ -28,6 +28,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..geometry import polygon_edges
+from ._follower import _in_keys
 
 FLATTEN_MM = 1e-4
 """Largest distance of ezdxf's flattened polygon from a curved entity (arc, spline), mm."""
@@ -264,12 +265,11 @@ def _lift(cam: DxfProfile, path, follower, points: int):
                          f"set base_radius_mm = {cam.base_radius_mm:.6g}")
     theta = np.radians(np.arange(int(points)) * 360.0 / int(points))
     q = cam.points
-    r_max = float(np.max(np.hypot(q[:, 0], q[:, 1])))
-    if f.swinging and f.pivot_mm <= r_max:
-        raise ValueError(f"{name}: the pivot (pivot_mm = {f.pivot_mm:g}) lies within the profile's "
-                         f"largest radius ({r_max:.6g} mm); move the pivot out")
     follower_geometry = f.geometry
-    displacement, centres = follower_geometry.lift_from_polygon(q, theta)
+    try:  # its kind's own refusals (a swinging follower's pivot inside the profile)
+        displacement, centres = follower_geometry.lift_from_polygon(q, theta)
+    except ValueError as error:
+        raise ValueError(f"{name}: follower.{_in_keys(str(error))}") from None
     lift = follower_geometry.lift_per_displacement * displacement
     missed = ~np.isfinite(lift)
     if missed.any():

@@ -26,21 +26,20 @@ import numpy as np
 
 from .. import checks
 from .._shapes import bucket
-from .._traces import exported_jit, register_types
+from .._traces import exported_jit
 from .._traces import kept as traces_kept
 from ..errors import RESULTS, raise_if_failed
 from ..sdof import (
-    MotionGrid,
     mode_between,
 )
 from ..sharding import resolve_devices, shard_batch
 from ._contact import NodeContact, node_contact
-from ._cycle import Cycle, TrainPeaks, _cycle
+from ._cycle import Cycle, _cycle
 from ._cycle_grid import CycleGrid, grid_intervals, program_grid, resolves, with_segment_law
 from ._oscillator import (
     Oscillator,
 )
-from ._outputs import Outputs, Probe
+from ._outputs import BUILT_IN_OUTPUTS, Outputs, Probe
 from ._program import Program
 from ._speeds import Speeds
 
@@ -186,10 +185,7 @@ def _cycles(rpm, turn: PaddedTurn, outputs: tuple[Probe, ...]) -> Cycle:
     return jax.vmap(one)(rpm)
 
 
-register_types(PaddedTurn, CycleGrid, MotionGrid, Oscillator, NodeContact, Cycle, TrainPeaks)
-
-
-_BUILT_IN_COMPILED = Outputs().compiled
+_BUILT_IN_COMPILED = BUILT_IN_OUTPUTS.compiled
 
 
 def _cycles_built_in(rpm, turn: PaddedTurn) -> Cycle:
@@ -247,15 +243,15 @@ class SteadyState:
         self._kept: tuple[dict[float, int], Cycle | None] = ({}, None)
         """The last batch of ``cycles``: its row of each speed, and the stacked ``Cycle``."""
 
-    def summary(self, rpm, outputs: Outputs | None = None) -> SpeedSummary:
+    def summary(self, rpm, outputs: Outputs = BUILT_IN_OUTPUTS) -> SpeedSummary:
         """Refined extrema and residual vibration at every speed in ``rpm`` (``Speeds``),
-        with the compiled values of ``outputs`` (default: ``default_outputs()``); the
+        with the compiled values of ``outputs`` (default: the built-in ones); the
         cycles computed on the way are kept for ``cycle`` (the flights read them)."""
         rpm = Speeds.of(rpm)
         cycles = self.cycles(rpm, outputs)
         return SpeedSummary(rpm.rpm, dict(cycles.outputs), cycles)
 
-    def cycles(self, rpm, outputs: Outputs | None = None) -> Cycle:
+    def cycles(self, rpm, outputs: Outputs = BUILT_IN_OUTPUTS) -> Cycle:
         """The whole ``Cycle`` at every speed of ``rpm`` (``Speeds``), stacked on axis 0,
         with the compiled values of ``outputs`` (``Cycle.outputs``)."""
         rpm = Speeds.of(rpm).rpm
@@ -294,7 +290,7 @@ class SteadyState:
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(f"rpm {rpm.min():g} below the steady state's slowest speed {self.rpm_min:g}")
 
-    def _blocks(self, program, rpm: np.ndarray, keep=None, outputs: Outputs | None = None):
+    def _blocks(self, program, rpm: np.ndarray, keep=None, outputs: Outputs = BUILT_IN_OUTPUTS):
         """``program`` over the speeds in blocks of ``SPEED_BLOCK`` (the last padded), each
         split over the devices (all of them, or one where the block does not split
         evenly: one compiled program for every call), with the compiled ``outputs``
@@ -304,7 +300,7 @@ class SteadyState:
         padded = np.pad(rpm, (0, -size % SPEED_BLOCK), mode="edge").reshape(-1, SPEED_BLOCK)
         devices = self.devices if SPEED_BLOCK % len(self.devices) == 0 else self.devices[:1]
         keep = keep or (lambda out: out)
-        compiled = _BUILT_IN_COMPILED if outputs is None else outputs.compiled
+        compiled = outputs.compiled
         if program is _cycles and compiled == _BUILT_IN_COMPILED and len(devices) == 1 and traces_kept():  # from disk
             def run(block):
                 with jax.default_device(devices[0]):

@@ -106,6 +106,19 @@ class Follower:
         return follower_kind(self.kind).swinging
 
     @property
+    def swing_arm_mm(self) -> float | None:
+        """The arm whose swing is the lift (the lift is the arc at it, mm per radian):
+        ``arm_mm`` for a follower that swings, ``None`` for one that translates."""
+        return self.arm_mm if self.swinging else None
+
+    @property
+    def displacement_per_lift(self) -> tuple[float, str]:
+        """The follower's own displacement per mm of lift, and its unit: degrees of swing per
+        mm of arc at the arm (``deg``), or the lift itself (``mm``)."""
+        arm = self.swing_arm_mm
+        return (1.0, "mm") if arm is None else (180.0 / (math.pi * arm), "deg")
+
+    @property
     def form_closed(self) -> bool:
         return self.spring_rate_n_per_mm is None
 

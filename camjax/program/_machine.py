@@ -23,7 +23,7 @@ from .._plain import json_ready
 from ..checks import read_toml
 from ..metrics import septic_coefficients
 from ._dynamics import SteadyState
-from ._outputs import BUILT_IN
+from ._outputs import BUILT_IN, BUILT_IN_OUTPUTS, Outputs
 from ._program import Program
 from ._reader import no_unknown as _no_unknown
 from ._report import Report, analyse
@@ -178,8 +178,10 @@ def shaft_torque(cycles, grids_nodes, phases_deg):
 
 
 def analyse_machine(machine, rpm, *, with_flight: bool = True,
-                    speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION) -> MachineReport:
-    """Every cam's ``analyse`` and the shaft's torque totals at every speed in ``rpm``.
+                    speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION,
+                    outputs: Outputs = BUILT_IN_OUTPUTS) -> MachineReport:
+    """Every cam's ``analyse`` (with the per-speed ``outputs``) and the shaft's torque
+    totals at every speed in ``rpm``.
 
     ``machine`` is a ``Machine`` or a list of ``(Program, phase_deg)``.
     """
@@ -189,7 +191,8 @@ def analyse_machine(machine, rpm, *, with_flight: bool = True,
     speed_fluctuation = check_speed_fluctuation(speed_fluctuation)
     steadies = [SteadyState(p, rpm) for p, _ in machine.cams]
     phases = [phase for _, phase in machine.cams]
-    reports = tuple(analyse(p, rpm, with_flight=with_flight, steady=s, speed_fluctuation=speed_fluctuation)
+    reports = tuple(analyse(p, rpm, with_flight=with_flight, steady=s, speed_fluctuation=speed_fluctuation,
+                            outputs=outputs)
                     for (p, _), s in zip(machine.cams, steadies))
     shaft = []
     for r in rpm:

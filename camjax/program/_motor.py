@@ -455,7 +455,7 @@ def duty_cycle(program, drive: Drive, rpm: float, response: dict) -> DutyCycle:
     theta = np.asarray(response["theta_deg"], dtype=float)
     y, dy, ddy = program.lift(theta)
     omega_deg = 360.0 * rpm / 60.0  # cam degrees per second
-    lift_per_rev = drive.lift_mm_per_motor_rev(follower.arm_mm if follower.swinging else None)
+    lift_per_rev = drive.lift_mm_per_motor_rev(follower.swing_arm_mm)
     r = 1e-3 * lift_per_rev / (2 * math.pi)  # m of lift per motor radian
     velocity = 1e-3 * dy * omega_deg  # m/s
     acceleration = 1e-3 * ddy * omega_deg**2

@@ -8,15 +8,17 @@ the periodic steady state's ``Cycle`` and the turn, ``PaddedTurn``, as diffrax's
 ``SaveAt(fn=...)`` keeps a function of the state) or, for a figure of the whole analysis,
 ``host(values, context)`` on the host from the compiled values (``ProbeContext``).
 
-``analyse(..., outputs=...)`` takes the set of outputs (``Outputs``: every built-in one and
-any probes), a static argument of the compiled cycle; the default is ``default_outputs()``,
-the built-ins and the probes registered in ``OUTPUTS`` (``register_probe``) when it is
-called.  The table of ``camjax program``, its ``--format csv`` and ``json`` columns and
+A set of outputs is a value, ``Outputs``: every built-in one and the probes it was made
+with (``Outputs([probe(...), ...])``); ``BUILT_IN_OUTPUTS`` holds the built-in ones alone.
+``analyse(..., outputs=...)``, ``camjax.studio.studio(..., outputs=...)`` and
+``camjax program --probes`` take the set (a static argument of the compiled cycle; the
+default is ``BUILT_IN_OUTPUTS``); no process-wide registry changes what a call reports.
+The table of ``camjax program``, its ``--format csv`` and ``json`` columns and
 ``summary.json`` read the set the report was computed with (``Report.columns``).  A new
 built-in output is one ``Probe`` in ``BUILT_IN`` below; a user's output is one ``probe``
-(passed in) or ``register_probe`` call: see docs/extending.md.  The turn's padding
-(``PaddedTurn``) is empty intervals at its end, so a probe integrating over
-``turn.grid.motion.widths`` or taking extrema of node series needs no care for it.
+passed in: see docs/extending.md.  The turn's padding (``PaddedTurn``) is empty intervals
+at its end, so a probe integrating over ``turn.grid.motion.widths`` or taking extrema of
+node series needs no care for it.
 """
 
 from __future__ import annotations
@@ -172,30 +174,35 @@ here, with a compiled ``fn`` of the ``Cycle`` or a ``host`` function of the othe
 
 class Outputs(Mapping):
     """A keyed set of per-speed outputs (name -> ``Probe``), in order: every built-in one
-    (``BUILT_IN``), then the probes.  Immutable and hashable: the compiled cycle takes it
-    as a static argument, and a cache of reports keys on it."""
+    (``BUILT_IN``), then the probes it is made with (``Outputs([probe(...), ...])``; the
+    built-in ones among ``probes`` are taken as they are).  Immutable and hashable: the
+    compiled cycle takes it as a static argument, and a cache of reports keys on it."""
 
     def __init__(self, probes: Iterable[Probe] = ()):
-        given = {p.name: p for p in probes}
-        extra = [p for p in given.values() if not p.built_in]
+        probes = tuple(probes.values() if isinstance(probes, Outputs) else probes)
+        if not all(isinstance(p, Probe) for p in probes):
+            raise ValueError(f"outputs: each must be a Probe (camjax.program.probe), got {probes!r}")
+        extra = [p for p in probes if not p.built_in]
+        built_in = {b.name for b in BUILT_IN}
+        for i, p in enumerate(extra):
+            if p.name in built_in or p.name in _RESERVED:
+                raise ValueError(f"probe name {p.name!r} is a built-in output of the report: choose another")
+            if any(q.name == p.name for q in extra[:i]):
+                raise ValueError(f"two probes are named {p.name!r}: give each its own name")
         self._probes = (*BUILT_IN, *extra)
         self._by_name = {p.name: p for p in self._probes}
-        if len(self._by_name) != len(self._probes):
-            names = [p.name for p in extra if p.name in {b.name for b in BUILT_IN}]
-            raise ValueError(f"probe name {names[0]!r} is a built-in output of the report: choose another")
 
     @classmethod
     def of(cls, outputs) -> Outputs:
-        """``outputs`` if an ``Outputs``; ``None``: ``default_outputs()``; else the
-        built-ins and the probes given (an iterable of ``Probe``)."""
+        """``outputs`` if an ``Outputs``; ``None``: ``BUILT_IN_OUTPUTS``; else the built-in
+        outputs and the probes given (an iterable of ``Probe``)."""
         if outputs is None:
-            return default_outputs()
+            return BUILT_IN_OUTPUTS
         if isinstance(outputs, Outputs):
             return outputs
-        probes = tuple(outputs)
-        if not all(isinstance(p, Probe) for p in probes):
+        if isinstance(outputs, (str, Probe)) or not isinstance(outputs, Iterable):
             raise ValueError(f"outputs must be an Outputs or a list of Probe (camjax.program.probe), got {outputs!r}")
-        return cls(probes)
+        return cls(outputs)
 
     def __getitem__(self, name: str) -> Probe:
         return self._by_name[name]
@@ -242,8 +249,9 @@ _RESERVED = {"rpm", "values", "outputs", "flights", "flight", "impacts", "impact
 def probe(name: str, fn: Callable, *, label: str | None = None, doc: str = "", unit: str = "",
           fmt: str = "{:.6g}") -> Probe:
     """A user's output ``fn(cycle, turn) -> scalar`` named ``name``, titled ``label`` in the
-    table, which formats it with ``fmt``: pass it to ``analyse(..., outputs=[...])`` (or
-    ``register_probe`` it)."""
+    table, which formats it with ``fmt``: report it with ``analyse(..., outputs=Outputs([...]))``
+    (or a list of probes), ``camjax.studio.studio(..., outputs=...)`` or ``camjax program
+    --probes``."""
     if not isinstance(name, str) or not re.fullmatch(r"[a-z_][a-z0-9_]*", name):
         raise ValueError(f"a probe's name must be a lower-case Python name, got {name!r}")
     if name in _RESERVED or name.startswith("max_contact_stress") or name in {p.name for p in BUILT_IN}:
@@ -257,28 +265,6 @@ def probe(name: str, fn: Callable, *, label: str | None = None, doc: str = "", u
     return Probe(name, fn, label or name, doc, unit, fmt)
 
 
-OUTPUTS: dict[str, Probe] = {p.name: p for p in BUILT_IN}
-"""The registry of default outputs, in the order of the table and the CSV: the built-in
-ones, then the probes registered with ``register_probe``.  It only sets the default of
-``analyse``'s ``outputs`` (``default_outputs``); a call's set is passed in."""
-
-
-def default_outputs() -> Outputs:
-    """The built-in outputs and the probes registered now (``OUTPUTS``)."""
-    return Outputs(OUTPUTS.values())
-
-
-def register_probe(name: str, fn: Callable, *, label: str | None = None, doc: str = "", unit: str = "",
-                   fmt: str = "{:.6g}") -> Probe:
-    """``probe(...)`` added to the default outputs (``OUTPUTS``), replacing a probe of that
-    name: every later ``analyse`` without ``outputs`` reports it."""
-    OUTPUTS[name] = made = probe(name, fn, label=label, doc=doc, unit=unit, fmt=fmt)
-    return made
-
-
-def unregister_probe(name: str) -> None:
-    """Remove the probe ``name`` from the default outputs (a ``ValueError`` if there is none)."""
-    if name not in OUTPUTS or OUTPUTS[name].built_in:
-        registered = [n for n, p in OUTPUTS.items() if not p.built_in]
-        raise ValueError(f"no probe named {name!r}; registered: {', '.join(registered) or 'none'}")
-    del OUTPUTS[name]
+BUILT_IN_OUTPUTS = Outputs()
+"""The report's own outputs alone, in the order of the table and the CSV: the default set
+of ``analyse``, the studio and ``camjax program`` (``Outputs([probe(...)])`` adds probes)."""

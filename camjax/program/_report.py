@@ -19,7 +19,7 @@ from ._groove import Impact, groove_turns
 from ._jump import Flight, _Turns, flights_at, jump_speed_rpm
 from ._motion import Join, segment_kinematics
 from ._oscillator import PAYLOAD_DISPLACEMENT, output_rows
-from ._outputs import Outputs, Probe, ProbeContext, kinematic_peak_m_s2
+from ._outputs import BUILT_IN_OUTPUTS, Outputs, Probe, ProbeContext, kinematic_peak_m_s2
 from ._program import Program
 from ._speeds import Speeds
 from ._torque import DEFAULT_SPEED_FLUCTUATION, check_speed_fluctuation
@@ -50,7 +50,7 @@ class SpeedReport:
         values: every per-speed output of the set the report was computed with
             (``Outputs``: name -> value, ``None`` where it does not apply), also read as
             attributes (``speed.min_contact_force_n``); the built-in ones are documented in
-            ``camjax.program.BUILT_IN`` (label, unit, doc line).
+            ``camjax.program.BUILT_IN_OUTPUTS`` (label, unit, doc line).
         residual_vibration_mm: amplitude of the free vibration at the start of each dwell
             and constant-velocity segment (``Program.residual_segments``), in program order.
         period_ratios: each moving segment's duration times the natural frequency.
@@ -114,7 +114,7 @@ class Report:
     geometry: Geometry | None = None
     speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION
     warnings: tuple[str, ...] = ()  # design_warnings: input or results past the design rules
-    outputs: Outputs = dataclasses.field(default_factory=Outputs)  # the per-speed outputs computed
+    outputs: Outputs = BUILT_IN_OUTPUTS  # the per-speed outputs computed
     train: dict | None = None
 
     def as_dict(self) -> dict:
@@ -163,7 +163,8 @@ def _blank(value):
 
 def analyse(program: Program, rpm, *, with_flight: bool = True,
             steady: SteadyState | ChainContacts | None = None,
-            devices=None, speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION, outputs=None) -> Report:
+            devices=None, speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION,
+            outputs: Outputs = BUILT_IN_OUTPUTS) -> Report:
     """The steady-state report at every speed in ``rpm`` (see docs/program.md).
 
     Every output but ``flights`` and ``impacts`` is the periodic steady state with contact
@@ -179,7 +180,7 @@ def analyse(program: Program, rpm, *, with_flight: bool = True,
     angles over the turn (a flat face over a cusp is a ``ValueError`` naming the angles).
     ``rpm``: ``Speeds`` or what one is built from; an implausible speed is warned of
     (in the report's warnings).  ``outputs``: the per-speed outputs (``Outputs``, or a list of
-    ``probe``s beside the built-in ones; default ``default_outputs()``).  A chain with lash
+    ``probe``s beside the built-in ones; default ``BUILT_IN_OUTPUTS``).  A chain with lash
     or a seat is simulated (``ChainContacts``; ``steady``, where given, is that simulation,
     which keeps its turns for ``response``).
     """

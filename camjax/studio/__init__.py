@@ -24,11 +24,13 @@ from ._workbench import parse_program as parse_program
 from ._workbench import rigid_contact_force_n as rigid_contact_force_n
 
 
-def studio(program=None, *, rpm: str = DEFAULT_RPM, host: str = "127.0.0.1", port: int = 0) -> Studio:
+def studio(program=None, *, rpm: str = DEFAULT_RPM, host: str = "127.0.0.1", port: int = 0,
+           outputs=None) -> Studio:
     """A studio for ``program`` (a ``Program``, a program file's path, or a built-in
-    example's name; default the ``feed`` example), serving on a background thread."""
+    example's name; default the ``feed`` example), serving on a background thread;
+    ``outputs``: the per-speed outputs its reports hold (``camjax.program.Outputs``, or a
+    list of probes beside the built-in ones; default the built-in ones)."""
     from ..program import Program, program_path
-
     base = None
     if isinstance(program, Program):
         toml = program.to_toml()
@@ -37,15 +39,16 @@ def studio(program=None, *, rpm: str = DEFAULT_RPM, host: str = "127.0.0.1", por
         Program.load(path)  # its one-line error names the file
         toml, base = path.read_text(), path.parent
     parse_program(toml, base)  # the starting program must stand on its own
-    return Studio(toml, base=base, rpm=rpm, host=host, port=port).start()
+    return Studio(toml, base=base, rpm=rpm, host=host, port=port, outputs=outputs).start()
 
 
-def show(program=None, *, rpm: str = DEFAULT_RPM, height: int = 900):
+def show(program=None, *, rpm: str = DEFAULT_RPM, height: int = 900, outputs=None):
     """The workbench for ``program`` in a Jupyter cell (an ``IFrame`` to a studio served on a
-    background thread of the kernel, which lives as long as the kernel)."""
+    background thread of the kernel, which lives as long as the kernel), its reports with
+    ``outputs`` (as ``studio``'s)."""
     from IPython.display import IFrame
 
-    running = studio(program, rpm=rpm)
+    running = studio(program, rpm=rpm, outputs=outputs)
     frame = IFrame(running.page_url, width="100%", height=height)
     frame.studio = running
     return frame

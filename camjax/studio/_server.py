@@ -70,14 +70,20 @@ class Studio:
     the folder whose files a posted program may name (default ``base``, else the current
     folder); ``token`` the secret every request must carry (``?token=`` once, then a
     cookie, or ``Authorization: token ...``): generated when serving beyond loopback, where
-    it is required.  ``timeout_s``: how long a request may take to arrive.
+    it is required.  ``timeout_s``: how long a request may take to arrive.  ``outputs``: the
+    per-speed outputs of every workbench's reports (``camjax.program.Outputs``, or a list of
+    probes beside the built-in ones; ``None``: the built-in ones), which the page shows as
+    ``GET /api/outputs`` lists them.
     """
 
     def __init__(self, toml: str, *, base: Path | None = None, rpm: str = DEFAULT_RPM,
                  host: str = "127.0.0.1", port: int = 0, with_flight: bool = True,
                  idle_s: float = IDLE_S, root: Path | None = None, token: str | None = None,
-                 timeout_s: float = TIMEOUT_S):
+                 timeout_s: float = TIMEOUT_S, outputs=None):
         self.toml, self.base, self.rpm, self.with_flight, self.idle_s = toml, base, rpm, with_flight, idle_s
+        from ..program import Outputs
+
+        self.outputs = Outputs.of(outputs)  # a bad set is refused here, not on the page's first request
         self.data = parse_toml(toml)  # its structure, as the page edits it
         self.workbenches: dict[str, Workbench] = {}
         self.reports = ReportCache()  # analyses shared by the workbenches (Workbench.update)
@@ -132,7 +138,8 @@ class Studio:
             if bench is None:
                 bench = self.workbenches[session] = Workbench(self.data, self.rpm, self.base,
                                                               with_flight=self.with_flight, cache=self.reports,
-                                                              law_dir=Path(self._laws.name), access=self.access)
+                                                              law_dir=Path(self._laws.name), access=self.access,
+                                                              outputs=self.outputs)
             bench.touch()
             return bench
 
@@ -150,7 +157,8 @@ class Studio:
 
         def first_look():
             try:
-                bench = Workbench(self.data, self.rpm, self.base, with_flight=self.with_flight, cache=self.reports)
+                bench = Workbench(self.data, self.rpm, self.base, with_flight=self.with_flight, cache=self.reports,
+                                  outputs=self.outputs)
                 bench.ensure()
                 bench.curves()
             except Exception:  # the page's own request reports it

@@ -262,11 +262,12 @@ class Workbench:
     job: DesignJob | None = None
     access: FileAccess | None = None
     """Which files a program may name (``None``: any, as the program API reads them)."""
-    outputs: object = None  # camjax.program.Outputs; None: the default outputs when analysed
+    outputs: object = None
+    """The per-speed outputs its reports hold (``camjax.program.Outputs``, or a list of
+    probes beside the built-in ones); ``None``: the built-in ones."""
 
     def output_set(self):
-        """The per-speed outputs its reports hold (``camjax.program.Outputs``): its own, else
-        the default outputs now (the built-ins and the registered probes)."""
+        """The per-speed outputs its reports hold, as a ``camjax.program.Outputs``."""
         from ..program import Outputs
 
         return Outputs.of(self.outputs)
