@@ -4,6 +4,7 @@ differences of that reading, a short design that lowers it, and its refusals."""
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import jax.numpy as jnp
@@ -149,3 +150,42 @@ def test_seating_needs_a_seat(example, tmp_path, capsys):
         residual = [*("residual" if a == "seating" else a for a in argv), option, "2"]
         assert main(residual) != 0
         assert f"{option}: only with --objective seating" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_rest_to_rest_closing_is_designed_as_a_spline(tmp_path):
+    """The valve example's cycloidal cam (no ramps) on the lash example's chain and seat: its
+    return, from rest to rest, is designed as a B-spline; the start reported is the cycloid's
+    own seating velocity and the designed one is the designed program's, each simulated
+    apart."""
+    cam = Program.load("camjax/program/examples/trains/valve.toml")
+    lash = Program.load(EXAMPLE)
+    program = dataclasses.replace(lash, segments=cam.segments, name="cycloidal valve")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        designed, result = design_segment(
+            program,
+            3,
+            1500.0,
+            2000.0,
+            objective="seating",
+            knots=8,
+            steps=200,
+            rounds=2,
+            seating_speeds=2,
+            progress=False,
+        )
+    (label,) = result.values
+
+    def largest(p):
+        turns = ChainContacts(p, p.chain, 1500.0).turns([1500.0, 2000.0], refine=False)
+        return max(t.seating_velocity_m_s for t in turns)
+
+    assert result.initial_values[label] == pytest.approx(largest(program), rel=1e-12)
+    if result.kept_initial:
+        assert any("did not improve" in str(w.message) for w in caught)
+        assert designed == program
+    else:
+        assert designed.segments[2].law.name.startswith("bspline")
+        assert result.values[label] == pytest.approx(largest(designed), rel=1e-12)
+        assert result.values[label] < result.initial_values[label]
