@@ -45,7 +45,7 @@ def test_seating_objective_reads_the_simulation_and_its_derivative_is_the_differ
     may part them).  Its derivative along a direction is the central difference of the
     simulation's reading (settled from rest each time) to 1e-4 of the gradient's size: the
     step (1e-4 of the lift) keeps the landing in one sample interval at both ends (asserted;
-    across one the reading jumps by its extrapolation's error, about 1e-5 of its value),
+    across one the reading jumps by its extrapolation's error, about 6e-5 of its value),
     and the difference's truncation and the integrator's tolerance are below that."""
     goal = _goal(example, 2000.0, 2500.0, 2)
     speeds = goal.speeds()
