@@ -42,7 +42,8 @@ The last turn is sampled at ``samples`` points, dense enough for a seat contact
 (``SAMPLES_PER_CONTACT``), and read on the host: the seating velocity (the last body's speed
 at its first seat contact of the closing, extrapolated from the sample before with its
 acceleration), the bounces (every later re-impact, with its velocity), each lash's openings
-and the separations.
+and the separations.  A design reads the seating velocity the same way in JAX, from the
+turn's start state and its landing's sample (``seating_velocity``, ``MaxSeatingVelocity``).
 
 **Figures between the samples.**  The samples also keep the state, from which each reported
 signal (the cam's contact force, each body's acceleration, the spring's seat force and
