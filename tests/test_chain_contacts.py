@@ -215,7 +215,8 @@ def test_the_report_carries_the_contacts(example, example_turns):
         assert row["seating_velocity_m_s"] == pytest.approx(turn.seating_velocity_m_s, rel=1e-9)
         assert row["bounce_count"] == len(turn.bounces)
         assert row["lash_openings"]["valve"]["count"] == len(turn.lash_openings_deg["valve"])
-    assert set(contacts["lowest_separation_rpm"]) == {"cam", "valve", "seat"}
+    assert contacts["lowest_separation_rpm"] == {"cam": None, "valve": None, "seat": 1000.0}
+    assert contacts["separation_below_range"] == {"cam": False, "valve": False, "seat": True}
     assert report.jump_speed_rpm is None and not report.jump_below_range
     assert json.loads(report.to_json())["train"]["contacts"]["speeds"][0]["bounce_count"] == len(
         example_turns[0].bounces
@@ -503,3 +504,211 @@ def test_bad_flights_input_is_one_line(valve_steady):
     with pytest.raises(ValueError, match=r"flexible \[arm\] are not simulated") as err:
         flights_at(SteadyState(arm, 600.0), [600.0])
     assert "\n" not in str(err.value)
+
+
+def test_a_lash_that_never_opens_has_the_linear_chains_residual_vibration():
+    """The residual vibration at each dwell's start of a lash that never opens (no seat)
+    equals the linear chain's exact one within the simulation's tolerance (measured
+    2026-11-29: 5e-7 of it at most, at 3000 rpm)."""
+    program = Program.load("camjax/program/examples/trains/valve.toml")
+    valve = Body("valve", 0.05, 200.0, 20.0)
+    linear = Chain((Body("tappet", 0.03), valve), Spring(52.0, 250.0))
+    lash = dataclasses.replace(
+        linear, bodies=(linear.bodies[0], dataclasses.replace(valve, lash_mm=0.1))
+    )
+    rpm = [1200.0, 3000.0]
+    exact = analyse(dataclasses.replace(program, chain=linear), rpm, with_flight=False)
+    report = analyse(dataclasses.replace(program, chain=lash), rpm)
+    for row, reference in zip(report.speeds, exact.speeds):
+        assert len(row.residual_vibration_mm) == 2
+        np.testing.assert_allclose(
+            row.residual_vibration_mm, reference.residual_vibration_mm, rtol=1e-5, atol=1e-7
+        )
+    assert not any(s["separates"]["valve"] for s in report.train["contacts"]["speeds"])
+    assert report.as_dict()["speeds"][1]["residual_vibration_mm"] == list(
+        report.speeds[1].residual_vibration_mm
+    )
+
+
+def _two_contacts_at(program, chain: Chain, rpm: float, angles_deg, turns: int = 24):
+    """A pushrod on the cam (its element one-sided) and a valve behind a lash (no seat: closed
+    at rest, carrying the preload), integrated with scipy from event to event (each contact
+    open or closed, switched where ``min(k a, k a + c a')`` crosses zero) from rest for
+    ``turns`` turns: the state ``(x1, x2, v1, v2)`` (m, m/s from rest) at ``angles_deg`` of
+    the last turn, and the contacts' openings counted over it."""
+    rod, valve = chain.bodies
+    k = np.array([1e3 * rod.stiffness_n_per_mm, 1e3 * valve.stiffness_n_per_mm])
+    c = np.array([rod.damping_n_s_per_m, valve.damping_n_s_per_m])
+    m = np.array([rod.mass_kg, valve.mass_kg])
+    ks, preload = 1e3 * chain.spring.rate_n_per_mm, chain.spring.preload_n
+    d0 = preload / k
+    period = 60.0 / rpm
+    w = 360.0 / period
+
+    def approach(t, z):
+        y, dy, _, _ = program.turn.jet(np.atleast_1d(w * t % 360.0))
+        y, dy = 1e-3 * y[0], 1e-3 * dy[0] * w
+        return d0 + np.array([y - z[0], z[0] - z[1]]), np.array([dy - z[2], z[2] - z[3]])
+
+    def rhs(t, z, mode):
+        a, ad = approach(t, z)
+        f = np.where(mode, k * a + c * ad, 0.0)
+        return [z[2], z[3], (f[0] - f[1]) / m[0], (f[1] - preload - ks * z[1]) / m[1]]
+
+    def events(mode):
+        out = []
+        for j in range(2):
+
+            def event(t, z, *_, j=j):
+                a, ad = approach(t, z)
+                return min(k[j] * a[j], k[j] * a[j] + c[j] * ad[j])
+
+            event.terminal, event.direction = True, -1.0 if mode[j] else 1.0
+            out.append(event)
+        return out
+
+    t, z, mode = 0.0, np.zeros(4), np.array([True, True])
+    end, last = turns * period, (turns - 1) * period
+    wanted = last + np.asarray(angles_deg) / 360.0 * period
+    states, openings = {}, [0, 0]
+    while t < end:
+        sol = scipy.integrate.solve_ivp(
+            rhs, (t, end), z, method="DOP853", rtol=1e-10, atol=1e-13,
+            events=events(mode), args=(mode,), dense_output=True, max_step=period / 400,
+        )  # fmt: skip
+        for i, tw in enumerate(wanted):
+            if t <= tw <= sol.t[-1]:
+                states[i] = sol.sol(tw)
+        t, z = sol.t[-1], sol.y[:, -1]
+        if sol.status != 1:
+            break
+        which = 0 if sol.t_events[0].size else 1
+        if mode[which] and t > last:
+            openings[which] += 1
+        mode = mode.copy()
+        mode[which] = not mode[which]
+    return [states[i] for i in range(len(wanted))], openings
+
+
+@pytest.mark.slow
+def test_residual_vibration_where_the_lash_opens_against_an_event_driven_integration():
+    """Slow: scipy's integration of 24 turns with its Python right-hand side (200 s on two
+    shared cores, 2026-11-29).  A pushrod leaving the cam and a valve leaving it through its lash at 3000 rpm: the
+    residual vibration at each dwell's start against scipy's event-driven integration
+    (rtol 1e-10) of the same chain, its state there split over the closed chain's modes
+    (both contacts close in the dwells' static states) as written here: within 1e-4."""
+    program = Program.load("camjax/program/examples/trains/valve.toml")
+    rod = Body("pushrod", 0.03, 500.0, 60.0)
+    valve = Body("valve", 0.05, 200.0, 40.0, lash_mm=0.1)
+    chain = Chain((rod, valve), Spring(20.0, 60.0))
+    rpm = 3000.0
+    (turn,) = ChainContacts(program, chain, rpm).turns([rpm])
+    assert turn.separates == {"cam": True, "valve": True}
+    assert len(turn.lash_openings_deg["valve"]) == 1
+    starts = [100.0, 220.0]  # the top dwell's and the base circle's
+    states, openings = _two_contacts_at(program, chain, rpm, starts)
+    assert openings[1] == 1
+    m = np.diag([rod.mass_kg, valve.mass_kg])
+    k1, k2, ks = 5e5, 2e5, 2e4
+    K = np.array([[k1 + k2, -k2], [-k2, k2 + ks]])
+    C = np.array([[100.0, -40.0], [-40.0, 40.0]])
+    A = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(m, K), -np.linalg.solve(m, C)]])
+    _, V = np.linalg.eig(A)
+    for start, state, residual in zip(starts, states, turn.residual_vibration_mm):
+        y = 1e-3 * float(program.turn.jet(np.array([start]))[0][0])
+        x2 = y / (1 + ks / k2 + ks / k1)  # the static state in the dwell: both contacts carry
+        static = np.array([y - ks * x2 / k1, x2, 0.0, 0.0])  # the spring's force
+        xi = np.linalg.solve(V, state - static)
+        expected = 1e3 * np.sum(np.abs(V[1] * xi))
+        assert residual == pytest.approx(expected, rel=1e-4)
+
+
+@pytest.mark.slow
+def test_a_lashs_lowest_separation_searched_against_a_fine_scan():
+    """Slow: the report, the search and the scan (36 s on two shared cores, 2026-11-29).  The pushrod and valve above: the lash holds at 2900 rpm and opens at 3000 (the pushrod
+    leaves the cam at both): the report's lowest speed of the lash's separation is searched
+    between them (to 0.1 rpm) and checked by a scan 0.1 rpm apart around it: every speed of
+    the scan below the answer holds, every one above separates; the cam's is the lowest speed
+    given, below the range."""
+    program = Program.load("camjax/program/examples/trains/valve.toml")
+    rod = Body("pushrod", 0.03, 500.0, 60.0)
+    valve = Body("valve", 0.05, 200.0, 40.0, lash_mm=0.1)
+    chain = Chain((rod, valve), Spring(20.0, 60.0))
+    simulation = ChainContacts(program, chain, 2900.0)
+    report = analyse(dataclasses.replace(program, chain=chain), [2900.0, 3000.0], steady=simulation)
+    contacts = report.train["contacts"]
+    found = contacts["lowest_separation_rpm"]["valve"]
+    assert 2900.0 < found < 3000.0 and not contacts["separation_below_range"]["valve"]
+    assert contacts["lowest_separation_rpm"]["cam"] == 2900.0
+    assert contacts["separation_below_range"]["cam"] and report.jump_below_range
+    scan = found + 0.1 * (np.arange(30) - 14.5)
+    opens = np.array([t.separates["valve"] for t in simulation.turns(scan, refine=False)])
+    assert not opens[scan < found].any() and opens[scan > found].all()
+    assert (
+        json.loads(report.to_json())["train"]["contacts"]["lowest_separation_rpm"]["valve"] == found
+    )
+
+
+MOTORS = """name,maximum_speed_rpm,maximum_torque_n_m,continuous_stall_torque_n_m,rotor_inertia_kg_m2,envelope
+medium,6000,3.8,1.3,1.2e-4,0:3.8 3500:3.8 6000:1.8
+large,6000,24,8,6e-4,0:24 3500:24 6000:12
+"""
+
+
+@pytest.mark.slow
+def test_a_lash_that_never_opens_sizes_the_linear_chains_motor(tmp_path):
+    """Slow: both chains' steady states at two speeds (50 s on two shared cores, 2026-11-29).
+    Motor sizing of a chain with lash reads the simulated contact force over the settled
+    turn (``response`` of its ``ChainContacts``): where the lash never opens it gives the
+    linear chain's motor figures, the same motor picked.  The two sum over different points:
+    the exact path over its 260 nodes at 1200 rpm, the simulation over its 4096 samples (with
+    the motion's breakpoints), whose figures 16384 samples change by 1e-6 at most: the
+    difference is the nodes' trapezoid and sampling error, within 2e-3 (measured 2026-11-29:
+    7e-4 at most, the RMS torque of the motor with the largest rotor)."""
+    from camjax.program import Drive, program_motor_choice, read_motors
+
+    catalogue = tmp_path / "motors.csv"
+    catalogue.write_text(MOTORS)
+    motors = read_motors(catalogue)
+    drive = Drive(travel_mm_per_rev=40, transmission_efficiency=0.9)
+    program = dataclasses.replace(
+        Program.load("camjax/program/examples/trains/valve.toml"), drive=drive
+    )
+    valve = Body("valve", 0.05, 200.0, 20.0)
+    linear = Chain((Body("tappet", 0.03), valve), Spring(52.0, 250.0))
+    lash = dataclasses.replace(
+        linear, bodies=(linear.bodies[0], dataclasses.replace(valve, lash_mm=0.1))
+    )
+    rpm = [1200.0, 3000.0]
+    exact = program_motor_choice(dataclasses.replace(program, chain=linear), rpm, motors=motors)
+    simulated = dataclasses.replace(program, chain=lash)
+    steady = ChainContacts(simulated, lash, min(rpm))
+    report = analyse(simulated, rpm, steady=steady)
+    assert not any(s["separates"]["valve"] for s in report.train["contacts"]["speeds"])
+    choice = program_motor_choice(simulated, rpm, steady=steady, motors=motors)
+    assert choice.shown.name == exact.shown.name and choice.picked == exact.picked
+    tolerance = {"max_speed_rpm": 1e-6}
+    for per_speed, reference in zip(choice.sizings, exact.sizings):
+        for sizing, expected in zip(per_speed, reference):
+            assert sizing.inertia_ratio == pytest.approx(expected.inertia_ratio, rel=1e-12)
+            for name in (
+                "peak_torque_n_m",
+                "rms_torque_n_m",
+                "max_speed_rpm",
+                "regenerated_energy_j",
+                "thermal_use",
+                "envelope_use",
+            ):
+                a, b = getattr(sizing.dynamic, name), getattr(expected.dynamic, name)
+                assert a == pytest.approx(b, rel=tolerance.get(name, 2e-3)), name
+
+
+def test_compensating_a_chain_with_lash_is_refused_in_one_line(tmp_path, capsys):
+    """A chain with lash or a seat has no compensated lift: refused before the analysis,
+    in one line saying why."""
+    from camjax.cli import main
+
+    code = main(["program", EXAMPLE, "--compensate", "1000", "--out", str(tmp_path / "out")])
+    out, err = capsys.readouterr()
+    assert code != 0 and out == "" and len(err.strip().splitlines()) == 1
+    assert "--compensate: a chain with lash or a seat has no compensated lift" in err

@@ -222,9 +222,10 @@ def _contact_lines(train: dict, contacts: dict) -> list[str]:
         apart = [name for name, yes in c["separates"].items() if yes]
         parts.append("separates: " + (", ".join(apart) if apart else "none"))
         lines.append("; ".join(parts))
-    lowest = contacts["lowest_separation_rpm"]
+    lowest, below = contacts["lowest_separation_rpm"], contacts.get("separation_below_range", {})
     lines.append("lowest speed of separation: " + ", ".join(
-        f"{name} {'none' if r is None else f'{r:g} rpm'}" for name, r in lowest.items()))
+        f"{name} {'none' if r is None else f'{r:.1f} rpm' + (' or below' if below.get(name) else '')}"
+        for name, r in lowest.items()))
     return lines
 
 
@@ -341,12 +342,11 @@ def run(args) -> int:
     with file_named(path), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # the library's speed warnings, shown below
         program = Program.load(path)
+        simulated = program.chain is not None and program.chain.has_contacts  # lash or a seat
+        if simulated and args.compensate is not None:
+            raise CliError(COMPENSATE_CONTACTS)
         motors = _motors(args, program)  # before the analysis: a bad motor file fails at once
         out = output_dir(args.out)
-        simulated = program.chain is not None and program.chain.has_contacts  # lash or a seat
-        if simulated and (motors or args.compensate is not None):
-            raise CliError("--motor and --compensate: a chain with lash or a seat is simulated, and its "
-                           "drive torque and compensation are not computed yet")
         # a chain with contacts: its simulation, which keeps the turns for --out's files
         steady = ChainContacts(program, program.chain, rpm.min()) if simulated else SteadyState(program, rpm)
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
@@ -389,6 +389,13 @@ def _motors(args, program) -> tuple:
 
         check_smooth(program)  # before the analysis: a law too rough fails at once
     return motors
+
+
+COMPENSATE_CONTACTS = (
+    "--compensate: a chain with lash or a seat has no compensated lift: while its lash is open or its "
+    "valve sits on its seat the valve does not move with the cam, so no cam lift makes it follow the "
+    "law there (the inverse the compensation solves exists only for a linear chain)"
+)
 
 
 def _servo(args, program, motors, rpm, steady, report, out) -> dict:

@@ -76,6 +76,7 @@ from .._shapes import bucket
 from ..metrics import bounded_extremes, septic_coefficients
 from ..sdof import narrowed_crossing
 from ._contact import RefinedStress, contact_stress_squared, node_contact, refined_contact_stress
+from ._contact_residual import contact_residual_mm
 from ._cycle_grid import cycle_grid
 from ._dynamics import SPEED_BLOCK
 from ._flight import Flight
@@ -524,6 +525,31 @@ def _turns_compiled():
 
 
 _turns = _turns_compiled()
+
+
+def _state_before(z_after, s_target, rpm, system: ContactSystem, grid: _Grid, steps: int = 8):
+    """The state (mm, mm per turn) at turn time ``s_target`` from a sample's ``(s, z)`` just
+    after it (at most one sample interval): classic Runge-Kutta steps back along the chain's
+    equations, all on the segment's side of its start (where the motion's acceleration may
+    jump), so the error is the steps' (``(w h)^5``, about 1e-10 at 4096 samples a turn)."""
+    system, grid = jax.tree.map(jnp.asarray, (system, grid))
+    _, field, _ = _equations(rpm, system, grid)
+    s, z = z_after[0], z_after[1:]
+    h = (s_target - s) / steps
+    for _ in range(steps):
+        k1 = field(s, z)
+        k2 = field(s + h / 2, z + h / 2 * k1)
+        k3 = field(s + h / 2, z + h / 2 * k2)
+        k4 = field(s + h, z + h * k3)
+        z, s = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), s + h
+    return z
+
+
+_states_before = jax.jit(
+    jax.vmap(
+        jax.vmap(_state_before, in_axes=(0, 0, None, None, None)), in_axes=(0, None, 0, None, None)
+    )
+)
 _sample_jets = jax.jit(jax.vmap(_signal_jets, in_axes=(0, None, None, None)))
 _jets = jax.jit(jax.vmap(_sample_jets, in_axes=(0, 0, None, None)))
 
@@ -619,7 +645,9 @@ class ContactTurn:
     (by body name) the angles at which it opens; ``separates``: per contact (``cam``, each
     lash element's body, ``seat``) whether it separates: the cam or a lash opening while
     the valve is off its seat (anywhere without a seat), the seat bouncing; ``turns`` run and
-    the ``change`` that remained (relative, ``ContactOptions.settle_tolerance``)."""
+    the ``change`` that remained (relative, ``ContactOptions.settle_tolerance``);
+    ``residual_vibration_mm``: the last body's residual vibration at the start of each dwell
+    and constant-velocity segment (``contact_residual_mm``; empty where not refined)."""
 
     rpm: float
     theta_deg: np.ndarray
@@ -643,6 +671,7 @@ class ContactTurn:
     turns: int
     change: float
     refined: Refined | None  # the drive torque and the extremes refined between the samples
+    residual_vibration_mm: tuple[float, ...] = ()  # at each dwell's start (contact_residual_mm)
 
     @property
     def drive_torque_n_m(self) -> np.ndarray:
@@ -709,6 +738,7 @@ class ContactSummary(NamedTuple):
     mean_drive_torque_n_m: np.ndarray
     energy_fluctuation_j: np.ndarray
     stress: RefinedStress | None  # the largest Hertz stress (with follower.contact_width_mm)
+    residual_vibration_mm: np.ndarray  # (speeds, points): at each dwell's start
 
 
 class ChainContacts:
@@ -738,6 +768,12 @@ class ChainContacts:
         self._scale = (
             max(float(np.ptp(lift)), 1e-3) * max(self.kinematic_ratio, 1.0),
             max(float(np.max(np.abs(grid.velocity_nodes))), 1e-3) * max(self.kinematic_ratio, 1.0),
+        )
+        starts = np.asarray(grid.residual_start, dtype=int)
+        self._residual_at = np.asarray(grid.nodes, dtype=float)[starts]  # turn time
+        self._residual_lift = (  # the lift there (mm) and its rate (mm per turn)
+            np.asarray(grid.lift_nodes, dtype=float)[starts],
+            np.asarray(grid.velocity_nodes, dtype=float)[starts],
         )
         self._kept: dict[float, ContactTurn] = {}
         """The last batch of ``turns``, by speed: ``turn`` reads them (the report's files)."""
@@ -814,6 +850,7 @@ class ChainContacts:
                 jax.tree.map(np.asarray, x) for x in _figures(jets, jnp.asarray(switched), widths)
             )
             jets = np.asarray(jets)
+            residual = self._residual(samples, padded)
             out += [
                 self._read(
                     float(r),
@@ -828,6 +865,7 @@ class ChainContacts:
                         switched[i],
                         septic[i],
                     ),
+                    tuple(residual[i]),
                 )
                 for i, r in enumerate(block)
             ]
@@ -903,7 +941,12 @@ class ChainContacts:
         return out
 
     def jump_speed(self, rpm, separates) -> float:
-        """The lowest speed at which the cam separates, between the highest speed of ``rpm``
+        """The lowest speed at which the cam separates (``separation_speed`` of ``"cam"``)."""
+        return self.separation_speed(rpm, separates, "cam")
+
+    def separation_speed(self, rpm, separates, contact: str) -> float:
+        """The lowest speed at which ``contact`` separates (a key of ``ContactTurn.separates``:
+        ``"cam"``, a lash element's body, ``"seat"``), between the highest speed of ``rpm``
         where it holds below the lowest where it separates (``separates``, per speed) and
         that one: ``narrowed_crossing`` with a block of ``SPEED_BLOCK`` simulated speeds a
         round (33-fold narrower a round), to ``ContactOptions.jump_tolerance_rpm`` (the middle
@@ -912,17 +955,21 @@ class ChainContacts:
         hi = float(rpm[separates].min())
         held = rpm[~separates & (rpm < hi)]
         if not held.size:
+            what = "the cam" if contact == "cam" else f"the contact {contact!r}"
             raise ValueError(
-                f"the cam separates at the lowest speed given ({hi:g} rpm): no jump to search"
+                f"{what} separates at the lowest speed given ({hi:g} rpm): no "
+                f"{'jump' if contact == 'cam' else 'separation'} to search"
             )
         lo = float(held.max())
 
-        def cam_separates(trial: np.ndarray) -> np.ndarray:
+        def contact_separates(trial: np.ndarray) -> np.ndarray:
             turns = self.turns(trial, refine=False)
-            return np.array([t.separates.get("cam", False) for t in turns])
+            return np.array([t.separates.get(contact, False) for t in turns])
 
         return float(
-            narrowed_crossing(cam_separates, lo, hi, self.options.jump_tolerance_rpm, SPEED_BLOCK)
+            narrowed_crossing(
+                contact_separates, lo, hi, self.options.jump_tolerance_rpm, SPEED_BLOCK
+            )
         )
 
     def _switched(self, samples: np.ndarray) -> np.ndarray:
@@ -943,8 +990,43 @@ class ChainContacts:
             switched[:, int(np.floor(k)) % self.samples] = True
         return switched
 
+    def _residual(self, samples: np.ndarray, rpm: np.ndarray) -> np.ndarray:
+        """``(speeds, points)``: the residual vibration (mm) at the start of each dwell and
+        constant-velocity segment (``contact_residual_mm``) of the block's settled turns,
+        from the state there (``_state_before``: back from the first sample at or after it)."""
+        at = self._residual_at
+        if not at.size:
+            return np.zeros((rpm.size, 0))
+        n = self.system.Minv.shape[0]
+        after = np.minimum(np.ceil(at * self.samples - 1e-9).astype(int), self.samples)
+        states = samples[:, after, -(1 + 2 * n) :]
+        z = np.asarray(
+            _states_before(
+                jnp.asarray(states), jnp.asarray(at), jnp.asarray(rpm), self.system, self._grid
+            )
+        )
+        y0, ys = self._residual_lift
+        out = np.zeros((rpm.size, at.size))
+        for i, r in enumerate(rpm):
+            period = 60.0 / float(r)
+            for j in range(at.size):
+                out[i, j] = contact_residual_mm(
+                    self.system,
+                    1e-3 * z[i, j, :n],
+                    1e-3 * z[i, j, n:] / period,
+                    1e-3 * y0[j],
+                    1e-3 * ys[j] / period,
+                )
+        return out
+
     def _read(
-        self, rpm: float, x: np.ndarray, turns: int, change: float, refined: Refined | None
+        self,
+        rpm: float,
+        x: np.ndarray,
+        turns: int,
+        change: float,
+        refined: Refined | None,
+        residual: tuple[float, ...] = (),
     ) -> ContactTurn:
         """What the samples ``x`` (samples + 1, outputs) of one settled turn say, with the
         figures ``refined`` between them."""
@@ -1030,6 +1112,7 @@ class ChainContacts:
             turns=turns,
             change=change,
             refined=refined,
+            residual_vibration_mm=residual,
         )
 
     def summary(self, rpm) -> tuple[ContactSummary, list[ContactTurn]]:
@@ -1056,6 +1139,7 @@ class ChainContacts:
             each(lambda t: t.torque.mean),
             each(lambda t: t.torque.energy_fluctuation),
             self.contact_stress(turns),
+            np.asarray([t.residual_vibration_mm for t in turns]).reshape(len(turns), -1),
         ), turns
 
     def contact_stress(self, turns: list[ContactTurn]) -> RefinedStress | None:
@@ -1217,7 +1301,8 @@ def cam_flights(
 def contact_section(chain: Chain, turns: list[ContactTurn]) -> dict:
     """The contacts' part of the report's ``train`` section: per speed (same order as the
     section's ``speeds``) the seating velocity, the bounces, the lash's openings and the
-    separations; per contact the lowest speed at which it separates."""
+    separations; per contact the lowest speed given at which it separates (``simulated_train``
+    searches it between the speeds)."""
     per_speed = []
     for t in turns:
         per_speed.append(
@@ -1248,7 +1333,9 @@ CONTACTS_NOTE = (
     "extremes are refined between the samples of the settled turn; a contact separates where it opens "
     "while the valve is off its seat (anywhere without a seat), the seat where the valve bounces; jump "
     "speed: the lowest speed at which the cam separates, searched between the speeds given to "
-    "ContactOptions.jump_tolerance_rpm; lowest_separation_rpm: the lowest speed given"
+    "ContactOptions.jump_tolerance_rpm; lowest_separation_rpm: the same for each contact (the cam's "
+    "is the jump speed), the lowest speed given where it separates there already "
+    "(separation_below_range true), none where it holds at every speed"
 )
 
 
@@ -1260,9 +1347,12 @@ def simulated_train(
     simulation: ChainContacts | None = None,
 ):
     """``train_section``'s figures for a chain with contacts: the ``ContactSummary``, the
-    ``contacts`` part of the section (``contact_section``), the jump speed (the lowest speed at
-    which the cam separates, searched between the speeds of ``rpm``: ``ChainContacts.jump_speed``;
-    ``None`` where it holds at every one, or at the lowest already: then ``below`` is true).
+    ``contacts`` part of the section (``contact_section``, its ``lowest_separation_rpm`` each
+    contact's lowest speed of separation searched between the speeds of ``rpm`` as the jump
+    speed is, the lowest given where it separates there already: ``separation_below_range``),
+    the jump speed (the lowest speed at which the cam separates, searched between the speeds
+    of ``rpm``: ``ChainContacts.jump_speed``; ``None`` where it holds at every one, or at the
+    lowest already: then ``below`` is true).
     ``simulation``: the ``ChainContacts`` to run (default: one built for ``rpm`` with
     ``options``), which keeps the turns for the report's files."""
     rpm = np.asarray(rpm, dtype=float)
@@ -1274,4 +1364,13 @@ def simulated_train(
     jump = None
     if not below and cam.any():
         jump = simulation.jump_speed(rpm, cam)
+    lowest, under = {}, {}
+    for name, given in contacts["lowest_separation_rpm"].items():
+        hit = np.array([t.separates.get(name, False) for t in turns])
+        under[name] = bool(hit[np.argmin(rpm)])
+        if not hit.any() or under[name]:
+            lowest[name] = given
+        else:
+            lowest[name] = jump if name == "cam" else simulation.separation_speed(rpm, hit, name)
+    contacts["lowest_separation_rpm"], contacts["separation_below_range"] = lowest, under
     return summary, contacts, jump, below

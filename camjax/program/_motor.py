@@ -452,7 +452,11 @@ def duty_cycle(program, drive: Drive, rpm: float, response: dict) -> DutyCycle:
     ``response`` is the steady state there, ``camjax.program.response(program, rpm)``."""
     rpm = float(rpm)
     follower = program.follower
-    theta = np.asarray(response["theta_deg"], dtype=float)
+    theta, dynamic_force = _with_breakpoints(
+        program,
+        np.asarray(response["theta_deg"], dtype=float),
+        np.asarray(response["contact_force_n"], dtype=float),
+    )
     y, dy, ddy = program.lift(theta)
     omega_deg = 360.0 * rpm / 60.0  # cam degrees per second
     lift_per_rev = drive.lift_mm_per_motor_rev(follower.swing_arm_mm)
@@ -462,7 +466,6 @@ def duty_cycle(program, drive: Drive, rpm: float, response: dict) -> DutyCycle:
     rigid_force = (
         follower.mass_kg * acceleration + follower.spring_rate * 1e-3 * y + follower.preload_n
     )
-    dynamic_force = np.asarray(response["contact_force_n"], dtype=float)
     eta = drive.efficiency
 
     def through(force):  # motoring divides by the efficiency, regenerating multiplies
@@ -479,6 +482,23 @@ def duty_cycle(program, drive: Drive, rpm: float, response: dict) -> DutyCycle:
         drive_inertia,
         drive_inertia + follower.mass_kg * r**2,
     )
+
+
+def _with_breakpoints(program, theta_deg: np.ndarray, force: np.ndarray):
+    """The points of a history and its contact force with the motion's breakpoints added where
+    it lacks them (the simulated chain's evenly spaced samples), the force interpolated
+    linearly between its samples (it is continuous there): the torque steps at a breakpoint
+    where the efficiency switches (a dwell's end) and the acceleration may jump, and the
+    trapezoid rule is exact to its order only with a point there (the exact path's nodes
+    hold every breakpoint already, and are kept as they are)."""
+    breaks = np.mod(np.asarray(program.turn.breakpoints_deg(), dtype=float), 360.0)
+    breaks = breaks[(breaks > theta_deg[0]) & (breaks < theta_deg[-1])]
+    nearest = np.min(np.abs(breaks[:, None] - theta_deg[None, :]), axis=1, initial=np.inf)
+    missing = np.unique(breaks[nearest > 1e-9])
+    if not missing.size:
+        return theta_deg, force
+    theta = np.union1d(theta_deg, missing)
+    return theta, np.interp(theta, theta_deg, force)
 
 
 def _mean_over_turn(theta_deg: np.ndarray, values: np.ndarray) -> float:

@@ -313,14 +313,17 @@ def _contacts_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed
     context = ProbeContext(program, rpm, speed_fluctuation, None, None, summary.stress)
     known = {**outputs.evaluate(compiled, context), "jump": cam, "min_preload_n": None}
     rows = tuple(SpeedReport(rpm=float(r), values={
-        name: None if known.get(name) is None else np.asarray(known[name])[i].item() for name in outputs})
+        name: None if known.get(name) is None else np.asarray(known[name])[i].item() for name in outputs},
+        residual_vibration_mm=tuple(float(v) for v in summary.residual_vibration_mm[i]))
         for i, r in enumerate(rpm))
     section = {
         "one_body": False,
         "note": "a train with lash or a seat, simulated: the rows give the chain's contact force at the "
                 "cam, jump (the cam separates), the last body's peak acceleration, the drive torque and the "
-                "Hertz stress from the simulated contact force; the least preload, the residual vibration "
-                "and user probes are not computed and left empty",
+                "Hertz stress from the simulated contact force; the residual vibration the envelope of the last "
+                "body's free vibration at each dwell's start over the modes of the contacts the dwell's static "
+                "state closes (the closed chain's where the valve is lifted, the valve on its seat on the base "
+                "circle); the least preload and user probes are not computed and left empty",
         **_train_modes(chain, rpm),
         "speeds": [
             {

@@ -11,8 +11,10 @@ from ._report import response
 
 def program_motor_choice(program, speeds, *, steady=None, motors=None) -> MotorChoice:
     """``choose_motor`` for ``program`` (its ``[drive]``) at master ``speeds`` from the
-    dynamic steady state (``steady``: a ``SteadyState`` already solved at those speeds);
-    ``motors``: a catalogue in place of the program's own ``[motor]``."""
+    dynamic steady state (``steady``: a ``SteadyState`` already solved at those speeds, or
+    for a chain with lash or a seat its ``ChainContacts``, whose settled turns give the
+    simulated contact force at the cam over the turn: ``response``); ``motors``: a catalogue
+    in place of the program's own ``[motor]``."""
     motors = program.motors if motors is None else tuple(motors)
     if program.drive is None:
         raise ValueError(
