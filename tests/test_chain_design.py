@@ -122,6 +122,8 @@ def test_seating_needs_a_seat(example, tmp_path, capsys):
         assert "\n" not in str(error.value)
     with pytest.raises(ValueError, match="count of speeds"):
         _goal(example, 2500.0, 3000.0, 0)
+    with pytest.raises(ValueError, match="seating_speeds: only with objective 'seating'"):
+        design_segment(example, CLOSING, 2500.0, 3000.0, objective="preload", seating_speeds=2)
     argv = [
         "design",
         "--program",

@@ -63,6 +63,8 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
                          "through the whole chain: residual, preload or seating")
     seating_options = {key: design_options.pop(key) for key in ("seating_speeds", "contact_options")
                        if key in design_options}
+    if seating_options and objective != "seating":
+        raise ValueError(f"{', '.join(seating_options)}: only with objective 'seating', got {objective!r}")
     if objective == "seating":  # the valve's landing on its seat, simulated with the chain's contacts
         goal = MaxSeatingVelocity(program, segment, float(rpm_lo), float(rpm_hi),
                                   count=seating_options.get("seating_speeds"),
