@@ -278,7 +278,7 @@ def test_design_over_a_train_at_its_last_body(tmp_path, capsys):
         assert objective.report(designed.segments[0].law) == pytest.approx(
             result.values[label], rel=1e-9
         )
-    with pytest.raises(ValueError, match="a chain of bodies .* residual or preload"):
+    with pytest.raises(ValueError, match="a chain of bodies .* residual, preload or seating"):
         design_segment(program, 1, 900.0, 1100.0, objective="ca-ct")
 
 
@@ -338,7 +338,7 @@ def test_design_of_a_chain_with_lash_or_a_seat_is_refused_plainly():
             ValueError,
             match=r"the residual and preload objectives design through the exact "
             r"steady state of a chain without lash or seat, and this chain has "
-            r"\[\[train\]\] valve lash_mm, \[seat\]",
+            r"\[\[train\]\] valve lash_mm, \[seat\]; objective 'seating' designs a chain with a seat",
         ) as error:
             design_segment(program, 1, 1000.0, 3000.0, objective=objective)
         assert "\n" not in str(error.value)
