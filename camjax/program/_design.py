@@ -55,14 +55,6 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     from ._objectives import MaxPreload, MaxProgramResidual  # import optax: only when designing
     from ._seating import MaxSeatingVelocity, seating_design
 
-    chain = program.chain
-    if chain is not None and chain.has_contacts and objective in ("residual", "preload"):
-        given = [f"[[train]] {b.name} lash_mm" for b in chain.bodies if b.lash_mm]
-        given += ["[seat]"] if chain.seat is not None else []
-        raise ValueError(f"objective {objective!r}: the residual and preload objectives design through the exact "
-                         f"steady state of a chain without lash or seat, and this chain has {', '.join(given)}"
-                         + ("; objective 'seating' designs a chain with a seat (its valve's seating velocity)"
-                            if chain.seat is not None else "; a chain with lash and no seat has no design objective"))
     n1, n2 = segment_band(program, segment, rpm_lo, rpm_hi)
     f = program.follower
     zeta = f.damping_ratio * (f.stiffness / (f.stiffness + f.spring_rate)) ** 0.5
@@ -73,6 +65,14 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
                        if key in design_options}
     if seating_options and objective != "seating":
         raise ValueError(f"{', '.join(seating_options)}: only with objective 'seating', got {objective!r}")
+    chain = program.chain
+    if chain is not None and chain.has_contacts and objective in ("residual", "preload"):
+        given = [f"[[train]] {b.name} lash_mm" for b in chain.bodies if b.lash_mm]
+        given += ["[seat]"] if chain.seat is not None else []
+        raise ValueError(f"objective {objective!r}: the residual and preload objectives design through the exact "
+                         f"steady state of a chain without lash or seat, and this chain has {', '.join(given)}"
+                         + ("; objective 'seating' designs a chain with a seat (its valve's seating velocity)"
+                            if chain.seat is not None else "; a chain with lash and no seat has no design objective"))
     if objective == "seating":  # the valve's landing on its seat, simulated with the chain's contacts
         goal = MaxSeatingVelocity(program, segment, float(rpm_lo), float(rpm_hi),
                                   count=seating_options.get("seating_speeds"),
