@@ -130,8 +130,8 @@ def test_a_rider_on_a_surging_spring_is_rayleighs_effective_mass():
     what vibrates.  Far below the surge, the force at the cam is the rigid body's and the
     spring's with a third of its mass (Rayleigh) and its strain-rate damping (``tau k_s``,
     ``tau = 2 zeta / w_1`` at the continuous spring's first surge):
-    (m + m_s / 3) y'' + tau k_s y' + k_s y + F_0, within 1% of the inertial part (the surge
-    the rise's jerk leaves is 1e-3 of it)."""
+    (m + m_s / 3) y'' + tau k_s y' + k_s y + F_0, within 1e-3 of the inertial part (the
+    surge the rise's jerk leaves; measured 1.05e-4, 2026-11-29)."""
     from camjax.program import response
 
     m, k_s, m_s, preload = 0.1, 50.0, 0.005, 300.0
@@ -142,7 +142,7 @@ def test_a_rider_on_a_surging_spring_is_rayleighs_effective_mass():
     tau = 2 * 0.05 / (2 * math.pi * 0.5 * math.sqrt(1e3 * k_s / m_s))
     dy = out["valve_velocity_m_s"]
     rigid = (m + m_s / 3) * ddy + tau * 1e3 * k_s * dy + k_s * out["lift_mm"] + preload
-    assert np.max(np.abs(out["contact_force_n"] - rigid)) < 1e-2 * (m + m_s / 3) * np.max(np.abs(ddy))
+    assert np.max(np.abs(out["contact_force_n"] - rigid)) < 1e-3 * (m + m_s / 3) * np.max(np.abs(ddy))
     assert np.max(np.abs(out["payload_acceleration_m_s2"] - ddy)) < 1e-9 * np.max(np.abs(ddy))
 
 
