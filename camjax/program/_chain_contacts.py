@@ -103,8 +103,12 @@ steps grow as ``stiffest_hz * 60 / rpm``.  Measured 2026-11-29 at commit 5c36854
 rtol = atol = 1e-8): the example valve_lash
 8.2 per period plus about 2,200 a turn (6,160 steps at 1000 rpm, 15,490 at 300), a seated
 chain without lash 10.4 plus about 1,800 (4,370 and 10,360), each diffrax's ``num_steps``
-of one turn from rest.  ``turn_steps_refusal`` refuses a turn this estimate puts past
-``ContactOptions.max_steps`` before simulating it."""
+of one turn from rest.  ``turn_steps_refusal`` refuses a turn this estimate (with
+``STEPS_PER_TURN``) puts past ``ContactOptions.max_steps`` before simulating it."""
+STEPS_PER_TURN = 2_500.0
+"""Integration steps a turn takes besides those of the stiffest contact's periods (the
+motion's segment ends and breakpoints, the landings): the measurements of
+``STEPS_PER_CONTACT_CYCLE``, rounded up, so that the estimate lies above each measured turn."""
 
 
 _HELD_M = 1e-9
@@ -306,14 +310,15 @@ def turn_steps_refusal(chain: Chain, system: ContactSystem, rpm: float, max_step
     """Why a turn at ``rpm`` cannot be simulated within ``max_steps`` integration steps, with
     the slowest speed that fits and the field that sets the stiffest contact; ``None`` where
     it fits.  The steps are estimated as ``STEPS_PER_CONTACT_CYCLE`` per period of the
-    stiffest contact (``ContactSystem.stiffest_hz``): read before simulating, where the
+    stiffest contact (``ContactSystem.stiffest_hz``) and ``STEPS_PER_TURN``: read before simulating, where the
     integration itself would fail only after minutes."""
     hz = system.stiffest_hz
     cycles = hz * 60.0 / rpm
-    steps = STEPS_PER_CONTACT_CYCLE * cycles
+    steps = STEPS_PER_CONTACT_CYCLE * cycles + STEPS_PER_TURN
     if steps <= max_steps:
         return None
-    slowest = _round_up(rpm * steps / max_steps)
+    room = max_steps - STEPS_PER_TURN
+    slowest = _round_up(STEPS_PER_CONTACT_CYCLE * hz * 60.0 / room) if room > 0 else math.inf
     m_last = 1.0 / system.Minv[system.body_rows[-1], system.body_rows[-1]]
     seat_hz = math.sqrt(float(system.seat_k) / m_last) / (2 * math.pi)
     if seat_hz >= hz * (1 - 1e-9):
@@ -1195,8 +1200,8 @@ class ChainContacts:
 
         return ContactSummary(
             np.asarray([t.rpm for t in turns]),
-            each(lambda t: t.refined.extremes[cam, 0]),
-            each(lambda t: t.refined.extremes[cam, 1]),
+            one_sided(each(lambda t: t.refined.extremes[cam, 0])),
+            one_sided(each(lambda t: t.refined.extremes[cam, 1])),
             each(lambda t: np.max(np.abs(t.refined.extremes[body:]), axis=1)),
             each(lambda t: np.max(np.abs(t.last_mm - self.kinematic_ratio * t.lift_mm))),
             each(lambda t: t.refined.extremes[spring, 0]),
@@ -1248,6 +1253,14 @@ class ChainContacts:
         where = np.clip(np.floor(refined.angle_deg / 360.0 * m).astype(int), 0, m - 1)
         switched = np.array([t.refined.switched[k] for t, k in zip(turns, where)])
         return RefinedStress(*(np.where(switched, a, b) for a, b in zip(sampled, refined)))
+
+
+def one_sided(force: np.ndarray) -> np.ndarray:
+    """A one-sided contact's force (N) clipped at zero: it pushes only, so a value below zero
+    is the refinement's undershoot between the samples (about 1e-9 N), and ``-0`` reads as
+    ``0`` (the least force of a contact that carries nothing for a while)."""
+    force = np.asarray(force, dtype=float)
+    return np.where(force > 0, force, 0.0)
 
 
 def _first_root(gap0: float, rate: float, accel: float, dt: float) -> float:
