@@ -722,7 +722,8 @@ def _with_chain(program, **changes):
     spring = dataclasses.replace(chain.spring, **changes.get("spring", {}))
     seat = dataclasses.replace(chain.seat, **changes.get("seat", {}))
     return dataclasses.replace(
-        program, chain=dataclasses.replace(chain, bodies=(chain.bodies[0], valve), spring=spring, seat=seat)
+        program,
+        chain=dataclasses.replace(chain, bodies=(chain.bodies[0], valve), spring=spring, seat=seat),
     )
 
 
@@ -767,7 +768,9 @@ def test_causes_other_than_damping_are_named_before_simulating(example):
     ChainContacts(just, just.chain, 1000.0)  # the lash closes near the top: not refused
     fast = ChainContacts(example, example.chain, 1e6)
     for run in (lambda: fast.turns([1e6]), lambda: analyse(example, [1e6])):
-        with pytest.raises(ValueError, match=r"at 1e\+06 rpm: faster than any cam runs \(above 100,000"):
+        with pytest.raises(
+            ValueError, match=r"at 1e\+06 rpm: faster than any cam runs \(above 100,000"
+        ):
             run()
 
 
@@ -784,7 +787,9 @@ def test_a_spring_too_weak_is_named_where_the_chain_does_not_settle(example):
     with pytest.raises(ValueError) as error:
         ChainContacts(weak, weak.chain, 3000.0, ContactOptions(max_turns=3)).turns([3000.0])
     message = str(error.value)
-    assert message.startswith("[spring] preload_n: the chain at 3000 rpm does not settle within 3 turns")
+    assert message.startswith(
+        "[spring] preload_n: the chain at 3000 rpm does not settle within 3 turns"
+    )
     assert f"only up to about {hold:.3g} rpm" in message
 
 
@@ -796,13 +801,22 @@ def test_absurd_chain_inputs_are_warned_of(example):
     assert not [w for w in design_warnings(example) if "[seat]" in w or "[[train]]" in w]
     soft = _with_chain(example, seat={"stiffness_n_per_mm": 1.0})
     (line,) = [w for w in design_warnings(soft) if w.startswith("[seat] stiffness_n_per_mm = 1:")]
-    assert f"compresses the seat by 250 mm at rest, more than {MAX_SEAT_COMPRESSION_MM:g} mm" in line
+    assert (
+        f"compresses the seat by 250 mm at rest, more than {MAX_SEAT_COMPRESSION_MM:g} mm" in line
+    )
     # 300 N/mm: 0.83 mm, under both 1 mm and the valve's lift: no warning
-    assert not [w for w in design_warnings(_with_chain(example, seat={"stiffness_n_per_mm": 300.0}))
-                if w.startswith("[seat]")]
-    odd = _with_chain(example, valve={"lash_mm": 1e6, "ratio": 1e6}, seat={"stiffness_n_per_mm": 1e10})
+    assert not [
+        w
+        for w in design_warnings(_with_chain(example, seat={"stiffness_n_per_mm": 300.0}))
+        if w.startswith("[seat]")
+    ]
+    odd = _with_chain(
+        example, valve={"lash_mm": 1e6, "ratio": 1e6}, seat={"stiffness_n_per_mm": 1e10}
+    )
     lines = design_warnings(odd)
-    for start in ("[[train]] body 2 (valve) lash_mm = 1e+06 is more than 10,000 mm",
-                  "[[train]] body 2 (valve) ratio = 1e+06 is more than 100,",
-                  "[seat] stiffness_n_per_mm = 1e+10 is more than 1,000,000,000 N/mm"):
+    for start in (
+        "[[train]] body 2 (valve) lash_mm = 1e+06 is more than 10,000 mm",
+        "[[train]] body 2 (valve) ratio = 1e+06 is more than 100,",
+        "[seat] stiffness_n_per_mm = 1e+10 is more than 1,000,000,000 N/mm",
+    ):
         assert any(w.startswith(start) for w in lines), start

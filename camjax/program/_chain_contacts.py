@@ -306,7 +306,9 @@ def _round_up(value: float) -> float:
     return math.ceil(value / scale - 1e-9) * scale
 
 
-def turn_steps_refusal(chain: Chain, system: ContactSystem, rpm: float, max_steps: int) -> str | None:
+def turn_steps_refusal(
+    chain: Chain, system: ContactSystem, rpm: float, max_steps: int
+) -> str | None:
     """Why a turn at ``rpm`` cannot be simulated within ``max_steps`` integration steps, with
     the slowest speed that fits and the field that sets the stiffest contact; ``None`` where
     it fits.  The steps are estimated as ``STEPS_PER_CONTACT_CYCLE`` per period of the
