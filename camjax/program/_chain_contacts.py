@@ -320,7 +320,12 @@ def turn_steps_refusal(
     if steps <= max_steps:
         return None
     room = max_steps - STEPS_PER_TURN
-    slowest = _round_up(STEPS_PER_CONTACT_CYCLE * hz * 60.0 / room) if room > 0 else math.inf
+    if room <= 0:
+        return (
+            f"ContactOptions.max_steps = {max_steps:,}: fewer than the {STEPS_PER_TURN:,.0f} "
+            "integration steps any turn takes; give it more"
+        )
+    slowest = _round_up(STEPS_PER_CONTACT_CYCLE * hz * 60.0 / room)
     m_last = 1.0 / system.Minv[system.body_rows[-1], system.body_rows[-1]]
     seat_hz = math.sqrt(float(system.seat_k) / m_last) / (2 * math.pi)
     if seat_hz >= hz * (1 - 1e-9):
