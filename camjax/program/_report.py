@@ -323,7 +323,9 @@ def _contacts_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed
                 "Hertz stress from the simulated contact force; the residual vibration the envelope of the last "
                 "body's free vibration at each dwell's start over the modes of the contacts the dwell's static "
                 "state closes (the closed chain's where the valve is lifted, the valve on its seat on the base "
-                "circle); the least preload and user probes are not computed and left empty",
+                "circle); the contact force pushes only (its least value 0 where the cam carries nothing, "
+                "separated or unloaded; noise below zero clipped); the least preload and user probes are "
+                "not computed and left empty",
         **_train_modes(chain, rpm),
         "speeds": [
             {
