@@ -100,10 +100,9 @@ STEPS_PER_CONTACT_CYCLE = 10.0
 the default tolerances: at slow speeds the step control holds the stiffest contact's
 oscillation (or the landing's) to about this many steps a period all turn long, so a turn's
 steps grow as ``stiffest_hz * 60 / rpm``.  Measured 2026-11-29 at commit 5c36854 (Tsit5,
-rtol = atol = 1e-8): the example valve_lash
-8.2 per period plus about 2,200 a turn (6,160 steps at 1000 rpm, 15,490 at 300), a seated
-chain without lash 10.4 plus about 1,800 (4,370 and 10,360), each diffrax's ``num_steps``
-of one turn from rest.  ``turn_steps_refusal`` refuses a turn this estimate (with
+rtol = atol = 1e-8): the example valve_lash 8.2 per period plus about 2,200 a turn (6,160
+steps at 1000 rpm, 15,490 at 300), a seated chain without lash 10.4 plus about 1,800 (4,370
+and 10,360), each diffrax's ``num_steps`` of one turn from rest.  ``turn_steps_refusal`` refuses a turn this estimate (with
 ``STEPS_PER_TURN``) puts past ``ContactOptions.max_steps`` before simulating it."""
 STEPS_PER_TURN = 2_500.0
 """Integration steps a turn takes besides those of the stiffest contact's periods (the
@@ -312,8 +311,8 @@ def turn_steps_refusal(
     """Why a turn at ``rpm`` cannot be simulated within ``max_steps`` integration steps, with
     the slowest speed that fits and the field that sets the stiffest contact; ``None`` where
     it fits.  The steps are estimated as ``STEPS_PER_CONTACT_CYCLE`` per period of the
-    stiffest contact (``ContactSystem.stiffest_hz``) and ``STEPS_PER_TURN``: read before simulating, where the
-    integration itself would fail only after minutes."""
+    stiffest contact (``ContactSystem.stiffest_hz``) and ``STEPS_PER_TURN``: read before
+    simulating, where the integration itself would fail only after minutes."""
     hz = system.stiffest_hz
     cycles = hz * 60.0 / rpm
     steps = STEPS_PER_CONTACT_CYCLE * cycles + STEPS_PER_TURN
