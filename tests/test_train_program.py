@@ -271,5 +271,5 @@ def test_design_over_a_train_at_its_last_body(tmp_path, capsys):
         assert objective.report(designed.segments[0].law) == pytest.approx(
             result.values[label], rel=1e-9
         )
-    with pytest.raises(ValueError, match="a chain of bodies .* residual or preload"):
+    with pytest.raises(ValueError, match="a chain of bodies .* residual, preload or seating"):
         design_segment(program, 1, 900.0, 1100.0, objective="ca-ct")

@@ -32,14 +32,16 @@ def register(subparsers) -> None:
         description="Optimise a B-spline rise for a period-ratio band under caps; write the "
         "law (JSON, CSV), figures and a comparison with every standard law.",
     )
-    parser.add_argument("--objective", choices=("residual", "ca-ct", "rms-acceleration", "preload"),
+    parser.add_argument("--objective", choices=("residual", "ca-ct", "rms-acceleration", "preload", "seating"),
                         default="residual",
                         help="what to minimise: residual vibration R (units of Ca) or the peak "
                         "inertia load Ca*Ct (units of h/T^2), worst case over the band; "
                         "'rms-acceleration': Ca_rms, a servo's heating (no band; reported against "
                         "the floor 2 sqrt(3) no rest-to-rest law passes; give --max-jerk); with "
                         "--program also 'preload': the largest preload (N) the whole program "
-                        "needs over the speed range; for a --segment that starts or ends in "
+                        "needs over the speed range; 'seating': the valve's largest seating "
+                        "velocity (m/s) over the speed range, for a chain with a [seat], simulated "
+                        "with its contacts; for a --segment that starts or ends in "
                         "motion, 'residual' is the whole program's largest residual vibration (mm)")
     where = parser.add_mutually_exclusive_group()  # one is required unless --program (checked in run)
     where.add_argument("--band", metavar="N1:N2",
@@ -67,6 +69,13 @@ def register(subparsers) -> None:
                         "--rpm; writes DIR/program.toml and the law beside it)")
     parser.add_argument("--segment", type=int, help="segment number (1-based) to design, with --program")
     parser.add_argument("--rpm", metavar="LO:HI", help="speed range in rpm, with --program (maps to the segment's band)")
+    parser.add_argument("--seating-speeds", type=int, metavar="COUNT",
+                        help="with --objective seating: speeds (evenly spaced in the period) over "
+                        "--rpm at which the seating velocity is simulated (default 8 per natural-"
+                        "frequency cycle the turn gains across the range)")
+    parser.add_argument("--rounds", type=int, metavar="COUNT",
+                        help="with --objective seating: rounds of its linear model (default 6), "
+                        "each a design of --steps")
     parser.set_defaults(func=run)
 
 
@@ -86,6 +95,8 @@ def _run_program(args, out) -> int:
     if is_machine(path):
         raise CliError(f"--program: {path} is a machine file (several cams on one shaft); "
                        "design takes one cam's program: give the program file of the cam")
+    seating = {key: value for key, value in (("seating_speeds", args.seating_speeds), ("rounds", args.rounds))
+               if value is not None}
     with file_named(path), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DesignNotImproved)
         program = Program.load(path)
@@ -94,7 +105,7 @@ def _run_program(args, out) -> int:
         new, result = design_segment(
             program, args.segment, rpm_lo, rpm_hi, objective=args.objective,
             caps=Caps(args.max_ca, args.max_jerk), knots=args.knots, seed=args.seed,
-            optimizer=args.optimizer, progress=not args.quiet,
+            optimizer=args.optimizer, progress=not args.quiet, **seating,
             **({} if args.steps is None else {"steps": args.steps}))
     path = write_program(new, out)
     (label, value), = result.values.items()
@@ -167,18 +178,23 @@ def run(args) -> int:
             raise CliError(f"{option}: must be from 1 to {most:,}, got {value}")
     with options_named(max_ca="--max-ca", max_jerk="--max-jerk"):
         D.Caps(args.max_ca, args.max_jerk)  # the caps checked before any work
+    for option, value in (("--seating-speeds", args.seating_speeds), ("--rounds", args.rounds)):
+        if value is not None and args.objective != "seating":
+            raise CliError(f"{option}: only with --objective seating")
+        if value is not None and value < 1:
+            raise CliError(f"{option}: must be a whole number of at least 1, got {value}")
     if args.program and (args.band or args.n is not None):
         raise CliError(f"{'--band' if args.band else '--n'}: not with --program (the segment's "
                        "band comes from --rpm)")
     if args.program and args.objective == "rms-acceleration":
         raise CliError("--objective rms-acceleration: not with --program (it designs a free "
-                       "rise; a segment's design takes residual, ca-ct or preload)")
+                       "rise; a segment's design takes residual, ca-ct, preload or seating)")
     out = output_dir(args.out)
     if args.program:
         return _run_program(args, out)
     sweep_options = sweep_options_for(args)
-    if args.objective == "preload":
-        raise CliError("--objective preload needs --program (a whole cam with its follower)")
+    if args.objective in ("preload", "seating"):
+        raise CliError(f"--objective {args.objective} needs --program (a whole cam with its follower)")
     if args.objective == "rms-acceleration":
         return _run_rms(args, out)
     if args.band is None and args.n is None:

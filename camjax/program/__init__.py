@@ -164,10 +164,13 @@ if TYPE_CHECKING:  # the lazy names, for type checkers and the API reference
     from ._objectives import AbstractProgramObjective as AbstractProgramObjective
     from ._objectives import MaxPreload as MaxPreload
     from ._objectives import MaxProgramResidual as MaxProgramResidual
+    from ._seating import MaxSeatingVelocity as MaxSeatingVelocity
+    from ._seating import seating_design as seating_design
 
 # Loaded on first use: MaxPreload subclasses camjax.law_design's objective (which imports
 # optax) and the figures import matplotlib.
-_LAZY = {"AbstractProgramObjective": "._objectives", "MaxPreload": "._objectives", "MaxProgramResidual": "._objectives", "save_figures": "._figures", "shaft_figures": "._figures",
+_LAZY = {"AbstractProgramObjective": "._objectives", "MaxPreload": "._objectives", "MaxProgramResidual": "._objectives",
+         "MaxSeatingVelocity": "._seating", "seating_design": "._seating", "save_figures": "._figures", "shaft_figures": "._figures",
          "motor_figure": "._figures"}
 
 

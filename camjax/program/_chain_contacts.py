@@ -42,7 +42,8 @@ The last turn is sampled at ``samples`` points, dense enough for a seat contact
 (``SAMPLES_PER_CONTACT``), and read on the host: the seating velocity (the last body's speed
 at its first seat contact of the closing, extrapolated from the sample before with its
 acceleration), the bounces (every later re-impact, with its velocity), each lash's openings
-and the separations.
+and the separations.  A design reads the seating velocity the same way in JAX, from the
+turn's start state and its landing's sample (``seating_velocity``, ``MaxSeatingVelocity``).
 
 **Figures between the samples.**  The samples also keep the state, from which each reported
 signal (the cam's contact force, each body's acceleration, the spring's seat force and
@@ -442,6 +443,25 @@ class _Grid(NamedTuple):
     jumps: jax.Array
 
 
+def contact_grid(cycle, breaks) -> _Grid:
+    """The simulation's grid of a turn (``CycleGrid``: its lift and acceleration may be
+    traced, ``with_segment_law``) padded to a bucket of 64 intervals, with the step
+    control's jumps at ``breaks`` (turns) padded to a bucket of 8: one compile per bucket."""
+    size = bucket(cycle.intervals, 64)
+    nodes = np.concatenate([np.asarray(cycle.nodes), np.ones(size - cycle.intervals)])
+    pad = np.zeros((size - cycle.intervals, 6))
+    jumps = np.asarray(breaks, dtype=float)
+    jumps = jumps[(jumps > 0) & (jumps < 1)]
+    jumps = np.concatenate([jumps, np.full(bucket(jumps.size + 1, 8) - jumps.size, 0.5)])
+    xp = jnp if isinstance(cycle.lift, jax.Array) else np
+    return _Grid(
+        nodes,
+        xp.concatenate([cycle.lift, pad]),
+        xp.concatenate([cycle.motion.forcing, pad]),
+        np.sort(jumps),
+    )
+
+
 def _equations(rpm, system: ContactSystem, grid: _Grid):
     """The chain's equations at ``rpm`` in turn time (state ``z``: mm and mm per turn): the
     cam's jet (SI), the field ``dz/ds`` and the sampled ``signals`` (``_SIGNALS``)."""
@@ -501,6 +521,15 @@ def _turn(
     """From state ``z0`` (mm, mm per turn) at turn time ``t0`` to ``t1`` (one turn from 0 to 1
     to settle; at most two) at ``rpm``: the end state, the samples ``(samples + 1, outputs)``
     evenly over ``[t0, t1]`` and whether the integration succeeded (jittable, vmappable)."""
+    return _solve(z0, rpm, t0, t1, jnp.linspace(t0, t1, samples + 1), system, grid, options)
+
+
+def _solve(
+    z0, rpm, t0, t1, ts, system: ContactSystem, grid: _Grid, options: ContactOptions, adjoint=None
+):
+    """``_turn`` sampled at the turn times ``ts`` (in ``[t0, t1]``): the samples are the dense
+    solution's there, so the steps, and every sample, are the same whichever are asked for;
+    ``adjoint``: diffrax's (how it is differentiated; default its own)."""
     import diffrax
 
     system, grid = jax.tree.map(jnp.asarray, (system, grid))
@@ -554,15 +583,39 @@ def _turn(
         saveat=diffrax.SaveAt(
             subs=[
                 diffrax.SubSaveAt(t1=True),
-                diffrax.SubSaveAt(ts=jnp.linspace(t0, t1, samples + 1), fn=sample),
+                diffrax.SubSaveAt(ts=ts, fn=sample),
             ]
         ),
         stepsize_controller=controller,
         max_steps=options.max_steps,
         throw=False,
+        **({} if adjoint is None else {"adjoint": adjoint}),
     )
     end, samples_out = solution.ys
     return end[-1], samples_out, solution.result == diffrax.RESULTS.successful
+
+
+def seating_velocity(
+    z0, rpm, sample, system: ContactSystem, grid: _Grid, samples: int, options: ContactOptions
+):
+    """The turn from state ``z0`` at its start (``_turn``'s) and the last body's seating
+    velocity (m/s) read from its sample ``sample`` of ``samples`` (``seat_landings``):
+    ``(end state, velocity)``, jittable and differentiable in ``z0`` and the grid's lift.
+
+    The landing is read as ``_read`` reads it, from the quadratic of the seat's approach
+    ``g + r t + a t^2 / 2`` about the sample (``g <= 0``): its closing speed where the
+    approach reaches zero, ``r + a t = sqrt(r^2 - 2 a g)``, so the landing time's dependence
+    on the law is in the formula (the implicit function theorem on the sampled path)."""
+    t = jnp.mod(sample, samples) / samples
+    import diffrax
+
+    end, x, _ = _solve(
+        z0, rpm, 0.0, 1.0, jnp.stack([t]), system, grid, options, diffrax.ForwardMode()
+    )
+    column = {name: x[0, i] for i, name in enumerate(_COLUMNS)}
+    gap = system.seat_s0 - 1e-3 * column["last_mm"]
+    rate, accel = -column["last_v"], -column["last_a"]
+    return end, jnp.sqrt(rate**2 - 2.0 * accel * gap)
 
 
 _COLUMNS = (
@@ -700,7 +753,8 @@ class ContactTurn:
     engineer reads from them.
 
     ``seating_velocity_m_s``: the last body's speed at its first seat contact of the closing
-    (the end of its longest time off the seat; ``None`` without a seat or a lift off it);
+    (the end of its longest time off the seat; ``None`` without a seat or a lift off it),
+    read from the sample ``seating_sample`` (``seat_landings``, ``seating_velocity``);
     ``bounces``: every later landing in the turn; ``lash_openings_deg``: per lash element
     (by body name) the angles at which it opens; ``separates``: per contact (``cam``, each
     lash element's body, ``seat``) whether it separates: the cam or a lash opening while
@@ -723,6 +777,8 @@ class ContactTurn:
     spring_seat_force_n: np.ndarray
     surge_n: np.ndarray
     seating_velocity_m_s: float | None
+    seating_sample: int | None  # the sample the seating is read from (the last in flight)
+    start_state: np.ndarray  # the state at the turn's start (mm, mm per turn): periodic
     bounces: tuple[Impact, ...]
     lash_openings_deg: dict
     separates: dict
@@ -747,6 +803,24 @@ def _crossings(closed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ``i + 1``) and where it opens (closed at ``i``, open at ``i + 1``)."""
     nxt = np.roll(closed, -1)
     return np.flatnonzero(~closed & nxt), np.flatnonzero(closed & ~nxt)
+
+
+def seat_landings(seat_closed: np.ndarray, approach: np.ndarray) -> list[int]:
+    """The samples from which each landing of a turn on the seat is read: the last one in
+    flight (``approach``, the seat's in m, not yet positive) before each closing of
+    ``seat_closed`` (per sample of the turn), the seating first (the closing that ends the
+    longest time off the seat), then the bounces in turn order."""
+    closes, opens = _crossings(seat_closed)
+    if not closes.size:
+        return []
+    first = int(np.argmax(_interval_lengths(seat_closed, closes, opens)))
+    landings = []
+    for k in range(closes.size):
+        i = int(closes[(first + k) % closes.size])
+        while approach[i] > 0:  # touching already, below the threshold of closed:
+            i -= 1  # read the landing from the last sample in flight
+        landings.append(i)
+    return landings
 
 
 def _interval_lengths(closed: np.ndarray, closings: np.ndarray, openings: np.ndarray) -> np.ndarray:
@@ -800,19 +874,12 @@ class ChainContacts:
             if refusal is not None:
                 raise ValueError(refusal)
         grid = cycle_grid(program, self.rpm_min, chain.highest_frequency_hz())
-        size = bucket(grid.intervals, 64)
-        nodes = np.concatenate([np.asarray(grid.nodes), np.ones(size - grid.intervals)])
-        pad = np.zeros((size - grid.intervals, 6))
-        jumps = program.turn.breakpoints_deg() / 360.0
-        self._breaks = np.unique(np.mod(jumps, 1.0))  # where the motion's acceleration may jump
-        jumps = jumps[(jumps > 0) & (jumps < 1)]
-        jumps = np.concatenate([jumps, np.full(bucket(jumps.size + 1, 8) - jumps.size, 0.5)])
-        self._grid = _Grid(
-            nodes,
-            np.concatenate([np.asarray(grid.lift), pad]),
-            np.concatenate([np.asarray(grid.motion.forcing), pad]),
-            np.sort(jumps),
-        )
+        self.cycle = grid
+        """The program's turn on the engine's grid (``cycle_grid``), from which the simulation's
+        is padded (``contact_grid``): a design recomputes a segment's samples on it."""
+        breaks = program.turn.breakpoints_deg() / 360.0
+        self._breaks = np.unique(np.mod(breaks, 1.0))  # where the motion's acceleration may jump
+        self._grid = contact_grid(grid, breaks)
         self.kinematic_ratio = float(np.prod([b.ratio for b in chain.bodies if not b.rides]))
         period = 60.0 / self.rpm_min
         wanted = SAMPLES_PER_CONTACT * period * 2 * self.system.stiffest_hz
@@ -1149,24 +1216,19 @@ class ChainContacts:
         if chain.bodies[0].rides:
             gap = col["gap"][turn]
             separates["cam"] = bool(np.any((gap > 1e-3 * CLOSED_MM) & off_seat))
-        seating, bounces = None, ()
+        seating, bounces, landings = None, (), []
         if seated:
-            closes, opens = _crossings(seat_closed)
-            if closes.size:
-                lengths = _interval_lengths(seat_closed, closes, opens)
-                first = int(np.argmax(lengths))
-                order = [closes[(first + k) % closes.size] for k in range(closes.size)]
-                impacts = []
-                approach = s.seat_s0 - 1e-3 * col["last_mm"]  # the seat's (m)
-                for i in order:
-                    while approach[i] > 0:  # touching already, below the threshold of closed:
-                        i -= 1  # read the landing from the last sample in flight
-                    gap0 = approach[i]
-                    rate, accel = -col["last_v"][i], -col["last_a"][i]
-                    tau = _first_root(gap0, rate, accel, dt)
-                    impacts.append(
-                        Impact(float(theta[i] + 360.0 * tau / period), float(rate + accel * tau))
-                    )
+            approach = s.seat_s0 - 1e-3 * col["last_mm"]  # the seat's (m)
+            landings = seat_landings(seat_closed, approach)
+            impacts = []
+            for i in landings:
+                gap0 = approach[i]
+                rate, accel = -col["last_v"][i], -col["last_a"][i]
+                tau = _first_root(gap0, rate, accel, dt)
+                impacts.append(
+                    Impact(float(theta[i] + 360.0 * tau / period), float(rate + accel * tau))
+                )
+            if impacts:
                 seating = impacts[0].velocity_m_s
                 bounces = tuple(impacts[1:])
             separates["seat"] = bool(bounces)
@@ -1185,6 +1247,8 @@ class ChainContacts:
             spring_seat_force_n=col["spring"],
             surge_n=col["surge"],
             seating_velocity_m_s=seating,
+            seating_sample=landings[0] if landings else None,
+            start_state=x[0, -2 * s.Minv.shape[0] :],
             bounces=bounces,
             lash_openings_deg=lash_openings,
             separates=separates,

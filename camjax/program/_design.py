@@ -18,7 +18,7 @@ from .. import laws
 from ._motion import MATCH, is_polynomial
 from ._program import Program, segment_band, with_law
 
-OBJECTIVES = ("residual", "ca-ct", "preload")
+OBJECTIVES = ("residual", "ca-ct", "preload", "seating")
 
 
 def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float, *,
@@ -32,6 +32,10 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     For a chain of bodies (``Program.chain``) both are the whole chain's: ``"residual"`` the
     last body's residual vibration (``MaxProgramResidual``), ``"preload"`` the spring's
     preload that keeps the cam's contact (through the levers); ``"ca-ct"`` is refused.
+    ``"seating"`` (a chain with a seat only) is the valve's largest seating velocity over the
+    speed range, simulated with the chain's contacts (``MaxSeatingVelocity``: on
+    ``seating_speeds`` speeds, default 8 per natural-frequency cycle gained, with
+    ``contact_options``), designed in ``rounds`` of its linear model (``seating_design``).
 
     A segment that starts or ends in motion (a polynomial, constant velocity, any law whose
     end velocity is not zero) is designed as a ``CorrectedPolynomial``
@@ -49,14 +53,23 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     """
     from .. import law_design
     from ._objectives import MaxPreload, MaxProgramResidual  # import optax: only when designing
+    from ._seating import MaxSeatingVelocity, seating_design
 
     n1, n2 = segment_band(program, segment, rpm_lo, rpm_hi)
     f = program.follower
     zeta = f.damping_ratio * (f.stiffness / (f.stiffness + f.spring_rate)) ** 0.5
-    if not program.one_body and objective not in ("residual", "preload"):
+    if not program.one_body and objective not in ("residual", "preload", "seating"):
         raise ValueError(f"objective {objective!r}: a chain of bodies ([[train]]) is designed at its last body "
-                         "through the whole chain: residual or preload")
-    if not program.one_body and objective == "residual":  # the last body's, through the chain
+                         "through the whole chain: residual, preload or seating")
+    seating_options = {key: design_options.pop(key) for key in ("seating_speeds", "contact_options")
+                       if key in design_options}
+    if seating_options and objective != "seating":
+        raise ValueError(f"{', '.join(seating_options)}: only with objective 'seating', got {objective!r}")
+    if objective == "seating":  # the valve's landing on its seat, simulated with the chain's contacts
+        goal = MaxSeatingVelocity(program, segment, float(rpm_lo), float(rpm_hi),
+                                  count=seating_options.get("seating_speeds"),
+                                  options=seating_options.get("contact_options"))
+    elif not program.one_body and objective == "residual":  # the last body's, through the chain
         goal = MaxProgramResidual(program, segment, float(rpm_lo), float(rpm_hi))
     elif objective == "residual":
         goal = law_design.MaxResidual(n1, n2, damping=zeta)
@@ -82,7 +95,8 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
         base = initial if isinstance(initial, laws.BoundaryPolynomial) else initial.base
         monotone = float(jnp.min(base.v(jnp.linspace(0.0, 1.0, 20001)))) >= -1e-12
         caps = dataclasses.replace(caps, monotone=caps.monotone and monotone)
-    result = law_design.design(goal, caps=caps, initial=initial, **design_options)
+    run = seating_design if objective == "seating" else law_design.design
+    result = run(goal, caps=caps, initial=initial, **design_options)
     # The figure to beat is the segment's own law's, reported by the same objective on the
     # same speeds: the design's start where that is the law itself (a polynomial rebuilt
     # from its end states), else reported apart (the start is a B-spline fit of it).
