@@ -712,3 +712,111 @@ def test_compensating_a_chain_with_lash_is_refused_in_one_line(tmp_path, capsys)
     out, err = capsys.readouterr()
     assert code != 0 and out == "" and len(err.strip().splitlines()) == 1
     assert "--compensate: a chain with lash or a seat has no compensated lift" in err
+
+
+def _with_chain(program, **changes):
+    """``program`` with its chain's valve (body 2), spring or seat changed: ``valve``,
+    ``spring`` and ``seat`` take the fields to replace."""
+    chain = program.chain
+    valve = dataclasses.replace(chain.bodies[1], **changes.get("valve", {}))
+    spring = dataclasses.replace(chain.spring, **changes.get("spring", {}))
+    seat = dataclasses.replace(chain.seat, **changes.get("seat", {}))
+    return dataclasses.replace(
+        program,
+        chain=dataclasses.replace(chain, bodies=(chain.bodies[0], valve), spring=spring, seat=seat),
+    )
+
+
+def test_a_turn_past_the_step_limit_is_refused_before_simulating(example):
+    """A slow speed whose turn needs more integration steps than ``ContactOptions.max_steps``
+    is refused when the simulation is built, naming the slowest speed that fits.  The
+    stiffest contact of the example is the tappet's landing, 8 times the chain's first mode
+    with the cam held (above the seat's sqrt(k_seat / m_valve)); the estimate is 10 steps a
+    period of it and 2,500 a turn (measured: 8.2 a period and 2,200 a turn)."""
+    landing_hz = 8 * example.chain.natural_frequencies(contact=True)[0][0]
+    assert landing_hz > math.sqrt(5e7 / 0.05) / (2 * math.pi)
+
+    def slowest(max_steps):
+        rpm = 10 * landing_hz * 60 / (max_steps - 2_500)
+        scale = 10.0 ** (math.floor(math.log10(rpm)) - 2)
+        return math.ceil(rpm / scale) * scale
+
+    with pytest.raises(ValueError) as error:
+        ChainContacts(example, example.chain, 10.0)
+    message = str(error.value)
+    assert "\n" not in message and "ContactOptions.max_steps (200,000)" in message
+    assert f"run at {slowest(200_000):g} rpm or faster" in message
+    assert message.endswith("or lower [[train]] body 2 (valve) stiffness_n_per_mm")
+    assert 24 < slowest(200_000) < 26  # the measured rate runs out at about 20 rpm
+    ChainContacts(example, example.chain, slowest(200_000))  # builds: no refusal at that speed
+    with pytest.raises(ValueError, match=f"run at {slowest(50_000):g} rpm or faster"):
+        ChainContacts(example, example.chain, 90.0, ContactOptions(max_steps=50_000))
+
+
+def test_causes_other_than_damping_are_named_before_simulating(example):
+    """A lash the cam's lift cannot take up (the valve's lift through the rocker is the cam's
+    0.05 + 0.2 + 5.5 mm times 1.5), and a speed no cam runs (the exact path's warning), are
+    refused before any turn is simulated."""
+    lift = 1.5 * (0.05 + 0.2 + 5.5)
+    huge = _with_chain(example, valve={"lash_mm": 50.0})
+    with pytest.raises(ValueError) as error:
+        ChainContacts(huge, huge.chain, 1000.0)
+    message = str(error.value)
+    assert message.startswith("[[train]] body 2 (valve) lash_mm = 50: ")
+    assert f"the valve's lift through the chain ({lift:.4g} mm" in message
+    just = _with_chain(example, valve={"lash_mm": 0.99 * lift})
+    ChainContacts(just, just.chain, 1000.0)  # the lash closes near the top: not refused
+    fast = ChainContacts(example, example.chain, 1e6)
+    for run in (lambda: fast.turns([1e6]), lambda: analyse(example, [1e6])):
+        with pytest.raises(
+            ValueError, match=r"at 1e\+06 rpm: faster than any cam runs \(above 100,000"
+        ):
+            run()
+
+
+def test_a_spring_too_weak_is_named_where_the_chain_does_not_settle(example):
+    """A return spring that cannot hold the chain on the cam: the unsettled chain names the
+    spring and the speed up to which it holds the chain taken rigid,
+    ``sqrt(R P / (m max(-y'')))`` with the spring's rate negligible (``m`` the tappet's mass
+    and the valve's times the square of the rocker's ratio ``R``)."""
+    weak = _with_chain(example, spring={"rate_n_per_mm": 1e-9, "preload_n": 0.5})
+    theta = np.linspace(0.0, 360.0, 36_001)
+    deceleration = -np.min(weak.lift(theta)[2])  # mm/deg^2
+    mass = 0.04 + 0.05 * 1.5**2
+    hold = math.sqrt(1.5 * 0.5 / (mass * 1e-3 * deceleration)) / 6.0  # deg/s -> rpm
+    with pytest.raises(ValueError) as error:
+        ChainContacts(weak, weak.chain, 3000.0, ContactOptions(max_turns=3)).turns([3000.0])
+    message = str(error.value)
+    assert message.startswith(
+        "[spring] preload_n: the chain at 3000 rpm does not settle within 3 turns"
+    )
+    assert f"only up to about {hold:.3g} rpm" in message
+
+
+def test_absurd_chain_inputs_are_warned_of(example):
+    """A seat that the preload squeezes by more than a millimetre (250 N on 1 N/mm: 250 mm),
+    a lash of a kilometre, a lever's ratio of a million: each a warning naming its field."""
+    from camjax.program import MAX_SEAT_COMPRESSION_MM, design_warnings
+
+    assert not [w for w in design_warnings(example) if "[seat]" in w or "[[train]]" in w]
+    soft = _with_chain(example, seat={"stiffness_n_per_mm": 1.0})
+    (line,) = [w for w in design_warnings(soft) if w.startswith("[seat] stiffness_n_per_mm = 1:")]
+    assert (
+        f"compresses the seat by 250 mm at rest, more than {MAX_SEAT_COMPRESSION_MM:g} mm" in line
+    )
+    # 300 N/mm: 0.83 mm, under both 1 mm and the valve's lift: no warning
+    assert not [
+        w
+        for w in design_warnings(_with_chain(example, seat={"stiffness_n_per_mm": 300.0}))
+        if w.startswith("[seat]")
+    ]
+    odd = _with_chain(
+        example, valve={"lash_mm": 1e6, "ratio": 1e6}, seat={"stiffness_n_per_mm": 1e10}
+    )
+    lines = design_warnings(odd)
+    for start in (
+        "[[train]] body 2 (valve) lash_mm = 1e+06 is more than 10,000 mm",
+        "[[train]] body 2 (valve) ratio = 1e+06 is more than 100,",
+        "[seat] stiffness_n_per_mm = 1e+10 is more than 1,000,000,000 N/mm",
+    ):
+        assert any(w.startswith(start) for w in lines), start

@@ -55,7 +55,8 @@ def written(tmp_path_factory):
 
 def test_chain_response_columns(written):
     """Every body's histories by name and unit, the seat force, surge and lift error, beside
-    the one-body follower's columns; the train's figures beside the others."""
+    the one-body follower's columns (no contact stress without ``contact_width_mm``: none is
+    computed, the JSON's null, not a column of zeros); the train's figures beside the others."""
     histories = read_response(written / "response.csv")
     assert list(histories) == list(SPEEDS)
     keys = list(histories[SPEEDS[0]])
@@ -64,7 +65,7 @@ def test_chain_response_columns(written):
         for name in ("tappet", "valve")
         for what in ("displacement_mm", "velocity_m_s", "acceleration_m_s2")
     ]
-    assert keys[:8] == [
+    assert keys[:7] == [
         "theta_deg",
         "lift_mm",
         "payload_displacement_mm",
@@ -72,9 +73,8 @@ def test_chain_response_columns(written):
         "payload_acceleration_m_s2",
         "contact_force_n",
         "drive_torque_n_m",
-        "contact_stress_mpa",
     ]
-    assert keys[8:] == [*bodies, "seat_force_n", "surge_n", "lift_error_mm"]
+    assert keys[7:] == [*bodies, "seat_force_n", "surge_n", "lift_error_mm"]
     for name in ("svaj.png", "contact_force.png", "sweep.png", "profile.png", *TRAIN_FIGURES):
         assert (written / name).stat().st_size > 10_000, name
 
@@ -200,6 +200,9 @@ def test_contact_chain_files_are_its_simulation(tmp_path):
     write_report(tmp_path, program, report, steady=simulation, points=720)
     h = read_response(tmp_path / "response.csv")[rpm]
     assert "drive_torque_n_m" not in h and "contact_stress_mpa" not in h
+    # a one-sided contact force is never below zero: no -0, no undershoot between samples
+    least = [report.speeds[0].min_contact_force_n, report.train["speeds"][0]["min_contact_force_n"]]
+    assert least == [0.0, 0.0] and all(math.copysign(1.0, f) == 1.0 for f in least)
     turn = ChainContacts(program, program.chain, rpm).turns([rpm])[0]
     pairs = {
         "theta_deg": turn.theta_deg,
@@ -291,3 +294,28 @@ def test_one_body_train_response_is_the_classic_one():
         f.preload_n + f.spring_rate_n_per_mm * b["payload_displacement_mm"],
         rtol=1e-12,
     )
+
+
+def test_a_simulated_chains_table_says_what_its_force_is(capsys):
+    """The text table of a chain with lash and a seat: its contact force is the simulated one,
+    which pushes only (no "contact held (linear)"), and its least value prints 0, never -0."""
+    assert main(["program", LASH_EXAMPLE, "--rpm", "1000"]) == 0
+    out = capsys.readouterr().out
+    assert "contact held (linear)" not in out
+    assert "Fc: contact force at the cam of the simulated periodic steady state" in out
+    row = next(line.split() for line in out.splitlines() if line.split()[:1] == ["1000"])
+    assert row[3] == "0"  # rpm, max|x''|, max|y''|, min Fc
+
+
+def test_csv_says_where_the_train_section_is(tmp_path, capsys):
+    """``--format csv`` has the speeds' rows only: with a chain, one line on stderr says the
+    train section is in --format json and --out's summary.json; the classic follower none."""
+    path = tmp_path / "two.toml"
+    path.write_text(two_body().to_toml())
+    assert main(["program", str(path), "--rpm", "600", "--format", "csv"]) == 0
+    captured = capsys.readouterr()
+    notes = [line for line in captured.err.splitlines() if line.startswith("note:")]
+    assert len(notes) == 1 and "--format json" in notes[0] and "train section" in notes[0]
+    assert captured.out.startswith("rpm,")
+    assert main(["program", "indexer", "--rpm", "600", "--format", "csv"]) == 0
+    assert "note:" not in capsys.readouterr().err

@@ -138,9 +138,13 @@ def _table(typed, grooved: bool = False) -> str:
     for s in typed.speeds:
         lines.append(_row(s, columns) + f"  {_numbers(s.period_ratios, '{:.3f}'):<15} "
                      f"{_numbers(s.residual_vibration_mm)}")
-    lines.append("Fc: contact force of the periodic steady state with contact held (linear); period "
-                 "ratios per moving segment; residual: vibration amplitude at the start of each dwell "
-                 "and constant-velocity stroke")
+    simulated = "contacts" in (typed.train or {})  # a chain with lash or a seat
+    lines.append(("Fc: contact force at the cam of the simulated periodic steady state with the chain's "
+                  "one-sided contacts (it pushes only: min Fc 0 where the cam carries nothing, noise below "
+                  "zero clipped; jump: the cam separates)" if simulated else
+                  "Fc: contact force of the periodic steady state with contact held (linear)")
+                 + "; period ratios per moving segment; residual: vibration amplitude at the start of each "
+                 "dwell and constant-velocity stroke")
     for table in dict.fromkeys(p.table for p in typed.columns() if p.table != "speed"):
         columns = _block(typed, table)
         if columns:
@@ -367,6 +371,8 @@ def run(args) -> int:
         else:
             print(report.to_json())
     elif args.format == "csv":
+        if report.train is not None:
+            print(CSV_TRAIN_NOTE, file=sys.stderr)
         print(report.to_csv())
     else:
         print(_table(report, grooved=bool(program.follower.form_closed and program.follower.groove_clearance_mm
@@ -374,6 +380,10 @@ def run(args) -> int:
         for line in _servo_lines(servo):
             print(line)
     return 0
+
+
+CSV_TRAIN_NOTE = ("note: --format csv has the speeds' rows only; the chain's train section (its natural "
+                  "frequencies, each body's figures, the contacts) is in --format json and --out's summary.json")
 
 
 def _motors(args, program) -> tuple:

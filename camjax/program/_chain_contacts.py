@@ -80,7 +80,7 @@ from ._contact_residual import contact_residual_mm
 from ._cycle_grid import cycle_grid
 from ._dynamics import SPEED_BLOCK
 from ._flight import Flight
-from ._speeds import Speeds
+from ._speeds import Speeds, speed_warnings
 from ._torque import TorqueFigures, torque_figures, torque_jets
 from ._train import Chain
 
@@ -94,6 +94,21 @@ landing's): the seat's impacts are read between samples."""
 CLOSED_MM = 1e-5
 """An element, seat or cam contact is closed when its approach is past this (mm) and its
 force positive; a riding body has left the cam when its gap passes it."""
+
+
+STEPS_PER_CONTACT_CYCLE = 10.0
+"""Integration steps a turn takes per period of the stiffest contact (``stiffest_hz``) at
+the default tolerances: at slow speeds the step control holds the stiffest contact's
+oscillation (or the landing's) to about this many steps a period all turn long, so a turn's
+steps grow as ``stiffest_hz * 60 / rpm``.  Measured 2026-11-29 at commit 5c36854 (Tsit5,
+rtol = atol = 1e-8): the example valve_lash 8.2 per period plus about 2,200 a turn (6,160
+steps at 1000 rpm, 15,490 at 300), a seated chain without lash 10.4 plus about 1,800 (4,370
+and 10,360), each diffrax's ``num_steps`` of one turn from rest.  ``turn_steps_refusal`` refuses a turn this estimate (with
+``STEPS_PER_TURN``) puts past ``ContactOptions.max_steps`` before simulating it."""
+STEPS_PER_TURN = 2_500.0
+"""Integration steps a turn takes besides those of the stiffest contact's periods (the
+motion's segment ends and breakpoints, the landings): the measurements of
+``STEPS_PER_CONTACT_CYCLE``, rounded up, so that the estimate lies above each measured turn."""
 
 
 _HELD_M = 1e-9
@@ -283,6 +298,105 @@ class ContactSystem(NamedTuple):
             rider,
             float(np.sqrt(np.max(self.k) * np.max(np.diag(self.Minv)))) if self.k.size else 0.0,
         ) / (2 * math.pi)
+
+
+def _round_up(value: float) -> float:
+    """``value`` rounded up to three significant digits (a speed to name in a message)."""
+    scale = 10.0 ** (math.floor(math.log10(value)) - 2)
+    return math.ceil(value / scale - 1e-9) * scale
+
+
+def turn_steps_refusal(
+    chain: Chain, system: ContactSystem, rpm: float, max_steps: int
+) -> str | None:
+    """Why a turn at ``rpm`` cannot be simulated within ``max_steps`` integration steps, with
+    the slowest speed that fits and the field that sets the stiffest contact; ``None`` where
+    it fits.  The steps are estimated as ``STEPS_PER_CONTACT_CYCLE`` per period of the
+    stiffest contact (``ContactSystem.stiffest_hz``) and ``STEPS_PER_TURN``: read before
+    simulating, where the integration itself would fail only after minutes."""
+    hz = system.stiffest_hz
+    cycles = hz * 60.0 / rpm
+    steps = STEPS_PER_CONTACT_CYCLE * cycles + STEPS_PER_TURN
+    if steps <= max_steps:
+        return None
+    room = max_steps - STEPS_PER_TURN
+    if room <= 0:
+        return (
+            f"ContactOptions.max_steps = {max_steps:,}: fewer than the {STEPS_PER_TURN:,.0f} "
+            "integration steps any turn takes; give it more"
+        )
+    slowest = _round_up(STEPS_PER_CONTACT_CYCLE * hz * 60.0 / room)
+    m_last = 1.0 / system.Minv[system.body_rows[-1], system.body_rows[-1]]
+    seat_hz = math.sqrt(float(system.seat_k) / m_last) / (2 * math.pi)
+    if seat_hz >= hz * (1 - 1e-9):
+        field = "[seat] stiffness_n_per_mm"
+    else:
+        j, body = max(
+            ((j, b) for j, b in enumerate(chain.bodies, 1) if not b.rides),
+            key=lambda jb: jb[1].stiffness_n_per_mm,
+        )
+        field = f"[[train]] body {j} ({body.name}) stiffness_n_per_mm"
+    return (
+        f"[[train]]: a turn at {rpm:g} rpm would need about {steps:,.0f} integration steps (the "
+        f"stiffest contact, {hz:.4g} Hz, vibrates {cycles:,.0f} times a turn, about "
+        f"{STEPS_PER_CONTACT_CYCLE:g} steps each), more than ContactOptions.max_steps "
+        f"({max_steps:,}): run at {slowest:g} rpm or faster, or lower {field}"
+    )
+
+
+def lash_refusal(program, chain: Chain) -> str | None:
+    """Lash the cam's lift cannot take up: with a seat the valve leaves it only once the cam,
+    through the levers, has closed every lash, so where the lash referred to the valve
+    (``sum_j lash_j prod_{i > j} r_i``) is at least the valve's kinematic lift (the cam's
+    largest lift times the ratios) the valve never opens and the bodies before the lash,
+    held by no spring, never settle.  ``None`` where the lift exceeds it (or without a seat:
+    there the preload closes the lash at rest)."""
+    if chain.seat is None:
+        return None
+    elements = [(j, b) for j, b in enumerate(chain.bodies, 1) if not b.rides]
+    after = np.cumprod([b.ratio for _, b in elements][::-1])[::-1]  # prod_{i >= j} r_i
+    referred = [b.lash_mm * float(a / b.ratio) for (_, b), a in zip(elements, after)]
+    total = sum(referred)
+    if not total:
+        return None
+    lift = float(np.max(program.lift(np.arange(3600) * 0.1)[0]))
+    valve = lift * float(after[0])
+    if total < valve:
+        return None
+    j, body = elements[int(np.argmax(referred))]
+    return (
+        f"[[train]] body {j} ({body.name}) lash_mm = {body.lash_mm:g}: the chain's lash "
+        f"({total:.4g} mm at the valve) is not less than the valve's lift through the chain "
+        f"({valve:.4g} mm: the cam's {lift:.4g} mm times the ratios): the lash never closes and "
+        "the valve never leaves its seat (a valve's lash is a few tenths of a mm)"
+    )
+
+
+def spring_hold_rpm(program, chain: Chain) -> float | None:
+    """The highest speed at which the return spring holds the chain on the cam, the chain
+    taken rigid: ``R (P + k R y) >= m (-y'')`` at every angle (``y`` the cam's lift, ``R`` the
+    product of the ratios, ``P``/``k`` the spring's preload and rate, ``m`` the chain's mass
+    referred to the cam: each body's and lever's times its squared ratio from the cam, a third
+    of the spring's at the valve); ``None`` without a spring or where the cam never
+    decelerates.  An estimate for a message: the flexible chain's own jump speed differs."""
+    spring = chain.spring
+    if spring is None:
+        return None
+    theta = np.arange(3600) * 0.1
+    y, _, ydd = (np.asarray(v, dtype=float) for v in program.lift(theta))
+    mass, ratio = 0.0, 1.0
+    for body in chain.bodies:
+        if not body.rides:
+            mass += body.lever_mass_kg * ratio**2
+            ratio *= body.ratio
+        mass += body.mass_kg * ratio**2
+    mass += spring.mass_kg / 3 * ratio**2
+    falling = ydd < 0
+    if not falling.any() or mass <= 0:
+        return None
+    hold = ratio * (spring.preload_n + 1e3 * spring.rate_n_per_mm * ratio * 1e-3 * y[falling])
+    deg_per_s2 = hold / (mass * 1e-3 * -ydd[falling])  # (360 rpm / 60)^2 at the limit
+    return float(np.sqrt(max(float(np.min(deg_per_s2)), 0.0)) / 6.0)
 
 
 def _lift_at(nodes, lift, acceleration, s):
@@ -753,6 +867,12 @@ class ChainContacts:
         self.options = options or ContactOptions()
         self.rpm_min = Speeds.of(rpm_min, "rpm_min").min()
         self.system = ContactSystem.of(chain)
+        for refusal in (
+            lash_refusal(program, chain),
+            turn_steps_refusal(chain, self.system, self.rpm_min, self.options.max_steps),
+        ):
+            if refusal is not None:
+                raise ValueError(refusal)
         grid = cycle_grid(program, self.rpm_min, chain.highest_frequency_hz())
         self.cycle = grid
         """The program's turn on the engine's grid (``cycle_grid``), from which the simulation's
@@ -807,11 +927,30 @@ class ChainContacts:
             z = end
             if turn >= 2 and np.all(change <= o.settle_tolerance):
                 return np.asarray(samples), turn, change
-        worst = float(rpm[np.argmax(change)])
-        raise ValueError(
-            f"{self._damp_hint()}: the chain at {worst:g} rpm does not settle within "
-            f"{o.max_turns} turns (its state still moves by {np.max(change):.2g} of the lift "
-            f"a turn, against {o.settle_tolerance:g}): give it damping"
+        raise ValueError(self._unsettled(float(rpm[np.argmax(change)]), float(np.max(change))))
+
+    def _unsettled(self, rpm: float, change: float) -> str:
+        """Why the chain does not settle at ``rpm``: the return spring where it cannot hold
+        the chain, taken rigid, on the cam there (``spring_hold_rpm``), else the damping,
+        with the other likely causes."""
+        o, damp = self.options, self._damp_hint()
+        what = (
+            f"the chain at {rpm:g} rpm does not settle within {o.max_turns} turns (its state "
+            f"still moves by {change:.2g} of the lift a turn, against {o.settle_tolerance:g})"
+        )
+        hold = spring_hold_rpm(self.program, self.chain)
+        if hold is not None and rpm > hold:
+            spring = self.chain.spring
+            return (
+                f"[spring] preload_n: {what}: the return spring (preload {spring.preload_n:g} N, "
+                f"rate {spring.rate_n_per_mm:g} N/mm) holds the chain, taken rigid, on the cam "
+                f"only up to about {hold:.3g} rpm: give it more preload or rate, or damping "
+                f"({damp})"
+            )
+        lash = "; or lash the cam's lift barely takes up (lash_mm)" if self.chain.seat else ""
+        return (
+            f"{damp}: {what}: give it damping; or check the return spring ([spring] preload_n, "
+            f"rate_n_per_mm: too weak to return the chain onto the cam){lash}"
         )
 
     def _damp_hint(self) -> str:
@@ -830,6 +969,10 @@ class ChainContacts:
         if rpm.min() < self.rpm_min * (1 - 1e-12):
             raise ValueError(
                 f"rpm {rpm.min():g} below the simulation's slowest speed {self.rpm_min:g}"
+            )
+        for line in speed_warnings(self.program, rpm):  # the exact path's warning, refused here
+            raise ValueError(
+                f"{line}; a chain with lash or a seat is simulated, which does not settle there"
             )
         out = []
         for start in range(0, rpm.size, SPEED_BLOCK):
@@ -1127,8 +1270,8 @@ class ChainContacts:
 
         return ContactSummary(
             np.asarray([t.rpm for t in turns]),
-            each(lambda t: t.refined.extremes[cam, 0]),
-            each(lambda t: t.refined.extremes[cam, 1]),
+            one_sided(each(lambda t: t.refined.extremes[cam, 0])),
+            one_sided(each(lambda t: t.refined.extremes[cam, 1])),
             each(lambda t: np.max(np.abs(t.refined.extremes[body:]), axis=1)),
             each(lambda t: np.max(np.abs(t.last_mm - self.kinematic_ratio * t.lift_mm))),
             each(lambda t: t.refined.extremes[spring, 0]),
@@ -1180,6 +1323,14 @@ class ChainContacts:
         where = np.clip(np.floor(refined.angle_deg / 360.0 * m).astype(int), 0, m - 1)
         switched = np.array([t.refined.switched[k] for t, k in zip(turns, where)])
         return RefinedStress(*(np.where(switched, a, b) for a, b in zip(sampled, refined)))
+
+
+def one_sided(force: np.ndarray) -> np.ndarray:
+    """A one-sided contact's force (N) clipped at zero: it pushes only, so a value below zero
+    is the refinement's undershoot between the samples (about 1e-9 N), and ``-0`` reads as
+    ``0`` (the least force of a contact that carries nothing for a while)."""
+    force = np.asarray(force, dtype=float)
+    return np.where(force > 0, force, 0.0)
 
 
 def _first_root(gap0: float, rate: float, accel: float, dt: float) -> float:

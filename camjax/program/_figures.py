@@ -92,11 +92,18 @@ def sweep(program: Program, report) -> plt.Figure:
     jump = report.jump_speed_rpm
     fig, (a, b) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, constrained_layout=True)
     closed = program.follower.form_closed
+    simulated = program.chain is not None and program.chain.has_contacts
     if closed or all(s.min_preload_n is None for s in speeds):  # a form-closed cam, a seated chain
         a.plot(rpm, [s.max_contact_force_n for s in speeds], marker=".",
                label="max (inner flank)" if closed else "max")
+        # a simulated contact pushes only (its least force is 0 whether it separates or just
+        # unloads): the speeds where it separates are marked instead
         a.plot(rpm, [s.min_contact_force_n for s in speeds], marker=".",
-               label="min (outer flank < 0)" if closed else "min (< 0: the cam separates)")
+               label="min (outer flank < 0)" if closed else "min" if simulated else "min (< 0: the cam separates)")
+        if simulated:
+            apart = [(s.rpm, s.min_contact_force_n) for s in speeds if s.jump]
+            if apart:
+                a.plot(*zip(*apart), ls="none", marker="x", color="C3", ms=8, label="the cam separates")
         a.axhline(0.0, color="k", lw=0.8)
         a.set_ylabel("flank force, contact held (N)" if closed else "contact force at the cam (N)")
         a.legend(fontsize=8)
@@ -111,7 +118,6 @@ def sweep(program: Program, report) -> plt.Figure:
             a.annotate(f"jump {jump:.0f} rpm", (jump, 0.0),
                        xytext=(4, 4), textcoords="offset points", fontsize=8, color="C3")
         a.legend(fontsize=8)
-    simulated = program.chain is not None and program.chain.has_contacts
     a.set_title(f"{program.name}: {'simulated' if simulated else 'periodic steady state'} against speed")
     last = "payload" if program.chain is None else program.chain.names[-1]
     b.plot(rpm, _values(speeds, "max_payload_acceleration_m_s2"), marker=".", label=last)

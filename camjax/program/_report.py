@@ -329,7 +329,9 @@ def _contacts_analysis(program: Program, speeds: Speeds, outputs: Outputs, speed
                 "Hertz stress from the simulated contact force; the residual vibration the envelope of the last "
                 "body's free vibration at each dwell's start over the modes of the contacts the dwell's static "
                 "state closes (the closed chain's where the valve is lifted, the valve on its seat on the base "
-                "circle); the least preload and user probes are not computed and left empty",
+                "circle); the contact force pushes only (its least value 0 where the cam carries nothing, "
+                "separated or unloaded; noise below zero clipped); the least preload and user probes are "
+                "not computed and left empty",
         **_train_modes(chain, rpm),
         "speeds": [
             {
@@ -372,8 +374,8 @@ def response(program: Program, rpm: float, *, steady: SteadyState | ChainContact
 
     Keys: ``theta_deg``, ``lift_mm``, ``payload_displacement_mm``, ``kinematic_acceleration_m_s2``
     (``y''``), ``payload_acceleration_m_s2`` (``x''``, the last body's), ``contact_force_n``,
-    ``drive_torque_n_m`` (``F_c dy/dtheta``) and ``contact_stress_mpa`` (Hertz, zero without
-    ``follower.contact_width_mm`` and where contact is lost), at the grid's nodes (law
+    ``drive_torque_n_m`` (``F_c dy/dtheta``) and ``contact_stress_mpa`` (Hertz, zero where
+    contact is lost; absent without ``follower.contact_width_mm``, where none is computed), at the grid's nodes (law
     breakpoints included).  A program with a chain (``Program.chain``) adds every body's
     ``<name>_displacement_mm`` (from rest), ``<name>_velocity_m_s`` and
     ``<name>_acceleration_m_s2``, the return spring's force at its seat ``seat_force_n``, its
@@ -402,8 +404,9 @@ def response(program: Program, rpm: float, *, steady: SteadyState | ChainContact
         "payload_acceleration_m_s2": cycle.payload_acceleration_m_s2,
         "contact_force_n": cycle.contact_force_n,
         "drive_torque_n_m": cycle.drive_torque_n_m,
-        "contact_stress_mpa": cycle.contact_stress_mpa,
     }
+    if program.follower.contact_width_mm is not None:  # else none computed (the JSON's null)
+        out["contact_stress_mpa"] = cycle.contact_stress_mpa
     if chain is None:
         return out
     if osc.bodies != len(chain.bodies):

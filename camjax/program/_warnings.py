@@ -20,9 +20,9 @@ MAX_HALF_WIDTH_RATIO = 0.1
 (``b / R' = 2 p / E*``) for which the Hertz line contact holds (it needs ``b << R'``)."""
 
 
-ABSURD_SIZES = {"mm": 10_000.0, "kg": 10_000.0, "N": 1e6, "N/mm": 1e9}
+ABSURD_SIZES = {"mm": 10_000.0, "kg": 10_000.0, "N": 1e6, "N/mm": 1e9, "": 100.0}
 """Sizes no cam machine has, by unit: a length past 10 m, a moving mass past 10 tonnes, a
-force past a meganewton, a stiffness past 1e9 N/mm.  A value past them is computed but
+force past a meganewton, a stiffness past 1e9 N/mm, a lever's ratio past 100.  A value past them is computed but
 warned of (``size_warnings``): often a unit slip, and a length past 1e12 mm also loses the
 cam's curvature to rounding."""
 _SIZED_FIELDS = (("base_radius_mm", "mm"), ("roller_radius_mm", "mm"), ("offset_mm", "mm"), ("arm_mm", "mm"),
@@ -41,8 +41,52 @@ def size_warnings(program: Program) -> list[str]:
              and not (chain is not None and name in CLASSIC_FIELDS)]  # a chain's stand-in: its own below
     given += [] if chain is None else chain.sized_fields()
     given += [(f"segment {i}: lift_mm", s.lift_mm, "mm") for i, s in enumerate(program.segments, 1)]
-    return [f"{key} = {value:g} is more than {ABSURD_SIZES[unit]:,.0f} {unit}, larger than any cam machine's: "
-            f"check its unit ({unit})" for key, value, unit in given if abs(value) > ABSURD_SIZES[unit]]
+    given += _chain_sizes(program.chain)
+    return [(f"{key} = {value:g} is more than {ABSURD_SIZES[unit]:,.0f} {unit}, larger than any cam machine's: "
+             f"check its unit ({unit})") if unit else
+            (f"{key} = {value:g} is more than {ABSURD_SIZES[unit]:,.0f}, larger than any cam machine's lever: "
+             "check it (the body's motion over the body's before)")
+            for key, value, unit in given if abs(value) > ABSURD_SIZES[unit]]
+
+
+def _chain_sizes(chain) -> list[tuple[str, float, str]]:
+    """A chain's fields that ``size_warnings`` checks: each body's lash and lever ratio, the
+    seat's stiffness, as ``(key, value, unit)``."""
+    if chain is None:
+        return []
+    given = []
+    for j, body in enumerate(chain.bodies, 1):
+        where = f"[[train]] body {j} ({body.name})"
+        given += [(f"{where} lash_mm", body.lash_mm, "mm"), (f"{where} ratio", body.ratio, "")]
+    if chain.seat is not None:
+        given.append(("[seat] stiffness_n_per_mm", chain.seat.stiffness_n_per_mm, "N/mm"))
+    return given
+
+
+MAX_SEAT_COMPRESSION_MM = 1.0
+"""The most a valve's seat yields under the spring's preload at rest (mm): a seat is stiff
+(tens of thousands of N/mm, a few microns under the preload); past this, or past the valve's
+lift, its stiffness is taken for a unit slip."""
+
+
+def seat_warnings(program: Program) -> list[str]:
+    """A line where the seat's static compression under the spring's preload
+    (``preload_n / stiffness_n_per_mm``) is more than ``MAX_SEAT_COMPRESSION_MM`` or the
+    valve's lift through the chain (the cam's largest lift times the ratios): the valve sinks
+    into its seat, and may never leave it."""
+    chain = program.chain
+    if chain is None or chain.seat is None or chain.spring is None:
+        return []
+    squeeze = chain.spring.preload_n / chain.seat.stiffness_n_per_mm
+    ratio = math.prod(b.ratio for b in chain.bodies if not b.rides)
+    lift = ratio * float(np.max(program.lift(np.arange(3600) * 0.1)[0]))
+    limit = min(MAX_SEAT_COMPRESSION_MM, lift)
+    if squeeze <= limit:
+        return []
+    return [f"[seat] stiffness_n_per_mm = {chain.seat.stiffness_n_per_mm:g}: the spring's preload "
+            f"({chain.spring.preload_n:g} N) compresses the seat by {squeeze:.3g} mm at rest, more than "
+            f"{limit:.3g} mm (the lesser of {MAX_SEAT_COMPRESSION_MM:g} mm and the valve's lift, {lift:.3g} mm): "
+            "a valve's seat yields microns; check its unit (N/mm)"]
 
 
 def design_warnings(program: Program, report=None) -> list[str]:
@@ -67,6 +111,7 @@ def design_warnings(program: Program, report=None) -> list[str]:
                    f"{f.kind} follower tolerates: enlarge follower.base_radius_mm "
                    "or lengthen the rises")
     out += size_warnings(program)
+    out += seat_warnings(program)
     if f.form_closed and f.preload_n != 0:
         out.append(f"follower.preload_n = {f.preload_n:g} does nothing on a grooved cam (no "
                    "spring_rate_n_per_mm: no return spring preloads the follower, the groove holds it): "
