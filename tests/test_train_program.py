@@ -301,8 +301,8 @@ def test_chain_messages_name_the_chains_own_fields():
     warnings = design_warnings(two_body(tappet=2e4, valve=2e4))
     heavy = [w for w in warnings if "10,000 kg" in w]
     assert [w.split(" is more")[0] for w in heavy] == [
-        "[[train]] tappet mass_kg = 20000",
-        "[[train]] valve mass_kg = 20000",
+        "[[train]] body 1 (tappet) mass_kg = 20000",
+        "[[train]] body 2 (valve) mass_kg = 20000",
     ]
 
 

@@ -427,21 +427,25 @@ class Chain:
         )
 
     def sized_fields(self) -> list[tuple[str, float, str]]:
-        """``(key, value, unit)`` of the chain's masses, stiffnesses and spring forces as the
-        file names them (the absurd-size warnings read them in place of the follower's)."""
+        """``(key, value, unit)`` of the chain's sizes as the file names them: each body's
+        mass, element stiffness, lash and lever ratio (unit ``""``), the spring's rate,
+        preload and mass, the seat's stiffness (the absurd-size warnings read them in place
+        of the follower's one-body stand-in)."""
         out = []
-        for body in self.bodies:
-            out.append((f"[[train]] {body.name} mass_kg", body.mass_kg, "kg"))
+        for j, body in enumerate(self.bodies, start=1):
+            where = f"[[train]] body {j} ({body.name})"
+            out.append((f"{where} mass_kg", body.mass_kg, "kg"))
             if body.stiffness_n_per_mm is not None:
-                out.append(
-                    (f"[[train]] {body.name} stiffness_n_per_mm", body.stiffness_n_per_mm, "N/mm")
-                )
+                out.append((f"{where} stiffness_n_per_mm", body.stiffness_n_per_mm, "N/mm"))
+            out += [(f"{where} lash_mm", body.lash_mm, "mm"), (f"{where} ratio", body.ratio, "")]
         if self.spring is not None:
             out += [
                 ("[spring] rate_n_per_mm", self.spring.rate_n_per_mm, "N/mm"),
                 ("[spring] preload_n", self.spring.preload_n, "N"),
                 ("[spring] mass_kg", self.spring.mass_kg, "kg"),
             ]
+        if self.seat is not None:
+            out.append(("[seat] stiffness_n_per_mm", self.seat.stiffness_n_per_mm, "N/mm"))
         return out
 
     def harmonic_check(

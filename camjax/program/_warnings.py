@@ -41,26 +41,11 @@ def size_warnings(program: Program) -> list[str]:
              and not (chain is not None and name in CLASSIC_FIELDS)]  # a chain's stand-in: its own below
     given += [] if chain is None else chain.sized_fields()
     given += [(f"segment {i}: lift_mm", s.lift_mm, "mm") for i, s in enumerate(program.segments, 1)]
-    given += _chain_sizes(program.chain)
     return [(f"{key} = {value:g} is more than {ABSURD_SIZES[unit]:,.0f} {unit}, larger than any cam machine's: "
              f"check its unit ({unit})") if unit else
             (f"{key} = {value:g} is more than {ABSURD_SIZES[unit]:,.0f}, larger than any cam machine's lever: "
              "check it (the body's motion over the body's before)")
             for key, value, unit in given if abs(value) > ABSURD_SIZES[unit]]
-
-
-def _chain_sizes(chain) -> list[tuple[str, float, str]]:
-    """A chain's fields that ``size_warnings`` checks: each body's lash and lever ratio, the
-    seat's stiffness, as ``(key, value, unit)``."""
-    if chain is None:
-        return []
-    given = []
-    for j, body in enumerate(chain.bodies, 1):
-        where = f"[[train]] body {j} ({body.name})"
-        given += [(f"{where} lash_mm", body.lash_mm, "mm"), (f"{where} ratio", body.ratio, "")]
-    if chain.seat is not None:
-        given.append(("[seat] stiffness_n_per_mm", chain.seat.stiffness_n_per_mm, "N/mm"))
-    return given
 
 
 MAX_SEAT_COMPRESSION_MM = 1.0
