@@ -27,12 +27,10 @@ reported once (a ``RuntimeWarning`` naming the program and the error).  Each ``e
 from __future__ import annotations
 
 import collections
-import dataclasses
 import functools
 import hashlib
 import importlib.metadata
 import os
-import pickle
 import shutil
 import tempfile
 import warnings
@@ -100,42 +98,32 @@ def prune(root: Path, keep: int = KEPT_VERSIONS) -> list[Path]:
     return folders[keep:]
 
 
+def register_types(*types) -> None:
+    """Let ``jax.export`` write outputs holding these ``NamedTuple`` types (by their
+    qualified name)."""
+    for cls in types:
+        try:
+            export.register_namedtuple_serialization(cls, serialized_name=f"{cls.__module__}.{cls.__qualname__}")
+        except ValueError:  # registered already (a module reloaded)
+            pass
+
+
 _PLAIN = (bool, int, float, complex, str, type(None))
 _UNKEPT = object()  # the marker of arguments whose program is not kept
-
-
-def _keyable(value) -> bool:
-    """Whether ``repr(value)`` says all of it, the same in every process: a plain value,
-    a tuple of them, or a frozen dataclass (a model's options) whose every field is in its
-    repr and keyable."""
-    if isinstance(value, _PLAIN):
-        return True
-    if isinstance(value, tuple):
-        return all(_keyable(x) for x in value)
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        fields = dataclasses.fields(value)
-        return (type(value).__dataclass_params__.frozen and all(f.repr for f in fields)
-                and all(_keyable(getattr(value, f.name)) for f in fields))
-    return False
 
 
 class exported_jit:
     """``jax.jit(fn)`` whose traced programs persist across processes (see the module).
 
     The arguments' arrays are the program's inputs; their other leaves (Python numbers
-    and strings, frozen dataclasses of them such as a model's options, as
-    ``equinox.filter_jit`` takes them) are compiled in and part of the key.  Arguments
-    holding anything else (a function, an object) run through ``equinox.filter_jit`` as
-    they are, untouched by the cache.  The output may be any pytree: the kept program
-    returns its leaves, and a copy of the output with every leaf 0 (pickled with the
-    program) gives back its structure.  ``compiler_options``: XLA's options for every
-    compile of the program (``equinox.filter_jit``'s).
+    and strings, as ``equinox.filter_jit`` takes them) are compiled in and part of the
+    key.  Arguments holding anything else (a function, an object) run through
+    ``equinox.filter_jit`` as they are, untouched by the cache.
     """
 
-    def __init__(self, fn, name: str, memo_size: int = MEMO_SIZE, compiler_options: tuple = ()):
+    def __init__(self, fn, name: str, memo_size: int = MEMO_SIZE):
         self.fn, self.name, self.memo_size = fn, name, memo_size
-        self.compiler_options = dict(compiler_options) or None
-        self.jitted = eqx.filter_jit(fn, compiler_options=self.compiler_options)
+        self.jitted = eqx.filter_jit(fn)
         self.loaded: collections.OrderedDict[tuple, object] = collections.OrderedDict()  # memo_size at most
         functools.update_wrapper(self, fn)
 
@@ -156,7 +144,7 @@ class exported_jit:
             self.loaded.move_to_end(memo)
         else:
             described = str(tree)
-            if not all(_keyable(x) for x in constants) or " at 0x" in described:
+            if not all(isinstance(x, _PLAIN) for x in constants) or " at 0x" in described:
                 program = _UNKEPT  # no key that a new process would find again
             else:
                 text = "|".join([self.name, described, repr(constants), repr(shapes), jax.default_backend(),
@@ -168,53 +156,32 @@ class exported_jit:
                 self.loaded.popitem(last=False)
         return self.jitted(*args) if program is _UNKEPT else program(leaves)
 
-    def lower(self, *args):
-        """Trace and lower without compiling (``equinox.filter_jit``'s ``lower``)."""
-        return self.jitted.lower(*args)
-
     def _program(self, path: Path, tree, static, leaves):
-        shape = {}
-
         def flat(arrays):
-            out = self.fn(*eqx.combine(jax.tree.unflatten(tree, arrays), static))
-            shape["skeleton"] = jax.tree.map(lambda _: 0, out)
-            return jax.tree.leaves(out)
+            return self.fn(*eqx.combine(jax.tree.unflatten(tree, arrays), static))
 
-        def plain():
-            program = jax.jit(flat, compiler_options=self.compiler_options)
-
-            def call(arrays):
-                out = program(arrays)  # traced on the first call, which sets the skeleton
-                return jax.tree.unflatten(jax.tree.structure(shape["skeleton"]), out)
-
-            return call
-
-        marker = path.with_suffix(".plain")  # a program export cannot keep (a host callback)
-        if marker.exists():
-            return plain()
+        plain = path.with_suffix(".plain")  # a program export cannot keep (a host callback)
+        if plain.exists():
+            return jax.jit(flat)
         try:
-            skeleton, data = pickle.loads(path.read_bytes())
-            exported = export.deserialize(bytearray(data))
+            exported = export.deserialize(bytearray(path.read_bytes()))
             _touch(path.parent)
         except Exception:  # absent, truncated or from another JAX: trace afresh
             try:
                 exported = export.export(jax.jit(flat))(leaves)
-                skeleton = shape["skeleton"]
-                data = pickle.dumps((skeleton, exported.serialize()))
+                data = exported.serialize()
             except Exception as error:  # not exportable or its output not writable
                 if not _host_callback(error):
                     warnings.warn(f"camjax: the traced program {self.name!r} cannot be kept on disk "
                                   f"({type(error).__name__}: {error}); it is traced in each process",
                                   RuntimeWarning, stacklevel=3)
-                _write(marker, b"")
-                return plain()
+                _write(plain, b"")
+                return jax.jit(flat)
             new_version = not path.parent.exists()
             _write(path, data)
             if new_version:  # the first program of this version: older versions beyond the newest go
                 prune(path.parent.parent)
-        structure = jax.tree.structure(skeleton)
-        program = jax.jit(exported.call, compiler_options=self.compiler_options)
-        return lambda arrays: jax.tree.unflatten(structure, program(arrays))
+        return jax.jit(exported.call)
 
 
 def _host_callback(error: Exception) -> bool:

@@ -8,9 +8,8 @@ else the environment variable ``CAMJAX_CACHE_DIR``; the command runs inside
 - **Compiled programs**: JAX's persistent compilation cache, which the command turns on in
   the setting's directory (default: the user's cache directory; see
   ``camjax.cli.enable_compilation_cache``); in Python, JAX's own ``jax_compilation_cache_dir``.
-- **Traced programs** (``exported_jit``: a cam program's speed block, a law's evaluation
-  and the sweeps' programs, ``camjax.sharding.sweep_jit``): ``DIR/traces/<version>/``
-  when the setting names ``DIR``, in the library and the command alike; one folder per version of JAX, jaxlib,
+- **Traced programs** (``exported_jit``): ``DIR/traces/<version>/`` when the setting names
+  ``DIR``, in the library and the command alike; one folder per version of JAX, jaxlib,
   equinox and camjax's source, the newest ``KEPT_VERSIONS`` kept (``prune_traces``); each
   ``exported_jit`` remembers ``MEMO_SIZE`` loaded programs.
 
@@ -27,8 +26,8 @@ In the process:
   ``camjax.studies.COMPILED_ACCELERATIONS_KEPT``, keyed by the law's values.
 - **Small tables** behind ``functools.lru_cache`` / ``functools.cache`` of a few static
   arguments: spline knots, boundary inverses, Hermite matrices, result-code tables, the
-  sweep's default template (16), the solve's and the sweep's compiled (or kept) programs per
-  compiler option set; a program's law ends (``camjax.program``, 256 laws at most).
+  sweep's default template (16), the solve's and the sweep's compiled programs per compiler
+  option set; a program's law ends (``camjax.program``, 256 laws at most).
 """
 
 from ._cache_dir import ENV as SETTING

@@ -23,8 +23,6 @@ import jax
 import numpy as np
 from jax.sharding import Mesh, PartitionSpec
 
-from ._traces import exported_jit
-
 AXIS = "batch"
 """Name of the mesh axis the batch is split along."""
 
@@ -173,11 +171,6 @@ def _filter_jit(fun, options: tuple) -> eqx.Module:
     return eqx.filter_jit(fun, compiler_options=dict(options) or None)
 
 
-@functools.cache
-def _kept_jit(fun, name: str, options: tuple) -> exported_jit:
-    return exported_jit(fun, name, compiler_options=options)
-
-
 try:  # JAX's own test (private): no trace is running
     from jax._src.core import trace_state_clean as _trace_state_clean
 except ImportError:  # a JAX without it
@@ -196,27 +189,22 @@ class OptionsJit:
     defaults inside one: XLA takes options only for a top-level program (a caller's
     ``jit`` inlines this one; JAX refuses options there), and XLA's defaults where JAX
     cannot say.  Decided at each call, as the default backend may change.  ``fun`` itself
-    is ``__wrapped__``.  With ``kept_as`` a name, a top-level call keeps its trace on disk
-    (``camjax.caches.exported_jit``, when ``CAMJAX_CACHE_DIR`` names a directory), so a
-    new process with the same arguments' shapes skips tracing."""
+    is ``__wrapped__``."""
 
-    def __init__(self, fun, options, kept_as: str | None = None):
+    def __init__(self, fun, options):
         functools.update_wrapper(self, fun)
-        self._fun, self._options, self._kept_as = fun, options, kept_as
+        self._fun, self._options = fun, options
 
     def compiler_options(self, *args, **kwargs) -> tuple[tuple[str, object], ...]:
         """The XLA options a call with these arguments, made here and now, compiles with
         (none inside a trace)."""
         return self._options(*args, **kwargs) if outside_traces() else ()
 
-    def program(self, *args, **kwargs):
+    def program(self, *args, **kwargs) -> eqx.Module:
         """The jitted program a call with these arguments, made here and now, runs: one per
         function and options, shared by every ``OptionsJit`` of ``fun`` that picks the same
         options."""
-        options = self.compiler_options(*args, **kwargs)
-        if self._kept_as is not None and not kwargs and outside_traces():
-            return _kept_jit(self._fun, self._kept_as, options)
-        return _filter_jit(self._fun, options)
+        return _filter_jit(self._fun, self.compiler_options(*args, **kwargs))
 
     def __call__(self, *args, **kwargs):
         return self.program(*args, **kwargs)(*args, **kwargs)
@@ -238,11 +226,8 @@ def sweep_jit(fun) -> OptionsJit:
     """``equinox.filter_jit`` for the sweeps' programs (and ``shard_batch``'s split of
     them), which run the engine over whole batches and take the model's options last: on
     CPU they compile with those options' ``sweep.cpu_compiler_options``
-    (``CPU_COMPILER_OPTIONS`` by default).  Their traces are kept on disk with the
-    compilation cache (``OptionsJit``'s ``kept_as``): a cached command skips the sweep's
-    tracing, most of its wait."""
-    return OptionsJit(fun, lambda *args, **kwargs: sweep_options_of(*args, **kwargs).compiler_options(),
-                      kept_as=f"sweep-{fun.__name__}")
+    (``CPU_COMPILER_OPTIONS`` by default)."""
+    return OptionsJit(fun, lambda *args, **kwargs: sweep_options_of(*args, **kwargs).compiler_options())
 
 
 def cpu_options_jit(fun, cpu_options: tuple[tuple[str, object], ...]) -> OptionsJit:

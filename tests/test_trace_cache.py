@@ -133,27 +133,3 @@ def test_the_memo_is_bounded_and_the_setting_is_explicit(tmp_path, monkeypatch):
         assert float(square(jnp.full(n, 3.0)).sum()) == 9.0 * n
     assert len(square.loaded) == 2
     assert len(list((tmp_path / "traces").glob("*/square-test-*.bin"))) == 4
-
-
-def _ct(cache, *options) -> dict:
-    env = {**os.environ, "CAMJAX_CACHE_DIR": str(cache)}
-    command = [sys.executable, "-m", "camjax", "ct", "--law", "cycloidal", "--n", "1:20:40", "--damping", "0.05",
-               "--format", "json", *options]
-    return json.loads(subprocess.run(command, env=env, capture_output=True, text=True, timeout=300,
-                                     check=True).stdout)
-
-
-def test_a_sweeps_kept_trace_gives_its_numbers_and_its_options_are_in_the_key(tmp_path):
-    """The sweep's program is kept too (a cached ``camjax ct`` skips its tracing): read back
-    in a second process it gives the uncached numbers, and a sweep with other options (a
-    longer dwell, compiled into the program) is kept as a program of its own."""
-    cache = tmp_path / "cache"
-    first = _ct(cache)
-    kept = sorted((cache / "traces").glob("*/sweep-sweep_program-*.bin"))
-    assert len(kept) == 1
-    again = _ct(cache)
-    longer = _ct(cache, "--dwell", "2")
-    assert len(sorted((cache / "traces").glob("*/sweep-sweep_program-*.bin"))) == 2
-    assert_same_numbers(first, _ct("off"))
-    assert_same_numbers(again, first)
-    assert_same_numbers(longer, _ct("off", "--dwell", "2"))

@@ -26,15 +26,16 @@ import numpy as np
 
 from .. import checks
 from .._shapes import bucket
-from .._traces import exported_jit
+from .._traces import exported_jit, register_types
 from .._traces import kept as traces_kept
 from ..errors import RESULTS, raise_if_failed
 from ..sdof import (
+    MotionGrid,
     mode_between,
 )
 from ..sharding import resolve_devices, shard_batch
 from ._contact import NodeContact, node_contact
-from ._cycle import Cycle, _cycle
+from ._cycle import Cycle, TrainPeaks, _cycle
 from ._cycle_grid import CycleGrid, grid_intervals, program_grid, resolves, with_segment_law
 from ._oscillator import (
     Oscillator,
@@ -183,6 +184,9 @@ def _cycles(rpm, turn: PaddedTurn, outputs: tuple[Probe, ...]) -> Cycle:
         return cycle._replace(outputs={p.name: jnp.asarray(p.fn(cycle, turn), dtype=float) for p in outputs})
 
     return jax.vmap(one)(rpm)
+
+
+register_types(PaddedTurn, CycleGrid, MotionGrid, Oscillator, NodeContact, Cycle, TrainPeaks)
 
 
 _BUILT_IN_COMPILED = BUILT_IN_OUTPUTS.compiled
