@@ -279,6 +279,14 @@ def test_torque_and_hertz_against_the_simulated_force_samples(example, example_t
         assert stress.radius_mm[i] == pytest.approx(radius[k], rel=1e-4)
 
 
+def _linear_and_lashed() -> tuple[Chain, Chain]:
+    """A tappet and a valve on a surging spring, and the same chain with 0.1 mm of lash at
+    the valve: a lash the spring's preload keeps closed at the speeds these tests run."""
+    valve = Body("valve", 0.05, 200.0, 20.0)
+    linear = Chain((Body("tappet", 0.03), valve), Spring(52.0, 250.0))
+    return linear, dataclasses.replace(linear, bodies=(linear.bodies[0], dataclasses.replace(valve, lash_mm=0.1)))
+
+
 def test_a_lash_that_never_opens_reports_the_linear_chain():
     """A lash without a seat is closed at rest and opens only where the force would pull: where
     it never does, the report (``analyse``, routed to the simulation) gives the linear chain's
@@ -287,11 +295,7 @@ def test_a_lash_that_never_opens_reports_the_linear_chain():
     against refined between nodes, and every integral (RMS and mean torque, energy
     fluctuation, flywheel) within 1e-7 (measured 2026-11-29: 8e-9 at most)."""
     program = _wide(Program.load("camjax/program/examples/trains/valve.toml"))
-    valve = Body("valve", 0.05, 200.0, 20.0)
-    linear = Chain((Body("tappet", 0.03), valve), Spring(52.0, 250.0))
-    lash = dataclasses.replace(
-        linear, bodies=(linear.bodies[0], dataclasses.replace(valve, lash_mm=0.1))
-    )
+    linear, lash = _linear_and_lashed()
     rpm = [1200.0]
     (exact,) = analyse(dataclasses.replace(program, chain=linear), rpm).speeds
     report = analyse(dataclasses.replace(program, chain=lash), rpm)
@@ -511,11 +515,7 @@ def test_a_lash_that_never_opens_has_the_linear_chains_residual_vibration():
     equals the linear chain's exact one within the simulation's tolerance (measured
     2026-11-29: 5e-7 of it at most, at 3000 rpm)."""
     program = Program.load("camjax/program/examples/trains/valve.toml")
-    valve = Body("valve", 0.05, 200.0, 20.0)
-    linear = Chain((Body("tappet", 0.03), valve), Spring(52.0, 250.0))
-    lash = dataclasses.replace(
-        linear, bodies=(linear.bodies[0], dataclasses.replace(valve, lash_mm=0.1))
-    )
+    linear, lash = _linear_and_lashed()
     rpm = [1200.0, 3000.0]
     exact = analyse(dataclasses.replace(program, chain=linear), rpm, with_flight=False)
     report = analyse(dataclasses.replace(program, chain=lash), rpm)
@@ -674,11 +674,7 @@ def test_a_lash_that_never_opens_sizes_the_linear_chains_motor(tmp_path):
     program = dataclasses.replace(
         Program.load("camjax/program/examples/trains/valve.toml"), drive=drive
     )
-    valve = Body("valve", 0.05, 200.0, 20.0)
-    linear = Chain((Body("tappet", 0.03), valve), Spring(52.0, 250.0))
-    lash = dataclasses.replace(
-        linear, bodies=(linear.bodies[0], dataclasses.replace(valve, lash_mm=0.1))
-    )
+    linear, lash = _linear_and_lashed()
     rpm = [1200.0, 3000.0]
     exact = program_motor_choice(dataclasses.replace(program, chain=linear), rpm, motors=motors)
     simulated = dataclasses.replace(program, chain=lash)
