@@ -137,3 +137,22 @@ def test_the_command_refuses_too_many_speeds_before_building_them(capsys):
         err = capsys.readouterr().err.strip()
         assert "\n" not in err and err.startswith("camjax program: error: --rpm has ")
         assert f"more than the {MAX_SPEEDS:,} one analysis takes" in err and "split the range" in err
+
+
+@pytest.mark.parametrize("option", ["rpm_lo", "rpm_hi"])
+def test_a_design_bound_is_one_speed_not_the_first_of_several(feed, option):
+    """A design's speed bound given as several speeds is refused in one line naming it (it
+    used to take the first silently), as NumPy or JAX array or list alike, and an array
+    given as one speed raises no warning of a static array."""
+    import warnings
+
+    bounds = {"rpm_lo": 300.0, "rpm_hi": 600.0}
+    for several in ([300.0, 500.0], np.array([300.0, 500.0]), jnp.array([300.0, 500.0])):
+        for call in (cp.design_segment, cp.MaxPreload, cp.segment_band):
+            with pytest.raises(ValueError, match=f"^{option} must be one speed in rpm, got 2$"):
+                call(feed, 2, **{**bounds, option: several})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        objective = cp.MaxPreload(feed, 2, rpm_lo=np.float64(300.0), rpm_hi=jnp.asarray(600.0))
+    assert (objective.rpm_lo, objective.rpm_hi) == (300.0, 600.0)
+    assert type(objective.rpm_hi) is float

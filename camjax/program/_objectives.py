@@ -59,6 +59,14 @@ def _same_points(grid, original: Program):
     return grid._replace(residual_start=np.asarray(starts, dtype=int))
 
 
+def _plain_speed(value):
+    """A concrete array given as a speed, as Python numbers (a scalar, or a tuple that the
+    check refuses): a static field holds no array."""
+    if isinstance(value, np.ndarray | np.generic | jax.Array) and not isinstance(value, jax.core.Tracer):
+        return np.asarray(value).item() if np.ndim(value) == 0 else tuple(np.asarray(value).ravel().tolist())
+    return value
+
+
 class AbstractProgramObjective(AbstractObjective):
     """An objective on the whole program with segment ``segment``'s (1-based) law, over
     the speed range ``[rpm_lo, rpm_hi]``: training at ``speeds`` (8 per natural-frequency
@@ -67,8 +75,8 @@ class AbstractProgramObjective(AbstractObjective):
 
     program: Program = eqx.field(static=True)
     segment: int = eqx.field(static=True)
-    rpm_lo: float = eqx.field(static=True)
-    rpm_hi: float = eqx.field(static=True)
+    rpm_lo: float = eqx.field(static=True, converter=_plain_speed)
+    rpm_hi: float = eqx.field(static=True, converter=_plain_speed)
     weight: float = eqx.field(static=True, default=1.0)
     damping: float = eqx.field(static=True, default=0.0)
 

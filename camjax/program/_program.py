@@ -229,7 +229,13 @@ def with_law(program: Program, segment: int, law) -> Program:
 def segment_band(program: Program, segment: int, rpm_lo: float, rpm_hi: float) -> tuple[float, float]:
     """Period-ratio band ``(n1, n2)`` of segment ``segment`` (1-based) over the speed range
     (the design's check of its speeds, ``camjax.checks.speeds``)."""
-    rpm_lo, rpm_hi = float(speeds(rpm_lo, "rpm_lo")[0]), float(speeds(rpm_hi, "rpm_hi")[0])
+    bounds = []
+    for value, name in ((rpm_lo, "rpm_lo"), (rpm_hi, "rpm_hi")):
+        checked = speeds(value, name)
+        if checked.size != 1:
+            raise ValueError(f"{name} must be one speed in rpm, got {checked.size}")
+        bounds.append(float(checked[0]))
+    rpm_lo, rpm_hi = bounds
     if not rpm_lo < rpm_hi:
         raise ValueError(f"need 0 < rpm_lo < rpm_hi, got {rpm_lo:g}, {rpm_hi:g}")
     if not 1 <= segment <= len(program.segments):
