@@ -17,6 +17,7 @@ import numpy as np
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
 from ._cycle import _cycle, residual_modes
 from ._cycle_grid import program_grid, with_segment_law
+from ._design import design_refusal
 from ._dynamics import SteadyState
 from ._jump import even_periods, scan_speeds
 from ._oscillator import CONTACT_FORCE, Oscillator
@@ -67,6 +68,14 @@ def _plain_speed(value):
     return value
 
 
+def _refuse(program: Program, objective: str) -> None:
+    """A one-line ``ValueError`` where ``program`` cannot be designed for ``objective``
+    (``design_refusal``: the one place of the rules on the program)."""
+    refusal = design_refusal(program, objective)
+    if refusal is not None:
+        raise ValueError(refusal)
+
+
 class AbstractProgramObjective(AbstractObjective):
     """An objective on the whole program with segment ``segment``'s (1-based) law, over
     the speed range ``[rpm_lo, rpm_hi]``: training at ``speeds`` (8 per natural-frequency
@@ -114,8 +123,7 @@ class MaxPreload(AbstractProgramObjective):
     what: ClassVar[str] = "preload"
 
     def __check_init__(self):
-        if self.program.follower.form_closed:
-            raise ValueError("the preload objective needs a return spring (a force-closed cam)")
+        _refuse(self.program, "preload")
 
     def features(self, law):
         """``k e + c e'`` (N) at every grid node and training speed: affine in the law."""
@@ -154,6 +162,7 @@ class MaxProgramResidual(AbstractProgramObjective):
     what: ClassVar[str] = "residual"
 
     def __check_init__(self):
+        _refuse(self.program, "residual")
         if not self.program.residual_segments():
             raise ValueError("the program has no dwell or constant-velocity segment: no residual vibration to design for")
 

@@ -379,6 +379,17 @@ function renderDesign() {
     pick.appendChild(opt);
   });
   if ([...pick.options].some((o) => o.value === was)) pick.value = was;
+  // the objectives this program takes: the server's rule (its report), in the server's words
+  const objective = $("d-obj"), wasObjective = objective.value;
+  objective.innerHTML = "";
+  ((report && report.design_objectives) || designDefaults.objectives || []).forEach((o) => {
+    const opt = document.createElement("option");
+    opt.value = o.name; opt.textContent = o.label;
+    objective.appendChild(opt);
+  });
+  if ([...objective.options].some((o) => o.value === wasObjective)) objective.value = wasObjective;
+  $("d-start").disabled = !objective.options.length || $("design").dataset.state === "running";
+  $("d-start").title = objective.options.length ? "" : "no design objective applies to this program";
   if (!$("d-steps").value) $("d-steps").value = designDefaults.steps;
   if (report && !$("d-lo").value) {
     const rpm = report.speeds.map((x) => x.rpm);
