@@ -14,6 +14,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..checks import speeds as checked_speeds
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
 from ._cycle import _cycle, residual_modes
 from ._cycle_grid import program_grid, with_segment_law
@@ -60,12 +61,20 @@ def _same_points(grid, original: Program):
     return grid._replace(residual_start=np.asarray(starts, dtype=int))
 
 
-def _plain_speed(value):
-    """A concrete array given as a speed, as Python numbers (a scalar, or a tuple that the
-    check refuses): a static field holds no array."""
-    if isinstance(value, np.ndarray | np.generic | jax.Array) and not isinstance(value, jax.core.Tracer):
-        return np.asarray(value).item() if np.ndim(value) == 0 else tuple(np.asarray(value).ravel().tolist())
-    return value
+def _plain_speed(name: str):
+    """The converter of the speed bound ``name``: a concrete array as Python numbers (a
+    scalar, or a tuple that the check refuses), as a static field holds no array; a traced
+    one refused in ``camjax.checks.speeds``'s one line before it is set (where a static
+    field would warn of a JAX array first): the speeds are chosen on the host."""
+
+    def plain(value):
+        if isinstance(value, jax.core.Tracer):
+            checked_speeds(value, name)  # raises: not concrete
+        if isinstance(value, np.ndarray | np.generic | jax.Array):
+            return np.asarray(value).item() if np.ndim(value) == 0 else tuple(np.asarray(value).ravel().tolist())
+        return value
+
+    return plain
 
 
 def _refuse(program: Program, objective: str) -> None:
@@ -84,8 +93,8 @@ class AbstractProgramObjective(AbstractObjective):
 
     program: Program = eqx.field(static=True)
     segment: int = eqx.field(static=True)
-    rpm_lo: float = eqx.field(static=True, converter=_plain_speed)
-    rpm_hi: float = eqx.field(static=True, converter=_plain_speed)
+    rpm_lo: float = eqx.field(static=True, converter=_plain_speed("rpm_lo"))
+    rpm_hi: float = eqx.field(static=True, converter=_plain_speed("rpm_hi"))
     weight: float = eqx.field(static=True, default=1.0)
     damping: float = eqx.field(static=True, default=0.0)
 
