@@ -301,6 +301,8 @@ def test_a_seating_design_from_the_api_is_the_librarys(valve_lash):
     assert job["after"] == pytest.approx(_seating_m_s(designed, speeds), rel=1e-9)
     seating = [c["seating_velocity_m_s"] for c in kept["train"]["contacts"]["speeds"]]
     assert max(seating) == pytest.approx(job["after"], rel=1e-6)  # the report's reading, refined
+    assert job["curves"]["after"]["seating_velocity_m_s"] == seating  # the page's before and after
+    assert max(job["curves"]["before"]["seating_velocity_m_s"]) == pytest.approx(job["before"], rel=1e-6)
 
 
 SERVO_RPM = "60:120:2"

@@ -557,13 +557,18 @@ def _file_name(name: str) -> str:
 
 
 def _speed_curves(report: dict | None) -> dict | None:
-    """The speeds of a report, its minimum preload and its largest residual vibration at each."""
+    """The speeds of a report, its minimum preload and its largest residual vibration at
+    each, and for a chain with a seat the valve's seating velocity (m/s; ``None``
+    elsewhere)."""
     if report is None:
         return None
     speeds = report["speeds"]
+    contacts = (report.get("train") or {}).get("contacts")
+    seated = contacts is not None and any(c["seating_velocity_m_s"] is not None for c in contacts["speeds"])
     return {"rpm": [s["rpm"] for s in speeds], "min_preload_n": [s["min_preload_n"] for s in speeds],
             "max_residual_mm": [max(s["residual_vibration_mm"]) if s["residual_vibration_mm"] else None
-                                for s in speeds]}
+                                for s in speeds],
+            "seating_velocity_m_s": [c["seating_velocity_m_s"] for c in contacts["speeds"]] if seated else None}
 
 
 @dataclasses.dataclass

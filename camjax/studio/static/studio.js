@@ -451,6 +451,11 @@ function showDesign(job) {
     {label: "before", y: b.min_preload_n, dash: [4, 3], color: "#777"}, {label: "after", y: a.min_preload_n}], so);
   plot("c-d-residual", "largest residual vibration (mm): before and after", b.rpm, [
     {label: "before", y: b.max_residual_mm, dash: [4, 3], color: "#777"}, {label: "after", y: a.max_residual_mm}], so);
+  const seated = b.seating_velocity_m_s !== null && b.seating_velocity_m_s !== undefined;
+  $("c-d-seating").hidden = !seated;
+  if (seated) plot("c-d-seating", "valve seating velocity (m/s): before and after", b.rpm, [
+    {label: "before", y: b.seating_velocity_m_s, dash: [4, 3], color: "#777"},
+    {label: "after", y: a.seating_velocity_m_s}], so);
 }
 
 async function finishDesign(action) {
