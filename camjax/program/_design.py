@@ -36,6 +36,8 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     speed range, simulated with the chain's contacts (``MaxSeatingVelocity``: on
     ``seating_speeds`` speeds, default 8 per natural-frequency cycle gained, with
     ``contact_options``), designed in ``rounds`` of its linear model (``seating_design``).
+    An objective the program does not take is refused in one line (``design_refusal``;
+    ``design_objectives`` lists those it takes).
 
     A segment that starts or ends in motion (a polynomial, constant velocity, any law whose
     end velocity is not zero) is designed as a ``CorrectedPolynomial``
