@@ -181,7 +181,7 @@ def test_bad_input_is_one_line(example):
             Seat(5e4, -1.0),
         )
     with pytest.raises(
-        ValueError, match=r"body 1 \(rocker\) lever_mass_kg: .* not simulated with contacts"
+        ValueError, match=r"body 1 \(rocker\) lever_mass_kg: .* first \[\[train\]\] body"
     ):
         ChainContacts(
             example,

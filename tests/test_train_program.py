@@ -380,3 +380,56 @@ def test_lash_on_the_first_element_is_the_cam_clearance(tmp_path, capsys):
     assert main(["program", str(path), "--rpm", "1000"]) == 0
     out = capsys.readouterr().out
     assert "cam clearance (valve) opens 1x" in out and "lash at valve" not in out
+
+
+def test_a_lever_on_the_first_element_is_a_riding_body(tmp_path):
+    """``lever_mass_kg`` on a first element is refused in one line on the exact path and
+    with a seat alike, naming the riding body that models it; that body with the element's
+    ratio gives the hand-derived two-body frequencies (cam held and free)."""
+    from camjax.program import Body, Seat, Spring
+
+    message = (
+        "[[train]] body 1 (valve) lever_mass_kg: a lever on the cam's side of the first element "
+        "moves with the cam; give it as a first [[train]] body of mass_kg = 0.5 with no "
+        "stiffness_n_per_mm (it rides on the cam)"
+    )
+    data = tables(two_body())  # its valve on a rocker of ratio 1.6 (the trial's file)
+    data["train"] = [
+        {
+            "name": "valve",
+            "mass_kg": 0.07,
+            "stiffness_n_per_mm": 3000,
+            "damping_n_s_per_m": 20,
+            "ratio": 1.6,
+            "lever_mass_kg": 0.5,
+        }
+    ]
+    for seat in (None, {"stiffness_n_per_mm": 50000, "damping_n_s_per_m": 500}):
+        if seat:
+            data["seat"] = seat
+        lines = []
+        for key in ("program", "follower", "spring", "seat"):
+            if key in data:
+                lines += [f"[{key}]"] + [f"{k} = {json.dumps(v)}" for k, v in data[key].items()]
+        for key in ("segment", "train"):
+            for table in data.get(key, []):
+                lines += [f"[[{key}]]"] + [f"{k} = {json.dumps(v)}" for k, v in table.items()]
+        path = tmp_path / "lever.toml"
+        path.write_text("\n".join(lines) + "\n")
+        with pytest.raises(ValueError) as error:
+            Program.load(path)
+        assert str(error.value) == f"{path}: {message}"
+    with pytest.raises(ValueError) as error:
+        Chain((Body("valve", 0.07, 3000.0, 20.0, 1.6, 0.5),), Spring(35.0, 300.0), Seat(5e4))
+    assert str(error.value) == message
+    # the riding body it names: m_L m w^4 - (k r^2 m + (k + k_s) m_L) w^2 + k r^2 k_s = 0 free,
+    # w^2 = (k + k_s) / m held (the lever moves with the cam)
+    m_lever, m, k, r, k_s = 0.5, 0.07, 3e6, 1.6, 35e3
+    chain = Chain(
+        (Body("rocker", m_lever), Body("valve", m, 3000.0, 20.0, ratio=r)), Spring(35.0, 300.0)
+    )
+    held = chain.natural_frequencies(contact=True)[0]
+    assert held == pytest.approx([math.sqrt((k + k_s) / m) / (2 * math.pi)], rel=1e-12)
+    roots = np.roots([m_lever * m, -(k * r**2 * m + (k + k_s) * m_lever), k * r**2 * k_s])
+    free = chain.natural_frequencies(contact=False)[0]
+    assert free == pytest.approx(np.sort(np.sqrt(roots)) / (2 * math.pi), rel=1e-10)

@@ -196,12 +196,6 @@ class ContactSystem(NamedTuple):
             raise ValueError(
                 "[arm]: a flexible arm with lash is not simulated (give its lash_mm 0)"
             )
-        if chain.bodies[0].lever_mass_kg and not chain.bodies[0].rides:
-            raise ValueError(
-                f"[[train]] body 1 ({chain.bodies[0].name}) lever_mass_kg: a lever's inertia on "
-                "the cam's side of the first element is not simulated with contacts (give it to "
-                "the first body)"
-            )
         a = chain.matrices()
         rider = chain.bodies[0].rides
         start = 0 if rider else 1

@@ -40,7 +40,8 @@ class Body:
     """One body of the chain and the element that joins it to the body before (the cam for
     the first).  ``stiffness_n_per_mm=None``: no element, the body rides on the cam (the
     first body only).  ``lever_mass_kg``: the lever's moment of inertia over the square of
-    its arm on the side of the body before (a rocker's inertia at that end).  ``at_mm``: on a
+    its arm on the side of the body before (a rocker's inertia at that end; not on the first
+    element, whose cam side moves with the cam: such a lever is a riding first body).  ``at_mm``: on a
     chain with a flexible ``Arm``, where the body is clamped on it (mm from the pivot; the
     first body rides on the cam at the roller and needs none); a body on an arm has no
     element (the arm is its element) and may have no mass (a point of the arm watched)."""
@@ -519,6 +520,12 @@ def _check_chain(chain: Chain) -> None:
             raise ValueError(
                 f"{where}: ratio, lash_mm, lever_mass_kg and damping_n_s_per_m belong to an "
                 "element, and a body that rides on the cam has none (give stiffness_n_per_mm)"
+            )
+        if j == 1 and not body.rides and body.lever_mass_kg:
+            raise ValueError(
+                f"{where} lever_mass_kg: a lever on the cam's side of the first element moves "
+                f"with the cam; give it as a first [[train]] body of mass_kg = "
+                f"{body.lever_mass_kg:g} with no stiffness_n_per_mm (it rides on the cam)"
             )
     s = chain.spring
     if s is not None:
