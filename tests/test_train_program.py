@@ -433,3 +433,26 @@ def test_a_lever_on_the_first_element_is_a_riding_body(tmp_path):
     roots = np.roots([m_lever * m, -(k * r**2 * m + (k + k_s) * m_lever), k * r**2 * k_s])
     free = chain.natural_frequencies(contact=False)[0]
     assert free == pytest.approx(np.sort(np.sqrt(roots)) / (2 * math.pi), rel=1e-10)
+
+
+def test_an_undamped_chain_names_its_undamped_elements():
+    """A chain with no damping anywhere is refused before any turn, naming the fields that
+    would damp it (the element with a ratio, the spring that surges)."""
+    from camjax.program import Body, Oscillator, Spring
+
+    chain = Chain((Body("valve", 0.1, 100.0, ratio=1.5),), Spring(35.0, 300.0))
+    with pytest.raises(ValueError) as error:
+        Oscillator.of_chain(chain)
+    assert str(error.value) == (
+        "the chain has a mode without damping (give [[train]] valve damping_n_s_per_m): its "
+        "periodic steady state does not exist"
+    )
+    surging = Chain(
+        (Body("tappet", 0.03), Body("valve", 0.05, 200.0)), Spring(52.0, 250.0, mass_kg=0.04)
+    )
+    with pytest.raises(ValueError) as error:
+        Oscillator.of_chain(surging)
+    assert str(error.value) == (
+        "the chain has a mode without damping (give [[train]] valve damping_n_s_per_m or "
+        "[spring] damping_ratio): its periodic steady state does not exist"
+    )

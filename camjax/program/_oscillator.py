@@ -211,9 +211,19 @@ class Oscillator(NamedTuple):
                     "[arm] damping_ratio: the arm's modes have no damping (give the first mode's "
                     "ratio, e.g. 0.01): its periodic steady state does not exist"
                 )
+            undamped = [
+                f"[[train]] {b.name} damping_n_s_per_m"
+                for b in chain.bodies
+                if not b.rides and not b.damping_n_s_per_m
+            ]
+            if chain.spring is not None and chain.spring.surges and not chain.spring.damping_ratio:
+                undamped.append("[spring] damping_ratio")
+            give = (
+                " or ".join(undamped) or "the elements damping_n_s_per_m or [spring] damping_ratio"
+            )
             raise ValueError(
-                "the chain has a mode without damping (give the elements damping_n_s_per_m "
-                "or the spring damping_ratio): its periodic steady state does not exist"
+                f"the chain has a mode without damping (give {give}): its periodic steady state "
+                "does not exist"
             )
         if np.linalg.cond(V) > 1e10:
             raise ValueError(
