@@ -204,6 +204,18 @@ def test_cli_json_carries_the_train(capsys):
             r"body 1 \(tappet\): a single body riding on the cam is rigid .* give it stiffness_n_per_mm",
         ),
         (lambda d: d["train"][0].update(name=""), r"body 1: name must be a non-empty text"),
+        (
+            lambda d: d["spring"].update(mass_kg=0.05, elements=1000),
+            r"\[spring\] elements = 1000 is more than 64 \(the default meets 0\.5% with fewer; "
+            r"the modes cost the cube of the elements\)$",
+        ),
+        (
+            lambda d: d["train"].extend(
+                {"name": f"b{j}", "mass_kg": 0.01, "stiffness_n_per_mm": 100} for j in range(63)
+            ),
+            r"\[\[train\]\]: 65 bodies are more than the 64 a chain may have \(its modes cost "
+            r"the cube of its bodies\)$",
+        ),
     ],
 )
 def test_bad_train_program_is_one_line(tmp_path, edit, message):
@@ -294,9 +306,9 @@ def test_chain_messages_name_the_chains_own_fields():
         SteadyState(two_body(valve=1e-9), 1000.0)
     assert "follower." not in str(error.value) and "\n" not in str(error.value)
     data = tables(two_body())
-    data["spring"].update(mass_kg=0.05, damping_ratio=0.05, elements=400)
-    with pytest.raises(ValueError, match=r"give \[spring\] fewer elements \(now 400\)") as error:
-        SteadyState(Program.from_dict(data), 1000.0)
+    data["spring"].update(mass_kg=0.05, damping_ratio=0.05, elements=64)
+    with pytest.raises(ValueError, match=r"give \[spring\] fewer elements \(now 64\)") as error:
+        SteadyState(Program.from_dict(data), 10.0)
     assert "follower." not in str(error.value)
     warnings = design_warnings(two_body(tappet=2e4, valve=2e4))
     heavy = [w for w in warnings if "10,000 kg" in w]

@@ -33,6 +33,13 @@ SURGE_TOLERANCE = 0.005
 """Default spring discretisation: the fewest elements whose first three surge frequencies
 (both ends held) are within this share of the continuous spring's."""
 MAX_SPRING_ELEMENTS = 64
+"""The most elements a spring is cut into (the default search's ceiling too; 0.5% takes 8)
+and, as ``MAX_BODIES``, the most bodies: the chain's modes cost the cube of its coordinates.
+Measured 2026-11-29 at commit dc06f88 on the shared 2-core machine (a three-body valve train,
+``Oscillator.of_chain`` after ``natural_frequencies`` held and free): 64 elements 0.24 s and
+0.3 s, 128 0.66 s and 0.08 s, 512 11.5 s and 4.5 s, 1000 115 s and 4.2 s; the memory check
+refuses 100 elements at 1500 rpm anyway."""
+MAX_BODIES = MAX_SPRING_ELEMENTS
 
 
 @dataclasses.dataclass(frozen=True)
@@ -483,6 +490,11 @@ class Assembly(NamedTuple):
 def _check_chain(chain: Chain) -> None:
     if not chain.bodies:
         raise ValueError("[[train]]: a train needs at least one body")
+    if len(chain.bodies) > MAX_BODIES:
+        raise ValueError(
+            f"[[train]]: {len(chain.bodies)} bodies are more than the {MAX_BODIES} a chain may "
+            "have (its modes cost the cube of its bodies)"
+        )
     names = set()
     for j, body in enumerate(chain.bodies, start=1):
         where = f"[[train]] body {j} ({body.name})"
@@ -545,6 +557,11 @@ def _check_chain(chain: Chain) -> None:
             if not s.surges:
                 raise ValueError(
                     "[spring] elements: a spring without mass_kg has no surge to resolve"
+                )
+            if s.elements > MAX_SPRING_ELEMENTS:
+                raise ValueError(
+                    f"[spring] elements = {s.elements} is more than {MAX_SPRING_ELEMENTS} (the "
+                    "default meets 0.5% with fewer; the modes cost the cube of the elements)"
                 )
             if s.elements < 4:
                 raise ValueError(
