@@ -468,3 +468,25 @@ def test_an_undamped_chain_names_its_undamped_elements():
         "the chain has a mode without damping (give [[train]] valve damping_n_s_per_m or "
         "[spring] damping_ratio): its periodic steady state does not exist"
     )
+
+
+def test_an_absurd_ratio_is_named_before_the_grid_remedy():
+    """A ratio past ``ABSURD_SIZES`` (1600 on the valve's rocker) sets the highest mode; the
+    grid's refusal names it first, before the speed and the stiffnesses it would ask for."""
+    data = tables(two_body())
+    data["train"] = [
+        {"name": "tappet", "mass_kg": 0.06},
+        {"name": "pushrod", "mass_kg": 0.04, "stiffness_n_per_mm": 8000.0},
+        {"name": "valve", "mass_kg": 0.07, "stiffness_n_per_mm": 3000.0, "ratio": 1600.0},
+    ]
+    for body in data["train"][1:]:
+        body["damping_n_s_per_m"] = 20.0
+    with pytest.raises(ValueError) as error:
+        SteadyState(Program.from_dict(data), 1500.0)
+    named = (
+        "[[train]] body 3 (valve) ratio = 1600 is more than 100, larger than any cam machine's "
+        "lever: check it (the body's motion over the body's before); else the chain's highest "
+        "mode vibrates "
+    )
+    what, remedy = str(error.value).split(": ", 1)
+    assert what.startswith("a turn at 1500 rpm needs ") and remedy.startswith(named)

@@ -25,6 +25,7 @@ from ..sdof import (
 )
 from ._oscillator import Oscillator
 from ._program import Program
+from ._warnings import sizes_first
 
 
 class CycleGrid(NamedTuple):
@@ -65,7 +66,7 @@ class CycleGrid(NamedTuple):
 def _grid_refusal(program: Program, rpm_min: float, cycles: float) -> str:
     """What to change where a turn's grid is too large (``check_grid_size``'s remedy): the
     speed or the stiffness where the vibration asks for the intervals, the shortest
-    segments where the laws' pieces do."""
+    segments where the laws' pieces do; a size past ``ABSURD_SIZES`` first (``sizes_first``)."""
     by_speed = 2 * math.pi * cycles / TARGET_PHASE_STEP > MAX_GRID_INTERVALS / 2
     slowest = rpm_min * cycles / period_ratio_reach(TARGET_PHASE_STEP)
     shortest = min(s.angle_deg for s in program.segments)
@@ -75,7 +76,7 @@ def _grid_refusal(program: Program, rpm_min: float, cycles: float) -> str:
     remedies.append(f"widen or merge the shortest segments ({len(program.segments)} segments, the shortest "
                     f"{shortest:g} degrees)")
     who = "the follower vibrates" if chain is None else "the chain's highest mode vibrates"
-    return f"{who} {cycles:,.0f} times per turn; " + "; or ".join(remedies)
+    return sizes_first(program) + f"{who} {cycles:,.0f} times per turn; " + "; or ".join(remedies)
 
 
 def _layout(program: Program, rpm_min: float, vibration_hz: float | None):

@@ -48,6 +48,13 @@ def size_warnings(program: Program) -> list[str]:
             for key, value, unit in given if abs(value) > ABSURD_SIZES[unit]]
 
 
+def sizes_first(program: Program) -> str:
+    """The ``size_warnings`` a refusal says before its own remedy (empty where none): a size
+    no machine has (a ratio of 1600, a stiffness in N/m) is the likelier cause of a grid or a
+    step it asks for than the fields that remedy would name."""
+    return "".join(f"{line}; else " for line in size_warnings(program))
+
+
 MAX_SEAT_COMPRESSION_MM = 1.0
 """The most a valve's seat yields under the spring's preload at rest (mm): a seat is stiff
 (tens of thousands of N/mm, a few microns under the preload); past this, or past the valve's
