@@ -490,3 +490,20 @@ def test_an_absurd_ratio_is_named_before_the_grid_remedy():
     )
     what, remedy = str(error.value).split(": ", 1)
     assert what.startswith("a turn at 1500 rpm needs ") and remedy.startswith(named)
+
+
+def test_compensating_a_linear_chain_is_refused_before_any_file(tmp_path, capsys):
+    """``--compensate`` of a linear chain (the built-in valve train) is one line, exit 2, and
+    ``--out`` holds no file: the refusal comes before the analysis writes its report."""
+    out_dir = tmp_path / "out"
+    code = main(
+        ["program", "valve", "--rpm", "1000", "--compensate", "1000", "--out", str(out_dir)]
+    )
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.strip().endswith(
+        "--compensate: compensation of a chain of bodies ([[train]]) is not built yet: "
+        "compensated_lift takes a chain's arrays, compensate only the one-body follower"
+    )
+    assert len(err.strip().splitlines()) == 1
+    assert not out_dir.exists() or not any(out_dir.iterdir())

@@ -346,9 +346,7 @@ def run(args) -> int:
     with file_named(path), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # the library's speed warnings, shown below
         program = Program.load(path)
-        simulated = program.chain is not None and program.chain.has_contacts  # lash or a seat
-        if simulated and args.compensate is not None:
-            raise CliError(COMPENSATE_CONTACTS)
+        compensation = _compensation(args, program)  # before any work or file: refused at once
         motors = _motors(args, program)  # before the analysis: a bad motor file fails at once
         out = output_dir(args.out)
         # a chain with contacts: its simulation, which keeps the turns for --out's files
@@ -357,7 +355,7 @@ def run(args) -> int:
                          speed_fluctuation=args.speed_fluctuation, outputs=outputs)
         if out is not None:
             write_report(out, program, report, steady=steady, points=args.points, plot_rpm=args.plot_rpm)
-        servo = _servo(args, program, motors, rpm, steady, report, out)
+        servo = _servo(args, program, motors, rpm, steady, report, out, compensation)
     for line in dict.fromkeys([*_messages(caught), *report.warnings]):
         print(f"warning: {line}", file=sys.stderr)
     if args.format == "json":
@@ -394,21 +392,23 @@ def _motors(args, program) -> tuple:
     if motors and program.drive is None:
         raise ValueError("motor sizing needs the program's [drive] (travel_mm_per_rev or degrees_per_rev, "
                          "gear_ratio, efficiencies, inertias: docs/servo.md)")
-    if args.compensate is not None:
-        from ..program import check_smooth
-
-        check_smooth(program)  # before the analysis: a law too rough fails at once
     return motors
 
 
-COMPENSATE_CONTACTS = (
-    "--compensate: a chain with lash or a seat has no compensated lift: while its lash is open or its "
-    "valve sits on its seat the valve does not move with the cam, so no cam lift makes it follow the "
-    "law there (the inverse the compensation solves exists only for a linear chain)"
-)
+def _compensation(args, program):
+    """``--compensate``'s compensation, computed before the analysis writes anything, so that
+    each of its refusals (a chain, lash, a rough law, contact lost) is one line and no file."""
+    if args.compensate is None:
+        return None
+    from ..program import compensate
+
+    try:
+        return compensate(program, args.compensate)
+    except ValueError as error:
+        raise CliError(f"--compensate: {error}") from None
 
 
-def _servo(args, program, motors, rpm, steady, report, out) -> dict:
+def _servo(args, program, motors, rpm, steady, report, out, compensation) -> dict:
     """The motor sizing (``--motor`` or the program's [motor]) and the compensation
     (``--compensate``), as the JSON keys ``motor`` and ``compensation``."""
     from ..program import program_motor_choice
@@ -422,10 +422,9 @@ def _servo(args, program, motors, rpm, steady, report, out) -> dict:
             from ..program import motor_figure
 
             motor_figure(choice.sizings[list(motors).index(choice.shown)], out / "motor.png")
-    if args.compensate is not None:
-        from ..program import compensate, deviation_from_law, write_drive_table
+    if compensation is not None:
+        from ..program import deviation_from_law, write_drive_table
 
-        compensation = compensate(program, args.compensate)
         (out / "compensated-lift.csv").write_text(compensation.csv())
         write_drive_table(compensation.program, out / "compensated-drive.csv", "csv")
         speeds = []

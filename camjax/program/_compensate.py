@@ -219,13 +219,38 @@ class Compensation:
         }
 
 
+def check_compensable(program) -> None:
+    """Refuse in one line a program ``compensate`` has no lift for, from its file alone: a
+    chain with lash or a seat (no cam lift moves a valve that sits or whose lash is open), any
+    other chain of bodies (not built: ``compensated_lift`` takes a chain's arrays), a groove's
+    clearance (lash), a law not smooth enough (``check_smooth``)."""
+    chain = program.chain
+    if chain is not None and chain.has_contacts:
+        raise ValueError(
+            "a chain with lash or a seat has no compensated lift: while its lash is open or its "
+            "valve sits on its seat the valve does not move with the cam, so no cam lift makes "
+            "it follow the law there (the inverse the compensation solves exists only for a "
+            "linear chain)"
+        )
+    if not program.one_body:
+        raise ValueError(
+            "compensation of a chain of bodies ([[train]]) is not built yet: "
+            "compensated_lift takes a chain's arrays, compensate only the one-body follower"
+        )
+    if program.follower.groove_clearance_mm is not None:
+        raise ValueError(
+            "compensation needs a linear train: this follower has lash (groove_clearance_mm)"
+        )
+    check_smooth(program)
+
+
 def compensate(
     program, rpm: float, *, samples_per_degree: int = SAMPLES_PER_DEGREE
 ) -> Compensation:
     """The cam lift that makes ``program``'s payload follow its law exactly at ``rpm``.
 
-    Refused with one line: a law not smooth enough (``check_smooth``), a train with lash (a
-    groove's clearance) or whose contact is lost at ``rpm`` (the inverse is linear only).
+    Refused with one line: what ``check_compensable`` refuses, a train whose contact is lost
+    at ``rpm`` (the inverse is linear only).
     """
     from ._program import Program
     from ._speeds import Speeds
@@ -234,17 +259,8 @@ def compensate(
     if len(speeds) != 1:
         raise ValueError(f"rpm: compensation is designed at one speed, got {len(speeds)}")
     rpm = speeds[0]
-    if not program.one_body:
-        raise ValueError(
-            "compensation of a chain of bodies ([[train]]) is not built yet: "
-            "compensated_lift takes a chain's arrays, compensate only the one-body follower"
-        )
+    check_compensable(program)
     follower = program.follower
-    if follower.groove_clearance_mm is not None:
-        raise ValueError(
-            "compensation needs a linear train: this follower has lash (groove_clearance_mm)"
-        )
-    check_smooth(program)
     if int(samples_per_degree) != samples_per_degree or samples_per_degree < 1:
         raise ValueError(
             f"samples_per_degree must be a whole number >= 1, got {samples_per_degree!r}"
