@@ -507,3 +507,16 @@ def test_compensating_a_linear_chain_is_refused_before_any_file(tmp_path, capsys
     )
     assert len(err.strip().splitlines()) == 1
     assert not out_dir.exists() or not any(out_dir.iterdir())
+
+
+def test_rms_acceleration_with_a_chain_names_the_objectives_it_takes(tmp_path, capsys):
+    """``design --objective rms-acceleration --program`` lists the objectives this program's
+    segments take (``design_objectives``): no ca-ct for a chain, only seating with a seat."""
+    for name, takes in (("valve", "residual or preload"), ("valve_lash", "seating")):
+        argv = ["design", "--objective", "rms-acceleration", "--program", name]
+        code = main([*argv, "--out", str(tmp_path / "o")])
+        err = capsys.readouterr().err.strip()
+        assert code == 2 and err.endswith(
+            "--objective rms-acceleration: not with --program (it designs a free rise; this "
+            f"program's segment design takes {takes})"
+        )

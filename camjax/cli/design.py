@@ -80,6 +80,22 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
+def _segment_objectives(text: str) -> str:
+    """The objectives a segment of the program ``text`` names can be designed for, in words
+    (``design_objectives``: the library's rule for this program)."""
+    from ..program import Program, design_objectives
+
+    path = program_path(text)
+    if is_machine(path):
+        return "design takes one cam's program, not a machine file"
+    with file_named(path):
+        takes = design_objectives(Program.load(path))
+    if not takes:
+        return "this program's segments have no design objective"
+    listed = takes[0] if len(takes) == 1 else ", ".join(takes[:-1]) + " or " + takes[-1]
+    return f"this program's segment design takes {listed}"
+
+
 def _run_program(args, out) -> int:
     from ..law_design import Caps, DesignNotImproved
     from ..program import Program, design_segment, segment_band, write_program
@@ -189,7 +205,7 @@ def run(args) -> int:
                        "band comes from --rpm)")
     if args.program and args.objective == "rms-acceleration":
         raise CliError("--objective rms-acceleration: not with --program (it designs a free "
-                       "rise; a segment's design takes residual, ca-ct, preload or seating)")
+                       f"rise; {_segment_objectives(args.program)})")
     out = output_dir(args.out)
     if args.program:
         return _run_program(args, out)
