@@ -191,9 +191,23 @@ def test_a_failing_motor_names_its_check_and_margin(sized):
     worst = min(sizing.dynamic.checks, key=lambda c: c.margin)
     assert lone.closest_check == worst
     assert lone.summary() == (
-        f"no motor passes; the closest, tiny, fails {worst.name} by "
-        f"{-100 * worst.margin:.1f}% ({worst.value:.4g} against {worst.limit:.4g})"
+        f"no motor passes; the closest, tiny, fails {worst.name}: {worst.value:.4g} against "
+        f"{worst.limit:.4g} (by {-100 * worst.margin:.1f}%)"
     )
+
+
+def test_a_torque_past_the_envelope_is_said_in_words_not_inf():
+    """A torque asked where the envelope gives none divides by zero: the check's shortfall
+    says so instead of "inf against 1 (by inf%)"."""
+    from camjax.program import Check
+
+    past = Check.of("peak torque / envelope (worst point)", math.inf, 1.0)
+    assert not past.passed and past.shortfall() == (
+        "no bound against 1 (a torque asked at a speed past the envelope, where the motor "
+        "gives none)"
+    )
+    slow = Check.of("max speed / maximum speed", 3.6, 1.0)
+    assert slow.shortfall() == "3.6 against 1 (by 260.0%)"
 
 
 @pytest.mark.parametrize(

@@ -463,8 +463,9 @@ def _servo_lines(servo: dict) -> list[str]:
 
 
 def _check_text(c: dict) -> str:
-    return (f"{c['name']} fails: {c['value']:.4g} against {c['limit']:.4g} "
-            f"(by {-100 * c['margin']:.1f}%)")
+    from ..program import Check
+
+    return f"{c['name']} fails: {Check(**c).shortfall()}"
 
 
 def _drive_table(args) -> int:

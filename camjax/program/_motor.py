@@ -354,6 +354,17 @@ class Check:
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
 
+    def shortfall(self) -> str:
+        """How far a failed check misses, in words: ``"3.6 against 1 (by 260.0%)"``, or where
+        the value has no bound (a torque asked at a speed past the envelope, where the motor
+        gives none) that in place of ``inf``."""
+        if not math.isfinite(self.value):
+            return (
+                f"no bound against {self.limit:.4g} (a torque asked at a speed past the envelope, "
+                "where the motor gives none)"
+            )
+        return f"{self.value:.4g} against {self.limit:.4g} (by {-100 * self.margin:.1f}%)"
+
     def text(self) -> str:
         verdict = "passes" if self.passed else "FAILS"
         return f"{self.name} {verdict}: {self.value:.4g} against {self.limit:.4g} (margin {100 * self.margin:+.1f}%)"
@@ -627,9 +638,8 @@ class MotorChoice:
         if self.picked is not None:
             return f"picked motor: {self.picked.name} (the smallest that passes every check at every speed)"
         return (
-            f"no motor passes; the closest, {self.closest.name}, fails {self.closest_check.name} by "
-            f"{-100 * self.closest_check.margin:.1f}% ({self.closest_check.value:.4g} against "
-            f"{self.closest_check.limit:.4g})"
+            f"no motor passes; the closest, {self.closest.name}, fails {self.closest_check.name}: "
+            f"{self.closest_check.shortfall()}"
         )
 
 
