@@ -520,3 +520,23 @@ def test_rms_acceleration_with_a_chain_names_the_objectives_it_takes(tmp_path, c
             "--objective rms-acceleration: not with --program (it designs a free rise; this "
             f"program's segment design takes {takes})"
         )
+
+
+def test_the_harmonic_check_says_no_cam_order_in_words(capsys):
+    """At one speed no whole cam order meets a mode: the table says "met by no cam order";
+    a range's orders are those of ``Chain.harmonic_check``."""
+    chain = Program.load(example_path("valve")).chain
+    for rpm, lo, hi in (("1000", 1000.0, 1000.0), ("1000:3000:3", 1000.0, 3000.0)):
+        assert main(["program", "valve", "--rpm", rpm]) == 0
+        out = capsys.readouterr().out
+        checks = chain.harmonic_check(lo, hi)
+        assert lo < hi or not any(orders for _, orders in checks)
+        for hz, orders in checks:
+            met = (
+                f"cam orders {orders[0]} to {orders[-1]}"
+                if len(orders) > 1
+                else f"cam order {orders[0]}"
+                if orders
+                else "no cam order"
+            )
+            assert f"harmonic check: {hz:.5g} Hz met by {met} in the speed range\n" in out

@@ -187,9 +187,9 @@ def _train_lines(train: dict) -> list[str]:
              "natural frequencies, cam free: " + _numbers(train["natural_frequencies_free_hz"], "{:.5g}") + " Hz"]
     for check in train["harmonic_check"]:
         orders = check["orders"]
-        lines.append(f"harmonic check: {check['frequency_hz']:.5g} Hz met by cam orders "
-                     + (f"{orders[0]} to {orders[-1]}" if len(orders) > 1 else str(orders[0]) if orders else "none")
-                     + " in the speed range")
+        met = (f"cam orders {orders[0]} to {orders[-1]}" if len(orders) > 1
+               else f"cam order {orders[0]}" if orders else "no cam order")
+        lines.append(f"harmonic check: {check['frequency_hz']:.5g} Hz met by {met} in the speed range")
     titles = ["min Fc N", "max Fc N", *(f"max|a| {n}"[:15] for n in names), "lift err mm", "min seat N",
               "max seat N", "surge N"]
     lines.append(f"{'rpm':>16}" + "".join(f"{t:>16}" for t in titles))
