@@ -540,3 +540,31 @@ def test_the_harmonic_check_says_no_cam_order_in_words(capsys):
                 else "no cam order"
             )
             assert f"harmonic check: {hz:.5g} Hz met by {met} in the speed range\n" in out
+
+
+def test_the_modes_figure_does_not_run_the_bodies_names_together(tmp_path, monkeypatch):
+    """Three bodies on neighbouring coordinates (tappet, pushrod, valve) and a surging spring:
+    in modes.png no two names along the chain overlap, nor a name the axis label."""
+    import camjax.plot
+
+    data = tables(two_body())
+    data["train"] = [
+        {"name": "tappet", "mass_kg": 0.06},
+        {"name": "pushrod", "mass_kg": 0.04, "stiffness_n_per_mm": 8000.0, "damping_n_s_per_m": 30},
+        {"name": "valve", "mass_kg": 0.07, "stiffness_n_per_mm": 3000.0, "damping_n_s_per_m": 20},
+    ]
+    data["spring"].update(mass_kg=0.05, damping_ratio=0.05)
+    path = tmp_path / "pushrod.toml"
+    path.write_text(Program.from_dict(data).to_toml())
+    saved = {}
+    monkeypatch.setattr(camjax.plot, "save", lambda fig, where: saved.update({where.name: fig}))
+    assert main(["program", str(path), "--rpm", "1000", "--out", str(tmp_path / "out")]) == 0
+    fig = saved["modes.png"]
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    for ax in fig.axes:
+        names = [t for t in ax.get_xticklabels() if t.get_text()]
+        assert [t.get_text() for t in names][:3] == ["tappet", "pushrod", "valve"]
+        boxes = [t.get_window_extent(renderer) for t in names]
+        boxes.append(ax.xaxis.label.get_window_extent(renderer))
+        assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1 :])

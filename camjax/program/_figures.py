@@ -221,6 +221,16 @@ def train_turn(program: Program, rpm: float, history: dict) -> plt.Figure:
     return fig
 
 
+def _stagger(ax, positions: list[int]) -> None:
+    """Drop every other name of neighbouring coordinates (one apart) a line lower, so that the
+    bodies' names along the chain do not run into each other."""
+    lower = False
+    for k, tick in enumerate(ax.xaxis.get_major_ticks()):
+        lower = k > 0 and positions[k] - positions[k - 1] <= 1 and not lower
+        if lower:
+            tick.set_pad(tick.get_pad() + 1.2 * tick.label1.get_fontsize())
+
+
 def modes(program: Program, shown: int = 4) -> plt.Figure:
     """The chain's first ``shown`` undamped modes, the cam held and free, each labelled with
     its frequency: their shapes along the chain from the cam through the bodies and the
@@ -245,6 +255,7 @@ def modes(program: Program, shown: int = 4) -> plt.Figure:
                     label=f"mode {i + 1}: {hz[i]:.4g} Hz")
         ax.axhline(0.0, color="k", lw=0.8)
         ax.set_xticks(list(ticks), list(ticks.values()))
+        _stagger(ax, list(ticks))
         ax.set_title(f"{what}: {hz.size} mode{'s' if hz.size != 1 else ''}"
                      + (f", first {shown} shown" if hz.size > shown else ""),
                      fontsize=10)
