@@ -203,7 +203,9 @@ class ContactSystem(NamedTuple):
     @classmethod
     def of(cls, chain: Chain) -> ContactSystem:
         if chain.arm is not None and chain.has_contacts:
-            raise ValueError("[arm]: a flexible arm with lash is not simulated (give its lash_mm 0)")
+            raise ValueError(
+                "[arm]: a flexible arm with lash is not simulated (give its lash_mm 0)"
+            )
         if chain.bodies[0].lever_mass_kg and not chain.bodies[0].rides:
             raise ValueError(
                 f"[[train]] body 1 ({chain.bodies[0].name}) lever_mass_kg: a lever's inertia on "
@@ -1449,6 +1451,9 @@ def cam_flights(
             a, b = (k0 * approach[n] + c0 * rate[n] for n in (j, j + 1))
             t = dt * (0.0 if a == b else -a / (b - a))
         peak = float(force[best])
+        if rider:  # the landing's force is largest at the touch (w' = -v, w = 0), between samples
+            closing = rate[j] + accel[j] * t
+            peak = max(peak, (accel[j] + float(system.rider_c) * closing) / system.Minv[0, 0])
         sigma = np.linspace(0.0, h, 65)
         for n in (best - 1, best):
             if j + 1 <= n < stop:  # held at both ends
