@@ -1453,7 +1453,8 @@ def cam_flights(
         peak = float(force[best])
         if rider:  # the landing's force is largest at the touch (w' = -v, w = 0), between samples
             closing = rate[j] + accel[j] * t
-            peak = max(peak, (accel[j] + float(system.rider_c) * closing) / system.Minv[0, 0])
+            touch = (accel[j] + float(system.rider_c) * closing) / float(system.Minv[0, 0])
+            peak = max(peak, float(touch))
         sigma = np.linspace(0.0, h, 65)
         for n in (best - 1, best):
             if j + 1 <= n < stop:  # held at both ends
