@@ -190,7 +190,7 @@ def program():
     return Program.load(example_path("swinging_arm_spring"))
 
 
-@pytest.mark.slow  # about three minutes on two loaded cores: the scipy reference at 68 kHz
+@pytest.mark.slow  # one to three minutes on two shared cores: the scipy reference at 68 kHz
 def test_an_arms_first_flight_against_an_event_driven_scipy_integration(program):
     """The first flight at two speeds above the jump against the reference's: the landing
     within 1e-4 degrees and its impact velocity within 1e-5 (measured 2026-11-29: 3e-6 degrees
@@ -209,6 +209,7 @@ def test_an_arms_first_flight_against_an_event_driven_scipy_integration(program)
         assert got.peak_impact_force_n == pytest.approx(want[3], rel=1e-5)
 
 
+@pytest.mark.slow  # about two minutes on two shared cores: turns from rest to 1e-10
 def test_where_contact_holds_the_simulated_arm_is_the_exact_steady_state(program):
     """At a speed below the jump the arm simulated with its cam's contact one-sided
     (``ChainContacts``, settled from rest to 1e-10 of the lift a turn) is the exact linear

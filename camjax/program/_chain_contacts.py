@@ -57,8 +57,8 @@ the drive torque's figures (``torque_jets``, ``torque_figures``) and the Hertz p
 (``ChainContacts.jump_speed``, ``narrowed_crossing``).
 
 **Flights.**  A chain without lash or seat whose exact steady state loses contact runs here
-too, its cam's contact the only one-sided one: from a state of that steady state where the
-cam holds, two turns (``ChainContacts.flights``), whose flights ``cam_flights`` reads
+too, its cam's contact the only one-sided one (a force-closed flexible arm's too, its roller
+riding on the cam): from a state of that steady state where the cam holds, two turns (``ChainContacts.flights``), whose flights ``cam_flights`` reads
 (``flights_at``).
 """
 
@@ -87,16 +87,17 @@ from ._train import Chain
 RIDER_CONTACT_HZ = 8.0
 """A body riding on the cam that lands on it is brought to the cam's motion critically
 damped at this many times the chain's highest natural frequency (``ARM_CONTACT_HZ`` on a
-flexible arm; or the seat's where that is higher): a nearly plastic landing; in lasting contact the constraint holds exactly."""
+flexible arm; or the seat's where that is higher): a nearly plastic landing; in lasting
+contact the constraint holds exactly."""
 ARM_CONTACT_HZ = 1.0
 """``RIDER_CONTACT_HZ`` of a roller on a flexible arm: its landing is critically damped at the
 chain's highest natural frequency with the cam held, the reduced arm's quickest kept mode
 (``Arm.modes``), itself.  The arm's kept modes already set the integration's step, so this
 landing costs little more, where eight times it would multiply the steps and the samples
-(measured 2026-11-29 on commit 6beae5c with this rule, a turn of the example swinging_arm_spring from rest,
-the highest mode 67.8 kHz: 12,355 steps at 3000 rpm and 37,670 at 1000 rpm, against 42,157
-and 215,476 at eight times, and 8,437 and 15,330 with the landing at eight times the first
-mode, 15.4 kHz).  Separation, flight and landing angle do not depend on it; the landing's
+(measured 2026-11-29 on commit 6beae5c with this rule: diffrax's ``num_steps`` of a turn of
+the example swinging_arm_spring from rest, its highest mode 67.8 kHz: 12,355 at 3000 rpm
+and 37,670 at 1000 rpm, under ``turn_steps_refusal``'s 16,063 and 43,189; 42,157 and
+215,476 at eight times it; 8,437 and 15,330 at eight times the first mode, 15.4 kHz).  Separation, flight and landing angle do not depend on it; the landing's
 peak force is this model's."""
 SAMPLES_PER_CONTACT = 12
 """Samples of the reported turn per half period of the stiffest contact (the seat's or the
