@@ -2,6 +2,8 @@
 
 import json
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -297,3 +299,39 @@ def test_a_failed_solve_inside_a_command_is_one_line_not_a_traceback(capsys, mon
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("camjax follower: error: ")
     assert "unstable" in lines[0] or "fixed-step" in lines[0]
+
+
+@pytest.mark.parametrize("argv, user, expected", [
+    (["follower", "--law", "cycloidal"], None, "nan"),
+    (["follower", "--law", "cycloidal"], "raise", "raise"),  # the user's setting wins
+    (["ct"], None, None),  # other commands keep equinox's runtime errors
+])
+def test_the_follower_command_checks_by_select_not_callback(monkeypatch, argv, user, expected):
+    """The executable sets ``EQX_ON_ERROR=nan`` for ``camjax follower`` before equinox is
+    imported, so that its solve carries no host callback (``store_checked_solves``)."""
+    from camjax.cli import build_parser, compile_for_one_run
+
+    monkeypatch.setenv("XLA_FLAGS", os.environ.get("XLA_FLAGS", ""))  # restored afterwards
+    monkeypatch.delitem(sys.modules, "equinox")  # as in a fresh process (restored afterwards)
+    if user is None:
+        monkeypatch.delenv("EQX_ON_ERROR", raising=False)
+    else:
+        monkeypatch.setenv("EQX_ON_ERROR", user)
+    compile_for_one_run(build_parser().parse_args(argv))
+    assert os.environ.get("EQX_ON_ERROR") == expected
+
+
+def test_the_follower_commands_solve_is_kept_in_the_persistent_cache(tmp_path):
+    """Run as the executable, ``camjax follower`` stores its solve (``jit__response``) in
+    JAX's persistent cache, which keeps no program with a host callback: the next run
+    loads it instead of compiling it again."""
+    env = dict(os.environ, CAMJAX_CACHE_DIR=str(tmp_path))
+    env.pop("EQX_ON_ERROR", None)
+    run = subprocess.run(
+        [sys.executable, "-m", "camjax", "follower", "--law", "cycloidal", "--modes", "1",
+         "--axial-modes", "1", "--format", "json"],
+        env=env, capture_output=True, text=True, timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    assert json.loads(run.stdout)["max_constraint_error"] < 1e-6
+    assert list(tmp_path.rglob("jit__response-*")), sorted(p.name for p in tmp_path.iterdir())

@@ -139,7 +139,24 @@ def compile_for_one_run(args: argparse.Namespace) -> None:
     flags = os.environ.get("XLA_FLAGS", "")
     if "xla_cpu_use_fusion_emitters" not in flags:
         os.environ["XLA_FLAGS"] = f"{flags} --xla_cpu_use_fusion_emitters=false".strip()
+    if args.command == "follower":
+        store_checked_solves()  # before one_run_sweep_options imports equinox
     args.sweep_options = one_run_sweep_options()
+
+
+def store_checked_solves() -> None:
+    """Let JAX's persistent cache keep ``camjax follower``'s solve: equinox's runtime
+    checks as a select, not a host callback (``EQX_ON_ERROR=nan``), unless the user set
+    that variable, and only before equinox is imported (it reads it then).
+
+    JAX never stores a program with a host callback, and diffrax checks inside its own
+    ``jit`` that the save times rise and lie in the span, with a callback each: the
+    follower's save times are camjax's own grid, so the checks cannot fail, yet every
+    process compiled the solve again (2.8 s).  Were a check to fail, its value would be
+    NaN, which the follower reports as a failed solve (``SolverError``), never as a number.
+    """
+    if "equinox" not in sys.modules:
+        os.environ.setdefault("EQX_ON_ERROR", "nan")
 
 
 def _end_process(status: dict) -> None:
