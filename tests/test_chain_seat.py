@@ -100,8 +100,9 @@ def test_off_its_seat_the_valve_moves_as_the_closed_chain_on_the_lift_less_delta
     spring = float(exact.train.max_seat_force_n[0])
     assert summary.max_seat_force_n[0] == pytest.approx(spring - static, abs=1e-7 * spring)
     # the peak acceleration falls on a cycloid's quarter, a breakpoint the step control is told
-    # of, where the simulation's interpolant is the chord between samples (8192 a turn, 4.9e-4
-    # of the rise apart): a sine's peak read on a chord is low by up to (pi 4.9e-4)^2 / 2 = 1.2e-6
+    # of, where the simulation's interpolant is the chord between samples (12,288 a turn, 3.3e-4
+    # of the rise apart): a sine's peak read on a chord is low by up to (pi 3.3e-4)^2 / 2 = 5e-7
+    # (measured 4.7e-7)
     a = np.asarray(exact.train.max_acceleration_m_s2[0])
     assert summary.max_acceleration_m_s2[0] == pytest.approx(a, abs=2e-6 * a.max())
 
