@@ -154,6 +154,51 @@ def test_seating_needs_a_seat(example, tmp_path, capsys):
         assert f"{option}: only with --objective seating" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("option", ["rpm_lo", "rpm_hi"])
+def test_a_traced_seating_bound_is_refused_in_one_line(example, option):
+    """The seating objective's speed bounds choose its speeds and simulations on the host:
+    one traced under ``jax.jit``, ``jax.grad`` or ``jax.vmap`` (and through
+    ``design_segment``) is refused in one line naming it, as the program's other objectives
+    refuse one, with no other warning or error first; a concrete array given as one speed is
+    held as a Python float (no static-array warning), several speeds are refused."""
+    import jax
+
+    from camjax.program import MaxSeatingVelocity
+
+    bounds = {"rpm_lo": 2500.0, "rpm_hi": 3000.0}
+    inside = {"rpm_lo": 2600.0, "rpm_hi": 2900.0}[option]
+
+    def largest(value):
+        goal = MaxSeatingVelocity(example, CLOSING, **{**bounds, option: value}, count=2)
+        return goal.value(jnp.ones(2) * value, None, 8.0)
+
+    message = f"{option} must be concrete speeds here (not traced inside jit, vmap or grad)"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for transform, value in (
+            (jax.jit, inside),
+            (jax.grad, inside),
+            (jax.vmap, jnp.array([inside, inside + 10.0])),
+        ):
+            with pytest.raises(ValueError) as error:
+                transform(largest)(value)
+            assert str(error.value) == message
+        with pytest.raises(ValueError) as error:
+            jax.jit(
+                lambda v: design_segment(
+                    example, CLOSING, **{**bounds, option: v}, objective="seating"
+                )
+            )(inside)
+        assert str(error.value) == message
+        goal = MaxSeatingVelocity(
+            example, CLOSING, **{**bounds, option: jnp.asarray(bounds[option])}, count=2
+        )
+    assert type(getattr(goal, option)) is float and list(goal.speeds()) == [2500.0, 3000.0]
+    for several in ([2500.0, 2600.0], np.array([2500.0, 2600.0]), jnp.array([2500.0, 2600.0])):
+        with pytest.raises(ValueError, match=f"^{option} must be one speed in rpm, got 2$"):
+            MaxSeatingVelocity(example, CLOSING, **{**bounds, option: several}, count=2)
+
+
 @pytest.mark.slow
 def test_a_rest_to_rest_closing_is_designed_as_a_spline(tmp_path):
     """The valve example's cycloidal cam (no ramps) on the lash example's chain and seat: its

@@ -34,7 +34,7 @@ FEED = cp.example_path("feed").read_text()
 EDITED = FEED.replace("lift_mm = 8\n", "lift_mm = 7\n").replace("lift_mm = -23\n", "lift_mm = -22\n")
 
 
-STUDIO_KEYS = ("residual_segments",)
+STUDIO_KEYS = ("residual_segments", "design_objectives")
 """What the studio's report holds beside ``camjax program``'s JSON (for its page)."""
 
 
@@ -209,6 +209,100 @@ def test_design_from_the_api(server, tmp_path):
     saved = cp.Program.load(tmp_path / "program.toml")
     reference = json.loads(cp.analyse(saved, np.linspace(400, 1000, 4)).to_json())
     assert_same(kept, reference)
+
+
+SEATING_RPM = "2500:3000:2"  # the valve with lash and a seat: two simulated speeds
+CLOSING = 4  # valve_lash's closing onto its closing ramp
+SEATING = {"steps": 12, "knots": 8, "rounds": 1, "seating_speeds": 2}  # a short design, as the page posts it
+
+
+@pytest.fixture(scope="module")
+def valve_lash():
+    """A studio on the valve with lash and a seat (``valve_lash``)."""
+    running = studio("valve_lash", rpm=SEATING_RPM)
+    yield running
+    running.stop()
+
+
+def _offered(report: dict) -> list[str]:
+    return [o["name"] for o in report["design_objectives"]]
+
+
+def test_design_offers_what_the_program_takes_and_refuses_the_rest_in_one_line(server, valve_lash):
+    """The report names the objectives a design of its program takes, as
+    ``camjax.program.design_objectives`` rules (the page draws its choice from it): seating
+    exactly where the chain has a seat, and only it where the chain has contacts; an
+    objective the program does not take is refused before any work with the library's
+    one line (``design_refusal``); the seating design's own options only with it."""
+    feed = cp.Program.load(cp.example_path("feed"))
+    valve = cp.Program.load(cp.example_path("valve"))  # a chain without a seat
+    lash = cp.Program.load(cp.example_path("valve_lash"))
+    report = call(server.url + "api/report")[1]
+    assert _offered(report) == ["preload", "residual"] and "seating" not in cp.design_objectives(feed)
+    assert call(server.url + "api/program")[1]["design"]["objectives"] == report["design_objectives"]
+    status, report = call(server.url + "api/program?session=no-seat&rpm=2000", cp.example_path("valve").read_text())
+    assert status == 200 and _offered(report) == ["preload", "residual"]
+    assert cp.design_objectives(valve) == ("residual", "preload")
+    report = call(valve_lash.url + "api/report")[1]
+    assert _offered(report) == ["seating"] and cp.design_objectives(lash) == ("seating",)
+    for url, program in ((server.url + "api/design?session=no-seat&segment=1", valve),
+                         (server.url + "api/design?segment=2", feed)):
+        status, answer = call(url + "&objective=seating&rpm=400:1000", "")
+        assert status == 400 and answer == {"error": cp.design_refusal(program, "seating")}
+        assert "needs a valve seat" in answer["error"] and "\n" not in answer["error"]
+    for objective in ("preload", "residual"):  # a chain with lash and a seat: the exact path does not apply
+        status, answer = call(valve_lash.url + f"api/design?segment={CLOSING}&objective={objective}&rpm=2500:3000", "")
+        assert status == 400 and answer == {"error": cp.design_refusal(lash, objective)}
+        assert "objective 'seating' designs a chain with a seat" in answer["error"]
+    status, answer = call(server.url + "api/design?segment=2&objective=preload&rpm=400:1000&rounds=2", "")
+    assert status == 400 and answer == {"error": "rounds: only with objective 'seating', got 'preload'"}
+    status, answer = call(valve_lash.url + f"api/design?segment={CLOSING}&objective=seating&rpm=2500:3000"
+                          "&seating_speeds=0", "")
+    assert status == 400 and answer["error"].startswith("seating_speeds: must be from 1 to ")
+    assert call(server.url + "api/design?session=no-seat")[1] == {"state": "none"}  # nothing started
+
+
+def _seating_m_s(program, rpm) -> float:
+    """The largest seating velocity (m/s) of ``program`` at ``rpm``, simulated apart."""
+    turns = cp.ChainContacts(program, program.chain, min(rpm)).turns(rpm, refine=False)
+    return max(t.seating_velocity_m_s for t in turns)
+
+
+@pytest.mark.slow
+def test_a_seating_design_from_the_api_is_the_librarys(valve_lash):
+    """Slow: two seating designs (the studio's and the library's) and three simulations
+    apart, about two minutes on two shared cores (2026-11-29).  The valve's closing designed from the page for the least seating velocity over
+    2500-3000 rpm (one round of 12 steps on 2 speeds): the studio runs ``design_segment``,
+    whose seating design (``seating_design``) is the command line's, so its before and
+    after are the library's own for the same inputs; the after, the designed program's
+    seating velocity simulated apart, is below the before, the valve's own simulated apart;
+    kept, the workbench holds that program."""
+    url = valve_lash.url
+    query = "&".join(f"{k}={v}" for k, v in SEATING.items())
+    status, job = call(url + f"api/design?segment={CLOSING}&objective=seating&rpm=2500:3000&{query}", "")
+    assert status == 202 and job["objective"] == "seating"
+    job = design_done(url, "default")
+    assert job["state"] == "done", job
+    assert job["step"] == job["steps"] == SEATING["steps"] * SEATING["rounds"]  # the rounds' steps as one count
+    lash = cp.Program.load(cp.example_path("valve_lash"))
+    designed, result = cp.design_segment(lash, CLOSING, 2500.0, 3000.0, objective="seating", progress=False,
+                                         **SEATING)
+    (label,) = result.values
+    assert job["label"] == label and not job["kept_initial"] and not result.kept_initial
+    assert job["before"] == pytest.approx(result.initial_values[label], rel=1e-9)
+    assert job["after"] == pytest.approx(result.values[label], rel=1e-9)
+    speeds = [2500.0, 3000.0]
+    assert job["before"] == pytest.approx(_seating_m_s(lash, speeds), rel=1e-6)  # the law as the design holds it
+    assert job["after"] < job["before"]
+    status, kept = call(url + "api/design/keep", "")
+    assert status == 200
+    kept_program = cp.Program.from_dict(call(url + "api/program")[1]["program"])
+    assert job["after"] == pytest.approx(_seating_m_s(kept_program, speeds), rel=1e-9)
+    assert job["after"] == pytest.approx(_seating_m_s(designed, speeds), rel=1e-9)
+    seating = [c["seating_velocity_m_s"] for c in kept["train"]["contacts"]["speeds"]]
+    assert max(seating) == pytest.approx(job["after"], rel=1e-6)  # the report's reading, refined
+    assert job["curves"]["after"]["seating_velocity_m_s"] == seating  # the page's before and after
+    assert max(job["curves"]["before"]["seating_velocity_m_s"]) == pytest.approx(job["before"], rel=1e-6)
 
 
 SERVO_RPM = "60:120:2"

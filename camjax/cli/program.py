@@ -310,11 +310,10 @@ def program_path(text: str | None, default: str = "indexer") -> Path:
 def run(args) -> int:
     from ..program import (
         MAX_PROFILE_POINTS,
-        ChainContacts,
         Program,
         Speeds,
-        SteadyState,
         analyse,
+        steady_state,
         write_report,
     )
 
@@ -353,7 +352,7 @@ def run(args) -> int:
         motors = _motors(args, program)  # before the analysis: a bad motor file fails at once
         out = output_dir(args.out)
         # a chain with contacts: its simulation, which keeps the turns for --out's files
-        steady = ChainContacts(program, program.chain, rpm.min()) if simulated else SteadyState(program, rpm)
+        steady = steady_state(program, rpm)
         report = analyse(program, rpm, with_flight=not args.no_flight, steady=steady,
                          speed_fluctuation=args.speed_fluctuation, outputs=outputs)
         if out is not None:

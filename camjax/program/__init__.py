@@ -47,6 +47,8 @@ from ._contact import node_contact as node_contact
 from ._contact import refined_contact_stress as refined_contact_stress
 from ._cycle import Cycle as Cycle
 from ._cycle import TrainPeaks as TrainPeaks
+from ._design import design_objectives as design_objectives
+from ._design import design_refusal as design_refusal
 from ._design import design_segment as design_segment
 from ._design import write_program as write_program
 from ._drive import DRIVE_TABLE_FILE_NAMES as DRIVE_TABLE_FILE_NAMES
@@ -132,6 +134,7 @@ from ._report import kinematic_acceleration_m_s2 as kinematic_acceleration_m_s2
 from ._report import max_contact_stress as max_contact_stress
 from ._report import period_ratios as period_ratios
 from ._report import response as response
+from ._report import steady_state as steady_state
 from ._segment import MAX_SEGMENTS as MAX_SEGMENTS
 from ._segment import Segment as Segment
 from ._servo import program_motor_choice as program_motor_choice

@@ -641,28 +641,40 @@ def _turns_compiled():
 _turns = _turns_compiled()
 
 
-def _state_before(z_after, s_target, rpm, system: ContactSystem, grid: _Grid, steps: int = 8):
+def _state_before(
+    z_after, s_target, rpm, system: ContactSystem, grid: _Grid, options: ContactOptions
+):
     """The state (mm, mm per turn) at turn time ``s_target`` from a sample's ``(s, z)`` just
-    after it (at most one sample interval): classic Runge-Kutta steps back along the chain's
-    equations, all on the segment's side of its start (where the motion's acceleration may
-    jump), so the error is the steps' (``(w h)^5``, about 1e-10 at 4096 samples a turn)."""
+    after it (at most one sample interval), and whether the integration succeeded: the
+    chain's equations (``_equations``) integrated back in time by the turn's own method
+    (diffrax's Tsit5 under the simulation's error control, ``options.rtol``/``atol``), all
+    on the segment's side of its start (where the motion's acceleration may jump: the field
+    is read there from the segment's side), so the state is the turn's to its tolerance."""
+    import diffrax
+
     system, grid = jax.tree.map(jnp.asarray, (system, grid))
     _, field, _ = _equations(rpm, system, grid)
-    s, z = z_after[0], z_after[1:]
-    h = (s_target - s) / steps
-    for _ in range(steps):
-        k1 = field(s, z)
-        k2 = field(s + h / 2, z + h / 2 * k1)
-        k3 = field(s + h / 2, z + h / 2 * k2)
-        k4 = field(s + h, z + h * k3)
-        z, s = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), s + h
-    return z
+    solution = diffrax.diffeqsolve(
+        diffrax.ODETerm(field),
+        diffrax.Tsit5(),
+        z_after[0],
+        s_target,
+        None,
+        z_after[1:],
+        saveat=diffrax.SaveAt(t1=True),
+        stepsize_controller=diffrax.PIDController(rtol=options.rtol, atol=options.atol),
+        max_steps=options.max_steps,
+        throw=False,
+    )
+    return solution.ys[-1], solution.result == diffrax.RESULTS.successful
 
 
 _states_before = jax.jit(
     jax.vmap(
-        jax.vmap(_state_before, in_axes=(0, 0, None, None, None)), in_axes=(0, None, 0, None, None)
-    )
+        jax.vmap(_state_before, in_axes=(0, 0, None, None, None, None)),
+        in_axes=(0, None, 0, None, None, None),
+    ),
+    static_argnums=5,
 )
 _sample_jets = jax.jit(jax.vmap(_signal_jets, in_axes=(0, None, None, None)))
 _jets = jax.jit(jax.vmap(_sample_jets, in_axes=(0, 0, None, None)))
@@ -1143,11 +1155,21 @@ class ChainContacts:
         n = self.system.Minv.shape[0]
         after = np.minimum(np.ceil(at * self.samples - 1e-9).astype(int), self.samples)
         states = samples[:, after, -(1 + 2 * n) :]
-        z = np.asarray(
-            _states_before(
-                jnp.asarray(states), jnp.asarray(at), jnp.asarray(rpm), self.system, self._grid
-            )
+        z, ok = _states_before(
+            jnp.asarray(states),
+            jnp.asarray(at),
+            jnp.asarray(rpm),
+            self.system,
+            self._grid,
+            self.options,
         )
+        z, ok = np.asarray(z), np.asarray(ok)
+        if not ok.all():
+            bad = float(rpm[np.argmin(ok.all(axis=1))])
+            raise ValueError(
+                f"[[train]]: the chain's state at a dwell's start at {bad:g} rpm could not be "
+                f"followed back within {self.options.max_steps:,} steps (ContactOptions.max_steps)"
+            )
         y0, ys = self._residual_lift
         out = np.zeros((rpm.size, at.size))
         for i, r in enumerate(rpm):

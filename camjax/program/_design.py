@@ -36,6 +36,8 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     speed range, simulated with the chain's contacts (``MaxSeatingVelocity``: on
     ``seating_speeds`` speeds, default 8 per natural-frequency cycle gained, with
     ``contact_options``), designed in ``rounds`` of its linear model (``seating_design``).
+    An objective the program does not take is refused in one line (``design_refusal``;
+    ``design_objectives`` lists those it takes).
 
     A segment that starts or ends in motion (a polynomial, constant velocity, any law whose
     end velocity is not zero) is designed as a ``CorrectedPolynomial``
@@ -58,21 +60,13 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
     n1, n2 = segment_band(program, segment, rpm_lo, rpm_hi)
     f = program.follower
     zeta = f.damping_ratio * (f.stiffness / (f.stiffness + f.spring_rate)) ** 0.5
-    if not program.one_body and objective not in ("residual", "preload", "seating"):
-        raise ValueError(f"objective {objective!r}: a chain of bodies ([[train]]) is designed at its last body "
-                         "through the whole chain: residual, preload or seating")
     seating_options = {key: design_options.pop(key) for key in ("seating_speeds", "contact_options")
                        if key in design_options}
     if seating_options and objective != "seating":
         raise ValueError(f"{', '.join(seating_options)}: only with objective 'seating', got {objective!r}")
-    chain = program.chain
-    if chain is not None and chain.has_contacts and objective in ("residual", "preload"):
-        given = [f"[[train]] {b.name} lash_mm" for b in chain.bodies if b.lash_mm]
-        given += ["[seat]"] if chain.seat is not None else []
-        raise ValueError(f"objective {objective!r}: the residual and preload objectives design through the exact "
-                         f"steady state of a chain without lash or seat, and this chain has {', '.join(given)}"
-                         + ("; objective 'seating' designs a chain with a seat (its valve's seating velocity)"
-                            if chain.seat is not None else "; a chain with lash and no seat has no design objective"))
+    refusal = design_refusal(program, objective)
+    if refusal is not None:
+        raise ValueError(refusal)
     if objective == "seating":  # the valve's landing on its seat, simulated with the chain's contacts
         goal = MaxSeatingVelocity(program, segment, float(rpm_lo), float(rpm_hi),
                                   count=seating_options.get("seating_speeds"),
@@ -83,10 +77,8 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
         goal = law_design.MaxResidual(n1, n2, damping=zeta)
     elif objective == "ca-ct":
         goal = law_design.MaxCaCt(n1, n2, damping=zeta)
-    elif objective == "preload":
-        goal = MaxPreload(program, segment, float(rpm_lo), float(rpm_hi), damping=zeta)
     else:
-        raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}")
+        goal = MaxPreload(program, segment, float(rpm_lo), float(rpm_hi), damping=zeta)
     seg = program.segments[segment - 1]
     caps = caps or law_design.Caps()
     jerk = _jerk_matched(program, segment)
@@ -121,6 +113,42 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
         result = dataclasses.replace(result, law=seg.law, values={label: start}, kept_initial=True)
     result = dataclasses.replace(result, initial_values={label: start})
     return with_law(program, segment, result.law), result
+
+
+SEAT_NEEDED = ("the seating objective needs a valve seat: give the program's chain of bodies ([[train]]) a "
+               "[seat] (the seating velocity is the last body's landing on it)")
+
+
+def design_refusal(program: Program, objective: str) -> str | None:
+    """Why ``design_segment`` cannot design ``program`` for ``objective``, in one line, or
+    ``None`` where it can: the one place of the rules that depend on the program alone
+    (``design_objectives`` lists what passes them; a segment's own rules, as a segment in
+    motion refusing ``"ca-ct"``, are ``design_segment``'s)."""
+    if objective not in OBJECTIVES:
+        return f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}"
+    chain = program.chain
+    if objective == "seating":
+        return None if chain is not None and chain.seat is not None else SEAT_NEEDED
+    if objective == "ca-ct" and not program.one_body:
+        others = [o for o in OBJECTIVES if o != "ca-ct" and design_refusal(program, o) is None]
+        return (f"objective 'ca-ct': a chain of bodies ([[train]]) is designed at its last body through the "
+                f"whole chain: {' or '.join(others) if others else 'no objective applies to this chain'}")
+    if chain is not None and chain.has_contacts:
+        given = [f"[[train]] {b.name} lash_mm" for b in chain.bodies if b.lash_mm]
+        given += ["[seat]"] if chain.seat is not None else []
+        return (f"objective {objective!r}: the residual and preload objectives design through the exact steady "
+                f"state of a chain without lash or seat, and this chain has {', '.join(given)}"
+                + ("; objective 'seating' designs a chain with a seat (its valve's seating velocity)"
+                   if chain.seat is not None else "; a chain with lash and no seat has no design objective"))
+    if objective == "preload" and program.follower.form_closed:
+        return "the preload objective needs a return spring (a force-closed cam)"
+    return None
+
+
+def design_objectives(program: Program) -> tuple[str, ...]:
+    """The objectives of ``OBJECTIVES`` that ``design_segment`` takes for ``program``
+    (those ``design_refusal`` lets pass), in that order."""
+    return tuple(o for o in OBJECTIVES if design_refusal(program, o) is None)
 
 
 def _jerk_matched(program: Program, segment: int) -> bool:

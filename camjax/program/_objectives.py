@@ -14,9 +14,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..checks import speeds as checked_speeds
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
 from ._cycle import _cycle, residual_modes
 from ._cycle_grid import program_grid, with_segment_law
+from ._design import design_refusal
 from ._dynamics import SteadyState
 from ._jump import even_periods, scan_speeds
 from ._oscillator import CONTACT_FORCE, Oscillator
@@ -59,12 +61,28 @@ def _same_points(grid, original: Program):
     return grid._replace(residual_start=np.asarray(starts, dtype=int))
 
 
-def _plain_speed(value):
-    """A concrete array given as a speed, as Python numbers (a scalar, or a tuple that the
-    check refuses): a static field holds no array."""
-    if isinstance(value, np.ndarray | np.generic | jax.Array) and not isinstance(value, jax.core.Tracer):
-        return np.asarray(value).item() if np.ndim(value) == 0 else tuple(np.asarray(value).ravel().tolist())
-    return value
+def _plain_speed(name: str):
+    """The converter of the speed bound ``name``: a concrete array as Python numbers (a
+    scalar, or a tuple that the check refuses), as a static field holds no array; a traced
+    one refused in ``camjax.checks.speeds``'s one line before it is set (where a static
+    field would warn of a JAX array first): the speeds are chosen on the host."""
+
+    def plain(value):
+        if isinstance(value, jax.core.Tracer):
+            checked_speeds(value, name)  # raises: not concrete
+        if isinstance(value, np.ndarray | np.generic | jax.Array):
+            return np.asarray(value).item() if np.ndim(value) == 0 else tuple(np.asarray(value).ravel().tolist())
+        return value
+
+    return plain
+
+
+def _refuse(program: Program, objective: str) -> None:
+    """A one-line ``ValueError`` where ``program`` cannot be designed for ``objective``
+    (``design_refusal``: the one place of the rules on the program)."""
+    refusal = design_refusal(program, objective)
+    if refusal is not None:
+        raise ValueError(refusal)
 
 
 class AbstractProgramObjective(AbstractObjective):
@@ -75,8 +93,8 @@ class AbstractProgramObjective(AbstractObjective):
 
     program: Program = eqx.field(static=True)
     segment: int = eqx.field(static=True)
-    rpm_lo: float = eqx.field(static=True, converter=_plain_speed)
-    rpm_hi: float = eqx.field(static=True, converter=_plain_speed)
+    rpm_lo: float = eqx.field(static=True, converter=_plain_speed("rpm_lo"))
+    rpm_hi: float = eqx.field(static=True, converter=_plain_speed("rpm_hi"))
     weight: float = eqx.field(static=True, default=1.0)
     damping: float = eqx.field(static=True, default=0.0)
 
@@ -114,8 +132,7 @@ class MaxPreload(AbstractProgramObjective):
     what: ClassVar[str] = "preload"
 
     def __check_init__(self):
-        if self.program.follower.form_closed:
-            raise ValueError("the preload objective needs a return spring (a force-closed cam)")
+        _refuse(self.program, "preload")
 
     def features(self, law):
         """``k e + c e'`` (N) at every grid node and training speed: affine in the law."""
@@ -154,6 +171,7 @@ class MaxProgramResidual(AbstractProgramObjective):
     what: ClassVar[str] = "residual"
 
     def __check_init__(self):
+        _refuse(self.program, "residual")
         if not self.program.residual_segments():
             raise ValueError("the program has no dwell or constant-velocity segment: no residual vibration to design for")
 

@@ -161,6 +161,17 @@ def _blank(value):
     return "" if value is None else value
 
 
+def steady_state(program: Program, rpm) -> SteadyState | ChainContacts:
+    """The steady state that ``analyse``, ``response`` and the report's files read for
+    ``program`` at the speeds ``rpm`` (from the slowest up): a chain with lash or a seat
+    (``Chain.has_contacts``) simulated (``ChainContacts``, which keeps its turns), else the
+    exact one (``SteadyState``)."""
+    chain = program.chain
+    if chain is not None and chain.has_contacts:
+        return ChainContacts(program, chain, Speeds.of(rpm).min())
+    return SteadyState(program, rpm)
+
+
 def analyse(program: Program, rpm, *, with_flight: bool = True,
             steady: SteadyState | ChainContacts | None = None,
             devices=None, speed_fluctuation: float = DEFAULT_SPEED_FLUCTUATION,

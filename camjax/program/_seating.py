@@ -23,7 +23,7 @@ from ..laws import BoundaryPolynomial, BSplineLaw, CorrectedPolynomial
 from ._chain_contacts import ChainContacts, ContactOptions, contact_grid, seating_velocity
 from ._cycle_grid import with_segment_law
 from ._jump import even_periods, scan_speeds
-from ._objectives import _SPEEDS_PER_CYCLE, AbstractProgramObjective, _smooth_max
+from ._objectives import _SPEEDS_PER_CYCLE, AbstractProgramObjective, _refuse, _smooth_max
 from ._program import with_law
 
 
@@ -77,12 +77,7 @@ class MaxSeatingVelocity(AbstractProgramObjective):
     what: ClassVar[str] = "seating"
 
     def __check_init__(self):
-        chain = self.program.chain
-        if chain is None or chain.seat is None:
-            raise ValueError(
-                "the seating objective needs a valve seat: give the program's chain of "
-                "bodies ([[train]]) a [seat] (the seating velocity is the last body's landing on it)"
-            )
+        _refuse(self.program, "seating")
         if self.options is not None and not isinstance(self.options, ContactOptions):
             raise ValueError(
                 f"the seating objective's options must be a ContactOptions, got {self.options!r}"
@@ -248,6 +243,12 @@ class _SeatingModel(AbstractObjective):
         return self.goal.label
 
 
+def _round_progress(progress, round_: int, rounds: int):
+    """``progress(step, total, loss)`` of a round's design as the whole design's: the
+    steps of the rounds before it counted, ``total`` every round's."""
+    return lambda step, total, loss: progress(round_ * total + step, rounds * total, loss)
+
+
 FIRST_STEP = 0.02
 """The first round's step in the designed law's coefficients (a fraction of the lift) that
 the proximal term aims at: ``weight_step = |grad| / FIRST_STEP``."""
@@ -268,7 +269,8 @@ def seating_design(
     ``design_options`` as there) of the seating velocities' linear model about the current
     law (``MaxSeatingVelocity.linearised``) with a proximal step (``_SeatingModel``).  A round
     whose simulated seating velocity is no lower keeps its law and quadruples the proximal
-    weight; one that is halves it.  Returns a ``DesignResult`` whose ``initial_values`` are
+    weight; one that is halves it.  A ``progress`` function (``camjax.design``'s) counts the
+    rounds' steps as one run.  Returns a ``DesignResult`` whose ``initial_values`` are
     the start's (the law in the design's family: ``initial`` fitted or corrected) and whose
     law is the start with a ``DesignNotImproved`` warning where no round improved on it."""
     started_at = time.perf_counter()
@@ -282,7 +284,12 @@ def seating_design(
         law = BSplineLaw.fit(initial, knots, degree)
     started = law
     weight_step, best, history, coefficients, accepted = None, None, [], None, False
-    for _ in range(rounds):
+    progress = design_options.pop("progress", True)
+    for round_ in range(rounds):
+        if callable(progress):  # the rounds' steps as one count: the progress only goes forward
+            design_options["progress"] = _round_progress(progress, round_, rounds)
+        else:
+            design_options["progress"] = progress
         values, jacobian, reported = goal.linearised(law)
         if best is None:
             start_value = best = float(np.max(reported))

@@ -16,7 +16,7 @@ from ._dynamics import SteadyState
 from ._export import profile, write_csv, write_dxf
 from ._groove import groove_turns
 from ._program import Program
-from ._report import Report, response
+from ._report import Report, response, steady_state
 
 RESPONSE_SPEEDS = 10
 """Most speeds whose histories over the turn ``response.csv`` holds (the first ones), with
@@ -37,10 +37,8 @@ def write_report(out, program: Program, report: Report, *, steady: SteadyState |
     out = Path(out)
     plot_rpm = report.plot_rpm(plot_rpm)
     lowest = min(s.rpm for s in report.speeds)
-    chain = program.chain
     if steady is None:
-        steady = (ChainContacts(program, chain, lowest) if chain is not None and chain.has_contacts
-                  else SteadyState(program, lowest))
+        steady = steady_state(program, lowest)
     text = report.to_json() if summary is None else json.dumps(json_ready(summary), indent=1)
     (out / "summary.json").write_text(text + "\n")
     prof = profile(program, points)

@@ -33,6 +33,7 @@ import numpy as np
 from ..caches import carried
 from ._workbench import (
     DEFAULT_RPM,
+    SEATING_OPTIONS,
     Busy,
     FileAccess,
     OutsideRoot,
@@ -492,7 +493,7 @@ class _Handler(BaseHTTPRequestHandler):
         if len(parts) != 2:
             raise ValueError(f"rpm: expected LO:HI (rpm), got {text!r}")
         lo, hi = (_number({"rpm": p}, "rpm", float) for p in parts)
-        options = {k: _number(query, k, int) for k in ("steps", "knots") if k in query}
+        options = {k: _number(query, k, int) for k in ("steps", "knots", *SEATING_OPTIONS) if k in query}
         self._json(bench.start_design(segment, query.get("objective", "preload"), lo, hi, **options),
                    HTTPStatus.ACCEPTED)
 

@@ -40,8 +40,16 @@ cam on a 2-core machine (``camjax design`` takes 6000 for its best law; a design
 here, and may ask for more)."""
 DESIGN_KNOTS = 12
 """Free B-spline coefficients of a design from the page (``camjax design``: 24)."""
-DESIGN_OBJECTIVES = ("preload", "residual")
-"""The page's objectives, as ``camjax.program.design_segment`` names them."""
+DESIGN_OBJECTIVES = {"preload": "least preload over the band", "residual": "least residual vibration",
+                     "seating": "least seating velocity of the valve"}
+"""The page's objectives, as ``camjax.program.design_segment`` names them, with what the
+page calls them; a program is offered those it takes (``design_choices``)."""
+SEATING_ROUNDS = 3
+"""Rounds of a seating design from the page (``camjax.program.seating_design``: 6), each a
+design of ``DESIGN_STEPS`` steps and a simulation of the chain at every speed of the band."""
+SEATING_OPTIONS = ("rounds", "seating_speeds")
+"""A design's options for the seating objective only (``seating_design``'s rounds, its
+speeds over the band)."""
 PROGRAM_FILE_KEYS = ("file", "dxf")
 """Keys of ``[program]`` and of a ``[[segment]]`` that name a file to read (and ``law``
 when it ends in ``.json``)."""
@@ -307,7 +315,7 @@ class Workbench:
         ``rpm``, changing nothing.  The same program (the same structure, whole numbers and
         floats alike) at the same speeds and outputs (``output_set``) is analysed once per
         ``cache``."""
-        from ..program import Program, SteadyState, analyse, program_motor_choice
+        from ..program import Program, analyse, program_motor_choice, steady_state
 
         if not isinstance(data, dict):
             raise ValueError(f"the program must be a table of tables, got {type(data).__name__}")
@@ -320,7 +328,7 @@ class Workbench:
 
         def compute():
             relieve_memory_maps()  # a studio open all day compiles many programs
-            steady = SteadyState(program, rpm)  # a chain of bodies' too (the one compiled cycle)
+            steady = steady_state(program, rpm)  # a chain with lash or a seat: its simulation
             report = json_ready(analyse(program, rpm, with_flight=self.with_flight, steady=steady,
                                         speed_fluctuation=self.speed_fluctuation, outputs=outputs))
             if program.motors:  # a servo: the motor sizing at the same speeds (the page's motor panel)
@@ -331,6 +339,8 @@ class Workbench:
             # the segments each speed's residual_vibration_mm belongs to, in order (1-based):
             # the program's rule, not the page's
             report["residual_segments"] = [i + 1 for i in program.residual_segments()]
+            # the objectives a design of this program takes: the library's rule, not the page's
+            report["design_objectives"] = design_choices(program)
             return program, steady, report, list(report.get("warnings", ()))
 
         return self.cache.get(key, compute)
@@ -388,29 +398,43 @@ class Workbench:
         return {"toml": self.toml, "program": self.data, "rpm": self.rpm_text,
                 "laws": [*laws.names(), "constant-velocity", "polynomial"], "follower_defaults": defaults,
                 "materials_defaults": materials, "fields": program_fields(), "bundle": designed,
-                "design": {"steps": DESIGN_STEPS, "knots": DESIGN_KNOTS, "objectives": list(DESIGN_OBJECTIVES)}}
+                "design": {"steps": DESIGN_STEPS, "knots": DESIGN_KNOTS,
+                           "objectives": design_choices(self.program)}}
 
     # -- designing a segment's law -------------------------------------------------------
 
     def start_design(self, segment: int, objective: str, rpm_lo: float, rpm_hi: float, *,
-                     steps: int = DESIGN_STEPS, knots: int = DESIGN_KNOTS) -> dict:
+                     steps: int = DESIGN_STEPS, knots: int = DESIGN_KNOTS, rounds: int | None = None,
+                     seating_speeds: int | None = None) -> dict:
         """Start designing segment ``segment``'s law (``camjax.program.design_segment``) on a
-        background thread; its progress is ``self.job``.  A bad request is a one-line
-        ValueError before any work; a design already running is ``Busy``."""
+        background thread; its progress is ``self.job``.  ``rounds`` (default
+        ``SEATING_ROUNDS``) and ``seating_speeds`` (default the library's) only with the
+        seating objective.  A bad request, or an objective the program does not take
+        (``camjax.program.design_refusal``), is a one-line ValueError before any work; a
+        design already running is ``Busy``."""
         from .. import law_design
-        from ..program import segment_band
+        from ..program import design_refusal, segment_band
 
         if self.job is not None and self.job.state == "running":
             raise Busy("a design is running: wait for it (GET /api/design) before starting another")
         self.ensure()
         if objective not in DESIGN_OBJECTIVES:
             raise ValueError(f"objective: must be one of {', '.join(DESIGN_OBJECTIVES)}, got {objective!r}")
-        for name, value, most in (("steps", steps, law_design.MAX_STEPS), ("knots", knots, law_design.MAX_KNOTS)):
+        given = {name: value for name, value in (("rounds", rounds), ("seating_speeds", seating_speeds))
+                 if value is not None}
+        if given and objective != "seating":
+            raise ValueError(f"{', '.join(given)}: only with objective 'seating', got {objective!r}")
+        for name, value, most in (("steps", steps, law_design.MAX_STEPS), ("knots", knots, law_design.MAX_KNOTS),
+                                  *((name, value, law_design.MAX_STEPS) for name, value in given.items())):
             if not 1 <= value <= most:
                 raise ValueError(f"{name}: must be from 1 to {most:,}, got {value}")
         segment_band(self.program, segment, rpm_lo, rpm_hi)  # its one-line error names what is wrong
+        refusal = design_refusal(self.program, objective)
+        if refusal is not None:
+            raise ValueError(refusal)
+        options = {"rounds": SEATING_ROUNDS, **given} if objective == "seating" else {}
         job = self.job = DesignJob(segment, objective, float(rpm_lo), float(rpm_hi), steps, knots,
-                                   data=self.data, rpm=self.rpm, before=self.report)
+                                   data=self.data, rpm=self.rpm, before=self.report, options=options)
         threading.Thread(target=carried(self._design), args=(job, self.program), name="camjax-studio-design",
                          daemon=True).start()
         return job.as_dict()
@@ -428,7 +452,7 @@ class Workbench:
 
         try:
             new, result = design_segment(program, job.segment, job.rpm_lo, job.rpm_hi, objective=job.objective,
-                                         steps=job.steps, knots=job.knots, progress=progress)
+                                         steps=job.steps, knots=job.knots, progress=progress, **job.options)
             (job.label, job.after_value), = result.values.items()
             job.before_value, job.kept_initial = result.initial_values[job.label], result.kept_initial
             job.step = job.steps
@@ -519,18 +543,32 @@ def program_fields() -> dict:
             "chain_replaces": list(CLASSIC_FIELDS), "arm": arm}
 
 
+def design_choices(program) -> list[dict]:
+    """The page's objectives (``DESIGN_OBJECTIVES``) that ``program`` takes
+    (``camjax.program.design_objectives``: the library's rule), as ``{name, label}``."""
+    from ..program import design_objectives
+
+    takes = design_objectives(program)
+    return [{"name": name, "label": label} for name, label in DESIGN_OBJECTIVES.items() if name in takes]
+
+
 def _file_name(name: str) -> str:
     return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) or "program"
 
 
 def _speed_curves(report: dict | None) -> dict | None:
-    """The speeds of a report, its minimum preload and its largest residual vibration at each."""
+    """The speeds of a report, its minimum preload and its largest residual vibration at
+    each, and for a chain with a seat the valve's seating velocity (m/s; ``None``
+    elsewhere)."""
     if report is None:
         return None
     speeds = report["speeds"]
+    contacts = (report.get("train") or {}).get("contacts")
+    seated = contacts is not None and any(c["seating_velocity_m_s"] is not None for c in contacts["speeds"])
     return {"rpm": [s["rpm"] for s in speeds], "min_preload_n": [s["min_preload_n"] for s in speeds],
             "max_residual_mm": [max(s["residual_vibration_mm"]) if s["residual_vibration_mm"] else None
-                                for s in speeds]}
+                                for s in speeds],
+            "seating_velocity_m_s": [c["seating_velocity_m_s"] for c in contacts["speeds"]] if seated else None}
 
 
 @dataclasses.dataclass
@@ -548,6 +586,7 @@ class DesignJob:
     steps: int
     knots: int
     data: dict | None = None  # the program's structure when it started
+    options: dict = dataclasses.field(default_factory=dict)  # design_segment's further options
     rpm: object = None  # camjax.program.Speeds
     before: dict | None = None
     state: str = "running"

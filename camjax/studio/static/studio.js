@@ -379,6 +379,17 @@ function renderDesign() {
     pick.appendChild(opt);
   });
   if ([...pick.options].some((o) => o.value === was)) pick.value = was;
+  // the objectives this program takes: the server's rule (its report), in the server's words
+  const objective = $("d-obj"), wasObjective = objective.value;
+  objective.innerHTML = "";
+  ((report && report.design_objectives) || designDefaults.objectives || []).forEach((o) => {
+    const opt = document.createElement("option");
+    opt.value = o.name; opt.textContent = o.label;
+    objective.appendChild(opt);
+  });
+  if ([...objective.options].some((o) => o.value === wasObjective)) objective.value = wasObjective;
+  $("d-start").disabled = !objective.options.length || $("design").dataset.state === "running";
+  $("d-start").title = objective.options.length ? "" : "no design objective applies to this program";
   if (!$("d-steps").value) $("d-steps").value = designDefaults.steps;
   if (report && !$("d-lo").value) {
     const rpm = report.speeds.map((x) => x.rpm);
@@ -440,6 +451,11 @@ function showDesign(job) {
     {label: "before", y: b.min_preload_n, dash: [4, 3], color: "#777"}, {label: "after", y: a.min_preload_n}], so);
   plot("c-d-residual", "largest residual vibration (mm): before and after", b.rpm, [
     {label: "before", y: b.max_residual_mm, dash: [4, 3], color: "#777"}, {label: "after", y: a.max_residual_mm}], so);
+  const seated = b.seating_velocity_m_s !== null && b.seating_velocity_m_s !== undefined;
+  $("c-d-seating").hidden = !seated;
+  if (seated) plot("c-d-seating", "valve seating velocity (m/s): before and after", b.rpm, [
+    {label: "before", y: b.seating_velocity_m_s, dash: [4, 3], color: "#777"},
+    {label: "after", y: a.seating_velocity_m_s}], so);
 }
 
 async function finishDesign(action) {
