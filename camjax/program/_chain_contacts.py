@@ -344,6 +344,17 @@ def turn_steps_refusal(
     )
 
 
+def _valve_travel(program, chain: Chain):
+    """The chain's elements ``(j, body)`` (from 1), each one's lash referred to the valve
+    (``lash_j prod_{i > j} r_i``, mm), the cam's largest lift and the valve's lift through
+    the chain (the cam's times the ratios, mm)."""
+    elements = [(j, b) for j, b in enumerate(chain.bodies, 1) if not b.rides]
+    after = np.cumprod([b.ratio for _, b in elements][::-1])[::-1]  # prod_{i >= j} r_i
+    referred = [b.lash_mm * float(a / b.ratio) for (_, b), a in zip(elements, after)]
+    lift = float(np.max(program.lift(np.arange(3600) * 0.1)[0]))
+    return elements, referred, lift, lift * float(after[0])
+
+
 def lash_refusal(program, chain: Chain) -> str | None:
     """Lash the cam's lift cannot take up: with a seat the valve leaves it only once the cam,
     through the levers, has closed every lash, so where the lash referred to the valve
@@ -353,15 +364,9 @@ def lash_refusal(program, chain: Chain) -> str | None:
     there the preload closes the lash at rest)."""
     if chain.seat is None:
         return None
-    elements = [(j, b) for j, b in enumerate(chain.bodies, 1) if not b.rides]
-    after = np.cumprod([b.ratio for _, b in elements][::-1])[::-1]  # prod_{i >= j} r_i
-    referred = [b.lash_mm * float(a / b.ratio) for (_, b), a in zip(elements, after)]
+    elements, referred, lift, valve = _valve_travel(program, chain)
     total = sum(referred)
-    if not total:
-        return None
-    lift = float(np.max(program.lift(np.arange(3600) * 0.1)[0]))
-    valve = lift * float(after[0])
-    if total < valve:
+    if not total or total < valve:
         return None
     j, body = elements[int(np.argmax(referred))]
     return (
@@ -369,6 +374,29 @@ def lash_refusal(program, chain: Chain) -> str | None:
         f"({total:.4g} mm at the valve) is not less than the valve's lift through the chain "
         f"({valve:.4g} mm: the cam's {lift:.4g} mm times the ratios): the lash never closes and "
         "the valve never leaves its seat (a valve's lash is a few tenths of a mm)"
+    )
+
+
+def seat_refusal(program, chain: Chain) -> str | None:
+    """A seat the cam's lift cannot lift the valve off: at rest the spring's preload ``P``
+    squeezes the seat by ``P / k_seat``, and the valve leaves it only once the cam, through
+    the levers, has closed the lash and lifted it by that much, so where the squeeze and the
+    lash referred to the valve reach the valve's lift through the chain, the valve never
+    leaves its seat even with a rigid chain (a softer chain lifts it less).  ``None`` where
+    the lift exceeds them, or without a seat."""
+    if chain.seat is None or chain.spring is None:
+        return None
+    _, referred, lift, valve = _valve_travel(program, chain)
+    squeeze = chain.spring.preload_n / chain.seat.stiffness_n_per_mm
+    lash = sum(referred)
+    if squeeze + lash < valve:
+        return None
+    return (
+        f"[seat] stiffness_n_per_mm = {chain.seat.stiffness_n_per_mm:g}: the spring's preload "
+        f"({chain.spring.preload_n:g} N) squeezes the seat by {squeeze:.4g} mm at rest, which with "
+        f"the lash ({lash:.4g} mm at the valve) is not less than the valve's lift through the "
+        f"chain ({valve:.4g} mm: the cam's {lift:.4g} mm times the ratios): the valve never "
+        "leaves its seat (a valve's seat takes tens of thousands of N/mm)"
     )
 
 
@@ -821,18 +849,23 @@ def seat_landings(seat_closed: np.ndarray, approach: np.ndarray) -> list[int]:
     """The samples from which each landing of a turn on the seat is read: the last one in
     flight (``approach``, the seat's in m, not yet positive) before each closing of
     ``seat_closed`` (per sample of the turn), the seating first (the closing that ends the
-    longest time off the seat), then the bounces in turn order."""
+    longest time off the seat), then the bounces in turn order.
+
+    A closing with no sample in flight since the seat last opened is no landing: the seat's
+    force only dipped (its dashpot unloading it) while the valve stayed on it.  A turn whose
+    valve never leaves its seat, or never lands on it, has none."""
     closes, opens = _crossings(seat_closed)
-    if not closes.size:
+    m = seat_closed.size
+    landings, lengths = [], []
+    for i, length in zip(closes, _interval_lengths(seat_closed, closes, opens)):
+        flight = [k % m for k in range(int(i), int(i) - int(length), -1) if approach[k % m] <= 0]
+        if flight:  # the last sample in flight (touching already at the closing's sample)
+            landings.append(int(flight[0]))
+            lengths.append(int(length))
+    if not landings:
         return []
-    first = int(np.argmax(_interval_lengths(seat_closed, closes, opens)))
-    landings = []
-    for k in range(closes.size):
-        i = int(closes[(first + k) % closes.size])
-        while approach[i] > 0:  # touching already, below the threshold of closed:
-            i -= 1  # read the landing from the last sample in flight
-        landings.append(i)
-    return landings
+    first = int(np.argmax(lengths))
+    return landings[first:] + landings[:first]
 
 
 def _interval_lengths(closed: np.ndarray, closings: np.ndarray, openings: np.ndarray) -> np.ndarray:
@@ -881,6 +914,7 @@ class ChainContacts:
         self.system = ContactSystem.of(chain)
         for refusal in (
             lash_refusal(program, chain),
+            seat_refusal(program, chain),
             turn_steps_refusal(chain, self.system, self.rpm_min, self.options.max_steps),
         ):
             if refusal is not None:

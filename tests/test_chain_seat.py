@@ -1,0 +1,103 @@
+"""A valve's seat: its landings read from a turn's samples, and the seats and chains that
+never let the valve leave it (refused before simulating, or warned of in the report)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from camjax.program import ChainContacts, Program
+from camjax.program._chain_contacts import seat_landings
+
+EXAMPLE = "camjax/program/examples/trains/valve_lash.toml"
+VALVE_LIFT_MM = 1.5 * (0.05 + 0.2 + 5.5)  # the example's cam lift through its rocker
+
+
+@pytest.fixture(scope="module")
+def example():
+    return Program.load(EXAMPLE)
+
+
+def _with_seat(program, stiffness_n_per_mm: float):
+    chain = program.chain
+    seat = dataclasses.replace(chain.seat, stiffness_n_per_mm=stiffness_n_per_mm)
+    return dataclasses.replace(program, chain=dataclasses.replace(chain, seat=seat))
+
+
+def test_seat_landings_read_the_last_sample_in_flight():
+    """One long flight over the turn's end (samples 90 to 9, landing at 10) and a bounce
+    (samples 40 to 44): the seating is read from sample 9, the bounce from 44; where the
+    valve touches already at the closing's sample, from the one before."""
+    m = 100
+    closed = np.ones(m, bool)
+    closed[90:] = closed[:10] = False
+    closed[40:45] = False
+    approach = np.where(closed, 1e-6, -1e-6)
+    assert seat_landings(closed, approach) == [9, 44]
+    touching = approach.copy()
+    touching[9] = 1e-9  # the seat's approach positive, its force not yet past closed
+    assert seat_landings(closed, touching) == [8, 44]
+    wrapped = np.ones(m, bool)
+    wrapped[50:] = False  # open from sample 50 to the turn's last one, closing at 0
+    approach = np.where(wrapped, 1e-6, -1e-6)
+    assert seat_landings(wrapped, approach) == [m - 1]
+
+
+def test_a_turn_that_never_leaves_or_never_lands_on_its_seat_has_no_landing():
+    """The seat's force dipping under its threshold (its dashpot unloading it) while the valve
+    stays on it is no landing; nor is a turn the valve spends wholly off its seat, or wholly
+    on it."""
+    m = 6145
+    closed = np.ones(m, bool)
+    closed[1000:3000] = False  # the seat's force below closed, the valve still pressed into it
+    approach = np.full(m, 0.25)  # 250 N on 1 N/mm: 250 mm of squeeze, never released
+    assert seat_landings(closed, approach) == []
+    assert seat_landings(np.zeros(m, bool), np.full(m, -1e-3)) == []
+    assert seat_landings(np.ones(m, bool), np.full(m, 1e-3)) == []
+    # a dip on the seat beside a true flight: only the flight lands
+    approach = np.full(m, 1e-6)
+    closed[4000:4100] = False
+    approach[4000:4100] = -1e-6
+    assert seat_landings(closed, approach) == [4099]
+
+
+def test_a_seat_the_lift_cannot_lift_the_valve_off_is_refused_before_simulating(example):
+    """The example's 250 N preload squeezes a 1 N/mm seat by 250 mm, a 10 N/mm one by 25 mm,
+    against the valve's 8.625 mm lift less the 0.15 mm lash: refused when the simulation is
+    built, naming the seat's stiffness and the numbers.  A 100 N/mm seat (2.5 mm) builds
+    (its warning is the report's)."""
+    for stiffness, squeeze in ((1.0, "250"), (10.0, "25")):
+        soft = _with_seat(example, stiffness)
+        with pytest.raises(ValueError) as error:
+            ChainContacts(soft, soft.chain, 2000.0)
+        assert str(error.value) == (
+            f"[seat] stiffness_n_per_mm = {stiffness:g}: the spring's preload (250 N) squeezes the "
+            f"seat by {squeeze} mm at rest, which with the lash (0.15 mm at the valve) is not less "
+            f"than the valve's lift through the chain ({VALVE_LIFT_MM:.4g} mm: the cam's 5.75 mm "
+            "times the ratios): the valve never leaves its seat (a valve's seat takes tens of "
+            "thousands of N/mm)"
+        )
+    # the squeeze and the lash just under the lift: 250 / k + 0.15 = 0.99 * 8.625
+    near = _with_seat(example, 250.0 / (0.99 * VALVE_LIFT_MM - 0.15))
+    ChainContacts(near, near.chain, 2000.0)
+    ChainContacts(_with_seat(example, 100.0), _with_seat(example, 100.0).chain, 2000.0)
+
+
+def test_the_command_refuses_a_soft_seat_in_one_line(tmp_path, capsys):
+    """The trial's ``[seat] stiffness_n_per_mm = 1`` file: one line, exit 2, no traceback."""
+    from camjax.cli import main
+
+    text = open(EXAMPLE).read().replace("stiffness_n_per_mm = 50000", "stiffness_n_per_mm = 1")
+    assert "stiffness_n_per_mm = 1\n" in text
+    path = tmp_path / "seat1.toml"
+    path.write_text(text)
+    code = main(["program", str(path), "--rpm", "2000"])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    (line,) = err.strip().splitlines()
+    assert (
+        "[seat] stiffness_n_per_mm = 1: the spring's preload (250 N) squeezes the seat by 250"
+        in line
+    )
