@@ -8,8 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from camjax.program import ChainContacts, Program
-from camjax.program._chain_contacts import seat_landings
+from camjax.program import ChainContacts, Program, seat_landings
 
 EXAMPLE = "camjax/program/examples/trains/valve_lash.toml"
 VALVE_LIFT_MM = 1.5 * (0.05 + 0.2 + 5.5)  # the example's cam lift through its rocker
