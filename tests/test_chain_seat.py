@@ -100,3 +100,37 @@ def test_the_command_refuses_a_soft_seat_in_one_line(tmp_path, capsys):
         "[seat] stiffness_n_per_mm = 1: the spring's preload (250 N) squeezes the seat by 250"
         in line
     )
+
+
+def test_a_valve_that_never_leaves_its_seat_is_warned_of(example):
+    """The example with its rocker at 20 N/mm instead of 2000: the 250 N preload compresses it
+    by 12.5 mm, more than the valve's 8.625 mm lift, so the valve stays on its seat (within the
+    seat's 250 / 50000 mm squeeze) all turn: no seating, a lift error of the whole lift, and a
+    warning in the report (stderr, JSON) naming the rocker's stiffness."""
+    from camjax.program import analyse
+
+    chain = example.chain
+    soft = dataclasses.replace(
+        example,
+        chain=dataclasses.replace(
+            chain,
+            bodies=(
+                chain.bodies[0],
+                dataclasses.replace(chain.bodies[1], stiffness_n_per_mm=20.0),
+            ),
+        ),
+    )
+    report = analyse(soft, [2000.0])
+    (speed,) = report.train["contacts"]["speeds"]
+    assert speed["seating_velocity_m_s"] is None and speed["bounce_count"] == 0
+    error = report.train["speeds"][0]["max_lift_error_mm"]
+    assert VALVE_LIFT_MM - 250 / 50000 - 1e-6 <= error <= VALVE_LIFT_MM
+    (line,) = [w for w in report.warnings if "kinematic lift" in w]
+    assert line == (
+        f"at 2000 rpm the last body (valve) misses its kinematic lift ({VALVE_LIFT_MM:.4g} mm: "
+        f"the cam's lift times the ratios) by up to {error:.4g} mm (100%, at 2000 rpm): it "
+        "barely follows the cam and may never leave its seat; the chain gives most at "
+        "[[train]] body 2 (valve) stiffness_n_per_mm = 20 (the spring's preload, 250 N, "
+        "compresses it by 12.5 mm at the last body): stiffen it"
+    )
+    assert line in report.as_dict()["warnings"]

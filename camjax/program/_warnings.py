@@ -74,6 +74,59 @@ def seat_warnings(program: Program) -> list[str]:
             "a valve's seat yields microns; check its unit (N/mm)"]
 
 
+LIFT_ERROR_RATIO = 0.5
+"""A train's last body whose largest lift error reaches this part of its kinematic lift (the
+cam's largest lift times the ratios) does not follow the cam: a valve that barely opens, or
+never leaves its seat, is not a result to read as it stands (``lift_error_warnings``)."""
+
+
+def _softest_give(chain) -> tuple[str, float]:
+    """The chain's field that gives most at the last body, and how much (mm per N of the
+    spring's force there): each element's ``(prod_{i > j} r_i)^2 / k_j`` (its force and its
+    compression both referred through the levers after it), the seat's ``1 / k_seat``."""
+    gives, after = [], 1.0
+    for j in range(len(chain.bodies), 0, -1):
+        body = chain.bodies[j - 1]
+        if body.rides:
+            continue
+        gives.append((f"[[train]] body {j} ({body.name}) stiffness_n_per_mm = {body.stiffness_n_per_mm:g}",
+                      after**2 / body.stiffness_n_per_mm))
+        after *= body.ratio
+    if chain.seat is not None:
+        gives.append((f"[seat] stiffness_n_per_mm = {chain.seat.stiffness_n_per_mm:g}",
+                      1.0 / chain.seat.stiffness_n_per_mm))
+    return max(gives, key=lambda g: g[1])
+
+
+def lift_error_warnings(program: Program, report: dict) -> list[str]:
+    """One line where a train's last body misses its kinematic lift (the cam's largest lift
+    times the ratios) by ``LIFT_ERROR_RATIO`` of it or more at some speed of ``report``:
+    the valve barely follows the cam (with a seat, it may never leave it), so the forces and
+    the seating are those of a valve that does not open.  It names the speeds and the field
+    that gives most at the valve (``_softest_give``), with what the spring's preload
+    compresses it by there."""
+    chain, train = program.chain, (report or {}).get("train")
+    if chain is None or not train:
+        return []
+    ratio = math.prod(b.ratio for b in chain.bodies if not b.rides)
+    valve = ratio * float(np.max(np.abs(program.lift(np.arange(3600) * 0.1)[0])))
+    bad = [s for s in train["speeds"] if s["max_lift_error_mm"] >= LIFT_ERROR_RATIO * valve]
+    if not bad or valve <= 0:
+        return []
+    worst = max(bad, key=lambda s: s["max_lift_error_mm"])
+    field, give = _softest_give(chain)
+    preload = chain.spring.preload_n if chain.spring is not None else 0.0
+    squeeze = (f" (the spring's preload, {preload:g} N, compresses it by {preload * give:.4g} mm "
+               "at the last body)") if preload else ""
+    name, speeds = chain.bodies[-1].name, ", ".join(f"{s['rpm']:g}" for s in bad)
+    return [f"at {speeds} rpm the last body ({name}) misses its "
+            f"kinematic lift ({valve:.4g} mm: the cam's lift times the ratios) by up to "
+            f"{worst['max_lift_error_mm']:.4g} mm ({100 * worst['max_lift_error_mm'] / valve:.3g}%, "
+            f"at {worst['rpm']:g} rpm): it barely follows the cam"
+            + (" and may never leave its seat" if chain.seat is not None else "")
+            + f"; the chain gives most at {field}{squeeze}: stiffen it"]
+
+
 def design_warnings(program: Program, report=None) -> list[str]:
     """Where the input or a result lies outside what the design rules and the models hold,
     one line each (empty where all is well): the program's own numbers (sizes past
@@ -133,6 +186,7 @@ def design_warnings(program: Program, report=None) -> list[str]:
                        f"({worst['max_contact_stress_mpa']:.3g} MPa) is not to be trusted; check "
                        "follower.contact_width_mm and the moduli")
     out += _unsettled_grooves(report["speeds"])
+    out += lift_error_warnings(program, report)
     return out
 
 
