@@ -25,6 +25,7 @@ from camjax.program import (
     Spring,
     SteadyState,
     analyse,
+    contacts_note,
     flights_at,
 )
 
@@ -215,6 +216,7 @@ def test_the_report_carries_the_contacts(example, example_turns):
         assert row["seating_velocity_m_s"] == pytest.approx(turn.seating_velocity_m_s, rel=1e-9)
         assert row["bounce_count"] == len(turn.bounces)
         assert row["lash_openings"]["valve"]["count"] == len(turn.lash_openings_deg["valve"])
+    assert contacts["note"] == contacts_note(example.chain)
     assert contacts["lowest_separation_rpm"] == {"cam": None, "valve": None, "seat": 1000.0}
     assert contacts["separation_below_range"] == {"cam": False, "valve": False, "seat": True}
     assert report.jump_speed_rpm is None and not report.jump_below_range

@@ -134,3 +134,31 @@ def test_a_valve_that_never_leaves_its_seat_is_warned_of(example):
         "compresses it by 12.5 mm at the last body): stiffen it"
     )
     assert line in report.as_dict()["warnings"]
+
+
+def test_the_contacts_note_says_what_the_chain_has(example):
+    """The note's rest state is the chain's own (``ContactSystem.of``): the valve on its seat
+    with the lash open; a seat without lash, the elements just touching; lash without a
+    seat, the closed chain carrying the preload, the lash closed, and no seat's separation."""
+    from camjax.program import contacts_note
+
+    chain = example.chain
+    seated = contacts_note(chain)
+    assert (
+        "; the rest state has the valve on its seat carrying the spring's preload, the lash open;"
+        in seated
+    )
+    assert "while the valve is off its seat, the seat where the valve bounces;" in seated
+    no_lash = dataclasses.replace(
+        chain, bodies=(chain.bodies[0], dataclasses.replace(chain.bodies[1], lash_mm=0.0))
+    )
+    assert "on its seat carrying the spring's preload, the elements just touching;" in (
+        contacts_note(no_lash)
+    )
+    unseated = contacts_note(dataclasses.replace(chain, seat=None))
+    assert (
+        "; no seat: the rest state is the closed chain carrying the spring's preload through the "
+        "levers, the lash closed by it; extremes" in unseated
+    )
+    assert "seat where" not in unseated and "on its seat" not in unseated
+    assert "; a contact separates where it opens; jump speed:" in unseated

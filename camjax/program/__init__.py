@@ -31,6 +31,7 @@ from ._chain_contacts import ChainContacts as ChainContacts
 from ._chain_contacts import ContactOptions as ContactOptions
 from ._chain_contacts import ContactSummary as ContactSummary
 from ._chain_contacts import ContactTurn as ContactTurn
+from ._chain_contacts import contacts_note as contacts_note
 from ._chain_contacts import seat_landings as seat_landings
 from ._compensate import Compensation as Compensation
 from ._compensate import check_smooth as check_smooth

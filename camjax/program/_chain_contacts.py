@@ -1534,16 +1534,36 @@ def contact_section(chain: Chain, turns: list[ContactTurn]) -> dict:
     return {"speeds": per_speed, "lowest_separation_rpm": lowest}
 
 
-CONTACTS_NOTE = (
-    "lash or a seat: the chain's periodic steady state is simulated (diffrax) with its one-sided "
-    "contacts; the rest state has the valve on its seat carrying the spring's preload, the lash open; "
-    "extremes are refined between the samples of the settled turn; a contact separates where it opens "
-    "while the valve is off its seat (anywhere without a seat), the seat where the valve bounces; jump "
-    "speed: the lowest speed at which the cam separates, searched between the speeds given to "
-    "ContactOptions.jump_tolerance_rpm; lowest_separation_rpm: the same for each contact (the cam's "
-    "is the jump speed), the lowest speed given where it separates there already "
-    "(separation_below_range true), none where it holds at every speed"
-)
+def contacts_note(chain: Chain) -> str:
+    """The note of the report's ``contacts``: how the chain is simulated, its rest state as
+    this chain has it (``ContactSystem.of``: the valve on its seat with each lash open, or,
+    without a seat, the closed chain carrying the spring's preload, each lash closed) and
+    what separation means for it."""
+    lash = any(b.lash_mm for b in chain.bodies)
+    if chain.seat is not None:
+        rest = "the rest state has the valve on its seat carrying the spring's preload, " + (
+            "the lash open" if lash else "the elements just touching"
+        )
+        separates = (
+            "a contact separates where it opens while the valve is off its seat, the seat where "
+            "the valve bounces"
+        )
+    else:
+        carried = (
+            "carrying the spring's preload through the levers, the lash closed by it"
+            if chain.spring is not None and chain.spring.preload_n
+            else "with each lash just closed (no spring preloads it)"
+        )
+        rest = f"no seat: the rest state is the closed chain {carried}"
+        separates = "a contact separates where it opens"
+    return (
+        "lash or a seat: the chain's periodic steady state is simulated (diffrax) with its one-sided "
+        f"contacts; {rest}; extremes are refined between the samples of the settled turn; "
+        f"{separates}; jump speed: the lowest speed at which the cam separates, searched between "
+        "the speeds given to ContactOptions.jump_tolerance_rpm; lowest_separation_rpm: the same "
+        "for each contact (the cam's is the jump speed), the lowest speed given where it "
+        "separates there already (separation_below_range true), none where it holds at every speed"
+    )
 
 
 def simulated_train(
@@ -1565,7 +1585,7 @@ def simulated_train(
     rpm = np.asarray(rpm, dtype=float)
     simulation = simulation or ChainContacts(program, chain, float(rpm.min()), options)
     summary, turns = simulation.summary(rpm)
-    contacts = {"note": CONTACTS_NOTE, **contact_section(chain, turns)}
+    contacts = {"note": contacts_note(chain), **contact_section(chain, turns)}
     cam = np.array([t.separates.get("cam", False) for t in turns])
     below = bool(cam[np.argmin(rpm)])
     jump = None
