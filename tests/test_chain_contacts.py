@@ -217,6 +217,11 @@ def test_the_report_carries_the_contacts(example, example_turns):
         assert row["bounce_count"] == len(turn.bounces)
         assert row["lash_openings"]["valve"]["count"] == len(turn.lash_openings_deg["valve"])
     assert contacts["note"] == contacts_note(example.chain)
+    # the example's spring has no mass: no surge, exactly, as the exact path's zero row gives
+    assert not example.chain.spring.surges
+    assert [s["max_surge_n"] for s in report.train["speeds"]] == [0.0, 0.0]
+    for turn in example_turns:
+        assert not np.any(turn.surge_n) and not np.any(turn.refined.jets[:, 3])
     assert contacts["lowest_separation_rpm"] == {"cam": None, "valve": None, "seat": 1000.0}
     assert contacts["separation_below_range"] == {"cam": False, "valve": False, "seat": True}
     assert report.jump_speed_rpm is None and not report.jump_below_range

@@ -511,13 +511,22 @@ def _equations(rpm, system: ContactSystem, grid: _Grid):
         y, yd, ydd = jet(s)
         u, v = 1e-3 * z[:n], 1e-3 * z[n:] / period
         acc, f, _, _, _, lam, _ = _state_forces(system, y, yd, ydd, u, v)
-        last = system.body_rows[-1]
         spring = system.preload - system.spring_K @ u - system.spring_C @ v - system.spring_M @ acc
-        surge = spring - system.preload - system.rate * u[last]
-        head = jnp.stack([lam + system.g_cam @ f, 1e3 * yd * period, spring, surge])
+        head = jnp.stack(
+            [lam + system.g_cam @ f, 1e3 * yd * period, spring, _surge(system, u, v, acc)]
+        )
         return jnp.concatenate([head, acc[system.body_rows]])
 
     return jet, field, signals
+
+
+def _surge(system: ContactSystem, u, v, acc):
+    """The spring's surge (N): its force at its seat less the static ``F_0 + k_s x_N``, from
+    the state as the exact path's row (``-K_seat - k_s e_N``, its preload left out), so that a
+    spring without mass, whose row is zero, has none: exactly 0, not the rounding of the force
+    less its static part."""
+    row = system.spring_K.at[system.body_rows[-1]].add(system.rate)
+    return -(row @ u) - system.spring_C @ v - system.spring_M @ acc
 
 
 _SIGNALS = ("cam", "lift_rate", "spring", "surge")
@@ -584,7 +593,7 @@ def _solve(
                         v[last],
                         acc[last],
                         spring,
-                        spring - system.preload - system.rate * u[last],
+                        _surge(system, u, v, acc),
                         1e3 * y,
                     ]
                 ),
