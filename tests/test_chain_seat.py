@@ -162,3 +162,30 @@ def test_the_contacts_note_says_what_the_chain_has(example):
     )
     assert "seat where" not in unseated and "on its seat" not in unseated
     assert "; a contact separates where it opens; jump speed:" in unseated
+
+
+def test_a_bad_seat_table_is_named(example):
+    """A misspelt [seat] key is named; a [seat] beside the classic follower gets the seat's
+    own message, not the spring's."""
+    import tomllib
+
+    data = tomllib.loads(example.to_toml())
+    data["seat"] = {"stiffness_n_per_mm": 50000, "dampin_n_s_per_m": 5}
+    with pytest.raises(ValueError) as error:
+        Program.from_dict(data)
+    assert str(error.value) == (
+        "[seat]: unknown field(s) dampin_n_s_per_m; it takes stiffness_n_per_mm and optionally "
+        "damping_n_s_per_m"
+    )
+    data["seat"] = {"damping_n_s_per_m": 5}
+    with pytest.raises(ValueError, match=r"^\[seat\]: it takes stiffness_n_per_mm and"):
+        Program.from_dict(data)
+    classic = {key: value for key, value in data.items() if key not in ("train", "spring")}
+    classic["follower"] = {**data["follower"], "mass_kg": 0.2, "stiffness_n_per_mm": 500.0}
+    classic["seat"] = {"stiffness_n_per_mm": 50000}
+    with pytest.raises(ValueError) as error:
+        Program.from_dict(classic)
+    assert str(error.value).startswith(
+        "[seat] belongs to a [[train]]: a seat sits under a chain's last body, and the classic "
+        "[follower] has none"
+    )
