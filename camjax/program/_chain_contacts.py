@@ -953,9 +953,10 @@ class ChainContacts:
         self._kept: dict[float, ContactTurn] = {}
         """The last batch of ``turns``, by speed: ``turn`` reads them (the report's files)."""
 
-    def _block(self, rpm: np.ndarray):
+    def _block(self, rpm: np.ndarray, done=()):
         """Turns from rest at the speeds ``rpm`` (one block) until settled: the last
-        turn's samples, the turns run and the change that remained per speed."""
+        turn's samples, the turns run and the change that remained per speed; ``done``: the
+        speeds of earlier blocks, settled (named where this block does not settle)."""
         o = self.options
         n = self.system.Minv.shape[0]
         z = jnp.zeros((rpm.size, 2 * n))
@@ -982,16 +983,28 @@ class ChainContacts:
             z = end
             if turn >= 2 and np.all(change <= o.settle_tolerance):
                 return np.asarray(samples), turn, change
-        raise ValueError(self._unsettled(float(rpm[np.argmax(change)]), float(np.max(change))))
+        settled = np.unique(rpm[change <= o.settle_tolerance])
+        raise ValueError(
+            self._unsettled(
+                float(rpm[np.argmax(change)]), float(np.max(change)), np.union1d(done, settled)
+            )
+        )
 
-    def _unsettled(self, rpm: float, change: float) -> str:
+    def _unsettled(self, rpm: float, change: float, settled=()) -> str:
         """Why the chain does not settle at ``rpm``: the return spring where it cannot hold
-        the chain, taken rigid, on the cam there (``spring_hold_rpm``), else the damping,
-        with the other likely causes."""
+        the chain, taken rigid, on the cam there (``spring_hold_rpm``), else the damping to
+        add (``_damp_hint``), with the other likely causes; and the speeds that did settle
+        (``settled``), to be run alone."""
         o, damp = self.options, self._damp_hint()
         what = (
             f"the chain at {rpm:g} rpm does not settle within {o.max_turns} turns (its state "
-            f"still moves by {change:.2g} of the lift a turn, against {o.settle_tolerance:g})"
+            f"still moves by {change:.2g} of the lift a turn, against {o.settle_tolerance:g}"
+            + (
+                f"; {', '.join(f'{r:g}' for r in settled)} rpm settled: run them alone"
+                if len(settled)
+                else ""
+            )
+            + ")"
         )
         hold = spring_hold_rpm(self.program, self.chain)
         if hold is not None and rpm > hold:
@@ -1000,22 +1013,56 @@ class ChainContacts:
                 f"[spring] preload_n: {what}: the return spring (preload {spring.preload_n:g} N, "
                 f"rate {spring.rate_n_per_mm:g} N/mm) holds the chain, taken rigid, on the cam "
                 f"only up to about {hold:.3g} rpm: give it more preload or rate, or damping "
-                f"({damp})"
+                f"({damp or '[[train]] damping_n_s_per_m'})"
             )
+        spring = (
+            "check the return spring ([spring] preload_n, rate_n_per_mm: too weak to return the "
+            "chain onto the cam)"
+        )
+        free = self._held_by_nothing()
+        if damp is None and free is not None:
+            return f"{free[0]}: {what}: {free[1]}; or {spring}"
         lash = "; or lash the cam's lift barely takes up (lash_mm)" if self.chain.seat else ""
         return (
-            f"{damp}: {what}: give it damping; or check the return spring ([spring] preload_n, "
-            f"rate_n_per_mm: too weak to return the chain onto the cam){lash}"
+            f"{damp or '[[train]] damping_n_s_per_m'}: {what}: give it damping; or {spring}{lash}"
         )
 
-    def _damp_hint(self) -> str:
+    def _held_by_nothing(self) -> tuple[str, str] | None:
+        """The bodies between the cam and the first lash of a seated chain: with the lash
+        open (the valve on its seat) no spring holds them, only the cam pushes them and the
+        lash's element stops them, so they rattle between the two, damped only by the
+        elements among them and the lash's: ``(their names, what to give)``; ``None``
+        without a seat or with no body before the lash."""
+        bodies = self.chain.bodies
+        first = next((j for j, b in enumerate(bodies) if b.lash_mm > 0), None)
+        if self.chain.seat is None or not first:
+            return None
+        names = ", ".join(f"body {j} ({b.name})" for j, b in enumerate(bodies[:first], 1))
+        dampers = [
+            f"body {j} ({b.name}) damping_n_s_per_m = {b.damping_n_s_per_m:g}"
+            for j, b in enumerate(bodies[: first + 1], 1)
+            if not b.rides
+        ]
+        lash = bodies[first]
+        them = "it" if first == 1 else "them"
+        return (
+            f"[[train]] {names}",
+            f"between the cam and the open lash of body {first + 1} ({lash.name}, lash_mm = "
+            f"{lash.lash_mm:g}) nothing holds {them} (no spring): {them} rattle{'s' if first == 1 else ''} "
+            f"there with only the damping of {'; '.join(dampers)}: give more damping_n_s_per_m, "
+            "or less lash",
+        )
+
+    def _damp_hint(self) -> str | None:
+        """The damping field missing from the seat or an element (``None`` where each has
+        some): its mode rings undamped."""
         seat = self.chain.seat
         if seat is not None and not seat.damping_n_s_per_m:
             return "[seat] damping_n_s_per_m"
         for j, body in enumerate(self.chain.bodies, start=1):
             if not body.rides and not body.damping_n_s_per_m:
                 return f"[[train]] body {j} ({body.name}) damping_n_s_per_m"
-        return "[[train]] damping_n_s_per_m"
+        return None
 
     def turns(self, rpm, refine: bool = True) -> list[ContactTurn]:
         """The settled turn at every speed of ``rpm`` (without ``refine``: its ``refined``
@@ -1033,7 +1080,7 @@ class ChainContacts:
         for start in range(0, rpm.size, SPEED_BLOCK):
             block = rpm[start : start + SPEED_BLOCK]
             padded = np.pad(block, (0, SPEED_BLOCK - block.size), mode="edge")
-            samples, turns, change = self._block(padded)
+            samples, turns, change = self._block(padded, rpm[:start])
             if not refine:
                 out += [
                     self._read(float(r), samples[i], turns, float(change[i]), None)
