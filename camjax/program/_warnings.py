@@ -85,9 +85,11 @@ def _softest_give(chain) -> tuple[str, float]:
     spring's force there): each element's ``(prod_{i > j} r_i)^2 / k_j`` (its force and its
     compression both referred through the levers after it), the seat's ``1 / k_seat``."""
     gives, after = [], 1.0
+    if chain.arm is not None:  # the bodies sit on the arm, which bends: no element of their own
+        return "[arm] (its bending)", 0.0
     for j in range(len(chain.bodies), 0, -1):
         body = chain.bodies[j - 1]
-        if body.rides:
+        if body.rides or not body.stiffness_n_per_mm:
             continue
         gives.append((f"[[train]] body {j} ({body.name}) stiffness_n_per_mm = {body.stiffness_n_per_mm:g}",
                       after**2 / body.stiffness_n_per_mm))
@@ -95,7 +97,7 @@ def _softest_give(chain) -> tuple[str, float]:
     if chain.seat is not None:
         gives.append((f"[seat] stiffness_n_per_mm = {chain.seat.stiffness_n_per_mm:g}",
                       1.0 / chain.seat.stiffness_n_per_mm))
-    return max(gives, key=lambda g: g[1])
+    return max(gives, key=lambda g: g[1], default=("[[train]] stiffness_n_per_mm", 0.0))
 
 
 def lift_error_warnings(program: Program, report: dict) -> list[str]:
@@ -108,8 +110,7 @@ def lift_error_warnings(program: Program, report: dict) -> list[str]:
     chain, train = program.chain, (report or {}).get("train")
     if chain is None or not train:
         return []
-    ratio = math.prod(b.ratio for b in chain.bodies if not b.rides)
-    valve = ratio * float(np.max(np.abs(program.lift(np.arange(3600) * 0.1)[0])))
+    valve = chain.lever_ratio * float(np.max(np.abs(program.lift(np.arange(3600) * 0.1)[0])))
     bad = [s for s in train["speeds"] if s["max_lift_error_mm"] >= LIFT_ERROR_RATIO * valve]
     if not bad or valve <= 0:
         return []
@@ -117,7 +118,7 @@ def lift_error_warnings(program: Program, report: dict) -> list[str]:
     field, give = _softest_give(chain)
     preload = chain.spring.preload_n if chain.spring is not None else 0.0
     squeeze = (f" (the spring's preload, {preload:g} N, compresses it by {preload * give:.4g} mm "
-               "at the last body)") if preload else ""
+               "at the last body)") if preload and give else ""
     name, speeds = chain.bodies[-1].name, ", ".join(f"{s['rpm']:g}" for s in bad)
     return [f"at {speeds} rpm the last body ({name}) misses its "
             f"kinematic lift ({valve:.4g} mm: the cam's lift times the ratios) by up to "
