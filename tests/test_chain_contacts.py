@@ -505,15 +505,11 @@ def test_a_one_body_chain_flies_as_the_classic_follower():
 
 
 def test_bad_flights_input_is_one_line(valve_steady):
-    """A simulation slower than asked, a follower on a flexible arm: one line each."""
+    """A simulation slower than asked: one line (an arm's flights: tests/test_arm_flights.py)."""
     program = valve_steady.program
     slow = ChainContacts(program, program.chain, 4000.0)
     with pytest.raises(ValueError, match="below the simulation's slowest speed 4000") as err:
         flights_at(valve_steady, [FLIGHT_RPM[1]], simulation=slow)
-    assert "\n" not in str(err.value)
-    arm = Program.load("camjax/program/examples/trains/swinging_arm.toml")
-    with pytest.raises(ValueError, match=r"flexible \[arm\] are not simulated") as err:
-        flights_at(SteadyState(arm, 600.0), [600.0])
     assert "\n" not in str(err.value)
 
 

@@ -57,8 +57,8 @@ the drive torque's figures (``torque_jets``, ``torque_figures``) and the Hertz p
 (``ChainContacts.jump_speed``, ``narrowed_crossing``).
 
 **Flights.**  A chain without lash or seat whose exact steady state loses contact runs here
-too, its cam's contact the only one-sided one: from a state of that steady state where the
-cam holds, two turns (``ChainContacts.flights``), whose flights ``cam_flights`` reads
+too, its cam's contact the only one-sided one (a force-closed flexible arm's too, its roller
+riding on the cam): from a state of that steady state where the cam holds, two turns (``ChainContacts.flights``), whose flights ``cam_flights`` reads
 (``flights_at``).
 """
 
@@ -86,8 +86,19 @@ from ._train import Chain
 
 RIDER_CONTACT_HZ = 8.0
 """A body riding on the cam that lands on it is brought to the cam's motion critically
-damped at this many times the chain's highest natural frequency (or the seat's where that
-is higher): a nearly plastic landing; in lasting contact the constraint holds exactly."""
+damped at this many times the chain's highest natural frequency (``ARM_CONTACT_HZ`` on a
+flexible arm; or the seat's where that is higher): a nearly plastic landing; in lasting
+contact the constraint holds exactly."""
+ARM_CONTACT_HZ = 1.0
+"""``RIDER_CONTACT_HZ`` of a roller on a flexible arm: its landing is critically damped at the
+chain's highest natural frequency with the cam held, the reduced arm's quickest kept mode
+(``Arm.modes``), itself.  The arm's kept modes already set the integration's step, so this
+landing costs little more, where eight times it would multiply the steps and the samples
+(measured 2026-11-29 on commit 6beae5c with this rule: diffrax's ``num_steps`` of a turn of
+the example swinging_arm_spring from rest, its highest mode 67.8 kHz: 12,355 at 3000 rpm
+and 37,670 at 1000 rpm, under ``turn_steps_refusal``'s 16,063 and 43,189; 42,157 and
+215,476 at eight times it; 8,437 and 15,330 at eight times the first mode, 15.4 kHz).  Separation, flight and landing angle do not depend on it; the landing's
+peak force is this model's."""
 SAMPLES_PER_CONTACT = 12
 """Samples of the reported turn per half period of the stiffest contact (the seat's or the
 landing's): the seat's impacts are read between samples."""
@@ -192,7 +203,7 @@ class ContactSystem(NamedTuple):
 
     @classmethod
     def of(cls, chain: Chain) -> ContactSystem:
-        if getattr(chain, "arm", None) is not None:
+        if chain.arm is not None and chain.has_contacts:
             raise ValueError(
                 "[arm]: a flexible arm with lash is not simulated (give its lash_mm 0)"
             )
@@ -247,6 +258,11 @@ class ContactSystem(NamedTuple):
         last = int(a.body_index[-1]) - start
         load = np.zeros(n)
         load[last] = -preload
+        if chain.arm is not None:  # from the rest, where the preload bends the arm and the
+            beam = dataclasses.replace(chain, spring=None).matrices().K  # spring carries it:
+            b = beam.shape[0] - 1  # the arm's coordinates, the first b; at u = 0 the preload
+            bent = np.linalg.solve(beam[1:b, 1:b], load[1:b])  # and the bending leave
+            load[:b] -= beam[:b, 1:b] @ bent  # the cam's static force alone (load[0])
         seat_row = np.zeros(n)
         seat_k = seat_c = seat_s0 = 0.0
         if seated:
@@ -255,7 +271,7 @@ class ContactSystem(NamedTuple):
             seat_c = chain.seat.damping_n_s_per_m
             seat_s0 = preload / seat_k
         top = max(chain.highest_frequency_hz(), 1.0)
-        w_p = 2 * math.pi * RIDER_CONTACT_HZ * top
+        w_p = 2 * math.pi * (RIDER_CONTACT_HZ if chain.arm is None else ARM_CONTACT_HZ) * top
         if seated:
             w_p = max(w_p, math.sqrt(seat_k / chain.bodies[-1].mass_kg))
         M = a.M[np.ix_(moving, moving)]
@@ -330,6 +346,8 @@ def turn_steps_refusal(
     seat_hz = math.sqrt(float(system.seat_k) / m_last) / (2 * math.pi)
     if seat_hz >= hz * (1 - 1e-9):
         field = "[seat] stiffness_n_per_mm"
+    elif chain.arm is not None:  # the landing on the cam, at the arm's highest mode
+        field = chain.highest_mode_remedy().removeprefix("lower ")
     else:
         j, body = max(
             ((j, b) for j, b in enumerate(chain.bodies, 1) if not b.rides),
@@ -935,7 +953,7 @@ class ChainContacts:
         breaks = program.turn.breakpoints_deg() / 360.0
         self._breaks = np.unique(np.mod(breaks, 1.0))  # where the motion's acceleration may jump
         self._grid = contact_grid(grid, breaks)
-        self.kinematic_ratio = float(np.prod([b.ratio for b in chain.bodies if not b.rides]))
+        self.kinematic_ratio = chain.lever_ratio
         period = 60.0 / self.rpm_min
         wanted = SAMPLES_PER_CONTACT * period * 2 * self.system.stiffest_hz
         self.samples = int(self.options.samples or bucket(max(4096, math.ceil(wanted)), 1024))
@@ -1546,6 +1564,10 @@ def cam_flights(
             a, b = (k0 * approach[n] + c0 * rate[n] for n in (j, j + 1))
             t = dt * (0.0 if a == b else -a / (b - a))
         peak = float(force[best])
+        if rider:  # the landing's force is largest at the touch (w' = -v, w = 0), between samples
+            closing = rate[j] + accel[j] * t
+            touch = (accel[j] + float(system.rider_c) * closing) / float(system.Minv[0, 0])
+            peak = max(peak, float(touch))
         sigma = np.linspace(0.0, h, 65)
         for n in (best - 1, best):
             if j + 1 <= n < stop:  # held at both ends

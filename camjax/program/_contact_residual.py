@@ -101,7 +101,7 @@ def static_contacts(
         approach = s.d0 + s.G @ np.nan_to_num(u) + s.g_cam * y0
         rate = s.G @ np.nan_to_num(v) + s.g_cam * ys
         force = s.k * approach + s.c * rate
-        known = np.array([np.all(np.isfinite(u[np.asarray(g) != 0])) for g in s.G])
+        known = np.array([np.all(np.isfinite(u[np.asarray(g) != 0])) for g in s.G], dtype=bool)
         now = np.where(closed > 0, force >= -tolerance, approach > _FORCE_TOLERANCE) & known
         now = np.where(s.one_sided > 0, now, True).astype(float)
         if seat_given:

@@ -339,11 +339,6 @@ def flights_at(steady: SteadyState, rpm, *, simulation=None) -> list[list[Flight
     speeds' events are searched together, flight by flight.
     """
     rpm = Speeds.of(rpm)
-    chain = steady.program.chain
-    if chain is not None and chain.arm is not None:
-        raise ValueError(
-            f"program {steady.program.name!r}: the flights of a follower on a flexible [arm] are not simulated"
-        )
     out = [[] for _ in rpm]
     if steady.program.follower.form_closed:
         return out

@@ -212,7 +212,7 @@ def analyse(program: Program, rpm, *, with_flight: bool = True,
     ratios = _period_ratios(program, rpm)
     grooved = closed and bool(program.follower.groove_clearance_mm) and with_flight
     turns = groove_turns(program, speeds) if grooved else [None] * rpm.size
-    simulated = with_flight and not closed and (program.chain is None or program.chain.arm is None)
+    simulated = with_flight and not closed
     lost = np.flatnonzero(values["jump"]) if simulated else np.zeros(0, int)
     found = dict(zip(lost.tolist(), flights_at(steady, speeds[lost]) if lost.size else []))
     rows = []
@@ -245,7 +245,7 @@ CHAIN_NOTE = (
     "vibration the last body's, the residual the envelope sum_j |g_j (xi_j - xi_j,static)| of its "
     "modes; period ratios at the first mode with the cam held); flights: where the steady state "
     "loses contact, the chain simulated with the cam's contact one-sided (ChainContacts) from the "
-    "steady state, one period from its first separation (not on a flexible arm)"
+    "steady state, one period from its first separation"
 )
 ONE_BODY_NOTE = "a one-body train: the classic follower's rows are this chain's (the same numbers)"
 
