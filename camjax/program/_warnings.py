@@ -80,24 +80,37 @@ cam's largest lift times the ratios) does not follow the cam: a valve that barel
 never leaves its seat, is not a result to read as it stands (``lift_error_warnings``)."""
 
 
-def _softest_give(chain) -> tuple[str, float]:
-    """The chain's field that gives most at the last body, and how much (mm per N of the
-    spring's force there): each element's ``(prod_{i > j} r_i)^2 / k_j`` (its force and its
-    compression both referred through the levers after it), the seat's ``1 / k_seat``."""
-    gives, after = [], 1.0
+def _softest_give(chain, preload: float) -> str:
+    """The chain's field that takes most of the valve's lift, with how much: each element's
+    compression under the spring's preload ``P`` at the last body, ``P (prod_{i > j} r_i)^2 /
+    k_j`` (its force and its compression both referred through the levers after it), the
+    seat's ``P / k_seat`` and, with a seat (the lash open at rest), each lash at the last body,
+    ``lash_j prod_{i > j} r_i``; without a preload, the element of the largest compliance there."""
     if chain.arm is not None:  # the bodies sit on the arm, which bends: no element of their own
-        return "[arm] (its bending)", 0.0
+        return "[arm] (its bending)"
+    gives, after = [], 1.0  # (field, mm at the last body, compliance there, what it does, action)
     for j in range(len(chain.bodies), 0, -1):
         body = chain.bodies[j - 1]
         if body.rides or not body.stiffness_n_per_mm:
             continue
-        gives.append((f"[[train]] body {j} ({body.name}) stiffness_n_per_mm = {body.stiffness_n_per_mm:g}",
-                      after**2 / body.stiffness_n_per_mm))
+        field = f"[[train]] body {j} ({body.name})"
+        compliance = after**2 / body.stiffness_n_per_mm
+        gives.append((f"{field} stiffness_n_per_mm = {body.stiffness_n_per_mm:g}", preload * compliance,
+                      compliance, "the spring's preload, {P} N, compresses it by {mm} mm", "stiffen it"))
+        if body.lash_mm and chain.seat is not None:
+            gives.append((f"{field} lash_mm = {body.lash_mm:g}", body.lash_mm * after, 0.0,
+                          "{mm} mm of it", "lessen it"))
         after *= body.ratio
     if chain.seat is not None:
-        gives.append((f"[seat] stiffness_n_per_mm = {chain.seat.stiffness_n_per_mm:g}",
-                      1.0 / chain.seat.stiffness_n_per_mm))
-    return max(gives, key=lambda g: g[1], default=("[[train]] stiffness_n_per_mm", 0.0))
+        compliance = 1.0 / chain.seat.stiffness_n_per_mm
+        gives.append((f"[seat] stiffness_n_per_mm = {chain.seat.stiffness_n_per_mm:g}", preload * compliance,
+                      compliance, "the spring's preload, {P} N, squeezes it by {mm} mm", "stiffen it"))
+    if not gives:
+        return "[[train]] stiffness_n_per_mm"
+    field, mm, _, what, action = max(gives, key=lambda g: (g[1], g[2]) if preload else g[2])
+    if not preload:
+        return f"{field}: {action}"
+    return f"{field} ({what.format(P=f'{preload:g}', mm=f'{mm:.4g}')} at the last body): {action}"
 
 
 def lift_error_warnings(program: Program, report: dict) -> list[str]:
@@ -105,8 +118,7 @@ def lift_error_warnings(program: Program, report: dict) -> list[str]:
     times the ratios) by ``LIFT_ERROR_RATIO`` of it or more at some speed of ``report``:
     the valve barely follows the cam (with a seat, it may never leave it), so the forces and
     the seating are those of a valve that does not open.  It names the speeds and the field
-    that gives most at the valve (``_softest_give``), with what the spring's preload
-    compresses it by there."""
+    that takes most of the valve's lift (``_softest_give``), with how much."""
     chain, train = program.chain, (report or {}).get("train")
     if chain is None or not train:
         return []
@@ -115,17 +127,14 @@ def lift_error_warnings(program: Program, report: dict) -> list[str]:
     if not bad or valve <= 0:
         return []
     worst = max(bad, key=lambda s: s["max_lift_error_mm"])
-    field, give = _softest_give(chain)
     preload = chain.spring.preload_n if chain.spring is not None else 0.0
-    squeeze = (f" (the spring's preload, {preload:g} N, compresses it by {preload * give:.4g} mm "
-               "at the last body)") if preload and give else ""
     name, speeds = chain.bodies[-1].name, ", ".join(f"{s['rpm']:g}" for s in bad)
     return [f"at {speeds} rpm the last body ({name}) misses its "
             f"kinematic lift ({valve:.4g} mm: the cam's lift times the ratios) by up to "
             f"{worst['max_lift_error_mm']:.4g} mm ({100 * worst['max_lift_error_mm'] / valve:.3g}%, "
             f"at {worst['rpm']:g} rpm): it barely follows the cam"
             + (" and may never leave its seat" if chain.seat is not None else "")
-            + f"; the chain gives most at {field}{squeeze}: stiffen it"]
+            + f"; the chain gives most at {_softest_give(chain, preload)}"]
 
 
 def design_warnings(program: Program, report=None) -> list[str]:
