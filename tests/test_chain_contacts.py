@@ -835,7 +835,7 @@ def test_an_unsettled_chain_names_what_rattles_and_the_speeds_that_settled(examp
     assert message.startswith(
         "[[train]] body 1 (tappet): the chain at 1000 rpm does not settle within 2 turns (its "
         "state still moves by 2.7e-09 of the lift a turn, against 1.3e-09; 3000 rpm settled: "
-        "run them alone): "
+        "run it alone): "
     )
     assert message.endswith(
         ": between the cam and the open lash of body 2 (valve, lash_mm = 0.15) nothing holds it "

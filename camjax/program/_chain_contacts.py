@@ -1014,15 +1014,13 @@ class ChainContacts:
         add (``_damp_hint``), with the other likely causes; and the speeds that did settle
         (``settled``), to be run alone."""
         o, damp = self.options, self._damp_hint()
+        done = ""
+        if len(settled):
+            them = "it" if len(settled) == 1 else "them"
+            done = f"; {', '.join(f'{r:g}' for r in settled)} rpm settled: run {them} alone"
         what = (
             f"the chain at {rpm:g} rpm does not settle within {o.max_turns} turns (its state "
-            f"still moves by {change:.2g} of the lift a turn, against {o.settle_tolerance:g}"
-            + (
-                f"; {', '.join(f'{r:g}' for r in settled)} rpm settled: run them alone"
-                if len(settled)
-                else ""
-            )
-            + ")"
+            f"still moves by {change:.2g} of the lift a turn, against {o.settle_tolerance:g}{done})"
         )
         hold = spring_hold_rpm(self.program, self.chain)
         if hold is not None and rpm > hold:
@@ -1062,13 +1060,12 @@ class ChainContacts:
             if not b.rides
         ]
         lash = bodies[first]
-        them = "it" if first == 1 else "them"
+        them, they = ("it", "it rattles") if first == 1 else ("them", "they rattle")
         return (
             f"[[train]] {names}",
             f"between the cam and the open lash of body {first + 1} ({lash.name}, lash_mm = "
-            f"{lash.lash_mm:g}) nothing holds {them} (no spring): {them} rattle{'s' if first == 1 else ''} "
-            f"there with only the damping of {'; '.join(dampers)}: give more damping_n_s_per_m, "
-            "or less lash",
+            f"{lash.lash_mm:g}) nothing holds {them} (no spring): {they} there with only the "
+            f"damping of {'; '.join(dampers)}: give more damping_n_s_per_m, or less lash",
         )
 
     def _damp_hint(self) -> str | None:
