@@ -572,3 +572,26 @@ def test_the_modes_figure_does_not_run_the_bodies_names_together(tmp_path, monke
         boxes = [t.get_window_extent(renderer) for t in names]
         boxes.append(ax.xaxis.label.get_window_extent(renderer))
         assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1 :])
+
+
+def test_a_last_body_that_barely_follows_the_cam_is_warned_of():
+    """A valve on a 10 N/mm element against a 20 N/mm spring follows the cam's 20 mm lift
+    statically by ``k / (k + k_s)``: at 60 rpm (far below its 35 Hz mode) it misses it by
+    ``20 * 20 / 30 = 13.33 mm``, two thirds of it: one warning naming the speeds, the numbers
+    and the element (the 150 N preload compresses it by 15 mm).  The same chain on 300 N/mm
+    misses it by 1.25 mm: no warning."""
+    report = analyse(two_body(element=10.0), [60.0, 120.0])
+    errors = [s["max_lift_error_mm"] for s in report.train["speeds"]]
+    assert errors == pytest.approx([20 * 20 / 30] * 2, rel=2e-3)
+    worst = max(errors)
+    (line,) = [w for w in report.warnings if "kinematic lift" in w]
+    assert line == (
+        "at 60, 120 rpm the last body (valve) misses its kinematic lift (20 mm: the cam's lift "
+        f"times the ratios) by up to {worst:.4g} mm ({100 * worst / 20:.3g}%, at "
+        f"{60.0 if worst == errors[0] else 120.0:g} rpm): it barely follows the cam; the chain "
+        "gives most at [[train]] body 2 (valve) stiffness_n_per_mm = 10 (the spring's preload, "
+        "150 N, compresses it by 15 mm at the last body): stiffen it"
+    )
+    stiff = analyse(two_body(element=300.0), [60.0])
+    assert stiff.train["speeds"][0]["max_lift_error_mm"] == pytest.approx(1.25, rel=2e-3)
+    assert not [w for w in stiff.warnings if "kinematic lift" in w]

@@ -31,6 +31,8 @@ from ._chain_contacts import ChainContacts as ChainContacts
 from ._chain_contacts import ContactOptions as ContactOptions
 from ._chain_contacts import ContactSummary as ContactSummary
 from ._chain_contacts import ContactTurn as ContactTurn
+from ._chain_contacts import contacts_note as contacts_note
+from ._chain_contacts import seat_landings as seat_landings
 from ._compensate import Compensation as Compensation
 from ._compensate import check_smooth as check_smooth
 from ._compensate import compensate as compensate
@@ -153,6 +155,7 @@ from ._train import load_chain as load_chain
 from ._turn import JOIN_TOLERANCE_DEG as JOIN_TOLERANCE_DEG
 from ._turn import Turn as Turn
 from ._warnings import ABSURD_SIZES as ABSURD_SIZES
+from ._warnings import LIFT_ERROR_RATIO as LIFT_ERROR_RATIO
 from ._warnings import MAX_HALF_WIDTH_RATIO as MAX_HALF_WIDTH_RATIO
 from ._warnings import MAX_SEAT_COMPRESSION_MM as MAX_SEAT_COMPRESSION_MM
 from ._warnings import MODULUS_RANGE_GPA as MODULUS_RANGE_GPA

@@ -356,6 +356,17 @@ def turn_steps_refusal(
     )
 
 
+def _valve_travel(program, chain: Chain):
+    """The chain's elements ``(j, body)`` (from 1), each one's lash referred to the valve
+    (``lash_j prod_{i > j} r_i``, mm), the cam's largest lift and the valve's lift through
+    the chain (the cam's times the ratios, mm)."""
+    elements = [(j, b) for j, b in enumerate(chain.bodies, 1) if not b.rides]
+    after = np.cumprod([b.ratio for _, b in elements][::-1])[::-1]  # prod_{i >= j} r_i
+    referred = [b.lash_mm * float(a / b.ratio) for (_, b), a in zip(elements, after)]
+    lift = float(np.max(program.lift(np.arange(3600) * 0.1)[0]))
+    return elements, referred, lift, lift * float(after[0])
+
+
 def lash_refusal(program, chain: Chain) -> str | None:
     """Lash the cam's lift cannot take up: with a seat the valve leaves it only once the cam,
     through the levers, has closed every lash, so where the lash referred to the valve
@@ -365,15 +376,9 @@ def lash_refusal(program, chain: Chain) -> str | None:
     there the preload closes the lash at rest)."""
     if chain.seat is None:
         return None
-    elements = [(j, b) for j, b in enumerate(chain.bodies, 1) if not b.rides]
-    after = np.cumprod([b.ratio for _, b in elements][::-1])[::-1]  # prod_{i >= j} r_i
-    referred = [b.lash_mm * float(a / b.ratio) for (_, b), a in zip(elements, after)]
+    elements, referred, lift, valve = _valve_travel(program, chain)
     total = sum(referred)
-    if not total:
-        return None
-    lift = float(np.max(program.lift(np.arange(3600) * 0.1)[0]))
-    valve = lift * float(after[0])
-    if total < valve:
+    if not total or total < valve:
         return None
     j, body = elements[int(np.argmax(referred))]
     return (
@@ -381,6 +386,29 @@ def lash_refusal(program, chain: Chain) -> str | None:
         f"({total:.4g} mm at the valve) is not less than the valve's lift through the chain "
         f"({valve:.4g} mm: the cam's {lift:.4g} mm times the ratios): the lash never closes and "
         "the valve never leaves its seat (a valve's lash is a few tenths of a mm)"
+    )
+
+
+def seat_refusal(program, chain: Chain) -> str | None:
+    """A seat the cam's lift cannot lift the valve off: at rest the spring's preload ``P``
+    squeezes the seat by ``P / k_seat``, and the valve leaves it only once the cam, through
+    the levers, has closed the lash and lifted it by that much, so where the squeeze and the
+    lash referred to the valve reach the valve's lift through the chain, the valve never
+    leaves its seat even with a rigid chain (a softer chain lifts it less).  ``None`` where
+    the lift exceeds them, or without a seat."""
+    if chain.seat is None or chain.spring is None:
+        return None
+    _, referred, lift, valve = _valve_travel(program, chain)
+    squeeze = chain.spring.preload_n / chain.seat.stiffness_n_per_mm
+    lash = sum(referred)
+    if squeeze + lash < valve:
+        return None
+    return (
+        f"[seat] stiffness_n_per_mm = {chain.seat.stiffness_n_per_mm:g}: the spring's preload "
+        f"({chain.spring.preload_n:g} N) squeezes the seat by {squeeze:.4g} mm at rest, which with "
+        f"the lash ({lash:.4g} mm at the valve) is not less than the valve's lift through the "
+        f"chain ({valve:.4g} mm: the cam's {lift:.4g} mm times the ratios): the valve never "
+        "leaves its seat (a valve's seat takes tens of thousands of N/mm)"
     )
 
 
@@ -495,13 +523,22 @@ def _equations(rpm, system: ContactSystem, grid: _Grid):
         y, yd, ydd = jet(s)
         u, v = 1e-3 * z[:n], 1e-3 * z[n:] / period
         acc, f, _, _, _, lam, _ = _state_forces(system, y, yd, ydd, u, v)
-        last = system.body_rows[-1]
         spring = system.preload - system.spring_K @ u - system.spring_C @ v - system.spring_M @ acc
-        surge = spring - system.preload - system.rate * u[last]
-        head = jnp.stack([lam + system.g_cam @ f, 1e3 * yd * period, spring, surge])
+        head = jnp.stack(
+            [lam + system.g_cam @ f, 1e3 * yd * period, spring, _surge(system, u, v, acc)]
+        )
         return jnp.concatenate([head, acc[system.body_rows]])
 
     return jet, field, signals
+
+
+def _surge(system: ContactSystem, u, v, acc):
+    """The spring's surge (N): its force at its seat less the static ``F_0 + k_s x_N``, from
+    the state as the exact path's row (``-K_seat - k_s e_N``, its preload left out), so that a
+    spring without mass, whose row is zero, has none: exactly 0, not the rounding of the force
+    less its static part."""
+    row = system.spring_K.at[system.body_rows[-1]].add(system.rate)
+    return -(row @ u) - system.spring_C @ v - system.spring_M @ acc
 
 
 _SIGNALS = ("cam", "lift_rate", "spring", "surge")
@@ -568,7 +605,7 @@ def _solve(
                         v[last],
                         acc[last],
                         spring,
-                        spring - system.preload - system.rate * u[last],
+                        _surge(system, u, v, acc),
                         1e3 * y,
                     ]
                 ),
@@ -833,18 +870,23 @@ def seat_landings(seat_closed: np.ndarray, approach: np.ndarray) -> list[int]:
     """The samples from which each landing of a turn on the seat is read: the last one in
     flight (``approach``, the seat's in m, not yet positive) before each closing of
     ``seat_closed`` (per sample of the turn), the seating first (the closing that ends the
-    longest time off the seat), then the bounces in turn order."""
+    longest time off the seat), then the bounces in turn order.
+
+    A closing with no sample in flight since the seat last opened is no landing: the seat's
+    force only dipped (its dashpot unloading it) while the valve stayed on it.  A turn whose
+    valve never leaves its seat, or never lands on it, has none."""
     closes, opens = _crossings(seat_closed)
-    if not closes.size:
+    m = seat_closed.size
+    landings, lengths = [], []
+    for i, length in zip(closes, _interval_lengths(seat_closed, closes, opens)):
+        flight = [k % m for k in range(int(i), int(i) - int(length), -1) if approach[k % m] <= 0]
+        if flight:  # the last sample in flight (touching already at the closing's sample)
+            landings.append(int(flight[0]))
+            lengths.append(int(length))
+    if not landings:
         return []
-    first = int(np.argmax(_interval_lengths(seat_closed, closes, opens)))
-    landings = []
-    for k in range(closes.size):
-        i = int(closes[(first + k) % closes.size])
-        while approach[i] > 0:  # touching already, below the threshold of closed:
-            i -= 1  # read the landing from the last sample in flight
-        landings.append(i)
-    return landings
+    first = int(np.argmax(lengths))
+    return landings[first:] + landings[:first]
 
 
 def _interval_lengths(closed: np.ndarray, closings: np.ndarray, openings: np.ndarray) -> np.ndarray:
@@ -893,6 +935,7 @@ class ChainContacts:
         self.system = ContactSystem.of(chain)
         for refusal in (
             lash_refusal(program, chain),
+            seat_refusal(program, chain),
             turn_steps_refusal(chain, self.system, self.rpm_min, self.options.max_steps),
         ):
             if refusal is not None:
@@ -922,9 +965,10 @@ class ChainContacts:
         self._kept: dict[float, ContactTurn] = {}
         """The last batch of ``turns``, by speed: ``turn`` reads them (the report's files)."""
 
-    def _block(self, rpm: np.ndarray):
+    def _block(self, rpm: np.ndarray, done=()):
         """Turns from rest at the speeds ``rpm`` (one block) until settled: the last
-        turn's samples, the turns run and the change that remained per speed."""
+        turn's samples, the turns run and the change that remained per speed; ``done``: the
+        speeds of earlier blocks, settled (named where this block does not settle)."""
         o = self.options
         n = self.system.Minv.shape[0]
         z = jnp.zeros((rpm.size, 2 * n))
@@ -951,16 +995,26 @@ class ChainContacts:
             z = end
             if turn >= 2 and np.all(change <= o.settle_tolerance):
                 return np.asarray(samples), turn, change
-        raise ValueError(self._unsettled(float(rpm[np.argmax(change)]), float(np.max(change))))
+        settled = np.unique(rpm[change <= o.settle_tolerance])
+        raise ValueError(
+            self._unsettled(
+                float(rpm[np.argmax(change)]), float(np.max(change)), np.union1d(done, settled)
+            )
+        )
 
-    def _unsettled(self, rpm: float, change: float) -> str:
+    def _unsettled(self, rpm: float, change: float, settled=()) -> str:
         """Why the chain does not settle at ``rpm``: the return spring where it cannot hold
-        the chain, taken rigid, on the cam there (``spring_hold_rpm``), else the damping,
-        with the other likely causes."""
+        the chain, taken rigid, on the cam there (``spring_hold_rpm``), else the damping to
+        add (``_damp_hint``), with the other likely causes; and the speeds that did settle
+        (``settled``), to be run alone."""
         o, damp = self.options, self._damp_hint()
+        done = ""
+        if len(settled):
+            them = "it" if len(settled) == 1 else "them"
+            done = f"; {', '.join(f'{r:g}' for r in settled)} rpm settled: run {them} alone"
         what = (
             f"the chain at {rpm:g} rpm does not settle within {o.max_turns} turns (its state "
-            f"still moves by {change:.2g} of the lift a turn, against {o.settle_tolerance:g})"
+            f"still moves by {change:.2g} of the lift a turn, against {o.settle_tolerance:g}{done})"
         )
         hold = spring_hold_rpm(self.program, self.chain)
         if hold is not None and rpm > hold:
@@ -969,22 +1023,55 @@ class ChainContacts:
                 f"[spring] preload_n: {what}: the return spring (preload {spring.preload_n:g} N, "
                 f"rate {spring.rate_n_per_mm:g} N/mm) holds the chain, taken rigid, on the cam "
                 f"only up to about {hold:.3g} rpm: give it more preload or rate, or damping "
-                f"({damp})"
+                f"({damp or '[[train]] damping_n_s_per_m'})"
             )
+        spring = (
+            "check the return spring ([spring] preload_n, rate_n_per_mm: too weak to return the "
+            "chain onto the cam)"
+        )
+        free = self._held_by_nothing()
+        if damp is None and free is not None:
+            return f"{free[0]}: {what}: {free[1]}; or {spring}"
         lash = "; or lash the cam's lift barely takes up (lash_mm)" if self.chain.seat else ""
         return (
-            f"{damp}: {what}: give it damping; or check the return spring ([spring] preload_n, "
-            f"rate_n_per_mm: too weak to return the chain onto the cam){lash}"
+            f"{damp or '[[train]] damping_n_s_per_m'}: {what}: give it damping; or {spring}{lash}"
         )
 
-    def _damp_hint(self) -> str:
+    def _held_by_nothing(self) -> tuple[str, str] | None:
+        """The bodies between the cam and the first lash of a seated chain: with the lash
+        open (the valve on its seat) no spring holds them, only the cam pushes them and the
+        lash's element stops them, so they rattle between the two, damped only by the
+        elements among them and the lash's: ``(their names, what to give)``; ``None``
+        without a seat or with no body before the lash."""
+        bodies = self.chain.bodies
+        first = next((j for j, b in enumerate(bodies) if b.lash_mm > 0), None)
+        if self.chain.seat is None or not first:
+            return None
+        names = ", ".join(f"body {j} ({b.name})" for j, b in enumerate(bodies[:first], 1))
+        dampers = [
+            f"body {j} ({b.name}) damping_n_s_per_m = {b.damping_n_s_per_m:g}"
+            for j, b in enumerate(bodies[: first + 1], 1)
+            if not b.rides
+        ]
+        lash = bodies[first]
+        them, they = ("it", "it rattles") if first == 1 else ("them", "they rattle")
+        return (
+            f"[[train]] {names}",
+            f"between the cam and the open lash of body {first + 1} ({lash.name}, lash_mm = "
+            f"{lash.lash_mm:g}) nothing holds {them} (no spring): {they} there with only the "
+            f"damping of {'; '.join(dampers)}: give more damping_n_s_per_m, or less lash",
+        )
+
+    def _damp_hint(self) -> str | None:
+        """The damping field missing from the seat or an element (``None`` where each has
+        some): its mode rings undamped."""
         seat = self.chain.seat
         if seat is not None and not seat.damping_n_s_per_m:
             return "[seat] damping_n_s_per_m"
         for j, body in enumerate(self.chain.bodies, start=1):
             if not body.rides and not body.damping_n_s_per_m:
                 return f"[[train]] body {j} ({body.name}) damping_n_s_per_m"
-        return "[[train]] damping_n_s_per_m"
+        return None
 
     def turns(self, rpm, refine: bool = True) -> list[ContactTurn]:
         """The settled turn at every speed of ``rpm`` (without ``refine``: its ``refined``
@@ -1002,7 +1089,7 @@ class ChainContacts:
         for start in range(0, rpm.size, SPEED_BLOCK):
             block = rpm[start : start + SPEED_BLOCK]
             padded = np.pad(block, (0, SPEED_BLOCK - block.size), mode="edge")
-            samples, turns, change = self._block(padded)
+            samples, turns, change = self._block(padded, rpm[:start])
             if not refine:
                 out += [
                     self._read(float(r), samples[i], turns, float(change[i]), None)
@@ -1516,16 +1603,36 @@ def contact_section(chain: Chain, turns: list[ContactTurn]) -> dict:
     return {"speeds": per_speed, "lowest_separation_rpm": lowest}
 
 
-CONTACTS_NOTE = (
-    "lash or a seat: the chain's periodic steady state is simulated (diffrax) with its one-sided "
-    "contacts; the rest state has the valve on its seat carrying the spring's preload, the lash open; "
-    "extremes are refined between the samples of the settled turn; a contact separates where it opens "
-    "while the valve is off its seat (anywhere without a seat), the seat where the valve bounces; jump "
-    "speed: the lowest speed at which the cam separates, searched between the speeds given to "
-    "ContactOptions.jump_tolerance_rpm; lowest_separation_rpm: the same for each contact (the cam's "
-    "is the jump speed), the lowest speed given where it separates there already "
-    "(separation_below_range true), none where it holds at every speed"
-)
+def contacts_note(chain: Chain) -> str:
+    """The note of the report's ``contacts``: how the chain is simulated, its rest state as
+    this chain has it (``ContactSystem.of``: the valve on its seat with each lash open, or,
+    without a seat, the closed chain carrying the spring's preload, each lash closed) and
+    what separation means for it."""
+    lash = any(b.lash_mm for b in chain.bodies)
+    if chain.seat is not None:
+        rest = "the rest state has the valve on its seat carrying the spring's preload, " + (
+            "the lash open" if lash else "the elements just touching"
+        )
+        separates = (
+            "a contact separates where it opens while the valve is off its seat, the seat where "
+            "the valve bounces"
+        )
+    else:
+        carried = (
+            "carrying the spring's preload through the levers, the lash closed by it"
+            if chain.spring is not None and chain.spring.preload_n
+            else "with each lash just closed (no spring preloads it)"
+        )
+        rest = f"no seat: the rest state is the closed chain {carried}"
+        separates = "a contact separates where it opens"
+    return (
+        "lash or a seat: the chain's periodic steady state is simulated (diffrax) with its one-sided "
+        f"contacts; {rest}; extremes are refined between the samples of the settled turn; "
+        f"{separates}; jump speed: the lowest speed at which the cam separates, searched between "
+        "the speeds given to ContactOptions.jump_tolerance_rpm; lowest_separation_rpm: the same "
+        "for each contact (the cam's is the jump speed), the lowest speed given where it "
+        "separates there already (separation_below_range true), none where it holds at every speed"
+    )
 
 
 def simulated_train(
@@ -1547,7 +1654,7 @@ def simulated_train(
     rpm = np.asarray(rpm, dtype=float)
     simulation = simulation or ChainContacts(program, chain, float(rpm.min()), options)
     summary, turns = simulation.summary(rpm)
-    contacts = {"note": CONTACTS_NOTE, **contact_section(chain, turns)}
+    contacts = {"note": contacts_note(chain), **contact_section(chain, turns)}
     cam = np.array([t.separates.get("cam", False) for t in turns])
     below = bool(cam[np.argmin(rpm)])
     jump = None

@@ -687,12 +687,17 @@ def chain_from_dict(data: dict) -> Chain | None:
                 "[arm] needs [[train]] bodies: the first rides on the cam at the roller (its "
                 "mass_kg), the others sit at their at_mm on the arm"
             )
-        for table, value in (("[spring]", spring), ("[seat]", seat)):
-            if value is not None:
-                raise ValueError(
-                    f"{table} belongs to a [[train]]; a one-body follower gives its spring in "
-                    "[follower] (spring_rate_n_per_mm, preload_n)"
-                )
+        if spring is not None:
+            raise ValueError(
+                "[spring] belongs to a [[train]]; a one-body follower gives its spring in "
+                "[follower] (spring_rate_n_per_mm, preload_n)"
+            )
+        if seat is not None:
+            raise ValueError(
+                "[seat] belongs to a [[train]]: a seat sits under a chain's last body, and the "
+                "classic [follower] has none (give the follower as a one-body [[train]] with a "
+                "[spring] to seat it)"
+            )
         return None
     if not isinstance(train, list) or not all(isinstance(b, dict) for b in train):
         raise ValueError("[[train]] must be an array of tables, one per body")
@@ -736,12 +741,14 @@ def chain_from_dict(data: dict) -> Chain | None:
         spring_obj = Spring(**spring)
     seat_obj = None
     if seat is not None:
-        if (
-            not isinstance(seat, dict)
-            or "stiffness_n_per_mm" not in seat
-            or not set(seat) <= {"stiffness_n_per_mm", "damping_n_s_per_m"}
-        ):
-            raise ValueError("[seat] takes stiffness_n_per_mm and optionally damping_n_s_per_m")
+        if not isinstance(seat, dict):
+            raise ValueError("[seat] must be a table")
+        unknown = sorted(set(seat) - {"stiffness_n_per_mm", "damping_n_s_per_m"})
+        if unknown or "stiffness_n_per_mm" not in seat:
+            raise ValueError(
+                (f"[seat]: unknown field(s) {', '.join(unknown)}; " if unknown else "[seat]: ")
+                + "it takes stiffness_n_per_mm and optionally damping_n_s_per_m"
+            )
         seat_obj = Seat(**seat)
     arm_obj = None if arm is None else arm_from_dict(arm, data.get("follower"))
     return Chain(tuple(bodies), spring_obj, seat_obj, arm_obj)

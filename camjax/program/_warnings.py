@@ -81,6 +81,69 @@ def seat_warnings(program: Program) -> list[str]:
             "a valve's seat yields microns; check its unit (N/mm)"]
 
 
+LIFT_ERROR_RATIO = 0.5
+"""A train's last body whose largest lift error reaches this part of its kinematic lift (the
+cam's largest lift times the ratios) does not follow the cam: a valve that barely opens, or
+never leaves its seat, is not a result to read as it stands (``lift_error_warnings``)."""
+
+
+def _softest_give(chain, preload: float) -> str:
+    """The chain's field that takes most of the valve's lift, with how much: each element's
+    compression under the spring's preload ``P`` at the last body, ``P (prod_{i > j} r_i)^2 /
+    k_j`` (its force and its compression both referred through the levers after it), the
+    seat's ``P / k_seat`` and, with a seat (the lash open at rest), each lash at the last body,
+    ``lash_j prod_{i > j} r_i``; without a preload, the element of the largest compliance there."""
+    if chain.arm is not None:  # the bodies sit on the arm, which bends: no element of their own
+        return "[arm] (its bending)"
+    gives, after = [], 1.0  # (field, mm at the last body, compliance there, what it does, action)
+    for j in range(len(chain.bodies), 0, -1):
+        body = chain.bodies[j - 1]
+        if body.rides or not body.stiffness_n_per_mm:
+            continue
+        field = f"[[train]] body {j} ({body.name})"
+        compliance = after**2 / body.stiffness_n_per_mm
+        gives.append((f"{field} stiffness_n_per_mm = {body.stiffness_n_per_mm:g}", preload * compliance,
+                      compliance, "the spring's preload, {P} N, compresses it by {mm} mm", "stiffen it"))
+        if body.lash_mm and chain.seat is not None:
+            gives.append((f"{field} lash_mm = {body.lash_mm:g}", body.lash_mm * after, 0.0,
+                          "{mm} mm of it", "lessen it"))
+        after *= body.ratio
+    if chain.seat is not None:
+        compliance = 1.0 / chain.seat.stiffness_n_per_mm
+        gives.append((f"[seat] stiffness_n_per_mm = {chain.seat.stiffness_n_per_mm:g}", preload * compliance,
+                      compliance, "the spring's preload, {P} N, squeezes it by {mm} mm", "stiffen it"))
+    if not gives:
+        return "[[train]] stiffness_n_per_mm"
+    field, mm, _, what, action = max(gives, key=lambda g: (g[1], g[2]) if preload else g[2])
+    if not preload:
+        return f"{field}: {action}"
+    return f"{field} ({what.format(P=f'{preload:g}', mm=f'{mm:.4g}')} at the last body): {action}"
+
+
+def lift_error_warnings(program: Program, report: dict) -> list[str]:
+    """One line where a train's last body misses its kinematic lift (the cam's largest lift
+    times the ratios) by ``LIFT_ERROR_RATIO`` of it or more at some speed of ``report``:
+    the valve barely follows the cam (with a seat, it may never leave it), so the forces and
+    the seating are those of a valve that does not open.  It names the speeds and the field
+    that takes most of the valve's lift (``_softest_give``), with how much."""
+    chain, train = program.chain, (report or {}).get("train")
+    if chain is None or not train:
+        return []
+    valve = chain.lever_ratio * float(np.max(np.abs(program.lift(np.arange(3600) * 0.1)[0])))
+    bad = [s for s in train["speeds"] if s["max_lift_error_mm"] >= LIFT_ERROR_RATIO * valve]
+    if not bad or valve <= 0:
+        return []
+    worst = max(bad, key=lambda s: s["max_lift_error_mm"])
+    preload = chain.spring.preload_n if chain.spring is not None else 0.0
+    name, speeds = chain.bodies[-1].name, ", ".join(f"{s['rpm']:g}" for s in bad)
+    return [f"at {speeds} rpm the last body ({name}) misses its "
+            f"kinematic lift ({valve:.4g} mm: the cam's lift times the ratios) by up to "
+            f"{worst['max_lift_error_mm']:.4g} mm ({100 * worst['max_lift_error_mm'] / valve:.3g}%, "
+            f"at {worst['rpm']:g} rpm): it barely follows the cam"
+            + (" and may never leave its seat" if chain.seat is not None else "")
+            + f"; the chain gives most at {_softest_give(chain, preload)}"]
+
+
 def design_warnings(program: Program, report=None) -> list[str]:
     """Where the input or a result lies outside what the design rules and the models hold,
     one line each (empty where all is well): the program's own numbers (sizes past
@@ -140,6 +203,7 @@ def design_warnings(program: Program, report=None) -> list[str]:
                        f"({worst['max_contact_stress_mpa']:.3g} MPa) is not to be trusted; check "
                        "follower.contact_width_mm and the moduli")
     out += _unsettled_grooves(report["speeds"])
+    out += lift_error_warnings(program, report)
     return out
 
 
