@@ -49,8 +49,6 @@ from ._contact import node_contact as node_contact
 from ._contact import refined_contact_stress as refined_contact_stress
 from ._cycle import Cycle as Cycle
 from ._cycle import TrainPeaks as TrainPeaks
-from ._design import design_objectives as design_objectives
-from ._design import design_refusal as design_refusal
 from ._design import design_segment as design_segment
 from ._design import write_program as write_program
 from ._drive import DRIVE_TABLE_FILE_NAMES as DRIVE_TABLE_FILE_NAMES
@@ -117,6 +115,8 @@ from ._motor import choose_motor as choose_motor
 from ._motor import duty_cycle as duty_cycle
 from ._motor import read_motors as read_motors
 from ._motor import size_motor as size_motor
+from ._objective_rules import design_objectives as design_objectives
+from ._objective_rules import design_refusal as design_refusal
 from ._oscillator import Oscillator as Oscillator
 from ._outputs import BUILT_IN_OUTPUTS as BUILT_IN_OUTPUTS
 from ._outputs import Outputs as Outputs

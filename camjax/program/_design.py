@@ -16,9 +16,8 @@ import numpy as np
 
 from .. import laws
 from ._motion import MATCH, is_polynomial
+from ._objective_rules import design_refusal
 from ._program import Program, segment_band, with_law
-
-OBJECTIVES = ("residual", "ca-ct", "preload", "seating")
 
 
 def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float, *,
@@ -113,42 +112,6 @@ def design_segment(program: Program, segment: int, rpm_lo: float, rpm_hi: float,
         result = dataclasses.replace(result, law=seg.law, values={label: start}, kept_initial=True)
     result = dataclasses.replace(result, initial_values={label: start})
     return with_law(program, segment, result.law), result
-
-
-SEAT_NEEDED = ("the seating objective needs a valve seat: give the program's chain of bodies ([[train]]) a "
-               "[seat] (the seating velocity is the last body's landing on it)")
-
-
-def design_refusal(program: Program, objective: str) -> str | None:
-    """Why ``design_segment`` cannot design ``program`` for ``objective``, in one line, or
-    ``None`` where it can: the one place of the rules that depend on the program alone
-    (``design_objectives`` lists what passes them; a segment's own rules, as a segment in
-    motion refusing ``"ca-ct"``, are ``design_segment``'s)."""
-    if objective not in OBJECTIVES:
-        return f"objective must be one of {', '.join(OBJECTIVES)}, got {objective!r}"
-    chain = program.chain
-    if objective == "seating":
-        return None if chain is not None and chain.seat is not None else SEAT_NEEDED
-    if objective == "ca-ct" and not program.one_body:
-        others = [o for o in OBJECTIVES if o != "ca-ct" and design_refusal(program, o) is None]
-        return (f"objective 'ca-ct': a chain of bodies ([[train]]) is designed at its last body through the "
-                f"whole chain: {' or '.join(others) if others else 'no objective applies to this chain'}")
-    if chain is not None and chain.has_contacts:
-        given = [f"[[train]] {b.name} lash_mm" for b in chain.bodies if b.lash_mm]
-        given += ["[seat]"] if chain.seat is not None else []
-        return (f"objective {objective!r}: the residual and preload objectives design through the exact steady "
-                f"state of a chain without lash or seat, and this chain has {', '.join(given)}"
-                + ("; objective 'seating' designs a chain with a seat (its valve's seating velocity)"
-                   if chain.seat is not None else "; a chain with lash and no seat has no design objective"))
-    if objective == "preload" and program.follower.form_closed:
-        return "the preload objective needs a return spring (a force-closed cam)"
-    return None
-
-
-def design_objectives(program: Program) -> tuple[str, ...]:
-    """The objectives of ``OBJECTIVES`` that ``design_segment`` takes for ``program``
-    (those ``design_refusal`` lets pass), in that order."""
-    return tuple(o for o in OBJECTIVES if design_refusal(program, o) is None)
 
 
 def _jerk_matched(program: Program, segment: int) -> bool:

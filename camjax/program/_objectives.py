@@ -18,9 +18,9 @@ from ..checks import speeds as checked_speeds
 from ..law_design import EVALUATION_SAMPLES, AbstractObjective
 from ._cycle import _cycle, residual_modes
 from ._cycle_grid import program_grid, with_segment_law
-from ._design import design_refusal
 from ._dynamics import SteadyState
 from ._jump import even_periods, scan_speeds
+from ._objective_rules import design_refusal
 from ._oscillator import CONTACT_FORCE, Oscillator
 from ._outputs import cam_levers, min_preload_n
 from ._program import Program, segment_band, with_law
