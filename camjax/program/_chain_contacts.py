@@ -359,11 +359,11 @@ def turn_steps_refusal(
 def _valve_travel(program, chain: Chain):
     """The chain's elements ``(j, body)`` (from 1), each one's lash referred to the valve
     (``lash_j prod_{i > j} r_i``, mm), the cam's largest lift and the valve's lift through
-    the chain (the cam's times the ratios, mm)."""
+    the chain (the cam's, ``Program.largest_lift_mm``, times the ratios, mm)."""
     elements = [(j, b) for j, b in enumerate(chain.bodies, 1) if not b.rides]
     after = np.cumprod([b.ratio for _, b in elements][::-1])[::-1]  # prod_{i >= j} r_i
     referred = [b.lash_mm * float(a / b.ratio) for (_, b), a in zip(elements, after)]
-    lift = float(np.max(program.lift(np.arange(3600) * 0.1)[0]))
+    lift = program.largest_lift_mm()
     return elements, referred, lift, lift * float(after[0])
 
 

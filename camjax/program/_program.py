@@ -189,6 +189,12 @@ class Program:
         """
         return self.turn.jet(theta_deg, side)[:3]
 
+    def largest_lift_mm(self) -> float:
+        """The cam's largest lift (mm), read every 0.1 degree: times a chain's ratios
+        (``Chain.lever_ratio``), the scale of the checks at the valve (the seat's squeeze,
+        the lash, the lift error)."""
+        return float(np.max(np.abs(self.lift(np.arange(3600) * 0.1)[0])))
+
     def lift_curve(self) -> LiftCurve:
         """The lift as a pytree (laws as leaves) for ``camjax.geometry`` and other JAX code."""
         return LiftCurve(self.turn, 1.0 / self.follower.geometry.lift_per_displacement)

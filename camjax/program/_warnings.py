@@ -70,8 +70,7 @@ def seat_warnings(program: Program) -> list[str]:
     if chain is None or chain.seat is None or chain.spring is None:
         return []
     squeeze = chain.spring.preload_n / chain.seat.stiffness_n_per_mm
-    ratio = math.prod(b.ratio for b in chain.bodies if not b.rides)
-    lift = ratio * float(np.max(program.lift(np.arange(3600) * 0.1)[0]))
+    lift = chain.lever_ratio * program.largest_lift_mm()
     limit = min(MAX_SEAT_COMPRESSION_MM, lift)
     if squeeze <= limit:
         return []
@@ -129,7 +128,7 @@ def lift_error_warnings(program: Program, report: dict) -> list[str]:
     chain, train = program.chain, (report or {}).get("train")
     if chain is None or not train:
         return []
-    valve = chain.lever_ratio * float(np.max(np.abs(program.lift(np.arange(3600) * 0.1)[0])))
+    valve = chain.lever_ratio * program.largest_lift_mm()
     bad = [s for s in train["speeds"] if s["max_lift_error_mm"] >= LIFT_ERROR_RATIO * valve]
     if not bad or valve <= 0:
         return []
