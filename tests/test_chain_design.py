@@ -38,6 +38,13 @@ def _corrected(program, coefficients):
 
 
 @pytest.mark.slow
+
+def _largest_seating(program, speeds) -> float:
+    """The largest seating velocity (m/s) of the program's chain over ``speeds``, simulated
+    apart from the design (unrefined turns, as the design reads them)."""
+    turns = ChainContacts(program, program.chain, min(speeds)).turns(speeds, refine=False)
+    return max(t.seating_velocity_m_s for t in turns)
+
 def test_seating_objective_reads_the_simulation_and_its_derivative_is_the_differences(example):
     """The objective's value (the landing read in JAX from the settled start state, on the
     law's own grid) is the simulation's reading of the original program at every speed, to
@@ -96,8 +103,7 @@ def test_a_short_seating_design_lowers_it_and_reports_what_it_is(example):
     speeds = [2500.0, 3000.0]
 
     def largest(program):
-        turns = ChainContacts(program, program.chain, 2500.0).turns(speeds, refine=False)
-        return max(t.seating_velocity_m_s for t in turns)
+        return _largest_seating(program, speeds)
 
     start = largest(example)
     assert result.initial_values[label] == pytest.approx(
@@ -225,8 +231,7 @@ def test_a_rest_to_rest_closing_is_designed_as_a_spline(tmp_path):
     (label,) = result.values
 
     def largest(p):
-        turns = ChainContacts(p, p.chain, 1500.0).turns([1500.0, 2000.0], refine=False)
-        return max(t.seating_velocity_m_s for t in turns)
+        return _largest_seating(p, [1500.0, 2000.0])
 
     assert result.initial_values[label] == pytest.approx(largest(program), rel=1e-12)
     if result.kept_initial:
