@@ -37,14 +37,14 @@ def _corrected(program, coefficients):
     return CorrectedPolynomial(program.segments[CLOSING - 1].law, jnp.asarray(coefficients), 5)
 
 
-@pytest.mark.slow
-
 def _largest_seating(program, speeds) -> float:
     """The largest seating velocity (m/s) of the program's chain over ``speeds``, simulated
     apart from the design (unrefined turns, as the design reads them)."""
     turns = ChainContacts(program, program.chain, min(speeds)).turns(speeds, refine=False)
     return max(t.seating_velocity_m_s for t in turns)
 
+
+@pytest.mark.slow
 def test_seating_objective_reads_the_simulation_and_its_derivative_is_the_differences(example):
     """The objective's value (the landing read in JAX from the settled start state, on the
     law's own grid) is the simulation's reading of the original program at every speed, to
