@@ -220,6 +220,77 @@ def test_cli_json_report(tmp_path, capsys):
     assert report["max_constraint_error"] < 1e-10
 
 
+def _lagrangian_by_quadrature(model, q, qdot, t, jets):
+    """``T - V`` integrated over the rod at the quadrature nodes, the roller's translation
+    and spin written apart: the model's energies as first written, independent of its
+    ``RodIntegrals``."""
+    swing, contact = jets
+    x, w = model._quadrature()
+    a, b, delta = model._split(q)
+    adot, bdot, ddelta = model._split(qdot)
+    psi, psidot = model._swing(t, swing)
+    phi, dphi, ddphi = model.shapes(x)
+    phi_a, dphi_a, _ = model.shapes(x, model.n_axial)
+    u, v, udot, vdot, slope_rate = phi_a @ a, phi @ b, phi_a @ adot, phi @ bdot, dphi @ bdot
+    rho, area, inertia = model.density, model.area, model.second_moment
+    along, across = udot - v * psidot, vdot + (x + u) * psidot
+    t_rod = 0.5 * rho * jnp.sum(w * (area * (along**2 + across**2) + inertia * (psidot + slope_rate) ** 2))
+    end_along, end_across = adot[0] - b[0] * psidot, bdot[0] + (model.length + a[0]) * psidot
+    theta_c = model.omega * t + delta
+    pitch = lambda s: camjax.geometry.pitch_point(model.follower, contact, s)  # noqa: E731
+    pitch_speed = jnp.linalg.norm(jax.jvp(pitch, (theta_c,), (jnp.ones_like(theta_c),))[1])
+    spin = model.omega - pitch_speed * (model.omega + ddelta) / model.roller_radius
+    t_roller = 0.5 * model.roller_mass * (end_along**2 + end_across**2) + 0.5 * model.roller_inertia * spin**2
+    strain = 0.5 * model.youngs_modulus * jnp.sum(w * (area * (dphi_a @ a) ** 2 + inertia * (ddphi @ b) ** 2))
+    height = (x + u) * jnp.sin(psi) + v * jnp.cos(psi)
+    end_height = (model.length + a[0]) * jnp.sin(psi) + b[0] * jnp.cos(psi)
+    potential = model.gravity * (rho * area * jnp.sum(w * height) + model.roller_mass * end_height)
+    return t_rod + t_roller - strain - potential
+
+
+@eqx.filter_jit
+def _accelerations_by_differentiation(model, q, qdot, t):
+    """``(qddot, lambda)`` with the mass matrix, the forces and the constraint's terms all
+    from automatic differentiation of the quadrature Lagrangian and ``model.constraint``."""
+    jets = model.expansions(q, t)
+    lagrangian = lambda q_, qd_, t_: _lagrangian_by_quadrature(model, q_, qd_, t_, jets)  # noqa: E731
+    momentum = jax.grad(lagrangian, argnums=1)
+    mass = jax.jacfwd(momentum, argnums=1)(q, qdot, t)
+    _, momentum_rate = jax.jvp(momentum, (q, qdot, t), (qdot, jnp.zeros_like(qdot), jnp.ones_like(t)))
+    force = jax.grad(lagrangian)(q, qdot, t) - momentum_rate
+    constraint = lambda q_, t_: model.constraint(q_, t_, jets)  # noqa: E731
+    jac = jax.jacfwd(constraint)(q, t)
+    velocity = lambda q_, t_: jax.jvp(constraint, (q_, t_), (qdot, jnp.ones_like(t_)))[1]  # noqa: E731
+    phi_dot, phi_ddot_free = jax.jvp(velocity, (q, t), (qdot, jnp.ones_like(t)))
+    beta = model.baumgarte
+    rhs = -phi_ddot_free - 2 * beta * phi_dot - beta**2 * constraint(q, t)
+    system = jnp.block([[mass, jac.T], [jac, jnp.zeros((2, 2))]])
+    solution = jnp.linalg.solve(system, jnp.concatenate([force, rhs]))
+    return solution[: model.size], solution[model.size :], lagrangian(q, qdot, t)
+
+
+@pytest.mark.parametrize("kwargs", [{}, {"modes": 4, "axial_modes": 2, "gravity": 9.81}])
+def test_written_out_equations_equal_the_lagrangian_differentiated(kwargs):
+    # The equations of motion are written out from the rod's integrated energies; here the
+    # Lagrangian integrated at the quadrature nodes, differentiated by JAX, with the
+    # constraint's terms by JAX too, gives the same accelerations and multipliers, in the
+    # rise, the return and the low dwell, deflected and moving.
+    model = SwingingFollower(**kwargs).with_array_leaves()
+    keys = jax.random.split(jax.random.PRNGKey(0), 2)
+    q = 1e-4 * jax.random.normal(keys[0], (model.size,))
+    qdot = 1e-1 * jax.random.normal(keys[1], (model.size,))
+    accelerations = eqx.filter_jit(lambda m, q, qdot, t: m.accelerations(q, qdot, t))
+    energy = eqx.filter_jit(lambda m, q, qdot, t: m.lagrangian(q, qdot, t, m.expansions(q, t)))
+    for angle in (0.3 * math.pi, 1.2 * math.pi, 1.75 * math.pi):
+        t = jnp.asarray(angle / model.omega)
+        qddot, multipliers, lagrangian = _accelerations_by_differentiation(model, q, qdot, t)
+        got_qddot, got_multipliers = accelerations(model, q, qdot, t)
+        np.testing.assert_allclose(got_qddot, qddot, rtol=0, atol=1e-13 * float(jnp.max(jnp.abs(qddot))))
+        np.testing.assert_allclose(got_multipliers, multipliers, rtol=0,
+                                   atol=1e-13 * float(jnp.max(jnp.abs(multipliers))))
+        assert float(energy(model, q, qdot, t)) == pytest.approx(float(lagrangian), rel=1e-13)
+
+
 @pytest.mark.slow  # 10 s of compiling; the energy balance test covers the same path by default
 def test_accelerations_through_the_hoisted_jets_equal_the_laws_own_derivatives():
     # accelerations() evaluates the program once, as cubic jets about the primal cam angles, and

@@ -9,10 +9,12 @@ Rotary inertia of the section is kept (Rayleigh beam).  The coordinates are
 ``q = (a_1..a_N, b_1..b_N, delta)``, where ``theta_c = Omega t + delta`` is the unknown cam
 angle of the pitch-curve point the roller centre sits on (the contact point).  Two
 constraints keep the roller centre on the pitch curve (equivalently, the roller in the
-groove): ``Rot(-Omega t) E(q, t) - P(theta_c) = 0``.  The equations come from the
-Lagrangian by automatic differentiation; the index-3 system is reduced to acceleration
-level with Baumgarte stabilisation, ``Phi'' + 2 beta Phi' + beta^2 Phi = 0``, and integrated
-with diffrax.  The drift of the position constraint is reported on every saved sample.
+groove): ``Rot(-Omega t) E(q, t) - P(theta_c) = 0``.  The equations of motion are
+Lagrange's, written out from the rod's energies integrated once over its length
+(``RodIntegrals``); the tests check them against the Lagrangian and the constraint
+differentiated automatically.  The index-3 system is reduced to acceleration level with
+Baumgarte stabilisation, ``Phi'' + 2 beta Phi' + beta^2 Phi = 0``, and integrated with
+diffrax.  The drift of the position constraint is reported on every saved sample.
 """
 
 from __future__ import annotations
@@ -146,6 +148,38 @@ class FollowerOptions(Options):
         require(isinstance(self.samples_per_turn, int) and self.samples_per_turn >= 16, "samples_per_turn must be an integer >= 16")
         require(self.max_constraint_error > 0, "max_constraint_error must be positive")
         return base
+
+
+class RodIntegrals(eqx.Module):
+    """The rod's kinetic, strain and gravity energies integrated over its length: with
+    ``u = phi_a . a`` (axial) and ``v = phi . b`` (transverse), each energy is a quadratic
+    form in ``a``, ``b`` and their rates with these coefficients (``rho A`` per length,
+    rotary inertia ``rho I``, axial stiffness ``E A``, bending stiffness ``E I``)."""
+
+    axial_mass: jax.Array
+    """``rho A int phi_a phi_a^T``."""
+    coupling: jax.Array
+    """``rho A int phi_a phi^T``: axial rates against transverse deflections (the swing's Coriolis terms)."""
+    transverse_mass: jax.Array
+    """``rho A int phi phi^T``."""
+    bending_mass: jax.Array
+    """``rho A int phi phi^T + rho I int phi' phi'^T``: translation and rotary inertia of the bending rates."""
+    axial_moment: jax.Array
+    """``rho A int x phi_a``."""
+    transverse_moment: jax.Array
+    """``rho A int x phi + rho I int phi'``: the bending rates against the swing rate."""
+    swing_inertia: jax.Array
+    """``rho A int x^2 + rho I l``: the undeflected rod's inertia about the pivot."""
+    axial_stiffness: jax.Array
+    """``E A int phi_a' phi_a'^T``."""
+    bending_stiffness: jax.Array
+    """``E I int phi'' phi''^T``."""
+    first_moment: jax.Array
+    """``rho A int x``."""
+    axial_weight: jax.Array
+    """``rho A int phi_a``."""
+    transverse_weight: jax.Array
+    """``rho A int phi``."""
 
 
 class SwingingFollower(AbstractMachineModel):
@@ -295,19 +329,27 @@ class SwingingFollower(AbstractMachineModel):
     def expansions(self, q, t) -> tuple[_TaylorJet, _TaylorJet]:
         """The program's jets about the rod frame's cam angle and the contact point's, at ``(q, t)``.
 
-        ``accelerations`` evaluates the program once for both and hands the jets to the
-        Lagrangian and the constraint, so that the laws' formulas are traced twice per
-        vector field rather than once per nested derivative (half the compile time)."""
+        ``accelerations`` evaluates the program once for both (one evaluation at the two
+        angles) and hands the jets to the equations of motion and the constraint, so that
+        the laws' formulas are traced once per vector field rather than once per nested
+        derivative."""
         theta = self.omega * t
-        return _TaylorJet.about(self.program, theta), _TaylorJet.about(self.program, theta + self._split(q)[2])
+        centres = jax.lax.stop_gradient(jnp.stack([theta, theta + self._split(q)[2]]).astype(float))
+        values = self.program.evaluate(centres)
+        return tuple(_TaylorJet(centres[i], tuple(v[i] for v in values)) for i in range(2))
 
     def _jets(self, jets):
         return (self._jet, self._jet) if jets is None else jets
 
     def _swing(self, t, jet=None):
         """Rod frame angle psi(t) and its rate, from the rigid follower motion."""
-        y, dy, _, _ = (self._jet if jet is None else jet).evaluate(self.omega * t)
-        return self.follower.arm_angle(y), -self.omega * dy
+        return self._swing_motion(t, jet)[:2]
+
+    def _swing_motion(self, t, jet=None):
+        """Rod frame angle psi(t), its rate and its acceleration (psi = arm_angle(y) falls
+        as the lift y rises: d psi = -dy)."""
+        y, dy, d2y, _ = (self._jet if jet is None else jet).evaluate(self.omega * t)
+        return self.follower.arm_angle(y), -self.omega * dy, -self.omega**2 * d2y
 
     def _split(self, q):
         na, n = self.n_axial, self.modes
@@ -333,57 +375,131 @@ class SwingingFollower(AbstractMachineModel):
         return geometry._rot(-theta, self.roller_centre(q, t, swing)) - geometry.pitch_point(self.follower, contact, theta + delta)
 
     # ---- energies -----------------------------------------------------------------------
-    def lagrangian(self, q, qdot, t, jets=None):
-        """``T - V`` (J); ``jets``: the program's ``expansions`` at the primal ``(q, t)``, or ``None``."""
-        swing, contact = self._jets(jets)
-        a, b, delta = self._split(q)
-        adot, bdot, ddelta = self._split(qdot)
-        psi, psidot = self._swing(t, swing)
+    def rod_integrals(self) -> RodIntegrals:
+        """The rod's energies, and the roller's translation, as quadratic forms in the modal
+        coordinates: the quadrature over the assumed modes, done once (per solve) rather
+        than in every evaluation of the equations of motion.  The roller is a point mass at
+        ``x = l``, where every mode but the first vanishes (``u(l) = a_1``, ``v(l) = b_1``)."""
         x, w = self._quadrature()
         phi, dphi, ddphi = self.shapes(x)
         phi_a, dphi_a, _ = self.shapes(x, self.n_axial)
-        u, v, udot, vdot, slope_rate = phi_a @ a, phi @ b, phi_a @ adot, phi @ bdot, dphi @ bdot
-        rho, area, inertia = self.density, self.area, self.second_moment
-        # Rod: velocity of the neutral axis in the rod frame, plus rotary inertia (Rayleigh).
-        along, across = udot - v * psidot, vdot + (x + u) * psidot
-        t_rod = 0.5 * rho * jnp.sum(w * (area * (along**2 + across**2) + inertia * (psidot + slope_rate) ** 2))
-        # Roller: translation of its centre, spin from rolling without slip on the cam.
-        end_along, end_across = adot[0] - b[0] * psidot, bdot[0] + (self.length + a[0]) * psidot
-        theta_c = self.omega * t + delta
+        rho, area, inertia, modulus = self.density, self.area, self.second_moment, self.youngs_modulus
+        m, l = self.roller_mass, self.length
+        line = rho * area * w  # mass per length times the quadrature weights
+        end_a = jnp.zeros(self.n_axial).at[0].set(1.0)
+        end_b = jnp.zeros(self.modes).at[0].set(1.0)
+        return RodIntegrals(
+            axial_mass=(phi_a.T * line) @ phi_a + m * jnp.outer(end_a, end_a),
+            coupling=(phi_a.T * line) @ phi + m * jnp.outer(end_a, end_b),
+            transverse_mass=(phi.T * line) @ phi + m * jnp.outer(end_b, end_b),
+            bending_mass=(phi.T * line) @ phi + rho * inertia * (dphi.T * w) @ dphi + m * jnp.outer(end_b, end_b),
+            axial_moment=phi_a.T @ (line * x) + m * l * end_a,
+            transverse_moment=phi.T @ (line * x) + rho * inertia * dphi.T @ w + m * l * end_b,
+            swing_inertia=jnp.sum(line * x**2) + rho * inertia * jnp.sum(w) + m * l**2,
+            axial_stiffness=modulus * area * (dphi_a.T * w) @ dphi_a,
+            bending_stiffness=modulus * inertia * (ddphi.T * w) @ ddphi,
+            first_moment=jnp.sum(line * x) + m * l,
+            axial_weight=phi_a.T @ line + m * end_a,
+            transverse_weight=phi.T @ line + m * end_b,
+        )
+
+    def lagrangian(self, q, qdot, t, jets=None, rod=None):
+        """``T - V`` (J); ``jets``: the program's ``expansions`` at the primal ``(q, t)``, or
+        ``None``; ``rod``: the model's ``rod_integrals()`` (computed here if ``None``)."""
+        swing, contact = self._jets(jets)
+        rod = self.rod_integrals() if rod is None else rod
+        return self._frame_lagrangian(q, qdot, t, swing, rod) + self._spin_energy(q, qdot, t, contact)
+
+    def _frame_lagrangian(self, q, qdot, t, swing, rod: RodIntegrals):
+        """``T - V`` less the roller's spin: the rod and the roller's translation, with the
+        rod frame's jet ``swing``.
+
+        In the rod frame the neutral axis moves at ``(u' - v psi', v' + (x + u) psi')``
+        (``' = d/dt``) and the section turns at ``psi' + dv'/dx`` (rotary inertia,
+        Rayleigh); integrated over ``x`` (``rod_integrals``), T is a quadratic form in
+        ``a``, ``b`` and their rates."""
+        a, b, _ = self._split(q)
+        adot, bdot, _ = self._split(qdot)
+        psi, psidot = self._swing(t, swing)
+        kinetic = (0.5 * adot @ rod.axial_mass @ adot - psidot * adot @ rod.coupling @ b
+                   + 0.5 * psidot**2 * b @ rod.transverse_mass @ b + 0.5 * bdot @ rod.bending_mass @ bdot
+                   + psidot * bdot @ (rod.transverse_moment + rod.coupling.T @ a)
+                   + 0.5 * psidot**2 * (rod.swing_inertia + 2 * rod.axial_moment @ a + a @ rod.axial_mass @ a))
+        strain = 0.5 * a @ rod.axial_stiffness @ a + 0.5 * b @ rod.bending_stiffness @ b
+        height = (rod.first_moment + rod.axial_weight @ a) * jnp.sin(psi) + rod.transverse_weight @ b * jnp.cos(psi)
+        return kinetic - strain - self.gravity * height
+
+    def _frame_equations(self, q, qdot, t, swing, rod: RodIntegrals):
+        """``M`` and ``dL/dq - d/dt(dL/dqdot)|_{qddot=0}`` of ``_frame_lagrangian``, written
+        out: with ``A, C, B, D`` the axial, coupling, transverse and bending masses, ``g, h``
+        the axial and transverse moments and ``K_a, K_b`` the stiffnesses,
+        ``f_a = 2 psi' C b' + psi'' C b + psi'^2 (g + A a) - K_a a - gravity sin(psi) w_a`` and
+        ``f_b = -2 psi' C^T a' - psi'' (h + C^T a) + psi'^2 B b - K_b b - gravity cos(psi) w_b``;
+        ``M = diag(A, D, 0)`` (the spin adds the last entry)."""
+        a, b, _ = self._split(q)
+        adot, bdot, _ = self._split(qdot)
+        psi, psidot, psiddot = self._swing_motion(t, swing)
+        force_a = (2 * psidot * rod.coupling @ bdot + psiddot * rod.coupling @ b
+                   + psidot**2 * (rod.axial_moment + rod.axial_mass @ a) - rod.axial_stiffness @ a
+                   - self.gravity * jnp.sin(psi) * rod.axial_weight)
+        force_b = (-2 * psidot * rod.coupling.T @ adot - psiddot * (rod.transverse_moment + rod.coupling.T @ a)
+                   + psidot**2 * rod.transverse_mass @ b - rod.bending_stiffness @ b
+                   - self.gravity * jnp.cos(psi) * rod.transverse_weight)
+        mass = jax.scipy.linalg.block_diag(rod.axial_mass, rod.bending_mass, jnp.zeros((1, 1)))
+        return mass, jnp.concatenate([force_a, force_b, jnp.zeros(1)])
+
+    def _spin_energy(self, q, qdot, t, contact):
+        """The roller's spin energy (J): it rolls without slip on the cam, so it spins at
+        ``omega - s (omega + delta') / r_r``, ``s`` the pitch curve's speed ``|dP/dtheta|`` at
+        the contact point."""
+        theta_c = self.omega * t + self._split(q)[2]
         pitch_speed = jnp.linalg.norm(
             jax.jvp(lambda s: geometry.pitch_point(self.follower, contact, s), (theta_c,), (jnp.ones_like(theta_c),))[1]
         )
-        spin = self.omega - pitch_speed * (self.omega + ddelta) / self.roller_radius
-        t_roller = 0.5 * self.roller_mass * (end_along**2 + end_across**2) + 0.5 * self.roller_inertia * spin**2
-        # Strain energy (axial stretch + bending) and gravity along -Y.
-        modulus = self.youngs_modulus
-        strain = 0.5 * modulus * jnp.sum(w * (area * (dphi_a @ a) ** 2 + inertia * (ddphi @ b) ** 2))
-        height = (x + u) * jnp.sin(psi) + v * jnp.cos(psi)
-        end_height = (self.length + a[0]) * jnp.sin(psi) + b[0] * jnp.cos(psi)
-        potential = self.gravity * (rho * area * jnp.sum(w * height) + self.roller_mass * end_height)
-        return t_rod + t_roller - strain - potential
+        spin = self.omega - pitch_speed * (self.omega + self._split(qdot)[2]) / self.roller_radius
+        return 0.5 * self.roller_inertia * spin**2
 
-    def _mass_and_force(self, q, qdot, t, jets=None):
-        """``M(q, t)`` and ``dL/dq - d/dt(dL/dqdot)|_{qddot=0}`` by automatic differentiation."""
-        lagrangian = lambda q_, qd_, t_: self.lagrangian(q_, qd_, t_, jets)  # noqa: E731
-        momentum = jax.grad(lagrangian, argnums=1)
-        mass = jax.jacfwd(momentum, argnums=1)(q, qdot, t)
-        _, momentum_rate = jax.jvp(momentum, (q, qdot, t), (qdot, jnp.zeros_like(qdot), jnp.ones_like(t)))
-        return mass, jax.grad(lagrangian)(q, qdot, t) - momentum_rate
+    def _pitch_jet(self, contact, theta):
+        """The pitch point ``P`` at cam angle ``theta`` and its first two derivatives in it."""
+        point = lambda s: geometry.pitch_point(self.follower, contact, s)  # noqa: E731
+        along = lambda s: jax.jvp(point, (s,), (jnp.ones_like(s),))  # noqa: E731
+        (pitch, tangent), (_, curvature) = jax.jvp(along, (theta,), (jnp.ones_like(theta),))
+        return pitch, tangent, curvature
 
-    def accelerations(self, q, qdot, t, jets=None):
+    def accelerations(self, q, qdot, t, jets=None, rod=None):
         """``(qddot, lambda)`` from the stabilised augmented system.
 
         ``jets``: what the motion program is evaluated through (default: its ``expansions``
-        at ``(q, t)``; ``(program, program)`` differentiates the laws' formulas directly)."""
-        jets = self.expansions(q, t) if jets is None else jets
-        constraint = lambda q_, t_: self.constraint(q_, t_, jets)  # noqa: E731
-        mass, force = self._mass_and_force(q, qdot, t, jets)
-        jac = jax.jacfwd(constraint)(q, t)
-        velocity = lambda q_, t_: jax.jvp(constraint, (q_, t_), (qdot, jnp.ones_like(t_)))[1]  # noqa: E731
-        phi_dot, phi_ddot_free = jax.jvp(velocity, (q, t), (qdot, jnp.ones_like(t)))
+        at ``(q, t)``; ``(program, program)`` differentiates the laws' formulas directly);
+        ``rod``: the ``rod_integrals()`` (computed here if ``None``).
+
+        The rod and the roller's translation come from their Lagrangian by automatic
+        differentiation.  The contact point enters only through the pitch curve at
+        ``theta_c = omega t + delta``, whose terms are written out from its jet ``(P, P',
+        P'')`` (evaluated once): the spin ``J (s/r)^2 delta'' + J s s' (omega + delta')^2 / r^2``
+        (``s = |P'|``, ``s' = P'.P''/s``) and, in the constraint ``Phi = F(q, t) - P(theta_c)``,
+        ``-P' delta''`` with the free term ``-P'' (omega + delta')^2``.  This equals
+        differentiating the whole Lagrangian and constraint (tests/test_swinging_follower.py)
+        at a third of the program's size."""
+        swing, contact = self.expansions(q, t) if jets is None else jets
+        rod = self.rod_integrals() if rod is None else rod
+        mass, force = self._frame_equations(q, qdot, t, swing, rod)
+        rate = self.omega + self._split(qdot)[2]  # d theta_c / dt
+        pitch, tangent, curvature = self._pitch_jet(contact, self.omega * t + self._split(q)[2])
+        speed = jnp.linalg.norm(tangent)
+        spin_mass = self.roller_inertia / self.roller_radius**2
+        mass = mass.at[-1, -1].add(spin_mass * speed**2)
+        force = force.at[-1].add(-spin_mass * (tangent @ curvature) * rate**2)
+        # The roller centre in the cam frame, F(q, t), and its rates along the motion.
+        centre = lambda q_, t_: geometry._rot(-self.omega * t_, self.roller_centre(q_, t_, swing))  # noqa: E731
+        jac = jax.jacfwd(centre)(q, t).at[:, -1].add(-tangent)
+        velocity = lambda q_, t_: jax.jvp(centre, (q_, t_), (qdot, jnp.ones_like(t_)))  # noqa: E731
+        (position, centre_rate), (_, centre_free) = jax.jvp(velocity, (q, t), (qdot, jnp.ones_like(t)))
+        phi = position - pitch
+        phi_dot = centre_rate - tangent * rate
+        phi_ddot_free = centre_free - curvature * rate**2
         beta = self.baumgarte
-        rhs_c = -phi_ddot_free - 2 * beta * phi_dot - beta**2 * constraint(q, t)
+        rhs_c = -phi_ddot_free - 2 * beta * phi_dot - beta**2 * phi
         n = self.size
         system = jnp.block([[mass, jac.T], [jac, jnp.zeros((2, 2))]])
         solution = jnp.linalg.solve(system, jnp.concatenate([force, rhs_c]))
@@ -420,12 +536,21 @@ class SwingingFollower(AbstractMachineModel):
         return self.natural_frequencies()[0]
 
 
+def _mass_and_force(lagrangian, q, qdot, t):
+    """``M(q, t)`` and ``dL/dq - d/dt(dL/dqdot)|_{qddot=0}`` of ``lagrangian(q, qdot, t)`` by
+    automatic differentiation."""
+    momentum = jax.grad(lagrangian, argnums=1)
+    mass = jax.jacfwd(momentum, argnums=1)(q, qdot, t)
+    _, momentum_rate = jax.jvp(momentum, (q, qdot, t), (qdot, jnp.zeros_like(qdot), jnp.ones_like(t)))
+    return mass, jax.grad(lagrangian)(q, qdot, t) - momentum_rate
+
+
 @eqx.filter_jit
 def _natural_frequencies(model, cam_angle):
     t = cam_angle / model.omega
     zero = jnp.zeros(model.size)
     jets = model.expansions(zero, t)
-    mass, _ = model._mass_and_force(zero, zero, t, jets)
+    mass, _ = _mass_and_force(lambda q, qdot, t_: model.lagrangian(q, qdot, t_, jets), zero, zero, t)
     stiffness = -jax.hessian(lambda q, qdot: model.lagrangian(q, qdot, t, jets))(zero, zero)
     # Motions that keep the roller in the groove: the null space of the constraint Jacobian.
     _, _, vt = jnp.linalg.svd(jax.jacfwd(model.constraint)(zero, t, jets))
@@ -442,10 +567,11 @@ _RATE_SCALE = 1e4
 
 
 @jax.jit  # traced once: diffrax evaluates the vector field in several places
-def _vector_field(t, state, model):
+def _vector_field(t, state, args):
+    model, rod = args
     q, rate = state
     qdot = rate * _RATE_SCALE
-    return qdot, model.accelerations(q, qdot, t)[0] / _RATE_SCALE
+    return qdot, model.accelerations(q, qdot, t, rod=rod)[0] / _RATE_SCALE
 
 
 def _simulate(model, options: FollowerOptions) -> FollowerResponse:
@@ -462,7 +588,7 @@ def _simulate(model, options: FollowerOptions) -> FollowerResponse:
         t1=turns * period,
         dt0=period * 1e-4,
         y0=(zero, zero),
-        args=model,
+        args=(model, model.rod_integrals()),
         saveat=diffrax.SaveAt(ts=ts),
         stepsize_controller=diffrax.PIDController(
             rtol=options.rtol, atol=options.atol, pcoeff=options.pcoeff, icoeff=options.icoeff, jump_ts=jumps
