@@ -348,6 +348,26 @@ def fit_torsion_factor(curve, *, q_range: tuple[float, float] = (0.05, 6.0)) -> 
     return TorsionFactorFit(p, float(q), r, rms, n, c)
 
 
+def best_law_switches(curves: dict, fits: dict) -> list[tuple[float, str, str]]:
+    """Where the law with the lowest fitted Ca*Ct envelope changes: ``(n, from, to)``.
+
+    ``curves`` and ``fits`` map law names to ``CtCurve`` and ``TorsionFactorFit``.  The
+    envelopes are compared on 4001 period ratios across the span every fitted curve covers,
+    so each ``n`` is the last ratio before the change, within 1/4000 of that span."""
+    names = [k for k in curves if k in fits]
+    if not names:
+        return []
+    n = np.linspace(
+        max(curves[k].period_ratio.min() for k in names),
+        min(curves[k].period_ratio.max() for k in names),
+        4001,
+    )
+    loads = np.array([curves[k].ca * fits[k](n) for k in names])
+    best = np.argmin(loads, axis=0)
+    changes = np.nonzero(best[1:] != best[:-1])[0]
+    return [(float(n[i]), names[best[i]], names[best[i + 1]]) for i in changes]
+
+
 def ca_ct_crossings(curve_a, curve_b, *, envelope: bool = True) -> list[float]:
     """Period ratios where the Ca*Ct curves of two laws cross.
 

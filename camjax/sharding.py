@@ -65,7 +65,7 @@ def use_cpu_cores(count: int | None = None) -> int:
         count = available_cores()
     if isinstance(count, bool) or not isinstance(count, int | np.integer) or count < 1:
         raise ValueError(f"count must be a positive integer (CPU devices), got {count!r}")
-    if not _started():
+    if not backends_started():
         given = _HOST_DEVICES_FLAG.search(os.environ.get("XLA_FLAGS", ""))
         if given:
             return int(given.group(1))
@@ -74,7 +74,7 @@ def use_cpu_cores(count: int | None = None) -> int:
         try:
             jax.config.update("jax_num_cpu_devices", int(count))
             return int(count)
-        except RuntimeError:  # started after all (``_started`` could not tell)
+        except RuntimeError:  # started after all (``backends_started`` could not tell)
             pass
     started = len(jax.devices("cpu"))
     if started != count:
@@ -236,9 +236,10 @@ def cpu_options_jit(fun, cpu_options: tuple[tuple[str, object], ...]) -> Options
     return OptionsJit(fun, lambda *args, **kwargs: cpu_options if on_cpu() else ())
 
 
-def _started() -> bool:
-    """Whether JAX's backends have started (its CPU device count is then fixed); ``False``
-    where this JAX cannot say (``use_cpu_cores`` then learns it from JAX's refusal)."""
+def backends_started() -> bool:
+    """Whether JAX's backends have started (its CPU device count is then fixed, and XLA's
+    threads are running); ``False`` where this JAX cannot say (``use_cpu_cores`` then
+    learns it from JAX's refusal)."""
     try:
         from jax._src import xla_bridge
 

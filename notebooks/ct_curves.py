@@ -74,6 +74,6 @@ print(f"{'law':<20} {'p':>7} {'q':>6} {'r':>6}")
 for name, f in fits.items():
     print(f"{name:<20} {f.p:7.3f} {f.q:6.3f} {f.r:6.3f}")
 plot.ca_ct_chart(curves, fits)
-for n_switch, old, new in plot.best_law_switches(curves, fits):
+for n_switch, old, new in camjax.metrics.best_law_switches(curves, fits):
     print(f"best law changes at n = {n_switch:.2f}: {old} -> {new}")
 plt.show()

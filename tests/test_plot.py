@@ -5,6 +5,7 @@ import pytest
 
 from camjax import plot
 from camjax.law_design import Caps
+from camjax.metrics import best_law_switches
 from camjax.sweep import CtCurve
 
 N = np.linspace(1.0, 30.0, 300)
@@ -83,7 +84,7 @@ def test_residual_figure_has_one_panel_per_law(curves):
 
 
 def test_ca_ct_switch_labels_name_both_laws_and_do_not_overlap(curves, fits):
-    switches = plot.best_law_switches(curves, fits)
+    switches = best_law_switches(curves, fits)
     assert sum(2.5 < n < 3.1 for n, _, _ in switches) == 3
     fig = plot.ca_ct_chart(curves, fits, dwell=1.0)
     listing = fig.legends[-1].get_title().get_text()

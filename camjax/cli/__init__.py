@@ -18,6 +18,9 @@ from ._common import dump_json as dump_json
 from ._common import laws_of as laws_of
 from ._common import split_law_specs as split_law_specs
 from ._common import sweep_options_for as sweep_options_for
+from ._drawing import Drawing as Drawing
+from ._drawing import Figure as Figure
+from ._drawing import can_fork as can_fork
 
 
 class _Parser(argparse.ArgumentParser):
@@ -39,7 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
                                 parser_class=_Parser)
     # The sweeps' static options a command passes to the library (compile_for_one_run).
-    parser.set_defaults(sweep_options={})
+    parser.set_defaults(sweep_options={}, figures_aside=False)
     for name in COMMANDS:
         importlib.import_module(f"camjax.cli.{name}").register(sub)
     return parser
@@ -55,6 +58,7 @@ def main(argv: list[str] | None = None, *, one_run: bool = False) -> int:
         with using_cache_dir(directory):  # the library's traces follow, the environment untouched
             if one_run:
                 compile_for_one_run(args)
+                args.figures_aside = True  # a drawing process beside the work (cli._drawing)
             return args.func(args) or 0
     except (CliError, ValueError) as error:
         print(f"camjax {args.command}: error: {error}", file=sys.stderr)

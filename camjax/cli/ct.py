@@ -17,13 +17,13 @@ from ._common import (
     add_law_option,
     check_damping,
     dump_json,
-    import_aside,
     laws_of,
     options_named,
     output_dir,
     parse_range,
     sweep_options_for,
 )
+from ._drawing import Drawing, Figure
 
 DEFAULT_N = "1:30:1000"
 SECONDS_PER_RATIO = 1.5e-5  # a warm exact-path curve on two cores (2026-11-25): 9-15 ms per 1000
@@ -181,8 +181,6 @@ def run(args) -> int:
 
     from ..sweep import ct_curve
 
-    plotting = import_aside("camjax.plot") if args.out is not None else None  # imports while the sweep compiles
-
     selected = laws_of(args, tool="camjax ct")
     n = parse_range(args.n, "--n")
     check_damping(args.damping)
@@ -192,6 +190,7 @@ def run(args) -> int:
     with options_named("--method"):
         model.options(args.method, args.dwell)  # the method named, before any work
     out = output_dir(args.out)
+    drawing = Drawing(aside=args.figures_aside) if out is not None else None  # before the sweep
     minutes = len(selected) * n.size * SECONDS_PER_RATIO / 60
     if minutes > 0.5:  # said before a long sweep starts (the bar below counts laws)
         print(f"camjax ct: {len(selected)} law(s) x {n.size:,} period ratios: about {minutes:.0f} "
@@ -208,16 +207,16 @@ def run(args) -> int:
             print(warning, file=sys.stderr)
     fits = {k: f for k, f in ((k, _fit_or_none(c)) for k, c in curves.items()) if f}
     if out is not None:
-        plot = plotting()
+        figures = [Figure("ct_curves", out / "ct_curves.png", (curves,), {"dwell": args.dwell}),
+                   Figure("residual_curves", out / "residual_curves.png", (curves,))]
+        if fits:  # the chart needs a fitted envelope
+            figures.append(Figure("ca_ct_chart", out / "ca_ct.png", (curves, fits), {"dwell": args.dwell}))
+        drawing.draw(figures)
         (out / "ct.csv").write_text(_csv(curves))
         dump_json(_json(curves, args, selected), out / "ct.json")
         (out / "torsion_factor_fit.md").write_text(_fit_report(curves, fits))
-        plot.save(plot.ct_curves(curves, dwell=args.dwell), out / "ct_curves.png")
-        plot.save(plot.residual_curves(curves), out / "residual_curves.png")
-        written = ["ct.csv", "ct.json", "torsion_factor_fit.md", "ct_curves.png", "residual_curves.png"]
-        if fits:  # the chart needs a fitted envelope
-            plot.save(plot.ca_ct_chart(curves, fits, dwell=args.dwell), out / "ca_ct.png")
-            written.append("ca_ct.png")
+        drawing.wait()
+        written = ["ct.csv", "ct.json", "torsion_factor_fit.md", *(f.path.name for f in figures)]
         print(f"wrote {out}/: {', '.join(written)}", file=sys.stderr)
     if args.format == "json":
         print(dump_json(_json(curves, args, selected)))

@@ -1,0 +1,77 @@
+"""A command's figures drawn in a forked process beside its work (``camjax.cli._drawing``)."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import jax.numpy as jnp
+import pytest
+
+from camjax.cli import can_fork, main
+
+linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the fork is Linux's")
+
+
+def _run(script: str, tmp_path) -> subprocess.CompletedProcess:
+    env = dict(os.environ, CAMJAX_CACHE_DIR="off")
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(script)], capture_output=True,
+                          text=True, timeout=300, env=env, cwd=tmp_path)
+
+
+@linux_only
+def test_the_executables_forked_figures_equal_those_drawn_in_process(tmp_path):
+    # The executable (python -m camjax) forks the drawing; main() in this process, where
+    # JAX has started, draws in-process: the same PNG files, byte for byte.
+    argv = ["ct", "--n", "1:30:60", "--law", "cycloidal,modified-sine"]
+    forked = subprocess.run([sys.executable, "-m", "camjax", *argv, "--out", str(tmp_path / "forked")],
+                            capture_output=True, text=True, timeout=600,
+                            env=dict(os.environ, CAMJAX_CACHE_DIR="off"))
+    assert forked.returncode == 0, forked.stderr
+    jnp.zeros(1).block_until_ready()  # JAX's backends started: no fork here
+    assert not can_fork()
+    assert main([*argv, "--out", str(tmp_path / "here")]) == 0
+    names = ["ct_curves.png", "residual_curves.png", "ca_ct.png"]
+    assert sorted(p.name for p in (tmp_path / "forked").glob("*.png")) == sorted(names)
+    for name in names:
+        assert (tmp_path / "forked" / name).read_bytes() == (tmp_path / "here" / name).read_bytes(), name
+
+
+@linux_only
+def test_a_figure_that_fails_in_the_drawing_process_fails_the_wait(tmp_path):
+    done = _run("""
+        from camjax.cli import Drawing, Figure, can_fork
+        assert can_fork()
+        drawing = Drawing(aside=True)
+        assert drawing.forked
+        drawing.draw([Figure("no_such_figure", "x.png")])
+        try:
+            drawing.wait()
+        except RuntimeError as error:
+            print(error)
+        """, tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "the figures' drawing process failed" in done.stdout
+    assert "AttributeError" in done.stdout and "no_such_figure" in done.stdout
+
+
+@linux_only
+def test_a_drawing_process_left_without_figures_ends_with_its_parent(tmp_path):
+    # A command that fails after forking (a bad option, a failed solve) never draws: its
+    # child sees the pipe close and ends, quietly, rather than outliving it.
+    done = _run("""
+        import os, time
+        from camjax.cli import Drawing
+        drawing = Drawing(aside=True)
+        os.close(drawing._jobs)  # what the parent's exit does
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            pid, status = os.waitpid(drawing._child, os.WNOHANG)
+            if pid:
+                print("ended", os.waitstatus_to_exitcode(status))
+                break
+            time.sleep(0.05)
+        """, tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "ended 0"
+    assert done.stderr == ""
