@@ -236,16 +236,16 @@ def cpu_options_jit(fun, cpu_options: tuple[tuple[str, object], ...]) -> Options
     return OptionsJit(fun, lambda *args, **kwargs: cpu_options if on_cpu() else ())
 
 
-def backends_started() -> bool:
+def backends_started() -> bool | None:
     """Whether JAX's backends have started (its CPU device count is then fixed, and XLA's
-    threads are running); ``False`` where this JAX cannot say (``use_cpu_cores`` then
-    learns it from JAX's refusal)."""
+    threads are running); ``None`` where this JAX cannot say (``use_cpu_cores`` then
+    learns it from JAX's refusal; ``camjax.cli.can_fork`` does not fork)."""
     try:
         from jax._src import xla_bridge
 
         return bool(xla_bridge.backends_are_initialized())
     except (ImportError, AttributeError):
-        return False
+        return None
 
 
 def resolve_devices(devices=None) -> list:

@@ -36,12 +36,13 @@ class Figure(NamedTuple):
 
 
 def can_fork() -> bool:
-    """Whether a drawing process may be forked now: on Linux, before JAX's backends start."""
+    """Whether a drawing process may be forked now: on Linux, before JAX's backends start
+    (not where this JAX cannot say)."""
     if not sys.platform.startswith("linux") or not hasattr(os, "fork"):
         return False
     from ..sharding import backends_started
 
-    return not backends_started()
+    return backends_started() is False
 
 
 def _draw(figures: list[Figure]) -> None:
