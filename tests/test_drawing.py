@@ -63,15 +63,17 @@ def test_a_drawing_process_left_without_figures_ends_with_its_parent(tmp_path):
         import os, time
         from camjax.cli import Drawing
         drawing = Drawing(aside=True)
-        os.close(drawing._jobs)  # what the parent's exit does
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            pid, status = os.waitpid(drawing._child, os.WNOHANG)
-            if pid:
-                print("ended", os.waitstatus_to_exitcode(status))
-                break
-            time.sleep(0.05)
+        for child in drawing._children:
+            os.close(child.jobs)  # what the parent's exit does
+        for child in drawing._children:
+            deadline = time.monotonic() + 60
+            while time.monotonic() < deadline:
+                pid, status = os.waitpid(child.pid, os.WNOHANG)
+                if pid:
+                    print("ended", os.waitstatus_to_exitcode(status))
+                    break
+                time.sleep(0.05)
         """, tmp_path)
     assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "ended 0"
+    assert done.stdout.split("\n")[:-1] == ["ended 0", "ended 0"]
     assert done.stderr == ""

@@ -160,15 +160,14 @@ def _json(curves, args, selected) -> dict:
 
 
 def _fit_report(curves, fits) -> str:
-    from .. import plot
-    from ..metrics import ca_ct_crossings
+    from ..metrics import best_law_switches, ca_ct_crossings
 
     rows = ["| law | Ca | p | q | r | rms error |", "|---|---|---|---|---|---|"]
     for name, f in fits.items():
         rows.append(f"| {name} | {curves[name].ca:.4f} | {f.p:.4f} | {f.q:.4f} | {f.r:.4f} "
                     f"| {f.rms_error:.4f} |")
     rows += ["", "Where the law with the lowest fitted Ca*Ct envelope changes:", ""]
-    rows += [f"- n = {n:.3f}: {a} -> {b}" for n, a, b in plot.best_law_switches(curves, fits)]
+    rows += [f"- n = {n:.3f}: {a} -> {b}" for n, a, b in best_law_switches(curves, fits)]
     if {"modified-sine", "cycloidal"} <= fits.keys():
         cross = ca_ct_crossings(curves["modified-sine"], curves["cycloidal"])
         text = ", ".join(f"{x:.3f}" for x in cross) or "none in range"
