@@ -197,7 +197,7 @@ LAW_AXES = (("s", "units of h"), ("v = ds/dtau", "units of h/T"),
 
 
 def law_curves(laws: list, samples: int = 2001, *, title: str = "",
-               highlight: str | None = None) -> plt.Figure:
+               highlight: str | None = None, values: list | None = None) -> plt.Figure:
     """s, v, a, j of one or more motion laws over the rise, in normalised units.
 
     Args:
@@ -205,13 +205,15 @@ def law_curves(laws: list, samples: int = 2001, *, title: str = "",
         samples: points over ``tau`` in [0, 1].
         title: the figure's title.
         highlight: the name of a law to draw thick and black (e.g. a designed law).
+        values: each law's ``(s, v, a, j)`` at the samples, where the caller has them
+            already (each law is evaluated here otherwise).
     """
     tau = np.linspace(0.0, 1.0, samples)
     fig, axes = plt.subplots(2, 2, figsize=(10, 6), sharex=True, layout="constrained")
-    for law in laws:
-        values = law.evaluate(tau)
+    for i, law in enumerate(laws):
+        values_of_law = law.evaluate(tau) if values is None else values[i]
         style = dict(lw=2.2, color="k") if law.name == highlight else dict(lw=1.1)
-        for ax, (label, unit), y in zip(axes.flat, LAW_AXES, values):
+        for ax, (label, unit), y in zip(axes.flat, LAW_AXES, values_of_law):
             ax.plot(tau, np.asarray(y), label=law.name, **style)
             ax.set_ylabel(f"{label} ({unit})")
             ax.grid(True, alpha=0.3)
@@ -249,16 +251,6 @@ def design_comparison(period_ratios, curves: dict, *, title: str) -> plt.Figure:
     fig.legend(loc="outside right upper", fontsize=8, title="law", title_fontsize=8)
     fig.suptitle(title, fontsize=10)
     return fig
-
-
-def design_title(objective: str, caps, damping: float) -> str:
-    """A design figure's title: the objective, the caps and the damping."""
-    limits = [f"Ca <= {caps.max_ca:g}" if caps.max_ca is not None else "Ca free",
-              f"Cj <= {caps.max_jerk:g}" if caps.max_jerk is not None else "Cj free"]
-    if caps.monotone:
-        limits.append("monotone rise")
-    return (f"Designed B-spline law: minimise {objective}; caps {', '.join(limits)}; "
-            f"SDOF damping zeta = {damping:g}")
 
 
 def save(fig: plt.Figure, path) -> None:

@@ -77,3 +77,18 @@ def test_a_drawing_process_left_without_figures_ends_with_its_parent(tmp_path):
     assert done.returncode == 0, done.stderr
     assert done.stdout.split("\n")[:-1] == ["ended 0", "ended 0"]
     assert done.stderr == ""
+
+
+@pytest.mark.slow  # two cold designs (20 s)
+@linux_only
+def test_the_designed_laws_figure_is_the_same_forked_and_in_process(tmp_path):
+    # camjax design draws law.png from the CSV's points, the law's leaves on the host, so
+    # that the drawing process runs no JAX: the same file as main() draws in this process.
+    argv = ["design", "--objective", "rms-acceleration", "--knots", "6", "--steps", "20", "--quiet"]
+    forked = subprocess.run([sys.executable, "-m", "camjax", *argv, "--out", str(tmp_path / "forked")],
+                            capture_output=True, text=True, timeout=600,
+                            env=dict(os.environ, CAMJAX_CACHE_DIR="off"))
+    assert forked.returncode == 0, forked.stderr
+    assert main([*argv, "--out", str(tmp_path / "here")]) == 0
+    for name in ("law.png", "law.csv"):
+        assert (tmp_path / "forked" / name).read_bytes() == (tmp_path / "here" / name).read_bytes(), name

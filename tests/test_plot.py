@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from camjax import plot
+from camjax.cli.design import design_title
 from camjax.law_design import Caps
 from camjax.metrics import best_law_switches
 from camjax.sweep import CtCurve
@@ -100,10 +101,10 @@ def test_ca_ct_switch_labels_name_both_laws_and_do_not_overlap(curves, fits):
 
 
 def test_design_title_names_objective_and_caps():
-    title = plot.design_title("max R over [6, 12]", Caps(7.5, 100.0), 0.0)
+    title = design_title("max R over [6, 12]", Caps(7.5, 100.0), 0.0)
     assert "minimise max R over [6, 12]" in title
     assert "Ca <= 7.5" in title and "Cj <= 100" in title and "zeta = 0" in title
-    assert "Cj free" in plot.design_title("R(n=8)", Caps(7.5), 0.0)
+    assert "Cj free" in design_title("R(n=8)", Caps(7.5), 0.0)
 
 
 def test_design_comparison_has_one_legend(curves):

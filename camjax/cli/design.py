@@ -13,12 +13,12 @@ from ._common import (
     check_damping,
     dump_json,
     file_named,
-    import_aside,
     options_named,
     output_dir,
     parse_float_list,
     sweep_options_for,
 )
+from ._drawing import Drawing, Figure
 from .program import is_machine, program_path
 
 DEFAULT_STEPS = 6000
@@ -177,15 +177,33 @@ def _standard_laws_compared(ratios, damping: float, knots: int, sweep_options: d
     return compared
 
 
+def design_title(objective: str, caps, damping: float) -> str:
+    """A design figure's title: the objective, the caps and the damping."""
+    limits = [f"Ca <= {caps.max_ca:g}" if caps.max_ca is not None else "Ca free",
+              f"Cj <= {caps.max_jerk:g}" if caps.max_jerk is not None else "Cj free"]
+    if caps.monotone:
+        limits.append("monotone rise")
+    return (f"Designed B-spline law: minimise {objective}; caps {', '.join(limits)}; "
+            f"SDOF damping zeta = {damping:g}")
+
+
+def _law_figure(law, columns: np.ndarray, title: str, path) -> Figure:
+    """``law.png``: the designed law drawn from the CSV's points (``columns``: tau, s, v,
+    a, j), its leaves on the host so that the drawing process needs no JAX."""
+    import jax
+
+    on_host = jax.tree.map(np.asarray, law)
+    return Figure("law_curves", path, ([on_host], columns.shape[0]),
+                  {"title": title, "values": [tuple(columns[:, 1:].T)]})
+
+
 def run(args) -> int:
     from concurrent.futures import ThreadPoolExecutor
 
     from tqdm import tqdm
 
-    from ..caches import carried
-
-    plotting = import_aside("camjax.plot")  # imports while the design compiles
     from .. import law_design as D
+    from ..caches import carried
     from ..laws import save
     from ..sweep import ct_curve, prepare_sweep
 
@@ -230,6 +248,7 @@ def run(args) -> int:
     steps = args.steps
     n1, n2 = band if band else (0.8 * args.n, 1.2 * args.n)
     ratios = np.linspace(n1, n2, D.EVALUATION_SAMPLES)
+    drawing = Drawing(aside=args.figures_aside)  # before JAX starts (prepare_sweep starts it)
     # The comparison's ratios (0.8 to 1.2 times --n), checked before any work.
     with options_named("--band" if band else "--n (compared over 0.8 to 1.2 times it)"):
         prepare_sweep(ratios, damping=args.damping)
@@ -281,11 +300,11 @@ def run(args) -> int:
                "steps": steps, "repaired": result.restored, "seconds": result.seconds,
                "band": [n1, n2], "damping": args.damping}, out / "summary.json")
     bar.set_postfix_str("figures")
-    plot = plotting()
-    title = plot.design_title(objective.label, caps, args.damping)
-    # Drawn on the CSV's points: the law's evaluation is then compiled for one size, not two.
-    plot.save(plot.law_curves([law], tau.size, title=title), out / "law.png")
-    plot.save(plot.design_comparison(ratios, curves, title=title), out / "curves.png")
+    title = design_title(objective.label, caps, args.damping)
+    # Drawn from the CSV's points: the law is evaluated once.
+    drawing.draw([_law_figure(law, columns, title, out / "law.png"),
+                  Figure("design_comparison", out / "curves.png", (ratios, curves), {"title": title})])
+    drawing.wait()
     bar.update()
     bar.close()
     print(f"{objective.label}: designed {rows[0]['objective']:.5g}; best standard "
@@ -307,6 +326,7 @@ def _run_rms(args, out) -> int:
         raise CliError("--damping: not with --objective rms-acceleration (no vibration in it)")
     objective = D.RmsAcceleration()
     caps = D.Caps(args.max_ca, args.max_jerk)
+    drawing = Drawing(aside=args.figures_aside)  # before the design starts JAX
     result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=args.steps,
                       optimizer=args.optimizer, progress=not args.quiet)
     law = result.law
@@ -336,9 +356,8 @@ def _run_rms(args, out) -> int:
                "coefficients": rows[0] | {"law": law.name}, "knots": args.knots, "seed": args.seed,
                "steps": args.steps, "repaired": result.restored, "seconds": result.seconds},
               out / "summary.json")
-    plot = import_aside("camjax.plot")()
-    title = plot.design_title(objective.label, caps, 0.0)
-    plot.save(plot.law_curves([law], tau.size, title=title), out / "law.png")  # the CSV's points
+    drawing.draw([_law_figure(law, columns, design_title(objective.label, caps, 0.0), out / "law.png")])
+    drawing.wait()
     best = min(rows[1:], key=lambda r: r["Ca_rms"])
     print(f"Ca_rms: designed {value:.5g} ({value / RMS_ACCELERATION_FLOOR:.4f} of the floor "
           f"2 sqrt(3) = {RMS_ACCELERATION_FLOOR:.5g}); best standard {best['law']} "
