@@ -38,13 +38,20 @@ def test_the_executables_forked_figures_equal_those_drawn_in_process(tmp_path):
 
 
 @linux_only
-def test_a_figure_that_fails_in_the_drawing_process_fails_the_wait(tmp_path):
-    done = _run("""
+@pytest.mark.parametrize("failing", [0, 1])
+def test_a_figure_that_fails_in_a_drawing_process_fails_the_wait(tmp_path, failing):
+    # The drawing process draws the first figure and a fork of it the second: a failure in
+    # either comes back to the command's wait, and the other figure is still drawn.
+    done = _run(f"""
+        import numpy as np
         from camjax.cli import Drawing, Figure, can_fork
         assert can_fork()
         drawing = Drawing(aside=True)
         assert drawing.forked
-        drawing.draw([Figure("no_such_figure", "x.png")])
+        good = Figure("design_comparison", "good.png",
+                      (np.linspace(1, 2, 5), {{"designed": (np.ones(5), np.ones(5))}}), {{"title": "t"}})
+        bad = Figure("no_such_figure", "bad.png")
+        drawing.draw([bad, good] if {failing} == 0 else [good, bad])
         try:
             drawing.wait()
         except RuntimeError as error:
@@ -53,6 +60,8 @@ def test_a_figure_that_fails_in_the_drawing_process_fails_the_wait(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "the figures' drawing process failed" in done.stdout
     assert "AttributeError" in done.stdout and "no_such_figure" in done.stdout
+    assert ("a drawing helper failed" in done.stdout) == (failing == 1)
+    assert (tmp_path / "good.png").stat().st_size > 1000
 
 
 @linux_only
@@ -63,19 +72,11 @@ def test_a_drawing_process_left_without_figures_ends_with_its_parent(tmp_path):
         import os, time
         from camjax.cli import Drawing
         drawing = Drawing(aside=True)
-        for child in drawing._children:
-            os.close(child.jobs)  # what the parent's exit does
-        for child in drawing._children:
-            deadline = time.monotonic() + 60
-            while time.monotonic() < deadline:
-                pid, status = os.waitpid(child.pid, os.WNOHANG)
-                if pid:
-                    print("ended", os.waitstatus_to_exitcode(status))
-                    break
-                time.sleep(0.05)
+        os.close(drawing._jobs)  # what the parent's exit does
+        print("reported", repr(drawing._child.result()))
         """, tmp_path)
     assert done.returncode == 0, done.stderr
-    assert done.stdout.split("\n")[:-1] == ["ended 0", "ended 0"]
+    assert done.stdout.strip() == "reported ''"
     assert done.stderr == ""
 
 

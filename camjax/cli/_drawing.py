@@ -3,7 +3,9 @@
 Matplotlib's import (about half a second) and the drawing of a command's PNG figures
 (about as much again) used to follow the numbers they show.  The ``camjax`` executable
 now forks a drawing process before it computes: the child imports matplotlib while the
-parent sweeps, then draws what the parent sends it while the parent writes its tables.
+parent sweeps, then draws what the parent sends it while the parent writes its tables,
+sharing the figures with forks of itself (``PROCESSES`` in all), which start with
+matplotlib and the figures already in memory.
 The parent waits for it before it reports the files written, so a figure that fails is
 an error of the command, as it was in one process.
 
@@ -15,6 +17,7 @@ the figures are drawn in-process, matplotlib imported on a thread while XLA comp
 
 from __future__ import annotations
 
+import functools
 import os
 import pickle
 import sys
@@ -52,113 +55,115 @@ def _draw(figures: list[Figure]) -> None:
         plot.save(getattr(plot, figure.kind)(*figure.args, **figure.kwargs), figure.path)
 
 
-class _Child(NamedTuple):
-    """A forked drawing process: its pid, the pipe the parent sends its figures into, and
-    the pipe it reports a failure through."""
+PROCESSES = 2
+"""Processes that draw a command's figures at once, each taking every ``PROCESSES``-th
+figure (three PNG figures of ``camjax ct`` take 0.5 s of Agg in one process)."""
+
+
+class _Forked(NamedTuple):
+    """A forked process and the pipe it reports through: a failure's traceback, or nothing."""
 
     pid: int
-    jobs: int
     status: int
 
     @classmethod
-    def fork(cls) -> _Child:
-        jobs, send = os.pipe()
+    def run(cls, work, child_closes: tuple[int, ...] = (), parent_closes: tuple[int, ...] = ()) -> _Forked:
+        """Fork a process that calls ``work()``, reports, and ends without the parent's exit
+        handlers or buffers.  Each side closes its copies of the other's pipe ends."""
         receive, status = os.pipe()
         pid = os.fork()
         if pid == 0:
-            os.close(send)
-            os.close(receive)
-            _serve(jobs, status)  # never returns
-        os.close(jobs)
-        os.close(status)
-        return cls(pid, send, receive)
+            for descriptor in (receive, *child_closes):
+                os.close(descriptor)
+            failure = b""
+            try:
+                work()
+            except EOFError:  # the parent ended without sending figures: nothing to draw
+                pass
+            except BaseException:  # noqa: BLE001  (every failure goes back to the parent)
+                failure = traceback.format_exc().encode()
+            try:
+                os.write(status, failure)
+            finally:
+                os._exit(1 if failure else 0)
+        for descriptor in (status, *parent_closes):
+            os.close(descriptor)
+        return cls(pid, receive)
+
+    def result(self) -> str:
+        """Wait for the process; its failure (traceback and exit status), or ``""``."""
+        with os.fdopen(self.status, "rb") as status:
+            failure = status.read().decode()
+        _, code = os.waitpid(self.pid, 0)
+        return f"(status {code}):\n{failure}" if failure or code else ""
 
 
-PROCESSES = 2
-"""Drawing processes a command forks: the figures are shared among them in turn (three
-PNG figures of ``camjax ct`` take 0.5 s of Agg in one process)."""
+def _serve(jobs: int, processes: int) -> None:
+    """The drawing process: import matplotlib while the parent works, read the figures,
+    and draw them, every ``processes``-th in each of ``processes - 1`` forks of itself."""
+    from .. import plot  # noqa: F401  (imported while the parent computes)
+
+    with os.fdopen(jobs, "rb") as stream:
+        figures = pickle.load(stream)  # EOFError if the parent ends without drawing
+    helpers = [_Forked.run(functools.partial(_draw, figures[i::processes]))
+               for i in range(1, processes) if figures[i::processes]]
+    try:
+        _draw(figures[::processes])
+    finally:
+        failures = [failure for failure in (helper.result() for helper in helpers) if failure]
+    if failures:
+        raise RuntimeError("a drawing helper failed " + failures[0])
 
 
 class Drawing:
-    """Where a command's figures are drawn: ``Drawing(aside=True)`` forks ``processes``
-    drawing processes (see the module) if ``can_fork()``, else they are drawn in-process.
-    Start it before the work (the children import matplotlib meanwhile), then ``draw``
-    once and ``wait``."""
+    """Where a command's figures are drawn: ``Drawing(aside=True)`` forks the drawing process
+    (see the module) if ``can_fork()``, else they are drawn in-process.  Start it before
+    the work (the child imports matplotlib meanwhile), then ``draw`` once and ``wait``."""
 
     def __init__(self, aside: bool, processes: int = PROCESSES):
-        self._children: list[_Child] = []
+        self._child: _Forked | None = None
         self._figures: list[Figure] = []
-        self._sending: list[threading.Thread] = []
         if aside and can_fork():
-            self._children = [_Child.fork() for _ in range(processes)]
+            jobs, self._jobs = os.pipe()
+            self._child = _Forked.run(functools.partial(_serve, jobs, processes),
+                                      child_closes=(self._jobs,), parent_closes=(jobs,))
         else:
             self._plotting = import_aside("camjax.plot")
 
     @property
     def forked(self) -> bool:
-        """Whether the figures are drawn in forked processes."""
-        return bool(self._children)
+        """Whether the figures are drawn in a forked process."""
+        return self._child is not None
 
     def draw(self, figures: list[Figure]) -> None:
-        """Start drawing ``figures`` (the forked processes draw them now, the first figure
-        to the first process, the second to the second, and so on; in-process, at
+        """Start drawing ``figures`` (the forked process draws them now; in-process, at
         ``wait``)."""
         figures = list(figures)
-        if not self._children:
+        if self._child is None:
             self._figures = figures
             return
-        count = len(self._children)
-        for i, child in enumerate(self._children):
-            data = pickle.dumps(figures[i::count], protocol=pickle.HIGHEST_PROTOCOL)
-            # On a thread: the child may still be importing matplotlib, and a pipe holds
-            # 64 KiB; the command writes its tables meanwhile.
-            sending = threading.Thread(target=_send, args=(child.jobs, data))
-            sending.start()
-            self._sending.append(sending)
+        data = pickle.dumps(figures, protocol=pickle.HIGHEST_PROTOCOL)
+        # On a thread: the child may still be importing matplotlib, and a pipe holds
+        # 64 KiB; the command writes its tables meanwhile.
+        self._sending = threading.Thread(target=_send, args=(self._jobs, data))
+        self._sending.start()
 
     def wait(self) -> None:
         """Return once every figure is written.
 
         Raises:
-            RuntimeError: a drawing process failed (its traceback in the message).
+            RuntimeError: the drawing process failed (its traceback in the message).
         """
-        if not self._children:
+        if self._child is None:
             self._plotting()
             _draw(self._figures)
             return
-        for sending in self._sending:
-            sending.join()
-        failures = []
-        for child in self._children:
-            with os.fdopen(child.status, "rb") as status:
-                failure = status.read().decode()
-            _, code = os.waitpid(child.pid, 0)
-            if failure or code:
-                failures.append(f"(status {code}):\n{failure}")
-        if failures:
-            raise RuntimeError(f"the figures' drawing process failed {failures[0]}")
+        self._sending.join()
+        failure = self._child.result()
+        if failure:
+            raise RuntimeError(f"the figures' drawing process failed {failure}")
 
 
 def _send(jobs: int, data: bytes) -> None:
     with os.fdopen(jobs, "wb") as stream:
         stream.write(data)
-
-
-def _serve(jobs: int, status: int) -> None:
-    """The forked child: import matplotlib, draw the figures the parent sends, report any
-    failure, and end without running the parent's exit handlers or flushing its buffers."""
-    failure = b""
-    try:
-        from .. import plot  # noqa: F401  (imported while the parent computes)
-
-        with os.fdopen(jobs, "rb") as stream:
-            figures = pickle.load(stream)  # EOFError if the parent ends without drawing
-        _draw(figures)
-    except EOFError:
-        os._exit(0)
-    except BaseException:  # noqa: BLE001  (every failure goes back to the parent)
-        failure = traceback.format_exc().encode()
-    try:
-        os.write(status, failure)
-    finally:
-        os._exit(1 if failure else 0)
