@@ -8,6 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+import scipy.linalg
 from scipy.integrate import cumulative_simpson
 from scipy.optimize import brentq
 
@@ -289,6 +290,32 @@ def test_written_out_equations_equal_the_lagrangian_differentiated(kwargs):
         np.testing.assert_allclose(got_multipliers, multipliers, rtol=0,
                                    atol=1e-13 * float(jnp.max(jnp.abs(multipliers))))
         assert float(energy(model, q, qdot, t)) == pytest.approx(float(lagrangian), rel=1e-13)
+
+
+@eqx.filter_jit
+def _frequencies_by_differentiation(model, cam_angle):
+    """The rod's stiffness and mass at rest at ``cam_angle`` on the motions the groove allows:
+    the quadrature Lagrangian's Hessians and the constraint's Jacobian, all by automatic
+    differentiation (their generalised eigenvalues are the frequencies squared)."""
+    t = cam_angle / model.omega
+    zero = jnp.zeros(model.size)
+    jets = model.expansions(zero, t)
+    lagrangian = lambda q, qdot: _lagrangian_by_quadrature(model, q, qdot, t, jets)  # noqa: E731
+    mass = jax.hessian(lagrangian, argnums=1)(zero, zero)
+    stiffness = -jax.hessian(lagrangian)(zero, zero)
+    _, _, vt = jnp.linalg.svd(jax.jacfwd(model.constraint)(zero, t, jets))
+    basis = vt[2:].T
+    return basis.T @ stiffness @ basis, basis.T @ mass @ basis
+
+
+@pytest.mark.parametrize("angle", [0.3 * math.pi, 1.2 * math.pi, 1.75 * math.pi])
+def test_written_out_frequencies_equal_the_lagrangian_differentiated(angle):
+    # In the rise and the return the swing's rate softens the rod and the pitch curve's
+    # speed changes along the cam (the spin's stiffness), so both terms are exercised.
+    model = SwingingFollower(modes=3, axial_modes=2, omega=2000.0)
+    stiffness, mass = (np.asarray(x) for x in _frequencies_by_differentiation(model, angle))
+    expected = np.sqrt(np.clip(scipy.linalg.eigh(stiffness, mass, eigvals_only=True), 0.0, None))
+    np.testing.assert_allclose(model.natural_frequencies(angle), expected, rtol=1e-9)
 
 
 @pytest.mark.slow  # 10 s of compiling; the energy balance test covers the same path by default

@@ -459,12 +459,24 @@ class SwingingFollower(AbstractMachineModel):
         spin = self.omega - pitch_speed * (self.omega + self._split(qdot)[2]) / self.roller_radius
         return 0.5 * self.roller_inertia * spin**2
 
-    def _pitch_jet(self, contact, theta):
-        """The pitch point ``P`` at cam angle ``theta`` and its first two derivatives in it."""
-        point = lambda s: geometry.pitch_point(self.follower, contact, s)  # noqa: E731
-        along = lambda s: jax.jvp(point, (s,), (jnp.ones_like(s),))  # noqa: E731
-        (pitch, tangent), (_, curvature) = jax.jvp(along, (theta,), (jnp.ones_like(theta),))
-        return pitch, tangent, curvature
+    def _pitch_jet(self, contact, theta, order: int = 2) -> tuple:
+        """The pitch point ``P`` at cam angle ``theta`` and its derivatives in it up to
+        ``order``: ``(P, P', ..)``."""
+        def deeper(derivatives):
+            def next_order(s):
+                values, rates = jax.jvp(derivatives, (s,), (jnp.ones_like(s),))
+                return (*values, rates[-1])
+            return next_order
+
+        derivatives = lambda s: (geometry.pitch_point(self.follower, contact, s),)  # noqa: E731
+        for _ in range(order):
+            derivatives = deeper(derivatives)
+        return derivatives(theta)
+
+    def _constraint_jacobian(self, q, t, swing, tangent):
+        """``dPhi/dq``: the roller centre's in the cam frame, less ``P'`` for ``delta``."""
+        centre = lambda q_: geometry._rot(-self.omega * t, self.roller_centre(q_, t, swing))  # noqa: E731
+        return jax.jacfwd(centre)(q).at[:, -1].add(-tangent)
 
     def accelerations(self, q, qdot, t, jets=None, rod=None):
         """``(qddot, lambda)`` from the stabilised augmented system.
@@ -492,7 +504,7 @@ class SwingingFollower(AbstractMachineModel):
         force = force.at[-1].add(-spin_mass * (tangent @ curvature) * rate**2)
         # The roller centre in the cam frame, F(q, t), and its rates along the motion.
         centre = lambda q_, t_: geometry._rot(-self.omega * t_, self.roller_centre(q_, t_, swing))  # noqa: E731
-        jac = jax.jacfwd(centre)(q, t).at[:, -1].add(-tangent)
+        jac = self._constraint_jacobian(q, t, swing, tangent)
         velocity = lambda q_, t_: jax.jvp(centre, (q_, t_), (qdot, jnp.ones_like(t_)))  # noqa: E731
         (position, centre_rate), (_, centre_free) = jax.jvp(velocity, (q, t), (qdot, jnp.ones_like(t)))
         phi = position - pitch
@@ -536,24 +548,30 @@ class SwingingFollower(AbstractMachineModel):
         return self.natural_frequencies()[0]
 
 
-def _mass_and_force(lagrangian, q, qdot, t):
-    """``M(q, t)`` and ``dL/dq - d/dt(dL/dqdot)|_{qddot=0}`` of ``lagrangian(q, qdot, t)`` by
-    automatic differentiation."""
-    momentum = jax.grad(lagrangian, argnums=1)
-    mass = jax.jacfwd(momentum, argnums=1)(q, qdot, t)
-    _, momentum_rate = jax.jvp(momentum, (q, qdot, t), (qdot, jnp.zeros_like(qdot), jnp.ones_like(t)))
-    return mass, jax.grad(lagrangian)(q, qdot, t) - momentum_rate
-
-
 @eqx.filter_jit
 def _natural_frequencies(model, cam_angle):
+    """The constrained rod's frequencies linearised at rest (``q = qdot = 0``) at
+    ``cam_angle``: the written-out mass, the stiffness ``-d2L/dq2`` (strain less the swing's
+    centrifugal softening ``psi'^2``, and the spin's ``J omega^2 ((s'/r)^2 - (1 - s/r) s''/r)``
+    for ``delta``, ``s = |P'|``), on the motions that keep the roller in the groove."""
     t = cam_angle / model.omega
     zero = jnp.zeros(model.size)
-    jets = model.expansions(zero, t)
-    mass, _ = _mass_and_force(lambda q, qdot, t_: model.lagrangian(q, qdot, t_, jets), zero, zero, t)
-    stiffness = -jax.hessian(lambda q, qdot: model.lagrangian(q, qdot, t, jets))(zero, zero)
+    swing, contact = model.expansions(zero, t)
+    rod = model.rod_integrals()
+    mass, _ = model._frame_equations(zero, zero, t, swing, rod)
+    _, psidot, _ = model._swing_motion(t, swing)
+    _, tangent, curvature, third = model._pitch_jet(contact, model.omega * t, order=3)
+    speed = jnp.linalg.norm(tangent)
+    speed_rate = tangent @ curvature / speed
+    speed_curvature = (curvature @ curvature + tangent @ third) / speed - speed_rate**2 / speed
+    radius, spin = model.roller_radius, model.roller_inertia
+    mass = mass.at[-1, -1].add(spin * (speed / radius) ** 2)
+    spin_stiffness = -spin * model.omega**2 * ((speed_rate / radius) ** 2 - (1 - speed / radius) * speed_curvature / radius)
+    stiffness = jax.scipy.linalg.block_diag(rod.axial_stiffness - psidot**2 * rod.axial_mass,
+                                            rod.bending_stiffness - psidot**2 * rod.transverse_mass,
+                                            spin_stiffness[None, None])
     # Motions that keep the roller in the groove: the null space of the constraint Jacobian.
-    _, _, vt = jnp.linalg.svd(jax.jacfwd(model.constraint)(zero, t, jets))
+    _, _, vt = jnp.linalg.svd(model._constraint_jacobian(zero, t, swing, tangent))
     basis = vt[2:].T
     chol = jnp.linalg.cholesky(basis.T @ mass @ basis)
     reduced = jax.scipy.linalg.solve_triangular(chol, basis.T @ stiffness @ basis, lower=True)
