@@ -618,7 +618,7 @@ def _simulate(model, options: FollowerOptions) -> FollowerResponse:
     x_obs = jnp.atleast_1d(model.observation_point * model.length)
     phi_obs = model.shapes(x_obs)[0][0]
     na, n = model.n_axial, model.modes
-    error = jnp.linalg.norm(jax.vmap(model.constraint)(q, ts), axis=1)
+    error = jnp.linalg.norm(jax.vmap(lambda q_, t_: model.constraint(q_, t_, model.expansions(q_, t_)))(q, ts), axis=1)
     return FollowerResponse(
         tau=ts * model.omega / model.program.rise_angle,
         payload_acceleration=None,
