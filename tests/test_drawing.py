@@ -80,6 +80,21 @@ def test_a_drawing_process_left_without_figures_ends_with_its_parent(tmp_path):
     assert done.stderr == ""
 
 
+@linux_only
+def test_a_command_that_ends_without_waiting_ends_its_drawing_process(tmp_path):
+    # A command that fails after forking (an error found late, an interrupt) exits without
+    # waiting: its exit ends and reaps the drawing process, which does not outlive it.
+    done = _run("""
+        from camjax.cli import Drawing
+        drawing = Drawing(aside=True)
+        print(drawing._child.pid)
+        raise SystemExit(2)
+        """, tmp_path)
+    assert done.returncode == 2
+    with pytest.raises(ProcessLookupError):
+        os.kill(int(done.stdout), 0)
+
+
 @pytest.mark.slow  # two cold designs (20 s)
 @linux_only
 def test_the_designed_laws_figure_is_the_same_forked_and_in_process(tmp_path):
