@@ -5,14 +5,15 @@ Matplotlib's import (about half a second) and the drawing of a command's PNG fig
 now forks a drawing process before it computes: the child imports matplotlib while the
 parent sweeps, then draws what the parent sends it while the parent writes its tables,
 sharing the figures with forks of itself (``PROCESSES`` in all), which start with
-matplotlib and the figures already in memory.
-The parent waits for it before it reports the files written, so a figure that fails is
-an error of the command, as it was in one process.
+matplotlib and the figures already in memory.  The parent waits for it before it
+reports the files written, so a figure that fails is an error of the command, as it was
+in one process; a command that exits without waiting ends its drawing process.
 
 A fork is safe only before JAX starts its backends (XLA's threads do not survive one),
-and only where the figures need no windowing system (Linux, where Agg draws them): the
-executable forks there; anywhere else, and in a caller's own process (``camjax.cli.main``),
-the figures are drawn in-process, matplotlib imported on a thread while XLA compiles.
+and only on Linux (Windows has no fork; macOS's system libraries are not safe to use in
+a forked child): the executable forks there; anywhere else, and in a caller's own
+process (``camjax.cli.main``), the figures are drawn in-process, matplotlib imported on a
+thread while XLA compiles.
 """
 
 from __future__ import annotations
