@@ -42,7 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
                                 parser_class=_Parser)
     # The sweeps' static options a command passes to the library (compile_for_one_run).
-    parser.set_defaults(sweep_options={}, figures_aside=False)
+    parser.set_defaults(sweep_options={})
     for name in COMMANDS:
         importlib.import_module(f"camjax.cli.{name}").register(sub)
     return parser

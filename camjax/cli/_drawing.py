@@ -183,6 +183,13 @@ class Drawing:
             self._child = None
 
 
+def drawing_for(args) -> Drawing:
+    """The command's ``Drawing``: forked where the executable asked for it
+    (``args.figures_aside``, set by ``camjax.cli.main(one_run=True)``), in-process where a
+    caller's own parser built ``args``."""
+    return Drawing(aside=vars(args).get("figures_aside", False))
+
+
 def _send(jobs: int, data: bytes) -> None:
     with os.fdopen(jobs, "wb") as stream:
         stream.write(data)

@@ -23,7 +23,7 @@ from ._common import (
     parse_range,
     sweep_options_for,
 )
-from ._drawing import Drawing, Figure
+from ._drawing import Figure, drawing_for
 
 DEFAULT_N = "1:30:1000"
 SECONDS_PER_RATIO = 1.5e-5  # a warm exact-path curve on two cores (2026-11-25): 9-15 ms per 1000
@@ -189,7 +189,7 @@ def run(args) -> int:
     with options_named("--method"):
         model.options(args.method, args.dwell)  # the method named, before any work
     out = output_dir(args.out)
-    drawing = Drawing(aside=args.figures_aside) if out is not None else None  # before the sweep
+    drawing = drawing_for(args) if out is not None else None  # before the sweep
     minutes = len(selected) * n.size * SECONDS_PER_RATIO / 60
     if minutes > 0.5:  # said before a long sweep starts (the bar below counts laws)
         print(f"camjax ct: {len(selected)} law(s) x {n.size:,} period ratios: about {minutes:.0f} "

@@ -18,7 +18,7 @@ from ._common import (
     parse_float_list,
     sweep_options_for,
 )
-from ._drawing import Drawing, Figure
+from ._drawing import Figure, drawing_for
 from .program import is_machine, program_path
 
 DEFAULT_STEPS = 6000
@@ -248,7 +248,7 @@ def run(args) -> int:
     steps = args.steps
     n1, n2 = band if band else (0.8 * args.n, 1.2 * args.n)
     ratios = np.linspace(n1, n2, D.EVALUATION_SAMPLES)
-    drawing = Drawing(aside=args.figures_aside)  # before JAX starts (prepare_sweep starts it)
+    drawing = drawing_for(args)  # before JAX starts (prepare_sweep starts it)
     # The comparison's ratios (0.8 to 1.2 times --n), checked before any work.
     with options_named("--band" if band else "--n (compared over 0.8 to 1.2 times it)"):
         prepare_sweep(ratios, damping=args.damping)
@@ -326,7 +326,7 @@ def _run_rms(args, out) -> int:
         raise CliError("--damping: not with --objective rms-acceleration (no vibration in it)")
     objective = D.RmsAcceleration()
     caps = D.Caps(args.max_ca, args.max_jerk)
-    drawing = Drawing(aside=args.figures_aside)  # before the design starts JAX
+    drawing = drawing_for(args)  # before the design starts JAX
     result = D.design(objective, caps=caps, knots=args.knots, seed=args.seed, steps=args.steps,
                       optimizer=args.optimizer, progress=not args.quiet)
     law = result.law
