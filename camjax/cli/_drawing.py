@@ -125,13 +125,11 @@ class Drawing:
 
     def __init__(self, aside: bool, processes: int = PROCESSES):
         self._child: _Forked | None = None
-        self._forked = False
         self._figures: list[Figure] = []
         if aside and can_fork():
             jobs, self._jobs = os.pipe()
             self._child = _Forked.run(functools.partial(_serve, jobs, processes),
                                       child_closes=(self._jobs,), parent_closes=(jobs,))
-            self._forked = True
             # A command that fails before it waits (a bad option found late, an interrupt)
             # ends its drawing process with it rather than leave it to the pipe's close.
             atexit.register(self._abandon)
@@ -141,13 +139,13 @@ class Drawing:
     @property
     def forked(self) -> bool:
         """Whether the figures are drawn in a forked process."""
-        return self._forked
+        return self._child is not None
 
     def draw(self, figures: list[Figure]) -> None:
         """Start drawing ``figures`` (the forked process draws them now; in-process, at
         ``wait``)."""
         figures = list(figures)
-        if not self._forked:
+        if self._child is None:
             self._figures = figures
             return
         data = pickle.dumps(figures, protocol=pickle.HIGHEST_PROTOCOL)
@@ -162,25 +160,23 @@ class Drawing:
         Raises:
             RuntimeError: the drawing process failed (its traceback in the message).
         """
-        if not self._forked:
+        if self._child is None:
             self._plotting()
             _draw(self._figures)
             return
         self._sending.join()
-        failure, self._child = self._child.result(), None
+        atexit.unregister(self._abandon)
+        failure = self._child.result()
         if failure:
             raise RuntimeError(f"the figures' drawing process failed {failure}")
 
-
     def _abandon(self) -> None:
-        """End and reap a drawing process the command never waited for."""
-        if self._child is not None:
-            try:
-                os.kill(self._child.pid, signal.SIGTERM)
-                os.waitpid(self._child.pid, 0)
-            except OSError:  # ended already
-                pass
-            self._child = None
+        """End and reap the drawing process of a command that never waited for it."""
+        try:
+            os.kill(self._child.pid, signal.SIGTERM)
+            os.waitpid(self._child.pid, 0)
+        except OSError:  # ended already
+            pass
 
 
 def drawing_for(args) -> Drawing:
